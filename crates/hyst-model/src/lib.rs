@@ -1,0 +1,654 @@
+//! Single-degree-of-freedom oscillators with hysteretic, relaxation and extra force terms.
+//!
+//! One job: say what force acts on the mass and how the internal state evolves. Everything
+//! is written as a first-order system in the state
+//! $s = (x, \dot x, z, x_2, \dot x_2)$ so that any fixed-step integrator can drive it.
+//!
+//! The equation of motion (paper, eq. 1) is
+//!
+//! $$ m\ddot x + c\dot x + k x + z + f_{\text{extra}}(x, \dot x, x_2, \dot x_2) = u(t) $$
+//!
+//! with the restoring element $z$ one of
+//!
+//! * **none** (plain linear oscillator), $z \equiv 0$;
+//! * **Bouc-Wen** (eq. 2, with $|z|^{\nu-1}$ where the paper misprints $|\dot z|^{\nu-1}$):
+//!   $\dot z = \alpha\dot x - \beta\left(\gamma|\dot x||z|^{\nu-1}z + \delta\dot x|z|^\nu\right)$;
+//! * **Zener** relaxation element (eq. 3 with $k_0 = 0$): $\dot z + \Omega z = k_\infty \dot x$,
+//!   whose linear state-space form is eq. (25) and characteristic polynomial eq. (32).
+//!
+//! and the extra forces, each off by default:
+//! cubic spring $k_3 x^3$, quadratic damping $c_2\dot x|\dot x|$, Coulomb friction
+//! $F_c\tanh(\dot x/v_\varepsilon)$ (sign function smoothed over the velocity scale
+//! $v_\varepsilon$ so that fixed-step integrators stay accurate), and a second mass $m_2$ attached
+//! to the main mass by a spring $k_2$ and damper $c_2$:
+//! $m_2\ddot x_2 = k_2(x - x_2) + c_2(\dot x - \dot x_2)$. The measured output is always $x$.
+//!
+//! Parameters are checked by [`Oscillator::validate`], which returns a [`ModelError`] naming
+//! the offending value.
+
+#![warn(missing_docs)]
+
+use nalgebra::{Complex, DMatrix, SMatrix, SVector};
+
+pub mod poly;
+
+/// State vector $(x, \dot x, z, x_2, \dot x_2)$: displacement, velocity, restoring-element force,
+/// and the second mass's displacement and velocity (zero when there is none).
+pub type State = SVector<f64, 5>;
+
+/// Jacobian of the state derivative with respect to the state.
+pub type Jacobian = SMatrix<f64, 5, 5>;
+
+/// Errors of invalid model parameters.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ModelError {
+    /// A parameter is NaN or infinite.
+    #[error("parameter `{name}` is not finite: {value}")]
+    NonFinite {
+        /// Parameter name.
+        name: &'static str,
+        /// The offending value.
+        value: f64,
+    },
+    /// A parameter that must be strictly positive is not.
+    #[error("parameter `{name}` must be > 0, got {value}")]
+    NonPositive {
+        /// Parameter name.
+        name: &'static str,
+        /// The offending value.
+        value: f64,
+    },
+    /// A linear state-space form was asked of a model with nonlinear terms.
+    #[error("the model is not linear: it has {what}")]
+    NotLinear {
+        /// Which nonlinear term is present.
+        what: &'static str,
+    },
+}
+
+fn finite(name: &'static str, value: f64) -> Result<(), ModelError> {
+    if value.is_finite() {
+        Ok(())
+    } else {
+        Err(ModelError::NonFinite { name, value })
+    }
+}
+
+fn positive(name: &'static str, value: f64) -> Result<(), ModelError> {
+    finite(name, value)?;
+    if value > 0.0 {
+        Ok(())
+    } else {
+        Err(ModelError::NonPositive { name, value })
+    }
+}
+
+/// Bouc-Wen hysteresis parameters, eq. (2).
+///
+/// Only the products $\beta\gamma$ and $\beta\delta$ enter the equation; both forms are offered.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BoucWen {
+    /// Initial stiffness of the hysteretic element, α (N/m).
+    pub alpha: f64,
+    /// Scale β (its unit is that of 1/|z|^ν divided by that of γ).
+    pub beta: f64,
+    /// Shape parameter γ.
+    pub gamma: f64,
+    /// Shape parameter δ.
+    pub delta: f64,
+    /// Smoothness exponent ν > 0 (ν = 1 for the benchmark).
+    pub nu: f64,
+}
+
+impl BoucWen {
+    /// The benchmark's hysteresis: α = 5e4 N/m, β = 1e3 m⁻¹, γ = 0.8, δ = −1.1, ν = 1.
+    pub fn benchmark() -> Self {
+        BoucWen {
+            alpha: 5e4,
+            beta: 1e3,
+            gamma: 0.8,
+            delta: -1.1,
+            nu: 1.0,
+        }
+    }
+
+    /// Build from the products the paper identifies: β is set to 1, so γ = βγ and δ = βδ.
+    pub fn from_products(alpha: f64, beta_gamma: f64, beta_delta: f64, nu: f64) -> Self {
+        BoucWen {
+            alpha,
+            beta: 1.0,
+            gamma: beta_gamma,
+            delta: beta_delta,
+            nu,
+        }
+    }
+
+    /// The product βγ.
+    pub fn beta_gamma(&self) -> f64 {
+        self.beta * self.gamma
+    }
+
+    /// The product βδ.
+    pub fn beta_delta(&self) -> f64 {
+        self.beta * self.delta
+    }
+
+    /// Check that every parameter is finite and ν > 0.
+    pub fn validate(&self) -> Result<(), ModelError> {
+        finite("alpha", self.alpha)?;
+        finite("beta", self.beta)?;
+        finite("gamma", self.gamma)?;
+        finite("delta", self.delta)?;
+        positive("nu", self.nu)
+    }
+
+    /// $\dot z$ for velocity `v` and hysteretic force `z`.
+    #[inline(always)]
+    pub fn rate(&self, v: f64, z: f64) -> f64 {
+        let (bg, bd) = (self.beta_gamma(), self.beta_delta());
+        if self.nu == 1.0 {
+            self.alpha * v - bg * v.abs() * z - bd * v * z.abs()
+        } else {
+            let az = z.abs();
+            let p = az.powf(self.nu - 1.0);
+            self.alpha * v - bg * v.abs() * p * z - bd * v * p * az
+        }
+    }
+
+    /// Partial derivatives of [`BoucWen::rate`] with respect to `v` and `z`.
+    pub fn rate_gradient(&self, v: f64, z: f64) -> (f64, f64) {
+        let (bg, bd) = (self.beta_gamma(), self.beta_delta());
+        let sv = sign(v);
+        let sz = sign(z);
+        if self.nu == 1.0 {
+            (
+                self.alpha - bg * sv * z - bd * z.abs(),
+                -bg * v.abs() - bd * v * sz,
+            )
+        } else {
+            let az = z.abs();
+            let p = az.powf(self.nu - 1.0);
+            let dp = if az > 0.0 {
+                self.nu * az.powf(self.nu - 1.0)
+            } else {
+                0.0
+            };
+            // d(|z|^(ν-1) z)/dz = ν|z|^(ν-1); d(|z|^ν)/dz = ν|z|^(ν-1) sgn z
+            (
+                self.alpha - bg * sv * p * z - bd * p * az,
+                -bg * v.abs() * dp - bd * v * dp * sz,
+            )
+        }
+    }
+}
+
+#[inline(always)]
+fn sign(x: f64) -> f64 {
+    if x > 0.0 {
+        1.0
+    } else if x < 0.0 {
+        -1.0
+    } else {
+        0.0
+    }
+}
+
+/// Zener relaxation element, eq. (3) with $k_0 = 0$: $\dot z + \Omega z = k_\infty\dot x$.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ZenerParams {
+    /// High-frequency stiffness $k_\infty$ (N/m).
+    pub k_inf: f64,
+    /// Corner frequency Ω (rad/s), > 0.
+    pub omega: f64,
+}
+
+impl ZenerParams {
+    /// Check that both parameters are finite and Ω > 0.
+    pub fn validate(&self) -> Result<(), ModelError> {
+        finite("k_inf", self.k_inf)?;
+        positive("omega", self.omega)
+    }
+}
+
+/// The restoring element $z$ of eq. (1).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Restoring {
+    /// No element: a plain linear oscillator.
+    #[default]
+    None,
+    /// Bouc-Wen hysteresis, eq. (2).
+    BoucWen(BoucWen),
+    /// Zener relaxation element, eq. (3).
+    Zener(ZenerParams),
+}
+
+/// Coulomb friction $F_c\tanh(\dot x / v_\varepsilon)$.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Coulomb {
+    /// Friction force level $F_c$ (N).
+    pub force: f64,
+    /// Smoothing velocity $v_\varepsilon$ (m/s), > 0: below it the force ramps linearly.
+    pub smoothing_velocity: f64,
+}
+
+/// A second mass attached to the main one by a spring and a damper.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SecondMass {
+    /// Mass $m_2$ (kg), > 0.
+    pub mass: f64,
+    /// Coupling stiffness $k_2$ (N/m).
+    pub stiffness: f64,
+    /// Coupling damping $c_2$ (N s/m).
+    pub damping: f64,
+}
+
+/// Extra force terms that can be added to any oscillator. All off by default.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ExtraForces {
+    /// Cubic spring coefficient $k_3$ (N/m³): force $k_3x^3$.
+    pub cubic_stiffness: f64,
+    /// Quadratic damping coefficient (N s²/m²): force $c_q\dot x|\dot x|$.
+    pub quadratic_damping: f64,
+    /// Smoothed Coulomb friction.
+    pub coulomb: Option<Coulomb>,
+    /// A second mass (second mode).
+    pub second_mass: Option<SecondMass>,
+}
+
+impl ExtraForces {
+    /// Whether every extra term is off.
+    pub fn is_empty(&self) -> bool {
+        self.cubic_stiffness == 0.0
+            && self.quadratic_damping == 0.0
+            && self.coulomb.is_none()
+            && self.second_mass.is_none()
+    }
+}
+
+/// The oscillator $m\ddot x + c\dot x + kx + z + f_{\text{extra}} = u$.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Oscillator {
+    /// Mass m (kg), > 0.
+    pub mass: f64,
+    /// Viscous damping c (N s/m).
+    pub damping: f64,
+    /// Linear stiffness k (N/m).
+    pub stiffness: f64,
+    /// Restoring element z.
+    pub restoring: Restoring,
+    /// Extra force terms.
+    pub extras: ExtraForces,
+}
+
+/// Linear state-space form $\dot s = A s + B u$, $y = C s$.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StateSpace {
+    /// State matrix A (n × n).
+    pub a: DMatrix<f64>,
+    /// Input matrix B (n × 1).
+    pub b: DMatrix<f64>,
+    /// Output matrix C (1 × n), selecting x.
+    pub c: DMatrix<f64>,
+}
+
+impl StateSpace {
+    /// Eigenvalues of A: the continuous-time poles.
+    pub fn poles(&self) -> Vec<Complex<f64>> {
+        self.a.complex_eigenvalues().iter().copied().collect()
+    }
+
+    /// Coefficients of det(λI − A), highest power first (monic), by Faddeev–LeVerrier.
+    pub fn characteristic_polynomial(&self) -> Vec<f64> {
+        let n = self.a.nrows();
+        let mut coeffs = vec![1.0];
+        let mut m = DMatrix::<f64>::zeros(n, n);
+        let id = DMatrix::<f64>::identity(n, n);
+        let mut c_prev = 1.0;
+        for k in 1..=n {
+            m = &self.a * &m + &id * c_prev;
+            let am = &self.a * &m;
+            let ck = -am.trace() / k as f64;
+            coeffs.push(ck);
+            c_prev = ck;
+        }
+        coeffs
+    }
+}
+
+impl Oscillator {
+    /// A plain linear oscillator $m\ddot x + c\dot x + kx = u$.
+    pub fn linear(mass: f64, damping: f64, stiffness: f64) -> Self {
+        Oscillator {
+            mass,
+            damping,
+            stiffness,
+            restoring: Restoring::None,
+            extras: ExtraForces::default(),
+        }
+    }
+
+    /// A linear oscillator with a Zener element, eq. (25).
+    pub fn zener(mass: f64, damping: f64, stiffness: f64, zener: ZenerParams) -> Self {
+        Oscillator {
+            restoring: Restoring::Zener(zener),
+            ..Oscillator::linear(mass, damping, stiffness)
+        }
+    }
+
+    /// A linear oscillator with a Bouc-Wen element, eqs. (1)–(2).
+    pub fn bouc_wen(mass: f64, damping: f64, stiffness: f64, bw: BoucWen) -> Self {
+        Oscillator {
+            restoring: Restoring::BoucWen(bw),
+            ..Oscillator::linear(mass, damping, stiffness)
+        }
+    }
+
+    /// The hysteretic benchmark system (Noël & Schoukens 2016, Table 1):
+    /// m = 2 kg, c = 10 N s/m, k = 5e4 N/m and [`BoucWen::benchmark`].
+    pub fn benchmark() -> Self {
+        Oscillator::bouc_wen(2.0, 10.0, 5e4, BoucWen::benchmark())
+    }
+
+    /// Check every parameter; the error names the first bad one.
+    pub fn validate(&self) -> Result<(), ModelError> {
+        positive("mass", self.mass)?;
+        finite("damping", self.damping)?;
+        finite("stiffness", self.stiffness)?;
+        match &self.restoring {
+            Restoring::None => {}
+            Restoring::BoucWen(bw) => bw.validate()?,
+            Restoring::Zener(z) => z.validate()?,
+        }
+        let e = &self.extras;
+        finite("cubic_stiffness", e.cubic_stiffness)?;
+        finite("quadratic_damping", e.quadratic_damping)?;
+        if let Some(cf) = &e.coulomb {
+            finite("coulomb.force", cf.force)?;
+            positive("coulomb.smoothing_velocity", cf.smoothing_velocity)?;
+        }
+        if let Some(sm) = &e.second_mass {
+            positive("second_mass.mass", sm.mass)?;
+            finite("second_mass.stiffness", sm.stiffness)?;
+            finite("second_mass.damping", sm.damping)?;
+        }
+        Ok(())
+    }
+
+    /// Time derivative of the state under input force `u`.
+    #[inline(always)]
+    pub fn derivative(&self, s: &State, u: f64) -> State {
+        let (x, v, z) = (s[0], s[1], s[2]);
+        let mut force = u - self.damping * v - self.stiffness * x - z;
+        let e = &self.extras;
+        if e.cubic_stiffness != 0.0 {
+            force -= e.cubic_stiffness * x * x * x;
+        }
+        if e.quadratic_damping != 0.0 {
+            force -= e.quadratic_damping * v * v.abs();
+        }
+        if let Some(cf) = &e.coulomb {
+            force -= cf.force * (v / cf.smoothing_velocity).tanh();
+        }
+        let (mut dx2, mut dv2) = (0.0, 0.0);
+        if let Some(sm) = &e.second_mass {
+            let coupling = sm.stiffness * (x - s[3]) + sm.damping * (v - s[4]);
+            force -= coupling;
+            dx2 = s[4];
+            dv2 = coupling / sm.mass;
+        }
+        let dz = match &self.restoring {
+            Restoring::None => 0.0,
+            Restoring::BoucWen(bw) => bw.rate(v, z),
+            Restoring::Zener(zp) => zp.k_inf * v - zp.omega * z,
+        };
+        State::new(v, force / self.mass, dz, dx2, dv2)
+    }
+
+    /// Jacobian of [`Oscillator::derivative`] with respect to the state (the input enters linearly).
+    pub fn jacobian(&self, s: &State) -> Jacobian {
+        let (x, v, z) = (s[0], s[1], s[2]);
+        let m = self.mass;
+        let mut j = Jacobian::zeros();
+        j[(0, 1)] = 1.0;
+        let mut dfdx = -self.stiffness;
+        let mut dfdv = -self.damping;
+        let e = &self.extras;
+        dfdx -= 3.0 * e.cubic_stiffness * x * x;
+        dfdv -= 2.0 * e.quadratic_damping * v.abs();
+        if let Some(cf) = &e.coulomb {
+            let t = (v / cf.smoothing_velocity).tanh();
+            dfdv -= cf.force * (1.0 - t * t) / cf.smoothing_velocity;
+        }
+        if let Some(sm) = &e.second_mass {
+            dfdx -= sm.stiffness;
+            dfdv -= sm.damping;
+            j[(1, 3)] = sm.stiffness / m;
+            j[(1, 4)] = sm.damping / m;
+            j[(3, 4)] = 1.0;
+            j[(4, 0)] = sm.stiffness / sm.mass;
+            j[(4, 1)] = sm.damping / sm.mass;
+            j[(4, 3)] = -sm.stiffness / sm.mass;
+            j[(4, 4)] = -sm.damping / sm.mass;
+        }
+        j[(1, 0)] = dfdx / m;
+        j[(1, 1)] = dfdv / m;
+        j[(1, 2)] = -1.0 / m;
+        match &self.restoring {
+            Restoring::None => {}
+            Restoring::BoucWen(bw) => {
+                let (dv, dz) = bw.rate_gradient(v, z);
+                j[(2, 1)] = dv;
+                j[(2, 2)] = dz;
+            }
+            Restoring::Zener(zp) => {
+                j[(2, 1)] = zp.k_inf;
+                j[(2, 2)] = -zp.omega;
+            }
+        }
+        j
+    }
+
+    /// Number of states actually used: 2 (linear), 3 (with z), plus 2 for a second mass.
+    pub fn state_dimension(&self) -> usize {
+        let base = match self.restoring {
+            Restoring::None => 2,
+            _ => 3,
+        };
+        base + if self.extras.second_mass.is_some() {
+            2
+        } else {
+            0
+        }
+    }
+
+    /// Linear state-space form, eqs. (25)–(26) for a Zener oscillator, for a model without
+    /// nonlinear terms. States are (x, ẋ[, z][, x₂, ẋ₂]); the output is x.
+    pub fn state_space(&self) -> Result<StateSpace, ModelError> {
+        self.validate()?;
+        if let Restoring::BoucWen(_) = self.restoring {
+            return Err(ModelError::NotLinear {
+                what: "a Bouc-Wen element",
+            });
+        }
+        let e = &self.extras;
+        if e.cubic_stiffness != 0.0 {
+            return Err(ModelError::NotLinear {
+                what: "a cubic spring",
+            });
+        }
+        if e.quadratic_damping != 0.0 {
+            return Err(ModelError::NotLinear {
+                what: "quadratic damping",
+            });
+        }
+        if e.coulomb.is_some() {
+            return Err(ModelError::NotLinear {
+                what: "Coulomb friction",
+            });
+        }
+        // Select the used rows/columns of the full 5-state Jacobian, which is exact for a
+        // linear model.
+        let used: Vec<usize> = match (&self.restoring, e.second_mass.is_some()) {
+            (Restoring::None, false) => vec![0, 1],
+            (Restoring::None, true) => vec![0, 1, 3, 4],
+            (_, false) => vec![0, 1, 2],
+            (_, true) => vec![0, 1, 2, 3, 4],
+        };
+        let full = self.jacobian(&State::zeros());
+        let n = used.len();
+        let a = DMatrix::from_fn(n, n, |i, j| full[(used[i], used[j])]);
+        let mut b = DMatrix::zeros(n, 1);
+        b[(1, 0)] = 1.0 / self.mass;
+        let mut c = DMatrix::zeros(1, n);
+        c[(0, 0)] = 1.0;
+        Ok(StateSpace { a, b, c })
+    }
+
+    /// Continuous-time poles of the linear model (eigenvalues of [`Oscillator::state_space`]).
+    pub fn poles(&self) -> Result<Vec<Complex<f64>>, ModelError> {
+        Ok(self.state_space()?.poles())
+    }
+
+    /// Characteristic polynomial written out term by term, highest power first, not monic:
+    /// $m\lambda^2 + c\lambda + k$ for a linear oscillator and, for a Zener oscillator, eq. (32)
+    /// with its sign flipped: $m\lambda^3 + (\Omega m + c)\lambda^2 + (\Omega c + k + k_\infty)\lambda + k\Omega$.
+    pub fn characteristic_polynomial(&self) -> Result<Vec<f64>, ModelError> {
+        self.validate()?;
+        if !self.extras.is_empty() {
+            return Err(ModelError::NotLinear {
+                what: "extra force terms (use StateSpace::characteristic_polynomial)",
+            });
+        }
+        let (m, c, k) = (self.mass, self.damping, self.stiffness);
+        match &self.restoring {
+            Restoring::None => Ok(vec![m, c, k]),
+            Restoring::Zener(z) => Ok(vec![
+                m,
+                z.omega * m + c,
+                z.omega * c + k + z.k_inf,
+                k * z.omega,
+            ]),
+            Restoring::BoucWen(_) => Err(ModelError::NotLinear {
+                what: "a Bouc-Wen element",
+            }),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn benchmark_linear_modal_parameters() {
+        // README of the benchmark: stiffness k + α gives 35.59 Hz and 1.12 % damping.
+        let bw = Oscillator::benchmark();
+        let lin = Oscillator::linear(bw.mass, bw.damping, bw.stiffness + 5e4);
+        let p = lin.poles().unwrap();
+        let l = p.iter().find(|l| l.im > 0.0).unwrap();
+        let f = l.norm() / (2.0 * std::f64::consts::PI);
+        let zeta = -l.re / l.norm();
+        assert!((f - 35.59).abs() < 0.005, "{f}");
+        assert!((zeta - 0.0112).abs() < 5e-5, "{zeta}");
+    }
+
+    #[test]
+    fn validation_names_the_bad_value() {
+        let mut o = Oscillator::benchmark();
+        o.mass = 0.0;
+        assert_eq!(
+            o.validate(),
+            Err(ModelError::NonPositive {
+                name: "mass",
+                value: 0.0
+            })
+        );
+        let mut o = Oscillator::benchmark();
+        if let Restoring::BoucWen(bw) = &mut o.restoring {
+            bw.nu = -1.0;
+        }
+        assert!(matches!(
+            o.validate(),
+            Err(ModelError::NonPositive { name: "nu", .. })
+        ));
+        let mut o = Oscillator::benchmark();
+        o.stiffness = f64::NAN;
+        assert!(matches!(
+            o.validate(),
+            Err(ModelError::NonFinite {
+                name: "stiffness",
+                ..
+            })
+        ));
+        let o = Oscillator::zener(
+            2.0,
+            1.0,
+            1.0,
+            ZenerParams {
+                k_inf: 1.0,
+                omega: -3.0,
+            },
+        );
+        assert!(matches!(
+            o.validate(),
+            Err(ModelError::NonPositive { name: "omega", .. })
+        ));
+        assert!(matches!(
+            Oscillator::benchmark().state_space(),
+            Err(ModelError::NotLinear { .. })
+        ));
+    }
+
+    #[test]
+    fn jacobian_matches_finite_differences() {
+        let mut o = Oscillator::benchmark();
+        o.extras = ExtraForces {
+            cubic_stiffness: 1e9,
+            quadratic_damping: 3.0,
+            coulomb: Some(Coulomb {
+                force: 2.0,
+                smoothing_velocity: 0.05,
+            }),
+            second_mass: Some(SecondMass {
+                mass: 0.5,
+                stiffness: 2e4,
+                damping: 3.0,
+            }),
+        };
+        let s = State::new(1e-3, 0.07, 20.0, -2e-4, 0.01);
+        let j = o.jacobian(&s);
+        for c in 0..5 {
+            let h = 1e-6 * s[c].abs().max(1e-3);
+            let mut sp = s;
+            sp[c] += h;
+            let mut sm = s;
+            sm[c] -= h;
+            let d = (o.derivative(&sp, 0.3) - o.derivative(&sm, 0.3)) / (2.0 * h);
+            for r in 0..5 {
+                // Central differences: truncation O(h²) relative to the entry's scale.
+                assert_relative_eq!(j[(r, c)], d[r], epsilon = 1e-6, max_relative = 1e-6);
+            }
+        }
+    }
+
+    #[test]
+    fn zener_polynomial_matches_state_space() {
+        let o = Oscillator::zener(
+            2.0,
+            6.4,
+            3334.4,
+            ZenerParams {
+                k_inf: 122150.0,
+                omega: 37.68,
+            },
+        );
+        let p = o.characteristic_polynomial().unwrap();
+        let q = o.state_space().unwrap().characteristic_polynomial();
+        for (a, b) in p.iter().zip(&q) {
+            // q is monic: compare with p / m; Faddeev-LeVerrier is exact up to rounding.
+            assert_relative_eq!(a / p[0], *b, max_relative = 1e-12);
+        }
+    }
+}

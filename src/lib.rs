@@ -1,0 +1,11 @@
+//! **hyst** — identify the stiffness and hysteretic damping of a vibrating structure from its
+//! measured response.
+//!
+//! This crate is the command-line program `hyst` and a thin facade over the workspace:
+//! [`model`] (Bouc-Wen, Zener and linear oscillators), [`sim`] (simulation, excitations,
+//! resampling) and [`io`] (CSV records and the shared data folder).
+
+pub use hyst_model as model;
+pub use hyst_sim as sim;
+
+pub mod io;

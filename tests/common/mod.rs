@@ -1,0 +1,46 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+
+/// Path of a shared data file, e.g. `boucwen/multisine_val.csv`.
+///
+/// When the data folder or the file is missing: a test run under CI (`CI` set) fails, since
+/// CI must have the data; elsewhere the test is skipped with a message saying so.
+pub fn data_file(rel: &str) -> Option<PathBuf> {
+    let found = hyst::io::data_dir()
+        .map(|d| d.join(rel))
+        .filter(|p| p.is_file());
+    match found {
+        Some(p) => Some(p),
+        None if std::env::var_os("CI").is_some() => {
+            panic!(
+                "shared data file `{rel}` is missing (set HYST_DATA_DIR or provide ../shared/data)"
+            )
+        }
+        None => {
+            eprintln!(
+                "SKIPPED: shared data file `{rel}` not found (set HYST_DATA_DIR or provide ../shared/data)"
+            );
+            None
+        }
+    }
+}
+
+/// Columns `u` and `y` of a shared data file.
+pub fn load_uy(rel: &str) -> Option<(Vec<f64>, Vec<f64>)> {
+    let p = data_file(rel)?;
+    let t = hyst::io::read_csv(&p).expect("shared data must parse");
+    Some((
+        t.column("u").unwrap().to_vec(),
+        t.column("y").unwrap().to_vec(),
+    ))
+}
+
+/// ‖a − b‖ / ‖b‖ (RMS error relative to the reference's RMS).
+pub fn rel_rms(a: &[f64], b: &[f64]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    let num: f64 = a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum();
+    let den: f64 = b.iter().map(|y| y * y).sum();
+    (num / den).sqrt()
+}
