@@ -9,3 +9,4 @@ pub use hyst_model as model;
 pub use hyst_sim as sim;
 
 pub mod io;
+pub mod params;

@@ -20,6 +20,7 @@
 use hyst_model::{ModelError, Oscillator, State};
 
 pub mod excitation;
+mod kernel;
 pub mod resample;
 
 /// Errors of simulation and signal generation.
@@ -211,66 +212,114 @@ struct Sink<'a> {
     fine: bool,
 }
 
-/// Integrate `n_intervals` sample intervals of `r` sub-steps each from state `s`.
-/// `input(k, i)` gives (u at start, u at midpoint, u at end) of sub-step `i` of interval `k`.
-/// `first_sample` is the output sample index of the starting state (for error messages).
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn drive<F>(
-    model: &Oscillator,
-    mut s: State,
+/// Fixed parameters of one integration run.
+struct Run {
     n_intervals: usize,
     r: usize,
     h: f64,
-    integrator: Integrator,
     max_abs: f64,
-    first_sample: usize,
     fs: f64,
+}
+
+impl Run {
+    /// The divergence check after each sample interval `k`.
+    #[inline(always)]
+    fn check(&self, k: usize, s: &[f64]) -> Result<(), SimError> {
+        if let Some((component, &value)) = s
+            .iter()
+            .enumerate()
+            .find(|(_, v)| !v.is_finite() || v.abs() > self.max_abs)
+        {
+            let sample = k + 1;
+            return Err(SimError::Diverged {
+                sample,
+                time: sample as f64 / self.fs,
+                component,
+                value,
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Integrate `run.n_intervals` sample intervals of `run.r` sub-steps each from state `s`.
+/// `input(k, i)` gives (u at start, u at midpoint, u at end) of sub-step `i` of interval `k`.
+fn drive<F>(
+    model: &Oscillator,
+    s: State,
+    integrator: Integrator,
+    run: &Run,
     mut input: F,
     sink: &mut Sink<'_>,
 ) -> Result<State, SimError>
 where
     F: FnMut(usize, usize) -> (f64, f64, f64),
 {
-    let h2 = 0.5 * h;
-    let h6 = h / 6.0;
-    for k in 0..n_intervals {
-        for i in 0..r {
+    use kernel::Choice;
+    match integrator {
+        Integrator::Trapezoidal => drive_trapezoidal(model, s, run, &mut input, sink),
+        Integrator::Rk4 => match kernel::choose(model) {
+            Choice::Linear(k) => drive_rk4(&k, s, run, &mut input, sink),
+            Choice::BoucWen1(k) => drive_rk4(&k, s, run, &mut input, sink),
+            Choice::Zener(k) => drive_rk4(&k, s, run, &mut input, sink),
+            Choice::General(k) => drive_rk4(&k, s, run, &mut input, sink),
+        },
+    }
+}
+
+#[inline(always)]
+fn drive_rk4<const N: usize, K, F>(
+    kern: &K,
+    s0: State,
+    run: &Run,
+    input: &mut F,
+    sink: &mut Sink<'_>,
+) -> Result<State, SimError>
+where
+    K: kernel::Kernel<N>,
+    F: FnMut(usize, usize) -> (f64, f64, f64),
+{
+    let mut s = K::load(&s0);
+    for k in 0..run.n_intervals {
+        for i in 0..run.r {
             let (u0, um, u1) = input(k, i);
-            match integrator {
-                Integrator::Rk4 => {
-                    let k1 = model.derivative(&s, u0);
-                    let k2 = model.derivative(&(s + k1 * h2), um);
-                    let k3 = model.derivative(&(s + k2 * h2), um);
-                    let k4 = model.derivative(&(s + k3 * h), u1);
-                    s += (k1 + (k2 + k3) * 2.0 + k4) * h6;
-                }
-                Integrator::Trapezoidal => {
-                    s = trapezoidal_step(model, &s, u0, u1, h).map_err(|residual| {
-                        SimError::NewtonFailed {
-                            sample: first_sample + k + 1,
-                            residual,
-                        }
-                    })?;
-                }
-            }
+            s = kernel::rk4_step(kern, &s, run.h, u0, um, u1);
             if sink.fine {
                 sink.out.push(s[0]);
             }
         }
-        if let Some((component, &value)) = s
-            .iter()
-            .enumerate()
-            .find(|(_, v)| !v.is_finite() || v.abs() > max_abs)
-        {
-            let sample = first_sample + k + 1;
-            return Err(SimError::Diverged {
-                sample,
-                time: sample as f64 / fs,
-                component,
-                value,
-            });
+        run.check(k, &s)?;
+        if !sink.fine {
+            sink.out.push(s[0]);
         }
+    }
+    Ok(K::store(&s))
+}
+
+fn drive_trapezoidal<F>(
+    model: &Oscillator,
+    mut s: State,
+    run: &Run,
+    input: &mut F,
+    sink: &mut Sink<'_>,
+) -> Result<State, SimError>
+where
+    F: FnMut(usize, usize) -> (f64, f64, f64),
+{
+    for k in 0..run.n_intervals {
+        for i in 0..run.r {
+            let (u0, _, u1) = input(k, i);
+            s = trapezoidal_step(model, &s, u0, u1, run.h).map_err(|residual| {
+                SimError::NewtonFailed {
+                    sample: k + 1,
+                    residual,
+                }
+            })?;
+            if sink.fine {
+                sink.out.push(s[0]);
+            }
+        }
+        run.check(k, s.as_slice())?;
         if !sink.fine {
             sink.out.push(s[0]);
         }
@@ -351,8 +400,14 @@ pub fn simulate_from(
         out: &mut out,
         fine,
     };
-    let n_int = n_samples - 1;
-    let (integ, max_abs) = (opts.integrator, opts.max_abs_state);
+    let run = Run {
+        n_intervals: n_samples - 1,
+        r,
+        h,
+        max_abs: opts.max_abs_state,
+        fs,
+    };
+    let integ = opts.integrator;
     let s_end = match input {
         Input::Sampled(u) => {
             check_record(u)?;
@@ -366,13 +421,8 @@ pub fn simulate_from(
             drive(
                 model,
                 s0,
-                n_int,
-                r,
-                h,
                 integ,
-                max_abs,
-                0,
-                fs,
+                &run,
                 |k, i| {
                     let (a, b) = (u[k], u[k + 1]);
                     let d = b - a;
@@ -390,13 +440,8 @@ pub fn simulate_from(
             drive(
                 model,
                 s0,
-                n_int,
-                r,
-                h,
                 integ,
-                max_abs,
-                0,
-                fs,
+                &run,
                 |k, i| {
                     let base = (k % p.len()) * per + 2 * i;
                     let end = if base + 2 == len { 0 } else { base + 2 };
@@ -410,13 +455,8 @@ pub fn simulate_from(
             drive(
                 model,
                 s0,
-                n_int,
-                r,
-                h,
                 integ,
-                max_abs,
-                0,
-                fs,
+                &run,
                 |k, i| {
                     let t0 = k as f64 * dt + i as f64 * h;
                     (f(t0), f(t0 + 0.5 * h), f(t0 + h))

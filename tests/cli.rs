@@ -1,0 +1,187 @@
+//! The `hyst` program end to end: its outputs and its errors on bad input.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn hyst(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_hyst"))
+        .args(args)
+        .output()
+        .expect("the hyst binary runs");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("hyst-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+fn write(name: &str, text: &str) -> PathBuf {
+    let p = tmp(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// Run `hyst simulate` expecting failure; return stderr.
+fn simulate_fails(args: &[&str]) -> String {
+    let out = tmp("never.csv");
+    let mut all = vec!["simulate"];
+    all.extend_from_slice(args);
+    all.extend_from_slice(&["--out", s(&out)]);
+    let (ok, _, err) = hyst(&all);
+    assert!(!ok, "expected failure for {args:?}");
+    assert!(err.starts_with("error:"), "stderr: {err}");
+    err
+}
+
+#[test]
+fn reproduces_multisine_val_through_the_command_line() {
+    let Some(path) = common::data_file("boucwen/multisine_val.csv") else {
+        return;
+    };
+    let out = tmp("ms_val_sim.csv");
+    let (ok, _, err) = hyst(&[
+        "simulate",
+        "--input",
+        s(&path),
+        "--fs",
+        "750",
+        "--periodic",
+        "--integrator",
+        "newmark",
+        "--decimation",
+        "fir",
+        "--out",
+        s(&out),
+    ]);
+    assert!(ok, "{err}");
+    let sim = hyst::io::read_csv(&out).unwrap();
+    let reference = hyst::io::read_csv(&path).unwrap();
+    let e = common::rel_rms(sim.column("y").unwrap(), reference.column("y").unwrap());
+    assert!(e <= 1e-9, "relative RMS error {e:e}");
+    assert_eq!(sim.column("u").unwrap(), reference.column("u").unwrap());
+}
+
+#[test]
+fn generates_excitations_and_simulates_them() {
+    let out = tmp("gen.csv");
+    let (ok, _, err) = hyst(&[
+        "simulate",
+        "--excitation",
+        "white",
+        "--rms",
+        "10",
+        "--samples",
+        "3000",
+        "--seed",
+        "4",
+        "--out",
+        s(&out),
+    ]);
+    assert!(ok, "{err}");
+    let t = hyst::io::read_csv(&out).unwrap();
+    assert_eq!(t.len(), 3000);
+    let u = t.column("u").unwrap();
+    let rms = (u.iter().map(|v| v * v).sum::<f64>() / u.len() as f64).sqrt();
+    assert!((rms - 10.0).abs() < 1e-9);
+    let y = t.column("y").unwrap();
+    assert!(y.iter().any(|v| *v != 0.0));
+    let ex = tmp("ex.csv");
+    let (ok, _, err) = hyst(&[
+        "excite",
+        "--excitation",
+        "sweep",
+        "--samples",
+        "100",
+        "--out",
+        s(&ex),
+    ]);
+    assert!(ok, "{err}");
+    assert_eq!(hyst::io::read_csv(&ex).unwrap().len(), 100);
+}
+
+#[test]
+fn missing_file() {
+    let err = simulate_fails(&["--input", "/nonexistent/u.csv", "--fs", "750"]);
+    assert!(err.contains("/nonexistent/u.csv"), "{err}");
+}
+
+#[test]
+fn missing_column() {
+    let p = write("nocol.csv", "a,b\n1,2\n");
+    let err = simulate_fails(&["--input", s(&p), "--fs", "750"]);
+    assert!(
+        err.contains("no column `u`") && err.contains("a,b"),
+        "{err}"
+    );
+}
+
+#[test]
+fn non_numeric_cell_names_its_row() {
+    let p = write("text.csv", "u\n1\n2\nabc\n");
+    let err = simulate_fails(&["--input", s(&p), "--fs", "750"]);
+    assert!(err.contains("row 4") && err.contains("`abc`"), "{err}");
+}
+
+#[test]
+fn nan_cell() {
+    let p = write("nan.csv", "u\n1\nNaN\n");
+    let err = simulate_fails(&["--input", s(&p), "--fs", "750"]);
+    assert!(err.contains("row 3") && err.contains("not finite"), "{err}");
+}
+
+#[test]
+fn empty_record() {
+    let p = write("empty.csv", "u,y\n");
+    let err = simulate_fails(&["--input", s(&p), "--fs", "750"]);
+    assert!(err.contains("empty"), "{err}");
+}
+
+#[test]
+fn non_positive_sampling_rate() {
+    let p = write("ok.csv", "u\n1\n2\n");
+    let err = simulate_fails(&["--input", s(&p), "--fs", "0"]);
+    assert!(err.contains("--fs") && err.contains('0'), "{err}");
+    let err = simulate_fails(&["--input", s(&p), "--fs=-3"]);
+    assert!(err.contains("-3"), "{err}");
+}
+
+#[test]
+fn zero_oversampling() {
+    let p = write("ok2.csv", "u\n1\n2\n");
+    let err = simulate_fails(&["--input", s(&p), "--fs", "750", "--oversample", "0"]);
+    assert!(err.contains("oversample"), "{err}");
+}
+
+#[test]
+fn invalid_parameters() {
+    let u = write("ok3.csv", "u\n1\n2\n");
+    let p = write("bad.json", r#"{"mass": 0, "damping": 1, "stiffness": 1}"#);
+    let err = simulate_fails(&["--input", s(&u), "--fs", "750", "--params", s(&p)]);
+    assert!(err.contains("mass") && err.contains("bad.json"), "{err}");
+    let p = write("bad2.json", r#"{"mass": 1, "damping": 1}"#);
+    let err = simulate_fails(&["--input", s(&u), "--fs", "750", "--params", s(&p)]);
+    assert!(err.contains("stiffness"), "{err}");
+}
+
+#[test]
+fn diverging_simulation_names_the_sample() {
+    let u = write("ones.csv", &format!("u\n{}", "1\n".repeat(2000)));
+    let p = write(
+        "unstable.json",
+        r#"{"mass": 1, "damping": 0, "stiffness": -1e6}"#,
+    );
+    let err = simulate_fails(&["--input", s(&u), "--fs", "750", "--params", s(&p)]);
+    assert!(err.contains("diverged at sample"), "{err}");
+}
