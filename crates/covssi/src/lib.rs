@@ -1,0 +1,575 @@
+//! Output-only modal analysis by covariance-driven stochastic subspace identification (SSI-COV).
+//!
+//! One job: from one or more measured response channels alone, find the poles of the linear
+//! system that produced them, say which are physical, and group them into modes.
+//!
+//! 1. Correlations by the unbiased estimator (eq. 27 of the paper),
+//!    $\hat R_k = \frac{1}{N-k}\sum_n y(n+k)\,y_{\text{ref}}(n)^\top$ ([`corr`]), computed by
+//!    direct blocked sums or segmented zero-padded FFTs without building block data matrices.
+//! 2. The block Toeplitz matrix $T_{1|i}$ with block $(p, q) = R_{i+p-q}$ (lags $1 \dots 2i-1$)
+//!    and its SVD $T = U S V^\top$; for each model order $n$ the observability matrix
+//!    $\mathcal O = U_n S_n^{1/2}$, $A = \mathcal O_{\uparrow}^{\dagger}\mathcal O_{\downarrow}$
+//!    from its shift structure, $C$ = its first block row.
+//! 3. Eigenvalues $\mu$ of $A$ → continuous poles $\lambda = f_s \ln\mu$ (eq. 28), frequency
+//!    $|\lambda|/2\pi$ and damping $-\operatorname{Re}\lambda/|\lambda|$ (eq. 29), mode shapes
+//!    $C\psi$. Real poles stay real poles.
+//! 4. Each pole is compared with the nearest pole of the previous order (eq. 30:
+//!    $d\omega = |\omega_h-\omega_j|/\max$, $d\zeta$ likewise, $1-\text{MAC}$ for several channels;
+//!    eq. 31 for real poles) and labelled [`PoleStatus`]: stable in frequency, in frequency and
+//!    damping, also in shape, a stable real pole — or rejected, with the criterion and by how much.
+//! 5. Fully stable poles are clustered into [`Mode`]s (mean ± standard deviation), stable real
+//!    poles into [`RealPoleCluster`]s.
+//!
+//! ```
+//! # use covssi::{identify, SsiOptions, BlockRows};
+//! // a decaying oscillation sampled at 100 Hz (its correlation is again one)
+//! let y: Vec<f64> = (0..4000).map(|n| {
+//!     let t = n as f64 / 100.0;
+//!     (-0.3 * t).exp() * (2.0 * std::f64::consts::PI * 5.0 * t).cos()
+//! }).collect();
+//! let opts = SsiOptions { block_rows: BlockRows::Count(10), max_order: Some(2), ..SsiOptions::default() };
+//! let result = identify(&[&y], 100.0, &opts).unwrap();
+//! let pole = result.diagram.orders.last().unwrap().poles[0].lambda;
+//! assert!((pole.im / (2.0 * std::f64::consts::PI) - 5.0).abs() < 1e-3);
+//! ```
+
+#![warn(missing_docs)]
+
+pub mod corr;
+mod linalg;
+mod stabilize;
+#[cfg(feature = "svg")]
+pub mod svg;
+
+pub use corr::Correlations;
+pub use linalg::C64 as Complex64;
+pub use stabilize::{Mode, Pole, PoleStatus, RealPoleCluster, Rejection, Stability};
+
+use linalg::{C64, Dense};
+
+/// Errors of identification.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum SsiError {
+    /// No channel was given.
+    #[error("no channels given")]
+    NoChannels,
+    /// Channels differ in length.
+    #[error("channel {channel} has {len} samples, channel 0 has {expected}")]
+    LengthMismatch {
+        /// 0-based channel.
+        channel: usize,
+        /// Its length.
+        len: usize,
+        /// Length of channel 0.
+        expected: usize,
+    },
+    /// A sample is NaN or infinite.
+    #[error("channel {channel}, sample {index}: value {value} is not finite")]
+    NonFinite {
+        /// 0-based channel.
+        channel: usize,
+        /// 0-based sample.
+        index: usize,
+        /// The value.
+        value: f64,
+    },
+    /// A channel is constant (zero variance): it carries no dynamics.
+    #[error("channel {channel} is constant (value {value}): it carries no response")]
+    ConstantChannel {
+        /// 0-based channel.
+        channel: usize,
+        /// Its value.
+        value: f64,
+    },
+    /// The record is too short for the requested lags.
+    #[error(
+        "{samples} samples are too few for {block_rows} block rows: the correlations need lags up to {lags}, so at least {needed} samples"
+    )]
+    TooShort {
+        /// Samples given.
+        samples: usize,
+        /// Block rows asked.
+        block_rows: usize,
+        /// Largest lag needed.
+        lags: usize,
+        /// Minimum number of samples.
+        needed: usize,
+    },
+    /// The sampling rate is not a positive finite number.
+    #[error("sampling rate must be > 0, got {fs}")]
+    NonPositiveRate {
+        /// The rate (Hz).
+        fs: f64,
+    },
+    /// The maximum model order exceeds the rank of the Toeplitz matrix.
+    #[error(
+        "model order {order} exceeds the numerical rank {rank} of the block Toeplitz matrix ({rows}×{cols}); lower the maximum order or add block rows"
+    )]
+    OrderAboveRank {
+        /// Order asked.
+        order: usize,
+        /// Numerical rank.
+        rank: usize,
+        /// Toeplitz rows.
+        rows: usize,
+        /// Toeplitz columns.
+        cols: usize,
+    },
+    /// An option is out of range.
+    #[error("option `{name}` is invalid: {value}")]
+    InvalidOption {
+        /// Option name.
+        name: &'static str,
+        /// Its value.
+        value: f64,
+    },
+    /// A dense linear-algebra routine failed.
+    #[error("linear algebra failed: {0}")]
+    LinearAlgebra(String),
+}
+
+/// How many block rows i the Toeplitz matrix has (it uses lags 1 … 2i−1).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum BlockRows {
+    /// Exactly this many.
+    Count(usize),
+    /// Enough that the largest lag 2i−1 covers this many seconds.
+    Seconds(f64),
+    /// Enough that the largest lag covers `count` periods of `frequency_hz`
+    /// (the paper: 10 periods of the dominant mode).
+    Periods {
+        /// Number of periods.
+        count: f64,
+        /// Frequency whose period is counted (Hz).
+        frequency_hz: f64,
+    },
+}
+
+impl BlockRows {
+    /// The number of block rows at sampling rate `fs`.
+    pub fn resolve(&self, fs: f64) -> Result<usize, SsiError> {
+        let i = match *self {
+            BlockRows::Count(i) => i,
+            BlockRows::Seconds(t) => {
+                if !(t.is_finite() && t > 0.0) {
+                    return Err(SsiError::InvalidOption {
+                        name: "block_rows (seconds)",
+                        value: t,
+                    });
+                }
+                ((t * fs + 1.0) / 2.0).ceil() as usize
+            }
+            BlockRows::Periods {
+                count,
+                frequency_hz,
+            } => {
+                if !(count.is_finite()
+                    && count > 0.0
+                    && frequency_hz.is_finite()
+                    && frequency_hz > 0.0)
+                {
+                    return Err(SsiError::InvalidOption {
+                        name: "block_rows (periods)",
+                        value: count / frequency_hz,
+                    });
+                }
+                ((count / frequency_hz * fs + 1.0) / 2.0).ceil() as usize
+            }
+        };
+        if i < 2 {
+            return Err(SsiError::InvalidOption {
+                name: "block_rows",
+                value: i as f64,
+            });
+        }
+        Ok(i)
+    }
+}
+
+/// Thresholds of the stabilization criteria (eqs. 30–31).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StabilityCriteria {
+    /// Largest relative change of natural frequency, dω.
+    pub frequency: f64,
+    /// Largest relative change of damping ratio, dζ.
+    pub damping: f64,
+    /// Largest 1 − MAC between mode shapes (several channels only).
+    pub mac: f64,
+    /// Largest relative change of a real pole, eq. (31).
+    pub real: f64,
+}
+
+impl Default for StabilityCriteria {
+    /// dω 1 %, dζ 5 %, 1 − MAC 2 %, real pole 1.5 (the paper's value for eq. 31).
+    fn default() -> Self {
+        StabilityCriteria {
+            frequency: 0.01,
+            damping: 0.05,
+            mac: 0.02,
+            real: 1.5,
+        }
+    }
+}
+
+/// Options of [`identify`]. `SsiOptions::default()` suits most records.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SsiOptions {
+    /// Block rows of the Toeplitz matrix. Default: 20.
+    pub block_rows: BlockRows,
+    /// Largest model order; default: the numerical rank of the Toeplitz matrix, at most 40.
+    pub max_order: Option<usize>,
+    /// Orders run `order_step, 2·order_step, …`; 1 keeps odd orders, where a real pole can
+    /// appear. Default: 1.
+    pub order_step: usize,
+    /// Stabilization thresholds.
+    pub criteria: StabilityCriteria,
+    /// Poles damped more than this are rejected outright. Default: 0.5.
+    pub max_damping: f64,
+    /// Reference channels (indices); default: all.
+    pub references: Option<Vec<usize>>,
+    /// Stable poles within this relative frequency gap belong to one mode. Default: 0.02.
+    pub cluster_tolerance: f64,
+    /// A mode needs at least this many stable poles; default: max(3, orders / 5).
+    pub min_cluster_size: Option<usize>,
+}
+
+impl Default for SsiOptions {
+    fn default() -> Self {
+        SsiOptions {
+            block_rows: BlockRows::Count(20),
+            max_order: None,
+            order_step: 1,
+            criteria: StabilityCriteria::default(),
+            max_damping: 0.5,
+            references: None,
+            cluster_tolerance: 0.02,
+            min_cluster_size: None,
+        }
+    }
+}
+
+/// The poles of one model order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OrderPoles {
+    /// Model order n (size of A).
+    pub order: usize,
+    /// Poles: one per complex-conjugate pair (positive imaginary part) and every real pole.
+    pub poles: Vec<Pole>,
+}
+
+/// An estimate of the output spectrum, drawn behind the stabilization diagram.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Spectrum {
+    /// Frequencies (Hz).
+    pub frequencies_hz: Vec<f64>,
+    /// First singular value of the output spectral matrix (the PSD for one channel), from the
+    /// correlations with a Hann lag window.
+    pub first_singular_value: Vec<f64>,
+}
+
+/// Poles over model order with their labels, and the spectrum behind them.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct StabilizationDiagram {
+    /// Orders in increasing order.
+    pub orders: Vec<OrderPoles>,
+    /// Output spectrum.
+    pub spectrum: Spectrum,
+    /// Sampling rate (Hz).
+    pub fs: f64,
+    /// Number of channels.
+    pub channels: usize,
+}
+
+/// Everything [`identify`] finds.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SsiResult {
+    /// Block rows used.
+    pub block_rows: usize,
+    /// Singular values of the Toeplitz matrix.
+    pub singular_values: Vec<f64>,
+    /// The stabilization diagram.
+    pub diagram: StabilizationDiagram,
+    /// Modes (clusters of fully stable oscillating poles), by increasing frequency.
+    pub modes: Vec<Mode>,
+    /// Clusters of stable real poles, by increasing magnitude.
+    pub real_poles: Vec<RealPoleCluster>,
+    /// Remarks, e.g. why no mode was found.
+    pub notes: Vec<String>,
+}
+
+fn check_channels(y: &[&[f64]]) -> Result<usize, SsiError> {
+    let first = y.first().ok_or(SsiError::NoChannels)?;
+    let n = first.len();
+    for (c, ch) in y.iter().enumerate() {
+        if ch.len() != n {
+            return Err(SsiError::LengthMismatch {
+                channel: c,
+                len: ch.len(),
+                expected: n,
+            });
+        }
+        if let Some((index, &value)) = ch.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(SsiError::NonFinite {
+                channel: c,
+                index,
+                value,
+            });
+        }
+        if n > 0 && ch.iter().all(|v| *v == ch[0]) {
+            return Err(SsiError::ConstantChannel {
+                channel: c,
+                value: ch[0],
+            });
+        }
+    }
+    Ok(n)
+}
+
+fn check_fs(fs: f64) -> Result<(), SsiError> {
+    if fs.is_finite() && fs > 0.0 {
+        Ok(())
+    } else {
+        Err(SsiError::NonPositiveRate { fs })
+    }
+}
+
+fn references(opts: &SsiOptions, l: usize) -> Result<Vec<usize>, SsiError> {
+    match &opts.references {
+        None => Ok((0..l).collect()),
+        Some(r) => {
+            if r.is_empty() {
+                return Err(SsiError::InvalidOption {
+                    name: "references (empty)",
+                    value: 0.0,
+                });
+            }
+            if let Some(&bad) = r.iter().find(|&&b| b >= l) {
+                return Err(SsiError::InvalidOption {
+                    name: "references (index out of range)",
+                    value: bad as f64,
+                });
+            }
+            Ok(r.clone())
+        }
+    }
+}
+
+/// Identify modes from the output channels `y` (equal lengths) sampled at `fs` Hz.
+///
+/// The channels' means are removed first.
+pub fn identify(y: &[&[f64]], fs: f64, opts: &SsiOptions) -> Result<SsiResult, SsiError> {
+    check_fs(fs)?;
+    let n = check_channels(y)?;
+    let i = opts.block_rows.resolve(fs)?;
+    let lags = 2 * i;
+    if n < lags + 1 {
+        return Err(SsiError::TooShort {
+            samples: n,
+            block_rows: i,
+            lags: lags - 1,
+            needed: lags + 1,
+        });
+    }
+    let refs = references(opts, y.len())?;
+    let centred: Vec<Vec<f64>> = y
+        .iter()
+        .map(|c| {
+            let mean = c.iter().sum::<f64>() / n as f64;
+            c.iter().map(|v| v - mean).collect()
+        })
+        .collect();
+    let views: Vec<&[f64]> = centred.iter().map(|c| c.as_slice()).collect();
+    let corr = corr::estimate(&views, &refs, lags);
+    identify_from_correlations(&corr, fs, i, opts)
+}
+
+/// Identify from given correlations (at least `2·block_rows` lags), e.g. exact ones.
+pub fn identify_from_correlations(
+    corr: &Correlations,
+    fs: f64,
+    block_rows: usize,
+    opts: &SsiOptions,
+) -> Result<SsiResult, SsiError> {
+    check_fs(fs)?;
+    let i = block_rows;
+    let (l, r) = (corr.channels, corr.references);
+    if i < 2 || corr.r.len() < 2 * i {
+        return Err(SsiError::InvalidOption {
+            name: "block_rows (needs 2·block_rows correlation lags)",
+            value: i as f64,
+        });
+    }
+    if opts.order_step == 0 {
+        return Err(SsiError::InvalidOption {
+            name: "order_step",
+            value: 0.0,
+        });
+    }
+    // Block Toeplitz T (l·i × r·i), block (p, q) = R_{i+p−q}.
+    let (rows, cols) = (l * i, r * i);
+    let mut t = Dense::zeros(rows, cols);
+    for p in 0..i {
+        for q in 0..i {
+            let rk = &corr.r[i + p - q];
+            for b in 0..r {
+                for a in 0..l {
+                    t.set(p * l + a, q * r + b, rk[a + b * l]);
+                }
+            }
+        }
+    }
+    let (u, s) = linalg::thin_svd_u(&t).map_err(SsiError::LinearAlgebra)?;
+    let s0 = s.first().copied().unwrap_or(0.0);
+    let rank = s.iter().filter(|&&v| v > s0 * 1e-12).count();
+    let max_order = match opts.max_order {
+        Some(m) => m,
+        None => rank.min(40),
+    };
+    if max_order > rank || max_order == 0 {
+        return Err(SsiError::OrderAboveRank {
+            order: max_order,
+            rank,
+            rows,
+            cols,
+        });
+    }
+    // QR of the upper part of U (all max_order columns) by modified Gram–Schmidt, twice.
+    let up_rows = l * (i - 1);
+    let mut q = Dense::zeros(up_rows, max_order);
+    let mut rr = Dense::zeros(max_order, max_order);
+    for c in 0..max_order {
+        let mut v: Vec<f64> = (0..up_rows).map(|row| u.at(row, c)).collect();
+        for _pass in 0..2 {
+            for k in 0..c {
+                let d: f64 = (0..up_rows).map(|row| q.at(row, k) * v[row]).sum();
+                rr.set(k, c, rr.at(k, c) + d);
+                for (row, vr) in v.iter_mut().enumerate() {
+                    *vr -= d * q.at(row, k);
+                }
+            }
+        }
+        let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if norm == 0.0 {
+            return Err(SsiError::OrderAboveRank {
+                order: c + 1,
+                rank: c,
+                rows,
+                cols,
+            });
+        }
+        rr.set(c, c, norm);
+        for (row, vr) in v.iter().enumerate() {
+            q.set(row, c, vr / norm);
+        }
+    }
+    // M = Qᵀ U_down.
+    let mut m = Dense::zeros(max_order, max_order);
+    for a in 0..max_order {
+        for b in 0..max_order {
+            let d: f64 = (0..up_rows)
+                .map(|row| q.at(row, a) * u.at(row + l, b))
+                .sum();
+            m.set(a, b, d);
+        }
+    }
+    let mut orders = Vec::new();
+    let mut order = opts.order_step;
+    while order <= max_order {
+        // B = R_n⁻¹ M_n is similar to A_n = S^{-1/2} B S^{1/2}; shapes are U_top ψ_B.
+        let mut bmat = Dense::zeros(order, order);
+        for col in 0..order {
+            for row in (0..order).rev() {
+                let mut v = m.at(row, col);
+                for k in row + 1..order {
+                    v -= rr.at(row, k) * bmat.at(k, col);
+                }
+                bmat.set(row, col, v / rr.at(row, row));
+            }
+        }
+        let (mu, vecs) = linalg::eigen(&bmat).map_err(SsiError::LinearAlgebra)?;
+        let mut poles = Vec::new();
+        for (j, muj) in mu.iter().enumerate() {
+            if muj.im < 0.0 {
+                continue; // the conjugate partner is kept
+            }
+            let shape: Vec<C64> = (0..l)
+                .map(|a| (0..order).map(|k| vecs[j * order + k] * u.at(a, k)).sum())
+                .collect();
+            poles.push(stabilize::Pole::new(*muj, fs, shape));
+        }
+        orders.push(OrderPoles { order, poles });
+        order += opts.order_step;
+    }
+    let spectrum = spectrum_from_correlations(corr, fs);
+    let mut diagram = StabilizationDiagram {
+        orders,
+        spectrum,
+        fs,
+        channels: l,
+    };
+    stabilize::label(&mut diagram, opts);
+    let (modes, real_poles, notes) = stabilize::cluster(&diagram, opts);
+    Ok(SsiResult {
+        block_rows: i,
+        singular_values: s,
+        diagram,
+        modes,
+        real_poles,
+        notes,
+    })
+}
+
+/// First singular value of the spectral matrix of the reference channels, from the
+/// correlations with a Hann lag window, at 256 frequencies from 0 to fs/2.
+fn spectrum_from_correlations(corr: &Correlations, fs: f64) -> Spectrum {
+    let (l, r) = (corr.channels, corr.references);
+    // Use the square part: rows of the reference channels are not known here, so the
+    // auto/cross block of the first min(l, r) channels stands in when r < l.
+    let d = l.min(r);
+    let k_max = corr.r.len() - 1;
+    let npts = 256;
+    let mut freqs = Vec::with_capacity(npts);
+    let mut sv1 = Vec::with_capacity(npts);
+    for p in 0..npts {
+        let f = fs / 2.0 * p as f64 / (npts - 1) as f64;
+        let w = 2.0 * std::f64::consts::PI * f / fs;
+        let mut s = vec![C64::new(0.0, 0.0); d * d];
+        for (k, rk) in corr.r.iter().enumerate() {
+            let win = 0.5 * (1.0 + (std::f64::consts::PI * k as f64 / (k_max + 1) as f64).cos());
+            let e = C64::from_polar(1.0, -w * k as f64);
+            for a in 0..d {
+                for b in 0..d {
+                    let v = rk[a + b * l];
+                    if k == 0 {
+                        s[a + b * d] += v;
+                    } else {
+                        // R(−k) = R(k)ᵀ
+                        s[a + b * d] += e * v * win;
+                        s[b + a * d] += e.conj() * v * win;
+                    }
+                }
+            }
+        }
+        // Largest singular value of the Hermitian matrix s: power iteration.
+        let mut x = vec![C64::new(1.0, 0.0); d];
+        let mut lam = 0.0;
+        for _ in 0..30 {
+            let y: Vec<C64> = (0..d)
+                .map(|a| (0..d).map(|b| s[a + b * d] * x[b]).sum())
+                .collect();
+            let norm = y.iter().map(|v| v.norm_sqr()).sum::<f64>().sqrt();
+            if norm == 0.0 {
+                break;
+            }
+            lam = norm;
+            x = y.into_iter().map(|v| v / norm).collect();
+        }
+        freqs.push(f);
+        sv1.push(lam / fs);
+    }
+    Spectrum {
+        frequencies_hz: freqs,
+        first_singular_value: sv1,
+    }
+}

@@ -1,0 +1,428 @@
+//! Pole labels (eqs. 30–31) and clustering of stable poles into modes.
+
+use crate::linalg::C64;
+use crate::{SsiOptions, StabilizationDiagram};
+
+/// How far a pole is stable.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stability {
+    /// Stable in frequency only (dζ above its threshold).
+    Frequency,
+    /// Stable in frequency and damping (the top level for one channel).
+    FrequencyDamping,
+    /// Stable in frequency, damping and shape (1 − MAC), for several channels.
+    FrequencyDampingShape,
+    /// A real (non-oscillating) pole stable by eq. (31).
+    Real,
+}
+
+/// Why a pole is not stable.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Rejection {
+    /// No pole of the same kind at the previous order to compare with.
+    NoPrevious,
+    /// Re λ ≥ 0: not a decaying mode.
+    Unstable {
+        /// Re λ (1/s).
+        real_part: f64,
+    },
+    /// A negative real discrete eigenvalue: a pole at the Nyquist frequency, not physical.
+    NegativeRealEigenvalue,
+    /// Damping ratio above the hard limit.
+    DampingAboveLimit {
+        /// ζ of the pole.
+        damping: f64,
+        /// The limit.
+        limit: f64,
+    },
+    /// Frequency changed too much from the previous order (eq. 30).
+    Frequency {
+        /// dω.
+        change: f64,
+        /// Its threshold.
+        threshold: f64,
+    },
+    /// A real pole changed too much from the previous order (eq. 31).
+    RealPole {
+        /// dr.
+        change: f64,
+        /// Its threshold.
+        threshold: f64,
+    },
+}
+
+/// The label of a pole.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PoleStatus {
+    /// Stable to this level.
+    Stable(Stability),
+    /// Rejected, with the reason.
+    Rejected(Rejection),
+}
+
+impl PoleStatus {
+    /// A short name for reports: `stable_f`, `stable_fd`, `stable_fdm`, `stable_real`, or
+    /// `rejected_<criterion>`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            PoleStatus::Stable(Stability::Frequency) => "stable_f",
+            PoleStatus::Stable(Stability::FrequencyDamping) => "stable_fd",
+            PoleStatus::Stable(Stability::FrequencyDampingShape) => "stable_fdm",
+            PoleStatus::Stable(Stability::Real) => "stable_real",
+            PoleStatus::Rejected(Rejection::NoPrevious) => "rejected_no_previous",
+            PoleStatus::Rejected(Rejection::Unstable { .. }) => "rejected_unstable",
+            PoleStatus::Rejected(Rejection::NegativeRealEigenvalue) => "rejected_nyquist",
+            PoleStatus::Rejected(Rejection::DampingAboveLimit { .. }) => "rejected_damping_limit",
+            PoleStatus::Rejected(Rejection::Frequency { .. }) => "rejected_frequency",
+            PoleStatus::Rejected(Rejection::RealPole { .. }) => "rejected_real",
+        }
+    }
+}
+
+/// One pole of one model order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Pole {
+    /// Continuous-time pole λ (rad/s); for a pair, the member with Im λ > 0.
+    pub lambda: C64,
+    /// Natural frequency |λ|/2π (Hz).
+    pub frequency_hz: f64,
+    /// Damping ratio −Re λ/|λ| (1 for a real negative pole).
+    pub damping_ratio: f64,
+    /// Whether λ is real.
+    pub is_real: bool,
+    /// Mode shape Cψ (one entry per channel).
+    pub shape: Vec<C64>,
+    /// Relative frequency change from the nearest pole of the previous order.
+    pub d_frequency: Option<f64>,
+    /// Relative damping change.
+    pub d_damping: Option<f64>,
+    /// 1 − MAC with that pole's shape (several channels).
+    pub d_mac: Option<f64>,
+    /// Eq. (31) change for a real pole.
+    pub d_real: Option<f64>,
+    /// The label.
+    pub status: PoleStatus,
+    /// Whether the discrete eigenvalue was negative real (Nyquist).
+    negative_real: bool,
+}
+
+impl Pole {
+    pub(crate) fn new(mu: C64, fs: f64, shape: Vec<C64>) -> Pole {
+        let is_real = mu.im == 0.0;
+        let negative_real = is_real && mu.re <= 0.0;
+        let lambda = if is_real && !negative_real {
+            C64::new(mu.re.ln() * fs, 0.0)
+        } else {
+            mu.ln() * fs
+        };
+        let w = lambda.norm();
+        Pole {
+            lambda,
+            frequency_hz: w / (2.0 * std::f64::consts::PI),
+            damping_ratio: if w > 0.0 { -lambda.re / w } else { 0.0 },
+            is_real: is_real && !negative_real,
+            shape,
+            d_frequency: None,
+            d_damping: None,
+            d_mac: None,
+            d_real: None,
+            status: PoleStatus::Rejected(Rejection::NoPrevious),
+            negative_real,
+        }
+    }
+}
+
+fn rel(a: f64, b: f64) -> f64 {
+    let m = a.abs().max(b.abs());
+    if m == 0.0 { 0.0 } else { (a - b).abs() / m }
+}
+
+/// Modal assurance criterion of two complex shapes.
+pub(crate) fn mac(a: &[C64], b: &[C64]) -> f64 {
+    let num: C64 = a.iter().zip(b).map(|(x, y)| x.conj() * y).sum();
+    let da: f64 = a.iter().map(|x| x.norm_sqr()).sum();
+    let db: f64 = b.iter().map(|x| x.norm_sqr()).sum();
+    if da == 0.0 || db == 0.0 {
+        0.0
+    } else {
+        num.norm_sqr() / (da * db)
+    }
+}
+
+fn hard_rejection(p: &Pole, opts: &SsiOptions) -> Option<Rejection> {
+    if p.negative_real {
+        return Some(Rejection::NegativeRealEigenvalue);
+    }
+    if p.lambda.re >= 0.0 {
+        return Some(Rejection::Unstable {
+            real_part: p.lambda.re,
+        });
+    }
+    if !p.is_real && p.damping_ratio > opts.max_damping {
+        return Some(Rejection::DampingAboveLimit {
+            damping: p.damping_ratio,
+            limit: opts.max_damping,
+        });
+    }
+    None
+}
+
+/// Label every pole against the nearest pole of the same kind at the previous order.
+pub(crate) fn label(d: &mut StabilizationDiagram, opts: &SsiOptions) {
+    let c = &opts.criteria;
+    let multi = d.channels > 1;
+    for o in 0..d.orders.len() {
+        let (prev, cur) = d.orders.split_at_mut(o);
+        let prev = prev.last();
+        for p in cur[0].poles.iter_mut() {
+            if let Some(r) = hard_rejection(p, opts) {
+                p.status = PoleStatus::Rejected(r);
+                continue;
+            }
+            let candidates = prev
+                .map(|po| {
+                    po.poles
+                        .iter()
+                        .filter(|q| q.is_real == p.is_real && hard_rejection(q, opts).is_none())
+                        .collect::<Vec<_>>()
+                })
+                .unwrap_or_default();
+            let nearest = candidates.iter().min_by(|a, b| {
+                (a.frequency_hz - p.frequency_hz)
+                    .abs()
+                    .total_cmp(&(b.frequency_hz - p.frequency_hz).abs())
+            });
+            let Some(q) = nearest else {
+                p.status = PoleStatus::Rejected(Rejection::NoPrevious);
+                continue;
+            };
+            if p.is_real {
+                // Eq. (31) as printed, |λ_h − λ_j| / max(λ_h, λ_j): for negative real poles the
+                // max is the one nearer zero, i.e. the smaller magnitude.
+                let dr = (p.lambda.re - q.lambda.re).abs()
+                    / p.lambda
+                        .re
+                        .abs()
+                        .min(q.lambda.re.abs())
+                        .max(f64::MIN_POSITIVE);
+                p.d_real = Some(dr);
+                p.d_frequency = Some(rel(p.frequency_hz, q.frequency_hz));
+                p.status = if dr <= c.real {
+                    PoleStatus::Stable(Stability::Real)
+                } else {
+                    PoleStatus::Rejected(Rejection::RealPole {
+                        change: dr,
+                        threshold: c.real,
+                    })
+                };
+                continue;
+            }
+            let df = rel(p.frequency_hz, q.frequency_hz);
+            let dz = rel(p.damping_ratio, q.damping_ratio);
+            p.d_frequency = Some(df);
+            p.d_damping = Some(dz);
+            if multi {
+                p.d_mac = Some(1.0 - mac(&p.shape, &q.shape));
+            }
+            p.status = if df > c.frequency {
+                PoleStatus::Rejected(Rejection::Frequency {
+                    change: df,
+                    threshold: c.frequency,
+                })
+            } else if dz > c.damping {
+                PoleStatus::Stable(Stability::Frequency)
+            } else if !multi {
+                PoleStatus::Stable(Stability::FrequencyDamping)
+            } else if p.d_mac.unwrap_or(1.0) <= c.mac {
+                PoleStatus::Stable(Stability::FrequencyDampingShape)
+            } else {
+                PoleStatus::Stable(Stability::FrequencyDamping)
+            };
+        }
+    }
+}
+
+/// A physical mode: a cluster of fully stable oscillating poles.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Mode {
+    /// Mean natural frequency (Hz).
+    pub frequency_hz: f64,
+    /// Standard deviation of the members' frequencies (Hz).
+    pub frequency_std_hz: f64,
+    /// Mean damping ratio.
+    pub damping_ratio: f64,
+    /// Standard deviation of the members' damping ratios.
+    pub damping_std: f64,
+    /// Mean of the members' shapes, each scaled so that its largest entry is 1.
+    pub shape: Vec<C64>,
+    /// Standard deviation of the scaled shapes' entries (magnitude of the complex spread).
+    pub shape_std: Vec<f64>,
+    /// Member poles as (order, index in that order's pole list).
+    pub members: Vec<(usize, usize)>,
+    /// Mean continuous-time pole (rad/s).
+    pub lambda: C64,
+}
+
+/// A cluster of stable real poles.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RealPoleCluster {
+    /// Mean real pole λ (rad/s, negative).
+    pub lambda: f64,
+    /// Standard deviation of the members.
+    pub lambda_std: f64,
+    /// Member poles as (order, index in that order's pole list).
+    pub members: Vec<(usize, usize)>,
+}
+
+fn mean_std(v: &[f64]) -> (f64, f64) {
+    let n = v.len() as f64;
+    let m = v.iter().sum::<f64>() / n;
+    let var = if v.len() > 1 {
+        v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)
+    } else {
+        0.0
+    };
+    (m, var.sqrt())
+}
+
+fn normalise(shape: &[C64]) -> Vec<C64> {
+    let big = shape
+        .iter()
+        .copied()
+        .max_by(|a, b| a.norm().total_cmp(&b.norm()))
+        .unwrap_or(C64::new(1.0, 0.0));
+    if big.norm() == 0.0 {
+        return shape.to_vec();
+    }
+    shape.iter().map(|v| v / big).collect()
+}
+
+/// Group candidates (sorted by `key`) into runs whose neighbours differ by at most `tol`
+/// relatively; keep one member per order (the nearest to the run's median); drop small runs.
+fn runs(
+    mut cand: Vec<(f64, usize, usize)>,
+    tol: f64,
+    min_size: usize,
+) -> Vec<Vec<(f64, usize, usize)>> {
+    cand.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut out: Vec<Vec<(f64, usize, usize)>> = Vec::new();
+    for c in cand {
+        match out.last_mut() {
+            Some(run) if rel(run.last().expect("runs are non-empty").0, c.0) <= tol => run.push(c),
+            _ => out.push(vec![c]),
+        }
+    }
+    out.into_iter()
+        .map(|run| {
+            let med = run[run.len() / 2].0;
+            let mut best: Vec<(f64, usize, usize)> = Vec::new();
+            for c in run {
+                match best.iter_mut().find(|b| b.1 == c.1) {
+                    Some(b) if (c.0 - med).abs() < (b.0 - med).abs() => *b = c,
+                    Some(_) => {}
+                    None => best.push(c),
+                }
+            }
+            best
+        })
+        .filter(|run| run.len() >= min_size)
+        .collect()
+}
+
+pub(crate) fn cluster(
+    d: &StabilizationDiagram,
+    opts: &SsiOptions,
+) -> (Vec<Mode>, Vec<RealPoleCluster>, Vec<String>) {
+    let top = if d.channels > 1 {
+        Stability::FrequencyDampingShape
+    } else {
+        Stability::FrequencyDamping
+    };
+    let min_size = opts
+        .min_cluster_size
+        .unwrap_or_else(|| (d.orders.len() / 5).max(3));
+    let mut osc = Vec::new();
+    let mut real = Vec::new();
+    for (oi, o) in d.orders.iter().enumerate() {
+        for (pi, p) in o.poles.iter().enumerate() {
+            match p.status {
+                PoleStatus::Stable(s) if s == top => osc.push((p.frequency_hz, oi, pi)),
+                PoleStatus::Stable(Stability::Real) => real.push((-p.lambda.re, oi, pi)),
+                _ => {}
+            }
+        }
+    }
+    let mut notes = Vec::new();
+    let n_osc = osc.len();
+    let modes: Vec<Mode> = runs(osc, opts.cluster_tolerance, min_size)
+        .into_iter()
+        .map(|run| {
+            let poles: Vec<&Pole> = run.iter().map(|&(_, o, p)| &d.orders[o].poles[p]).collect();
+            let f: Vec<f64> = poles.iter().map(|p| p.frequency_hz).collect();
+            let z: Vec<f64> = poles.iter().map(|p| p.damping_ratio).collect();
+            let (fm, fs) = mean_std(&f);
+            let (zm, zs) = mean_std(&z);
+            let shapes: Vec<Vec<C64>> = poles.iter().map(|p| normalise(&p.shape)).collect();
+            let l = shapes[0].len();
+            let k = shapes.len() as f64;
+            let mean: Vec<C64> = (0..l)
+                .map(|a| shapes.iter().map(|s| s[a]).sum::<C64>() / k)
+                .collect();
+            let spread: Vec<f64> = (0..l)
+                .map(|a| {
+                    let v = shapes
+                        .iter()
+                        .map(|s| (s[a] - mean[a]).norm_sqr())
+                        .sum::<f64>();
+                    if shapes.len() > 1 {
+                        (v / (k - 1.0)).sqrt()
+                    } else {
+                        0.0
+                    }
+                })
+                .collect();
+            let lambda = poles.iter().map(|p| p.lambda).sum::<C64>() / k;
+            Mode {
+                frequency_hz: fm,
+                frequency_std_hz: fs,
+                damping_ratio: zm,
+                damping_std: zs,
+                shape: mean,
+                shape_std: spread,
+                members: run
+                    .iter()
+                    .map(|&(_, o, p)| (d.orders[o].order, p))
+                    .collect(),
+                lambda,
+            }
+        })
+        .collect();
+    if modes.is_empty() {
+        notes.push(if n_osc == 0 {
+            "no pole was stable in frequency and damping at any order: no mode found (try more block rows, a higher order, or looser thresholds)".to_string()
+        } else {
+            format!(
+                "{n_osc} stable poles, but no cluster reached {min_size} members: no mode found"
+            )
+        });
+    }
+    let real_clusters: Vec<RealPoleCluster> = runs(real, 0.25, min_size)
+        .into_iter()
+        .map(|run| {
+            let v: Vec<f64> = run
+                .iter()
+                .map(|&(_, o, p)| d.orders[o].poles[p].lambda.re)
+                .collect();
+            let (m, s) = mean_std(&v);
+            RealPoleCluster {
+                lambda: m,
+                lambda_std: s,
+                members: run
+                    .iter()
+                    .map(|&(_, o, p)| (d.orders[o].order, p))
+                    .collect(),
+            }
+        })
+        .collect();
+    (modes, real_clusters, notes)
+}
