@@ -5,6 +5,7 @@
 //! [`model`] (Bouc-Wen, Zener and linear oscillators), [`sim`] (simulation, excitations,
 //! resampling) and [`io`] (CSV records and the shared data folder).
 
+pub use covssi;
 pub use hyst_model as model;
 pub use hyst_sim as sim;
 

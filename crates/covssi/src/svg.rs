@@ -5,6 +5,9 @@ use plotters::prelude::*;
 
 use crate::{PoleStatus, Stability, StabilizationDiagram};
 
+/// A legend entry: its name, colour, and which poles it marks.
+type Kind = (&'static str, RGBColor, fn(&PoleStatus) -> bool);
+
 /// Render the diagram as an SVG document. `max_frequency_hz` limits the frequency axis
 /// (default: fs/2).
 pub fn stabilization_svg(
@@ -63,7 +66,7 @@ fn draw<DB: DrawingBackend>(
             RGBColor(170, 170, 170).stroke_width(2),
         ))?;
     }
-    let kinds: [(&str, RGBColor, fn(&PoleStatus) -> bool); 5] = [
+    let kinds: [Kind; 5] = [
         ("rejected", RGBColor(210, 210, 210), |s| {
             matches!(s, PoleStatus::Rejected(_))
         }),

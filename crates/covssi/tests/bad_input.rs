@@ -1,0 +1,149 @@
+//! Bad input gives a clear error (or an empty result with the reason), never a panic.
+
+use covssi::{BlockRows, SsiError, SsiOptions, identify};
+
+fn sine(n: usize) -> Vec<f64> {
+    (0..n)
+        .map(|k| (0.3 * k as f64).sin() + 0.1 * (1.7 * k as f64).cos())
+        .collect()
+}
+
+#[test]
+fn too_few_samples_for_the_lags() {
+    let y = sine(30);
+    let e = identify(&[&y], 10.0, &SsiOptions::default()).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            SsiError::TooShort {
+                samples: 30,
+                block_rows: 20,
+                ..
+            }
+        ),
+        "{e}"
+    );
+    assert!(e.to_string().contains("at least 41 samples"), "{e}");
+}
+
+#[test]
+fn constant_channel() {
+    let a = sine(500);
+    let b = vec![2.5; 500];
+    let e = identify(&[&a, &b], 10.0, &SsiOptions::default()).unwrap_err();
+    assert_eq!(
+        e,
+        SsiError::ConstantChannel {
+            channel: 1,
+            value: 2.5
+        }
+    );
+}
+
+#[test]
+fn nan_channel() {
+    let mut a = sine(500);
+    a[123] = f64::NAN;
+    let e = identify(&[&a], 10.0, &SsiOptions::default()).unwrap_err();
+    assert!(matches!(
+        e,
+        SsiError::NonFinite {
+            channel: 0,
+            index: 123,
+            ..
+        }
+    ));
+}
+
+#[test]
+fn unequal_lengths_and_no_channels_and_bad_rate() {
+    let a = sine(500);
+    let b = sine(400);
+    assert!(matches!(
+        identify(&[&a, &b], 10.0, &SsiOptions::default()),
+        Err(SsiError::LengthMismatch {
+            channel: 1,
+            len: 400,
+            expected: 500
+        })
+    ));
+    assert_eq!(
+        identify(&[], 10.0, &SsiOptions::default()),
+        Err(SsiError::NoChannels)
+    );
+    assert!(matches!(
+        identify(&[&a], 0.0, &SsiOptions::default()),
+        Err(SsiError::NonPositiveRate { .. })
+    ));
+}
+
+#[test]
+fn order_above_the_rank() {
+    // Exact correlations of one undamped sinusoid, R_k = cos(0.3 k): a rank-2 Toeplitz
+    // matrix; asking for order 10 is an error naming the rank.
+    let corr = covssi::Correlations {
+        channels: 1,
+        references: 1,
+        r: (0..20).map(|k| vec![(0.3 * k as f64).cos()]).collect(),
+    };
+    let opts = SsiOptions {
+        max_order: Some(10),
+        ..SsiOptions::default()
+    };
+    let e = covssi::identify_from_correlations(&corr, 10.0, 10, &opts).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            SsiError::OrderAboveRank {
+                order: 10,
+                rank: 2,
+                ..
+            }
+        ),
+        "{e}"
+    );
+    // More than the matrix has rows (5 block rows of one channel).
+    let opts = SsiOptions {
+        block_rows: BlockRows::Count(5),
+        max_order: Some(8),
+        ..SsiOptions::default()
+    };
+    let y = sine(2000);
+    let e = identify(&[&y], 10.0, &opts);
+    assert!(
+        matches!(e, Err(SsiError::OrderAboveRank { order: 8, .. })),
+        "{e:?}"
+    );
+}
+
+#[test]
+fn no_stable_pole_gives_an_empty_result_with_the_reason() {
+    // Deterministic pseudo-random noise has no stable poles.
+    let mut s = 7u64;
+    let y: Vec<f64> = (0..3000)
+        .map(|_| {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        })
+        .collect();
+    let opts = SsiOptions {
+        block_rows: BlockRows::Count(10),
+        max_order: Some(10),
+        criteria: covssi::StabilityCriteria {
+            frequency: 0.001,
+            damping: 0.001,
+            mac: 0.001,
+            real: 0.001,
+        },
+        ..SsiOptions::default()
+    };
+    let r = identify(&[&y], 10.0, &opts).unwrap();
+    assert!(r.modes.is_empty());
+    assert!(
+        r.notes.iter().any(|n| n.contains("no mode found")),
+        "{:?}",
+        r.notes
+    );
+}
