@@ -28,7 +28,7 @@ fn record(n: usize, seed: u64) -> Vec<Vec<f64>> {
         [-0.6, 0.2, 0.3, 0.9],
     ];
     let mut x = [0.0f64; 4];
-    let mut out = vec![Vec::with_capacity(n); 3];
+    let mut out: Vec<Vec<f64>> = (0..3).map(|_| Vec::with_capacity(n)).collect();
     for _ in 0..n {
         let mut nx = [0.0; 4];
         for (b, blk) in blocks.iter().enumerate() {
