@@ -32,6 +32,61 @@ enum Command {
     Simulate(SimulateArgs),
     /// Generate an excitation record and write it as a one-column CSV `u`.
     Excite(ExcitationArgs),
+    /// Output-only modal analysis (covariance-driven SSI) of one or more channels.
+    ///
+    /// Example:
+    ///   hyst ssi --input data_3dof.csv --fs 20 --columns y1,y2,y3 --max-order 40 --json modes.json --svg diagram.svg
+    #[command(verbatim_doc_comment)]
+    Ssi(SsiArgs),
+}
+
+#[derive(Args, Debug)]
+struct SsiArgs {
+    /// Input CSV file with a header line.
+    #[arg(long)]
+    input: PathBuf,
+    /// Sampling rate of the file (Hz).
+    #[arg(long)]
+    fs: f64,
+    /// Channels to analyse, comma-separated; default: every column except `t` and `time`.
+    #[arg(long, value_delimiter = ',')]
+    columns: Option<Vec<String>>,
+    /// Decimate by this factor first (MATLAB-style FIR decimation).
+    #[arg(long, default_value_t = 1)]
+    decimate: usize,
+    /// Skip this many leading rows (e.g. a start-up transient).
+    #[arg(long, default_value_t = 0)]
+    skip: usize,
+    /// Block rows of the Toeplitz matrix (lags up to 2·N−1).
+    #[arg(long, default_value_t = 20)]
+    block_rows: usize,
+    /// Largest model order (default: the Toeplitz rank, at most 40).
+    #[arg(long)]
+    max_order: Option<usize>,
+    /// Model order step.
+    #[arg(long, default_value_t = 1)]
+    order_step: usize,
+    /// Stabilization threshold on the relative frequency change.
+    #[arg(long, default_value_t = 0.01)]
+    df: f64,
+    /// Stabilization threshold on the relative damping change.
+    #[arg(long, default_value_t = 0.05)]
+    dzeta: f64,
+    /// Stabilization threshold on 1 − MAC (several channels).
+    #[arg(long, default_value_t = 0.02)]
+    dmac: f64,
+    /// Stabilization threshold of eq. (31) for real poles.
+    #[arg(long, default_value_t = 1.5)]
+    dreal: f64,
+    /// Reference channels (0-based indices among --columns), comma-separated; default: all.
+    #[arg(long, value_delimiter = ',')]
+    references: Option<Vec<usize>>,
+    /// Write the modes, real poles and per-order poles as JSON here.
+    #[arg(long)]
+    json: PathBuf,
+    /// Draw the stabilization diagram as SVG here.
+    #[arg(long)]
+    svg: Option<PathBuf>,
 }
 
 #[derive(Clone, Copy, ValueEnum, PartialEq, Eq, Debug)]
@@ -287,11 +342,172 @@ fn simulate(a: &SimulateArgs) -> Result<(), Error> {
     Ok(())
 }
 
+fn c64(v: hyst::covssi::Complex64) -> serde_json::Value {
+    serde_json::json!([v.re, v.im])
+}
+
+fn ssi(a: &SsiArgs) -> Result<(), Error> {
+    use hyst::covssi::{self, BlockRows, PoleStatus, Rejection, SsiOptions, StabilityCriteria};
+    use serde_json::json;
+    let fs = check_fs(a.fs)?;
+    if a.decimate == 0 {
+        return Err(fail("--decimate must be at least 1, got 0"));
+    }
+    let t = read_csv(&a.input)?;
+    let names: Vec<String> = match &a.columns {
+        Some(c) => c.clone(),
+        None => t
+            .names
+            .iter()
+            .filter(|n| !matches!(n.to_ascii_lowercase().as_str(), "t" | "time"))
+            .cloned()
+            .collect(),
+    };
+    if a.skip >= t.len() {
+        return Err(fail(format!(
+            "--skip {} leaves no rows of the {} in {}",
+            a.skip,
+            t.len(),
+            a.input.display()
+        )));
+    }
+    let mut channels = Vec::new();
+    for n in &names {
+        let c = &t.column(n)?[a.skip..];
+        channels.push(hyst::sim::resample::decimate(c, a.decimate));
+    }
+    let fs_used = fs / a.decimate as f64;
+    let views: Vec<&[f64]> = channels.iter().map(|c| c.as_slice()).collect();
+    let opts = SsiOptions {
+        block_rows: BlockRows::Count(a.block_rows),
+        max_order: a.max_order,
+        order_step: a.order_step,
+        criteria: StabilityCriteria {
+            frequency: a.df,
+            damping: a.dzeta,
+            mac: a.dmac,
+            real: a.dreal,
+        },
+        references: a.references.clone(),
+        ..SsiOptions::default()
+    };
+    let res = covssi::identify(&views, fs_used, &opts).map_err(|e| {
+        fail(format!(
+            "{}: columns {}: {e}",
+            a.input.display(),
+            names.join(",")
+        ))
+    })?;
+    let modes: Vec<_> = res
+        .modes
+        .iter()
+        .map(|m| {
+            json!({
+                "frequency_hz": m.frequency_hz,
+                "damping_ratio": m.damping_ratio,
+                "frequency_std_hz": m.frequency_std_hz,
+                "damping_std": m.damping_std,
+                "poles": m.members.len(),
+                "shape": m.shape.iter().map(|v| c64(*v)).collect::<Vec<_>>(),
+                "shape_std": m.shape_std,
+                "lambda": c64(m.lambda),
+            })
+        })
+        .collect();
+    let real: Vec<_> = res
+        .real_poles
+        .iter()
+        .map(|r| json!({"lambda": r.lambda, "lambda_std": r.lambda_std, "poles": r.members.len()}))
+        .collect();
+    let orders: Vec<_> = res
+        .diagram
+        .orders
+        .iter()
+        .map(|o| {
+            let poles: Vec<_> = o
+                .poles
+                .iter()
+                .map(|p| {
+                    let why = match p.status {
+                        PoleStatus::Rejected(Rejection::Frequency { change, threshold })
+                        | PoleStatus::Rejected(Rejection::RealPole { change, threshold }) => {
+                            json!({"change": change, "threshold": threshold})
+                        }
+                        PoleStatus::Rejected(Rejection::DampingAboveLimit { damping, limit }) => {
+                            json!({"damping": damping, "limit": limit})
+                        }
+                        PoleStatus::Rejected(Rejection::Unstable { real_part }) => {
+                            json!({"real_part": real_part})
+                        }
+                        _ => serde_json::Value::Null,
+                    };
+                    json!({
+                        "lambda": c64(p.lambda),
+                        "frequency_hz": p.frequency_hz,
+                        "damping_ratio": p.damping_ratio,
+                        "real": p.is_real,
+                        "label": p.status.name(),
+                        "why": why,
+                        "d_frequency": p.d_frequency,
+                        "d_damping": p.d_damping,
+                        "d_mac": p.d_mac,
+                        "d_real": p.d_real,
+                    })
+                })
+                .collect();
+            json!({"order": o.order, "poles": poles})
+        })
+        .collect();
+    let doc = json!({
+        "input": a.input.display().to_string(),
+        "channels": names,
+        "fs_hz": fs_used,
+        "block_rows": res.block_rows,
+        "modes": modes,
+        "real_poles": real,
+        "notes": res.notes,
+        "orders": orders,
+    });
+    std::fs::write(&a.json, serde_json::to_string_pretty(&doc)?)
+        .map_err(|e| fail(format!("{}: {e}", a.json.display())))?;
+    if let Some(svg) = &a.svg {
+        let title = format!("Stabilization diagram: {}", a.input.display());
+        std::fs::write(
+            svg,
+            covssi::svg::stabilization_svg(&res.diagram, None, &title),
+        )
+        .map_err(|e| fail(format!("{}: {e}", svg.display())))?;
+    }
+    for m in &res.modes {
+        println!(
+            "mode {:>9.4} ± {:.4} Hz  damping {:.4} ± {:.4}  ({} poles)",
+            m.frequency_hz,
+            m.frequency_std_hz,
+            m.damping_ratio,
+            m.damping_std,
+            m.members.len()
+        );
+    }
+    for r in &res.real_poles {
+        println!(
+            "real pole {:.4} ± {:.4} rad/s ({} poles)",
+            r.lambda,
+            r.lambda_std,
+            r.members.len()
+        );
+    }
+    for n in &res.notes {
+        println!("note: {n}");
+    }
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Simulate(a) => simulate(a),
         Command::Excite(a) => excite(a),
+        Command::Ssi(a) => ssi(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -70,75 +70,69 @@ pub fn direct(y: &[&[f64]], refs: &[usize], lags: usize) -> Correlations {
 
 #[inline]
 fn dot(a: &[f64], b: &[f64]) -> f64 {
-    // Four independent accumulators let the compiler vectorise the sum.
-    let mut s = [0.0f64; 4];
-    let chunks = a.len() / 4;
-    for i in 0..chunks {
-        for j in 0..4 {
-            s[j] += a[4 * i + j] * b[4 * i + j];
+    // Sixteen independent accumulators hide the latency of the vectorised multiply-adds.
+    let mut s = [0.0f64; 16];
+    let chunks = a.len() / 16;
+    for (ca, cb) in a.chunks_exact(16).zip(b.chunks_exact(16)) {
+        for j in 0..16 {
+            s[j] += ca[j] * cb[j];
         }
     }
-    let mut t = (s[0] + s[1]) + (s[2] + s[3]);
-    for i in chunks * 4..a.len() {
+    let mut t: f64 = s.iter().sum();
+    for i in chunks * 16..a.len() {
         t += a[i] * b[i];
     }
     t
 }
 
-/// Segmented zero-padded FFT (exact, up to rounding).
+/// FFT size for `lags` lags: four times the lags, at least 256 (small transforms stay in L1).
+fn fft_size(lags: usize) -> usize {
+    (4 * lags).max(256).next_power_of_two()
+}
+
+/// Segmented zero-padded FFT (exact, up to rounding). The record is split into stretches
+/// processed in parallel (rayon), each accumulating its own cross-spectra.
 pub fn fft(y: &[&[f64]], refs: &[usize], lags: usize) -> Correlations {
+    use rayon::prelude::*;
     let l = y.len();
     let nr = refs.len();
     let n = y[0].len();
-    let m = (4 * lags).max(2048).next_power_of_two();
+    let m = fft_size(lags);
     let block = m - lags + 1; // block + lags − 1 ≤ m: no circular wrap for lags < `lags`
     let bins = m / 2 + 1;
-    let mut planner = RealFftPlanner::<f64>::new();
-    let fwd = planner.plan_fft_forward(m);
-    let inv = planner.plan_fft_inverse(m);
-    let mut scratch = fwd.make_scratch_vec();
-    let mut buf = vec![0.0; m];
-    // Spectra of this segment: references (blocks) and all channels (segments).
-    let mut xref = vec![vec![Complex::new(0.0, 0.0); bins]; nr];
-    let mut yseg = vec![vec![Complex::new(0.0, 0.0); bins]; l];
-    let mut acc = vec![vec![Complex::new(0.0, 0.0); bins]; l * nr];
-    let mut start = 0;
-    while start < n {
-        let bend = (start + block).min(n);
-        let send = (start + block + lags - 1).min(n);
-        for (bi, &b) in refs.iter().enumerate() {
-            buf.fill(0.0);
-            buf[..bend - start].copy_from_slice(&y[b][start..bend]);
-            fwd.process_with_scratch(&mut buf, &mut xref[bi], &mut scratch)
-                .expect("sizes from the plan");
+    let nblocks = n.div_ceil(block);
+    let threads = rayon::current_num_threads().max(1);
+    let per = nblocks.div_ceil(threads * 2).max(1);
+    let starts: Vec<usize> = (0..nblocks).step_by(per).collect();
+    let partial: Vec<Vec<f64>> = starts
+        .par_iter()
+        .map(|&b0| {
+            let b1 = (b0 + per).min(nblocks);
+            accumulate(y, refs, lags, m, block, b0 * block, (b1 * block).min(n))
+        })
+        .collect();
+    // Sum the stretches: acc holds, per pair (a, b), re[bins] then im[bins].
+    let mut acc = vec![0.0; l * nr * 2 * bins];
+    for p in &partial {
+        for (a, v) in acc.iter_mut().zip(p) {
+            *a += v;
         }
-        for (a, ya) in y.iter().enumerate() {
-            buf.fill(0.0);
-            buf[..send - start].copy_from_slice(&ya[start..send]);
-            fwd.process_with_scratch(&mut buf, &mut yseg[a], &mut scratch)
-                .expect("sizes from the plan");
-        }
-        for bi in 0..nr {
-            let xb = &xref[bi];
-            for a in 0..l {
-                let ya = &yseg[a];
-                let s = &mut acc[a + bi * l];
-                for ((sv, xv), yv) in s.iter_mut().zip(xb).zip(ya) {
-                    // conj(X) · Y
-                    sv.re += xv.re * yv.re + xv.im * yv.im;
-                    sv.im += xv.re * yv.im - xv.im * yv.re;
-                }
-            }
-        }
-        start = bend;
     }
-    let mut r = vec![vec![0.0; l * nr]; lags];
+    let mut planner = RealFftPlanner::<f64>::new();
+    let inv = planner.plan_fft_inverse(m);
+    let mut buf = vec![0.0; m];
+    let mut spec = inv.make_input_vec();
     let mut iscratch = inv.make_scratch_vec();
-    for (p, spec) in acc.iter_mut().enumerate() {
+    let mut r = vec![vec![0.0; l * nr]; lags];
+    for p in 0..l * nr {
+        let (re, im) = acc[p * 2 * bins..(p + 1) * 2 * bins].split_at(bins);
+        for (k, s) in spec.iter_mut().enumerate() {
+            *s = Complex::new(re[k], im[k]);
+        }
         // The imaginary parts of the DC and Nyquist bins are rounding noise of a real signal.
         spec[0].im = 0.0;
         spec[bins - 1].im = 0.0;
-        inv.process_with_scratch(spec, &mut buf, &mut iscratch)
+        inv.process_with_scratch(&mut spec, &mut buf, &mut iscratch)
             .expect("sizes from the plan");
         for (k, rk) in r.iter_mut().enumerate() {
             rk[p] = buf[k] / (m as f64 * (n - k) as f64);
@@ -151,11 +145,77 @@ pub fn fft(y: &[&[f64]], refs: &[usize], lags: usize) -> Correlations {
     }
 }
 
+/// Cross-spectra Σ conj(X_ref) · Y over the blocks starting in [from, to).
+fn accumulate(
+    y: &[&[f64]],
+    refs: &[usize],
+    lags: usize,
+    m: usize,
+    block: usize,
+    from: usize,
+    to: usize,
+) -> Vec<f64> {
+    let (l, nr, n) = (y.len(), refs.len(), y[0].len());
+    let bins = m / 2 + 1;
+    let mut planner = RealFftPlanner::<f64>::new();
+    let fwd = planner.plan_fft_forward(m);
+    let mut scratch = fwd.make_scratch_vec();
+    let mut buf = vec![0.0; m];
+    let mut spec = fwd.make_output_vec();
+    // Split re/im (structure of arrays) so the accumulation vectorises.
+    let mut xr = vec![0.0; nr * bins];
+    let mut xi = vec![0.0; nr * bins];
+    let mut yr = vec![0.0; l * bins];
+    let mut yi = vec![0.0; l * bins];
+    let mut acc = vec![0.0; l * nr * 2 * bins];
+    let mut start = from;
+    while start < to {
+        let bend = (start + block).min(n);
+        let send = (start + block + lags - 1).min(n);
+        let mut transform = |src: &[f64], re: &mut [f64], im: &mut [f64]| {
+            buf.fill(0.0);
+            buf[..src.len()].copy_from_slice(src);
+            fwd.process_with_scratch(&mut buf, &mut spec, &mut scratch)
+                .expect("sizes from the plan");
+            for (k, c) in spec.iter().enumerate() {
+                re[k] = c.re;
+                im[k] = c.im;
+            }
+        };
+        for (bi, &b) in refs.iter().enumerate() {
+            let s = bi * bins..(bi + 1) * bins;
+            transform(&y[b][start..bend], &mut xr[s.clone()], &mut xi[s]);
+        }
+        for (a, ya) in y.iter().enumerate() {
+            let s = a * bins..(a + 1) * bins;
+            transform(&ya[start..send], &mut yr[s.clone()], &mut yi[s]);
+        }
+        for bi in 0..nr {
+            let (br, bim) = (
+                &xr[bi * bins..(bi + 1) * bins],
+                &xi[bi * bins..(bi + 1) * bins],
+            );
+            for a in 0..l {
+                let (ar, ai) = (&yr[a * bins..(a + 1) * bins], &yi[a * bins..(a + 1) * bins]);
+                let p = a + bi * l;
+                let (sr, si) = acc[p * 2 * bins..(p + 1) * 2 * bins].split_at_mut(bins);
+                // conj(X) · Y
+                for k in 0..bins {
+                    sr[k] += br[k] * ar[k] + bim[k] * ai[k];
+                    si[k] += br[k] * ai[k] - bim[k] * ar[k];
+                }
+            }
+        }
+        start = bend;
+    }
+    acc
+}
+
 /// The cheaper of [`direct`] and [`fft`] for this size.
 pub fn estimate(y: &[&[f64]], refs: &[usize], lags: usize) -> Correlations {
     let l = y.len() as f64;
     let nr = refs.len() as f64;
-    let m = ((4 * lags).max(2048).next_power_of_two()) as f64;
+    let m = fft_size(lags) as f64;
     // Operations per sample: direct l·r·lags multiply-adds; FFT (l + r) transforms of size
     // m per (m − lags) samples (≈ 2.5 m log2 m flops each) plus l·r complex products per bin.
     let direct_cost = l * nr * lags as f64;
