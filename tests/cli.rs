@@ -185,3 +185,89 @@ fn diverging_simulation_names_the_sample() {
     let err = simulate_fails(&["--input", s(&u), "--fs", "750", "--params", s(&p)]);
     assert!(err.contains("diverged at sample"), "{err}");
 }
+
+#[test]
+fn ssi_writes_modes_json_and_svg() {
+    let Some(path) = common::data_file("oma/data_sdof.csv") else {
+        return;
+    };
+    let (json, svg) = (tmp("sdof.json"), tmp("sdof.svg"));
+    let (ok, out, err) = hyst(&[
+        "ssi",
+        "--input",
+        s(&path),
+        "--fs",
+        "20",
+        "--block-rows",
+        "60",
+        "--max-order",
+        "40",
+        "--json",
+        s(&json),
+        "--svg",
+        s(&svg),
+    ]);
+    assert!(ok, "{err}");
+    assert!(out.contains("mode"), "{out}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let modes = v["modes"].as_array().unwrap();
+    let m = modes
+        .iter()
+        .find(|m| (m["frequency_hz"].as_f64().unwrap() - 1.5).abs() < 0.01)
+        .expect("the 1.5 Hz mode");
+    // 2 % damping within the estimator's spread (README: σ(ζ) ≈ 5 % of ζ).
+    assert!((m["damping_ratio"].as_f64().unwrap() - 0.02).abs() < 0.002);
+    for key in ["frequency_std_hz", "damping_std", "poles", "shape"] {
+        assert!(!m[key].is_null(), "{key}");
+    }
+    assert!(v["real_poles"].is_array());
+    let first = &v["orders"][5]["poles"][0];
+    assert!(first["label"].is_string() && first["lambda"].is_array());
+    assert!(std::fs::read_to_string(&svg).unwrap().starts_with("<svg"));
+}
+
+#[test]
+fn ssi_record_too_short_for_the_lags() {
+    let p = write(
+        "short.csv",
+        &format!(
+            "y\n{}",
+            (0..30)
+                .map(|k| format!("{}\n", (k as f64).sin()))
+                .collect::<String>()
+        ),
+    );
+    let (ok, _, err) = hyst(&[
+        "ssi",
+        "--input",
+        s(&p),
+        "--fs",
+        "10",
+        "--json",
+        s(&tmp("x.json")),
+    ]);
+    assert!(!ok);
+    assert!(
+        err.contains("30 samples are too few") && err.contains("short.csv"),
+        "{err}"
+    );
+}
+
+#[test]
+fn ssi_missing_column() {
+    let p = write("cols.csv", "a,b\n1,2\n3,4\n");
+    let (ok, _, err) = hyst(&[
+        "ssi",
+        "--input",
+        s(&p),
+        "--fs",
+        "10",
+        "--columns",
+        "c",
+        "--json",
+        s(&tmp("y.json")),
+    ]);
+    assert!(!ok);
+    assert!(err.contains("no column `c`"), "{err}");
+}
