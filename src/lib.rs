@@ -6,6 +6,7 @@
 //! resampling) and [`io`] (CSV records and the shared data folder).
 
 pub use covssi;
+pub use hyst_ident as ident;
 pub use hyst_linearize as linearize;
 pub use hyst_model as model;
 pub use hyst_sim as sim;

@@ -271,3 +271,57 @@ fn ssi_missing_column() {
     assert!(!ok);
     assert!(err.contains("no column `c`"), "{err}");
 }
+
+#[test]
+fn ident_default_job_writes_the_json_the_issue_asks_for() {
+    let json = tmp("ident.json");
+    let dir = tmp("ident_svg");
+    let (ok, out, err) = hyst(&["ident", "--json", s(&json), "--svg-dir", s(&dir)]);
+    assert!(ok, "{err}");
+    assert!(out.contains("validation"), "{out}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    for key in ["m", "c", "k"] {
+        assert!(v["linear"][key].is_number(), "linear.{key}");
+    }
+    for key in ["m", "c", "k", "k_inf", "omega"] {
+        assert!(v["zener"][key].is_number(), "zener.{key}");
+    }
+    for key in ["m", "c", "k", "alpha", "beta_gamma", "beta_delta", "nu"] {
+        assert!(v["bouc_wen"][key].is_number(), "bouc_wen.{key}");
+    }
+    assert!(v["poles"]["pair"].is_array() && v["poles"]["real"].is_number());
+    let val = &v["validation"][0];
+    assert!(val["file"].is_string());
+    // ε as fractions: the built-in case lands at a few per cent.
+    let e = val["zener"]["epsilon"].as_f64().unwrap();
+    assert!(e > 0.0 && e < 0.1, "{e}");
+    assert!(dir.join("stabilization.svg").is_file());
+}
+
+#[test]
+fn ident_requires_the_mass_with_data() {
+    let p = write(
+        "y_only.csv",
+        &format!(
+            "y\n{}",
+            (0..500)
+                .map(|k| format!("{}\n", (0.3 * k as f64).sin()))
+                .collect::<String>()
+        ),
+    );
+    let (ok, _, err) = hyst(&["ident", "--data", s(&p), "--fs", "750"]);
+    assert!(!ok);
+    assert!(err.contains("--mass is required"), "{err}");
+}
+
+#[test]
+fn ident_record_too_short() {
+    let p = write("y_short.csv", "y\n1\n2\n3\n");
+    let (ok, _, err) = hyst(&["ident", "--data", s(&p), "--fs", "750", "--mass", "2"]);
+    assert!(!ok);
+    assert!(
+        err.contains("y_short.csv") && err.contains("3 samples"),
+        "{err}"
+    );
+}

@@ -173,19 +173,25 @@ pub(crate) fn label(d: &mut StabilizationDiagram, opts: &SsiOptions) {
     let multi = d.channels > 1;
     for o in 0..d.orders.len() {
         let (prev, cur) = d.orders.split_at_mut(o);
-        let prev = prev.last();
         for p in cur[0].poles.iter_mut() {
             if let Some(r) = hard_rejection(p, opts) {
                 p.status = PoleStatus::Rejected(r);
                 continue;
             }
+            // The nearest previous order that has poles of the same kind, looking back at most
+            // two orders: with an order step of 1, a lone real pole appears only at every
+            // other order (complex poles come in pairs).
             let candidates = prev
+                .iter()
+                .rev()
+                .take(2)
                 .map(|po| {
                     po.poles
                         .iter()
                         .filter(|q| q.is_real == p.is_real && hard_rejection(q, opts).is_none())
                         .collect::<Vec<_>>()
                 })
+                .find(|c| !c.is_empty())
                 .unwrap_or_default();
             let nearest = candidates.iter().min_by(|a, b| {
                 (a.frequency_hz - p.frequency_hz)

@@ -1,0 +1,526 @@
+//! The output-only identification pipeline of the paper (Sections 3–4): from a measured
+//! displacement record alone to linear, Zener and Bouc-Wen models of a single-degree-of-freedom
+//! oscillator of known mass.
+//!
+//! Each step is a function of its own; [`identify`] runs them all:
+//!
+//! 1. [`prepare`]: remove the mean, find the dominant frequency from the spectrum, decimate to
+//!    about [`IdentOptions::samples_per_period`] samples per period of it, report skewness and
+//!    kurtosis (a stationary Gaussian-like response has 0 and 3).
+//! 2. [`run_ssi`]: [`covssi`] with block rows spanning [`IdentOptions::periods`] periods of the
+//!    dominant mode and the paper's thresholds (Δω = Δζ = 0.05, real-pole criterion 1.5).
+//! 3. [`select_poles`]: the oscillating pair (the stable cluster nearest the dominant
+//!    frequency, most members first), the real pole (the largest stable real cluster, else the
+//!    median of all stable real poles), and the viscous damping guess c
+//!    ([`DampingGuess`]).
+//! 4. [`build_models`]: linear $k = m|\lambda|^2$, $c = -2m\operatorname{Re}\lambda$; Zener
+//!    $(k, k_\infty, \Omega)$ by coefficient matching of eq. (32); Bouc-Wen with α from eq. (37)
+//!    and (βγ, βδ) from eq. (38) ([`Linearization::Paper`]) or from the exact inversion of the
+//!    describing function at $A$ ([`Linearization::Harmonic`]).
+//! 5. [`validate`]: simulate a model with a measured input and report
+//!    $\varepsilon = \text{RMS}(\hat y - y)/(\max y - \min y)$ (eq. 39) and the RMS.
+
+#![warn(missing_docs)]
+
+use covssi::{BlockRows, SsiOptions, SsiResult, Stability, StabilityCriteria};
+use hyst_linearize::{Amplitude, LinearizeError};
+use hyst_model::{BoucWen, Oscillator};
+use hyst_sim::{Decimation, Input, SimError, SimOptions};
+
+pub use covssi::Complex64;
+
+/// Errors of the pipeline.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum IdentError {
+    /// SSI failed.
+    #[error("SSI: {0}")]
+    Ssi(#[from] covssi::SsiError),
+    /// A linearization step failed.
+    #[error("linearization: {0}")]
+    Linearize(#[from] LinearizeError),
+    /// A simulation failed.
+    #[error("simulation: {0}")]
+    Sim(#[from] SimError),
+    /// The mass is not a positive finite number.
+    #[error("mass must be > 0 kg, got {mass}")]
+    NonPositiveMass {
+        /// The mass.
+        mass: f64,
+    },
+    /// The record is too short.
+    #[error("the record has {samples} samples; at least {needed} are needed")]
+    TooShort {
+        /// Samples given.
+        samples: usize,
+        /// Samples needed.
+        needed: usize,
+    },
+    /// No oscillating pair stable in frequency and damping was found.
+    #[error(
+        "no oscillating pole pair is stable in frequency and damping near {dominant_hz:.2} Hz (see the stabilization diagram)"
+    )]
+    NoStablePair {
+        /// The dominant frequency of the spectrum.
+        dominant_hz: f64,
+    },
+    /// Input and output records differ in length.
+    #[error("input has {input} samples, output {output}")]
+    LengthMismatch {
+        /// Input length.
+        input: usize,
+        /// Output length.
+        output: usize,
+    },
+}
+
+/// Where the viscous damping c of the Zener and Bouc-Wen models comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum DampingGuess {
+    /// The paper's choice: a cluster of lightly damped poles near the dominant frequency,
+    /// $c = -2m\operatorname{Re}\lambda$; if there is none, c = 0.
+    #[default]
+    LowDampingCluster,
+    /// A given value (N s/m).
+    Value(f64),
+}
+
+/// How the Zener element maps to Bouc-Wen parameters.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Linearization {
+    /// Eqs. (37)–(38) as printed.
+    Paper,
+    /// α from eq. (37), (βγ, βδ) by exact inversion of the numerical describing function.
+    #[default]
+    Harmonic,
+}
+
+/// Options of the pipeline.
+#[derive(Debug, Clone, PartialEq)]
+pub struct IdentOptions {
+    /// Mass m (kg), assumed known.
+    pub mass: f64,
+    /// Target samples per period of the dominant mode after decimation (default 10).
+    pub samples_per_period: f64,
+    /// The block rows of the Toeplitz matrix span this many periods of the dominant mode
+    /// (default 10, as the paper's Section 4).
+    pub periods: f64,
+    /// Largest model order (default 20).
+    pub max_order: usize,
+    /// Stabilization thresholds (default: the paper's 0.05, 0.05, real 1.5).
+    pub criteria: StabilityCriteria,
+    /// Source of c.
+    pub damping_guess: DampingGuess,
+    /// Mapping to Bouc-Wen.
+    pub linearization: Linearization,
+    /// Amplitude A for the mapping (default σₓ).
+    pub amplitude: Amplitude,
+}
+
+impl Default for IdentOptions {
+    fn default() -> Self {
+        IdentOptions {
+            mass: 2.0,
+            samples_per_period: 10.0,
+            periods: 10.0,
+            max_order: 20,
+            criteria: StabilityCriteria {
+                frequency: 0.05,
+                damping: 0.05,
+                mac: 0.02,
+                real: 1.5,
+            },
+            damping_guess: DampingGuess::default(),
+            linearization: Linearization::default(),
+            amplitude: Amplitude::SigmaX,
+        }
+    }
+}
+
+/// The prepared output record.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Prepared {
+    /// Centred, decimated record.
+    pub y: Vec<f64>,
+    /// Its sampling rate (Hz).
+    pub fs: f64,
+    /// Decimation factor applied.
+    pub decimation: usize,
+    /// Mean removed.
+    pub mean: f64,
+    /// Standard deviation σₓ of the (undecimated) record.
+    pub sigma_x: f64,
+    /// Skewness of the prepared record.
+    pub skewness: f64,
+    /// Kurtosis of the prepared record (3 for a Gaussian).
+    pub kurtosis: f64,
+    /// Dominant frequency of the spectrum (Hz).
+    pub dominant_hz: f64,
+}
+
+fn moments(y: &[f64]) -> (f64, f64, f64, f64) {
+    let n = y.len() as f64;
+    let mean = y.iter().sum::<f64>() / n;
+    let m2 = y.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n;
+    let m3 = y.iter().map(|v| (v - mean).powi(3)).sum::<f64>() / n;
+    let m4 = y.iter().map(|v| (v - mean).powi(4)).sum::<f64>() / n;
+    (mean, m2.sqrt(), m3 / m2.powf(1.5), m4 / (m2 * m2))
+}
+
+/// The frequency of the largest peak of the record's correlation-based spectrum.
+fn dominant_frequency(y: &[f64], fs: f64) -> Result<f64, IdentError> {
+    let lags = 256.min(y.len() / 2).max(2);
+    let c = covssi::corr::estimate(&[y], &[0], lags);
+    let mut best = (0.0, f64::MIN);
+    let npts = 2048;
+    for p in 1..npts {
+        let f = fs / 2.0 * p as f64 / npts as f64;
+        let w = 2.0 * std::f64::consts::PI * f / fs;
+        let mut s = c.r[0][0];
+        for (k, rk) in c.r.iter().enumerate().skip(1) {
+            let win = 0.5 * (1.0 + (std::f64::consts::PI * k as f64 / lags as f64).cos());
+            s += 2.0 * win * rk[0] * (w * k as f64).cos();
+        }
+        if s > best.1 {
+            best = (f, s);
+        }
+    }
+    Ok(best.0)
+}
+
+/// Step 1: centre, decimate, describe.
+pub fn prepare(y: &[f64], fs: f64, opts: &IdentOptions) -> Result<Prepared, IdentError> {
+    if y.len() < 64 {
+        return Err(IdentError::TooShort {
+            samples: y.len(),
+            needed: 64,
+        });
+    }
+    if !(fs.is_finite() && fs > 0.0) {
+        return Err(IdentError::Ssi(covssi::SsiError::NonPositiveRate { fs }));
+    }
+    if let Some((index, &value)) = y.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        return Err(IdentError::Ssi(covssi::SsiError::NonFinite {
+            channel: 0,
+            index,
+            value,
+        }));
+    }
+    let (mean, sigma_x, _, _) = moments(y);
+    let centred: Vec<f64> = y.iter().map(|v| v - mean).collect();
+    if sigma_x == 0.0 {
+        return Err(IdentError::Ssi(covssi::SsiError::ConstantChannel {
+            channel: 0,
+            value: mean,
+        }));
+    }
+    let dominant_hz = dominant_frequency(&centred, fs)?;
+    let r = ((fs / dominant_hz / opts.samples_per_period).floor() as usize).max(1);
+    let yd = hyst_sim::resample::decimate(&centred, r);
+    let (_, _, skewness, kurtosis) = moments(&yd);
+    Ok(Prepared {
+        y: yd,
+        fs: fs / r as f64,
+        decimation: r,
+        mean,
+        sigma_x,
+        skewness,
+        kurtosis,
+        dominant_hz,
+    })
+}
+
+/// Step 2: SSI-COV with lags covering `opts.periods` periods of the dominant mode.
+pub fn run_ssi(p: &Prepared, opts: &IdentOptions) -> Result<SsiResult, IdentError> {
+    // The paper sizes the Toeplitz matrix so that τ = i·Δt spans the periods (its lags then
+    // reach twice that).
+    let i = (opts.periods * p.fs / p.dominant_hz).ceil().max(2.0) as usize;
+    let so = SsiOptions {
+        block_rows: BlockRows::Count(i),
+        max_order: Some(opts.max_order),
+        criteria: opts.criteria,
+        ..SsiOptions::default()
+    };
+    Ok(covssi::identify(&[&p.y], p.fs, &so)?)
+}
+
+/// The poles the models are built from.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SelectedPoles {
+    /// The oscillating pair (Im > 0), rad/s.
+    pub pair: Complex64,
+    /// The real pole, if one was found (rad/s).
+    pub real: Option<f64>,
+    /// Viscous damping guess c (N s/m).
+    pub c: f64,
+    /// Where c came from.
+    pub c_source: String,
+    /// Remarks (fallbacks taken).
+    pub notes: Vec<String>,
+}
+
+/// Step 3: choose the pair, the real pole and c.
+pub fn select_poles(
+    ssi: &SsiResult,
+    p: &Prepared,
+    opts: &IdentOptions,
+) -> Result<SelectedPoles, IdentError> {
+    let mut notes = Vec::new();
+    let near = |f: f64| (f - p.dominant_hz).abs() / p.dominant_hz;
+    let mode = ssi
+        .modes
+        .iter()
+        .filter(|m| near(m.frequency_hz) < 0.3)
+        .max_by(|a, b| {
+            a.members
+                .len()
+                .cmp(&b.members.len())
+                .then(near(b.frequency_hz).total_cmp(&near(a.frequency_hz)))
+        })
+        .ok_or(IdentError::NoStablePair {
+            dominant_hz: p.dominant_hz,
+        })?;
+    let pair = mode.lambda;
+    let real = if let Some(r) = ssi.real_poles.iter().max_by_key(|r| r.members.len()) {
+        Some(r.lambda)
+    } else {
+        let mut all: Vec<f64> = ssi
+            .diagram
+            .orders
+            .iter()
+            .flat_map(|o| o.poles.iter())
+            .filter(|q| q.status == covssi::PoleStatus::Stable(Stability::Real))
+            .map(|q| q.lambda.re)
+            .collect();
+        if all.len() >= 3 {
+            all.sort_by(f64::total_cmp);
+            notes.push(format!(
+                "no cluster of stable real poles; using the median of {} stable real poles",
+                all.len()
+            ));
+            Some(all[all.len() / 2])
+        } else {
+            notes.push(
+                "no stable real pole found: the Zener and Bouc-Wen models fall back to the linear model"
+                    .to_string(),
+            );
+            None
+        }
+    };
+    let (c, c_source) = match opts.damping_guess {
+        DampingGuess::Value(c) => (c, "given".to_string()),
+        DampingGuess::LowDampingCluster => {
+            // Poles at least stable in frequency, within 10 % of the pair's frequency, damped
+            // less than half as much as the pair.
+            let f0 = mode.frequency_hz;
+            let mut re: Vec<f64> = ssi
+                .diagram
+                .orders
+                .iter()
+                .flat_map(|o| o.poles.iter())
+                .filter(|q| {
+                    matches!(q.status, covssi::PoleStatus::Stable(s) if s != Stability::Real)
+                        && (q.frequency_hz - f0).abs() < 0.1 * f0
+                        && q.damping_ratio < 0.5 * mode.damping_ratio
+                })
+                .map(|q| q.lambda.re)
+                .collect();
+            if re.len() >= 3 {
+                re.sort_by(f64::total_cmp);
+                let med = re[re.len() / 2];
+                (
+                    -2.0 * opts.mass * med,
+                    format!(
+                        "low-damping cluster ({} poles, median Re λ = {med:.3})",
+                        re.len()
+                    ),
+                )
+            } else {
+                notes.push("no low-damping cluster near the pair: c = 0".to_string());
+                (0.0, "none found (c = 0)".to_string())
+            }
+        }
+    };
+    Ok(SelectedPoles {
+        pair,
+        real,
+        c,
+        c_source,
+        notes,
+    })
+}
+
+/// The identified models.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Models {
+    /// Linear oscillator from the pair.
+    pub linear: Oscillator,
+    /// Zener oscillator, when a real pole was found and the mapping gives Ω > 0.
+    pub zener: Option<Oscillator>,
+    /// Bouc-Wen oscillator, when the mapping succeeded.
+    pub bouc_wen: Option<Oscillator>,
+    /// Amplitude A used (m).
+    pub amplitude: f64,
+    /// Remarks.
+    pub notes: Vec<String>,
+}
+
+/// Step 4: models from the poles.
+pub fn build_models(
+    sel: &SelectedPoles,
+    p: &Prepared,
+    opts: &IdentOptions,
+) -> Result<Models, IdentError> {
+    let m = opts.mass;
+    if !(m.is_finite() && m > 0.0) {
+        return Err(IdentError::NonPositiveMass { mass: m });
+    }
+    let linear = Oscillator::linear(m, -2.0 * m * sel.pair.re, m * sel.pair.norm_sqr());
+    let amplitude = opts.amplitude.resolve(p.sigma_x)?;
+    let mut notes = Vec::new();
+    let Some(real) = sel.real else {
+        return Ok(Models {
+            linear,
+            zener: None,
+            bouc_wen: None,
+            amplitude,
+            notes,
+        });
+    };
+    let fit = match hyst_linearize::zener_from_poles(m, sel.c, sel.pair, real) {
+        Ok(f) => f,
+        Err(e) => {
+            notes.push(format!("no Zener model: {e}"));
+            return Ok(Models {
+                linear,
+                zener: None,
+                bouc_wen: None,
+                amplitude,
+                notes,
+            });
+        }
+    };
+    let zener = Oscillator::zener(m, sel.c, fit.k, fit.zener);
+    let w = sel.pair.norm();
+    let alpha = hyst_linearize::paper::eq37_alpha(m, sel.c, fit.k, sel.pair.im);
+    let bw = match opts.linearization {
+        Linearization::Paper => {
+            let (bg, bd) = hyst_linearize::paper::eq38_beta(
+                alpha,
+                fit.zener.k_inf,
+                fit.zener.omega,
+                amplitude,
+                w,
+            );
+            Some(BoucWen::from_products(alpha, bg, bd, 1.0))
+        }
+        Linearization::Harmonic => {
+            let df = hyst_linearize::zener_at(&fit.zener, w, amplitude);
+            match hyst_linearize::bouc_wen_exact(alpha, &df) {
+                Ok(b) => Some(b),
+                Err(e) => {
+                    notes.push(format!(
+                        "exact describing-function inversion failed ({e}); first-order closed form used"
+                    ));
+                    hyst_linearize::bouc_wen_first_order(alpha, &df).ok()
+                }
+            }
+        }
+    };
+    let bouc_wen = bw.map(|b| Oscillator::bouc_wen(m, sel.c, fit.k, b));
+    Ok(Models {
+        linear,
+        zener: Some(zener),
+        bouc_wen,
+        amplitude,
+        notes,
+    })
+}
+
+/// Everything the pipeline found.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Identification {
+    /// Step 1.
+    pub prepared: Prepared,
+    /// Step 2.
+    pub ssi: SsiResult,
+    /// Step 3.
+    pub poles: SelectedPoles,
+    /// Step 4.
+    pub models: Models,
+}
+
+/// Run steps 1–4 on an output record `y` sampled at `fs`.
+pub fn identify(y: &[f64], fs: f64, opts: &IdentOptions) -> Result<Identification, IdentError> {
+    if !(opts.mass.is_finite() && opts.mass > 0.0) {
+        return Err(IdentError::NonPositiveMass { mass: opts.mass });
+    }
+    let prepared = prepare(y, fs, opts)?;
+    let ssi = run_ssi(&prepared, opts)?;
+    let poles = select_poles(&ssi, &prepared, opts)?;
+    let models = build_models(&poles, &prepared, opts)?;
+    Ok(Identification {
+        prepared,
+        ssi,
+        poles,
+        models,
+    })
+}
+
+/// A model's error against a measured output.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Validation {
+    /// ε of eq. (39): RMS error divided by the range of the measured output (a fraction).
+    pub epsilon: f64,
+    /// RMS error in the output's units.
+    pub rms: f64,
+}
+
+/// ε and RMS of `yhat` against `y`.
+pub fn epsilon(yhat: &[f64], y: &[f64]) -> Validation {
+    let n = y.len().min(yhat.len()).max(1) as f64;
+    let rms = (yhat
+        .iter()
+        .zip(y)
+        .map(|(a, b)| (a - b).powi(2))
+        .sum::<f64>()
+        / n)
+        .sqrt();
+    let (lo, hi) = y
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| {
+            (l.min(*v), h.max(*v))
+        });
+    Validation {
+        epsilon: rms / (hi - lo),
+        rms,
+    }
+}
+
+/// Step 5: simulate `model` with input `u` (RK4, 20 sub-steps) and compare with `y`.
+/// A `periodic` record is one steady-state period (simulated to steady state); otherwise the
+/// simulation starts from rest.
+pub fn validate(
+    model: &Oscillator,
+    u: &[f64],
+    y: &[f64],
+    fs: f64,
+    periodic: bool,
+) -> Result<Validation, IdentError> {
+    if u.len() != y.len() {
+        return Err(IdentError::LengthMismatch {
+            input: u.len(),
+            output: y.len(),
+        });
+    }
+    let opts = SimOptions {
+        decimation: Decimation::Subsample,
+        ..SimOptions::default()
+    };
+    let yhat = if periodic {
+        hyst_sim::steady_state_period(model, u, fs, &opts, 1e-9, 200)?.y
+    } else {
+        hyst_sim::simulate(model, Input::Sampled(u), fs, u.len(), &opts)?
+    };
+    Ok(epsilon(&yhat, y))
+}
