@@ -624,15 +624,15 @@ fn ident(a: &IdentArgs) -> Result<(), Error> {
             (col[a.skip..].to_vec(), fs, path.display().to_string())
         }
         None => {
-            let (y, vu, vy) = default_records()?;
+            let d = default_records()?;
             validations.push((
                 "built-in: benchmark, fresh 50 N multisine".into(),
-                vu,
-                vy,
+                d.val_u,
+                d.val_y,
                 true,
             ));
             (
-                y,
+                d.y,
                 750.0,
                 "built-in: benchmark, 50 N multisine, 4 periods, noise 7.4e-6 m".to_string(),
             )
