@@ -22,6 +22,8 @@
 
 #![warn(missing_docs)]
 
+pub mod floor;
+
 use covssi::{BlockRows, SsiOptions, SsiResult, Stability, StabilityCriteria};
 use hyst_linearize::{Amplitude, LinearizeError};
 use hyst_model::{BoucWen, Oscillator};
@@ -523,4 +525,33 @@ pub fn validate(
         hyst_sim::simulate(model, Input::Sampled(u), fs, u.len(), &opts)?
     };
     Ok(epsilon(&yhat, y))
+}
+
+/// Solve the small dense system `a x = b` in place (partial pivoting); false if singular.
+#[allow(clippy::needless_range_loop)] // rows `row` and `col` of `a` are read and written together
+pub(crate) fn solve_dense<const P: usize>(a: &mut [[f64; P]; P], b: &mut [f64; P]) -> bool {
+    for col in 0..P {
+        let piv = (col..P)
+            .max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))
+            .unwrap_or(col);
+        a.swap(col, piv);
+        b.swap(col, piv);
+        if a[col][col] == 0.0 || !a[col][col].is_finite() {
+            return false;
+        }
+        for row in col + 1..P {
+            let f = a[row][col] / a[col][col];
+            for k in col..P {
+                a[row][k] -= f * a[col][k];
+            }
+            b[row] -= f * b[col];
+        }
+    }
+    for col in (0..P).rev() {
+        for k in col + 1..P {
+            b[col] -= a[col][k] * b[k];
+        }
+        b[col] /= a[col][col];
+    }
+    b.iter().all(|v| v.is_finite())
 }

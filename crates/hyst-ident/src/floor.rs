@@ -1,0 +1,177 @@
+//! The floor of a linear model class on a periodic record: the best linear or Zener
+//! oscillator (mass fixed) fitted *with the input*, by output-error least squares in the
+//! frequency domain.
+//!
+//! For one steady-state period, the output of a linear model is exactly
+//! $\hat Y(f) = H(f)\,U(f)$ at every DFT bin, so the time-domain output error equals (Parseval)
+//! $\sum_f |Y(f) - H(f)U(f)|^2$, minimised by Gauss–Newton / Levenberg–Marquardt over
+//! $(c, k)$ with $H = 1/(k - m\omega^2 + i\omega c)$, or over $(c, k, k_\infty, \Omega)$ with
+//! $H = 1/(k - m\omega^2 + i\omega c + k_\infty\,i\omega/(i\omega + \Omega))$. No identified
+//! model of the class can validate better than this on that record.
+
+use hyst_model::{Oscillator, ZenerParams};
+use realfft::RealFftPlanner;
+use realfft::num_complex::Complex;
+
+use crate::{Validation, epsilon};
+
+type C = Complex<f64>;
+
+fn spectra(u: &[f64], y: &[f64]) -> (Vec<C>, Vec<C>) {
+    let mut planner = RealFftPlanner::<f64>::new();
+    let f = planner.plan_fft_forward(u.len());
+    let (mut bu, mut by) = (u.to_vec(), y.to_vec());
+    let (mut su, mut sy) = (f.make_output_vec(), f.make_output_vec());
+    f.process(&mut bu, &mut su).expect("sizes from the plan");
+    f.process(&mut by, &mut sy).expect("sizes from the plan");
+    (su, sy)
+}
+
+fn response(h: impl Fn(f64) -> C, u: &[C], n: usize, fs: f64) -> Vec<f64> {
+    let mut planner = RealFftPlanner::<f64>::new();
+    let inv = planner.plan_fft_inverse(n);
+    let mut spec: Vec<C> = u
+        .iter()
+        .enumerate()
+        .map(|(i, ui)| {
+            let w = 2.0 * std::f64::consts::PI * i as f64 * fs / n as f64;
+            h(w) * ui
+        })
+        .collect();
+    spec[0].im = 0.0;
+    if let Some(last) = spec.last_mut() {
+        last.im = 0.0;
+    }
+    let mut out = inv.make_output_vec();
+    inv.process(&mut spec, &mut out)
+        .expect("sizes from the plan");
+    out.iter().map(|v| v / n as f64).collect()
+}
+
+/// Levenberg–Marquardt on complex residuals `r(p)` (finite differences).
+fn lm<const P: usize>(mut p: [f64; P], r: impl Fn(&[f64; P]) -> Vec<C>) -> [f64; P] {
+    let cost = |v: &[C]| v.iter().map(|x| x.norm_sqr()).sum::<f64>();
+    let mut cur = r(&p);
+    let mut c = cost(&cur);
+    let mut lambda = 1e-3;
+    for _ in 0..200 {
+        let mut jac = vec![[C::new(0.0, 0.0); P]; cur.len()];
+        for j in 0..P {
+            let h = 1e-7 * p[j].abs().max(1e-6);
+            let mut q = p;
+            q[j] += h;
+            let rq = r(&q);
+            for (row, (a, b)) in jac.iter_mut().zip(rq.iter().zip(&cur)) {
+                row[j] = (a - b) / h;
+            }
+        }
+        let mut a = [[0.0; P]; P];
+        let mut g = [0.0; P];
+        for (row, ri) in jac.iter().zip(&cur) {
+            for i in 0..P {
+                g[i] += (row[i].conj() * ri).re;
+                for j in 0..P {
+                    a[i][j] += (row[i].conj() * row[j]).re;
+                }
+            }
+        }
+        let mut improved = false;
+        while lambda < 1e12 {
+            let mut m = a;
+            for (i, mi) in m.iter_mut().enumerate() {
+                mi[i] *= 1.0 + lambda;
+            }
+            let mut x = g;
+            if !crate::solve_dense(&mut m, &mut x) {
+                lambda *= 10.0;
+                continue;
+            }
+            let mut q = p;
+            for j in 0..P {
+                q[j] -= x[j];
+            }
+            let rq = r(&q);
+            let cq = cost(&rq);
+            if cq < c {
+                improved = c - cq > 1e-13 * c;
+                p = q;
+                cur = rq;
+                c = cq;
+                lambda = (lambda * 0.3).max(1e-12);
+                break;
+            }
+            lambda *= 10.0;
+        }
+        if !improved {
+            break;
+        }
+    }
+    p
+}
+
+/// A fitted floor model and its error on the record.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Floor {
+    /// The best model of the class.
+    pub model: Oscillator,
+    /// Its error on the record.
+    pub validation: Validation,
+}
+
+/// The best linear oscillator of mass `m` on one steady-state period (u, y) at `fs`,
+/// starting from `start` (c, k).
+pub fn linear(u: &[f64], y: &[f64], fs: f64, m: f64, start: (f64, f64)) -> Floor {
+    let n = u.len();
+    let (su, sy) = spectra(u, y);
+    let h = |p: &[f64; 2], w: f64| C::new(1.0, 0.0) / C::new(p[1] - m * w * w, w * p[0]);
+    let p = lm([start.0, start.1], |p| {
+        su.iter()
+            .zip(&sy)
+            .enumerate()
+            .map(|(i, (ui, yi))| {
+                let w = 2.0 * std::f64::consts::PI * i as f64 * fs / n as f64;
+                yi - h(p, w) * ui
+            })
+            .collect()
+    });
+    let yhat = response(|w| h(&p, w), &su, n, fs);
+    Floor {
+        model: Oscillator::linear(m, p[0], p[1]),
+        validation: epsilon(&yhat, y),
+    }
+}
+
+/// The best Zener oscillator of mass `m` on one steady-state period, starting from
+/// `start` (c, k, k∞, Ω).
+pub fn zener(u: &[f64], y: &[f64], fs: f64, m: f64, start: [f64; 4]) -> Floor {
+    let n = u.len();
+    let (su, sy) = spectra(u, y);
+    let h = |p: &[f64; 4], w: f64| {
+        let iw = C::new(0.0, w);
+        let z = iw * p[2] / (iw + p[3]);
+        C::new(1.0, 0.0) / (C::new(p[1] - m * w * w, w * p[0]) + z)
+    };
+    let p = lm(start, |p| {
+        su.iter()
+            .zip(&sy)
+            .enumerate()
+            .map(|(i, (ui, yi))| {
+                let w = 2.0 * std::f64::consts::PI * i as f64 * fs / n as f64;
+                yi - h(p, w) * ui
+            })
+            .collect()
+    });
+    let yhat = response(|w| h(&p, w), &su, n, fs);
+    Floor {
+        model: Oscillator::zener(
+            m,
+            p[0],
+            p[1],
+            ZenerParams {
+                k_inf: p[2],
+                omega: p[3],
+            },
+        ),
+        validation: epsilon(&yhat, y),
+    }
+}
