@@ -1,6 +1,10 @@
-//! Project tasks: `cargo xtask bench`.
+//! Project tasks.
 //!
-//! `bench` prints one line per figure, `name value unit`.
+//! - `cargo xtask bench` prints one line per figure, `name value unit`.
+//! - `cargo xtask sweep [--levels 10:90:10] [--samples N] [--seed S] [--out DIR]` runs the
+//!   paper's Section 5 amplitude study (see `sweep.rs`).
+
+mod sweep;
 
 use std::time::Instant;
 
@@ -9,8 +13,65 @@ use hyst_sim::excitation::{Multisine, white_noise};
 use hyst_sim::{Input, SimOptions, simulate};
 
 fn usage() -> ! {
-    eprintln!("usage: cargo xtask bench");
+    eprintln!(
+        "usage: cargo xtask bench\n       cargo xtask sweep [--levels FROM:TO:STEP] [--samples N] [--seed S] [--out DIR]"
+    );
     std::process::exit(2)
+}
+
+fn parse_levels(s: &str) -> Option<Vec<f64>> {
+    let p: Vec<f64> = s
+        .split(':')
+        .map(|v| v.parse().ok())
+        .collect::<Option<_>>()?;
+    match p.as_slice() {
+        [a] => Some(vec![*a]),
+        [a, b, st] if *st > 0.0 && b >= a => {
+            let n = ((b - a) / st + 1e-9).floor() as usize;
+            Some((0..=n).map(|i| a + i as f64 * st).collect())
+        }
+        _ => None,
+    }
+}
+
+fn sweep_cmd(args: &[String]) {
+    let mut opts = sweep::SweepOptions {
+        levels: (1..=9).map(|i| 10.0 * i as f64).collect(),
+        samples: 1 << 20,
+        seed: 1,
+        out: std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/sweep"),
+        progress: true,
+    };
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        let mut val = || it.next().cloned().unwrap_or_else(|| usage());
+        match a.as_str() {
+            "--levels" => opts.levels = parse_levels(&val()).unwrap_or_else(|| usage()),
+            "--samples" => opts.samples = val().parse().unwrap_or_else(|_| usage()),
+            "--seed" => opts.seed = val().parse().unwrap_or_else(|_| usage()),
+            "--out" => opts.out = val().into(),
+            _ => usage(),
+        }
+    }
+    if opts.levels.iter().any(|l| !(l.is_finite() && *l > 0.0)) || opts.samples < 8192 {
+        eprintln!("error: levels must be > 0 N and --samples at least 8192");
+        std::process::exit(2);
+    }
+    match sweep::run(&opts) {
+        Ok((results, secs)) => {
+            if let Err(e) = sweep::write(&opts.out, &results, secs, opts.samples) {
+                eprintln!("error: {e}");
+                std::process::exit(1);
+            }
+            print!("{}", sweep::markdown(&results, secs, opts.samples));
+            println!("\nwritten to {}", opts.out.display());
+            println!("sweep_seconds {secs:.2} s");
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::exit(1);
+        }
+    }
 }
 
 /// Best of `reps` wall times of `f`, in seconds.
@@ -130,6 +191,7 @@ fn main() {
             bench();
             bench_covssi();
         }
+        Some("sweep") => sweep_cmd(&args[1..]),
         _ => usage(),
     }
 }

@@ -249,8 +249,10 @@ pub fn run_ssi(p: &Prepared, opts: &IdentOptions) -> Result<SsiResult, IdentErro
 /// The poles the models are built from.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SelectedPoles {
-    /// The oscillating pair (Im > 0), rad/s.
+    /// The oscillating pair (Im > 0), rad/s: the mean of its cluster.
     pub pair: Complex64,
+    /// Every pole of that cluster (one per model order).
+    pub pair_cluster: Vec<Complex64>,
     /// The real pole, if one was found (rad/s).
     pub real: Option<f64>,
     /// Viscous damping guess c (N s/m).
@@ -283,6 +285,17 @@ pub fn select_poles(
             dominant_hz: p.dominant_hz,
         })?;
     let pair = mode.lambda;
+    let pair_cluster: Vec<Complex64> = mode
+        .members
+        .iter()
+        .filter_map(|&(order, idx)| {
+            ssi.diagram
+                .orders
+                .iter()
+                .find(|o| o.order == order)
+                .map(|o| o.poles[idx].lambda)
+        })
+        .collect();
     let real = if let Some(r) = ssi.real_poles.iter().max_by_key(|r| r.members.len()) {
         Some(r.lambda)
     } else {
@@ -345,6 +358,7 @@ pub fn select_poles(
     };
     Ok(SelectedPoles {
         pair,
+        pair_cluster,
         real,
         c,
         c_source,
