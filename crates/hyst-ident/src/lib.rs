@@ -23,6 +23,7 @@
 #![warn(missing_docs)]
 
 pub mod floor;
+pub mod refine;
 
 use covssi::{BlockRows, SsiOptions, SsiResult, Stability, StabilityCriteria};
 use hyst_linearize::{Amplitude, LinearizeError};

@@ -1,0 +1,759 @@
+//! Closing the loop with measured input and output: refine a model by output error, find in
+//! its residual the effect it lacks, add that effect, refit, and report the held-out error
+//! before and after.
+//!
+//! * **Output-error fit** ([`fit`]): simulate the model with the measured input (RK4, from
+//!   rest [`WARM_UP`] samples before the range), minimise $\sum (y - \hat y)^2$ over the model's free
+//!   parameters by Levenberg–Marquardt, the Jacobian by finite differences computed in
+//!   parallel (rayon).
+//! * **Diagnosis** ([`diagnose`]): each candidate effect ([`Effect`]) is added to the model
+//!   in turn and the whole model refitted. Evidence per candidate: the residual variance it
+//!   explains, the change of the Bayesian information criterion
+//!   $\Delta\text{BIC} = N\ln(\sigma^2_{new}/\sigma^2_{old}) + \Delta p\,\ln N$, and where the
+//!   residual lives in frequency (its spectral peak, and the share of its power above 1.5× the
+//!   resonance, where harmonics of a nonlinearity fall). The best candidate is added if its
+//!   ΔBIC is below −10 (strong evidence); noise alone cannot meet that, so it gives `none`.
+//! * **Loop** ([`refine`]): repeat while an effect is significant (at most three steps).
+
+use hyst_model::{BoucWen, Coulomb, Oscillator, Restoring, SecondMass, ZenerParams};
+use hyst_sim::{Input, SimOptions};
+use rayon::prelude::*;
+
+use crate::{IdentError, Validation, epsilon};
+
+/// An effect the loop can add.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Effect {
+    /// Cubic spring $k_3x^3$.
+    CubicStiffness,
+    /// Quadratic damping $c_q\dot x|\dot x|$.
+    QuadraticDamping,
+    /// Coulomb friction $F_c\tanh(\dot x/v_\varepsilon)$.
+    CoulombFriction,
+    /// A second mass on a spring and damper.
+    SecondMode,
+    /// A Bouc-Wen hysteretic element (when the model has no restoring element).
+    Hysteresis,
+}
+
+impl Effect {
+    /// The name used in reports.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Effect::CubicStiffness => "cubic_stiffness",
+            Effect::QuadraticDamping => "quadratic_damping",
+            Effect::CoulombFriction => "coulomb_friction",
+            Effect::SecondMode => "second_mode",
+            Effect::Hysteresis => "hysteresis",
+        }
+    }
+
+    /// Every candidate.
+    pub const ALL: [Effect; 5] = [
+        Effect::CubicStiffness,
+        Effect::QuadraticDamping,
+        Effect::CoulombFriction,
+        Effect::SecondMode,
+        Effect::Hysteresis,
+    ];
+}
+
+/// The free parameters of a model, in a fixed order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum P {
+    Mass,
+    Damping,
+    Stiffness,
+    KInf,
+    Omega,
+    Alpha,
+    BetaGamma,
+    BetaDelta,
+    Cubic,
+    Quad,
+    Coulomb,
+    M2,
+    K2,
+    C2,
+}
+
+fn free(o: &Oscillator, fit_mass: bool) -> Vec<P> {
+    let mut v = Vec::new();
+    if fit_mass {
+        v.push(P::Mass);
+    }
+    v.extend([P::Damping, P::Stiffness]);
+    match o.restoring {
+        Restoring::None => {}
+        Restoring::Zener(_) => v.extend([P::KInf, P::Omega]),
+        Restoring::BoucWen(_) => v.extend([P::Alpha, P::BetaGamma, P::BetaDelta]),
+    }
+    let e = &o.extras;
+    if e.cubic_stiffness != 0.0 {
+        v.push(P::Cubic);
+    }
+    if e.quadratic_damping != 0.0 {
+        v.push(P::Quad);
+    }
+    if e.coulomb.is_some() {
+        v.push(P::Coulomb);
+    }
+    if e.second_mass.is_some() {
+        v.extend([P::M2, P::K2, P::C2]);
+    }
+    v
+}
+
+fn get(o: &Oscillator, p: P) -> f64 {
+    match (p, &o.restoring) {
+        (P::Mass, _) => o.mass,
+        (P::Damping, _) => o.damping,
+        (P::Stiffness, _) => o.stiffness,
+        (P::KInf, Restoring::Zener(z)) => z.k_inf,
+        (P::Omega, Restoring::Zener(z)) => z.omega,
+        (P::Alpha, Restoring::BoucWen(b)) => b.alpha,
+        (P::BetaGamma, Restoring::BoucWen(b)) => b.beta_gamma(),
+        (P::BetaDelta, Restoring::BoucWen(b)) => b.beta_delta(),
+        (P::Cubic, _) => o.extras.cubic_stiffness,
+        (P::Quad, _) => o.extras.quadratic_damping,
+        (P::Coulomb, _) => o.extras.coulomb.map_or(0.0, |c| c.force),
+        (P::M2, _) => o.extras.second_mass.map_or(0.0, |s| s.mass),
+        (P::K2, _) => o.extras.second_mass.map_or(0.0, |s| s.stiffness),
+        (P::C2, _) => o.extras.second_mass.map_or(0.0, |s| s.damping),
+        _ => 0.0,
+    }
+}
+
+fn set(o: &mut Oscillator, p: P, v: f64) {
+    match p {
+        P::Mass => o.mass = v,
+        P::Damping => o.damping = v,
+        P::Stiffness => o.stiffness = v,
+        P::KInf | P::Omega => {
+            if let Restoring::Zener(z) = &mut o.restoring {
+                if p == P::KInf {
+                    z.k_inf = v
+                } else {
+                    z.omega = v
+                }
+            }
+        }
+        P::Alpha | P::BetaGamma | P::BetaDelta => {
+            if let Restoring::BoucWen(b) = &mut o.restoring {
+                let (mut a, mut bg, mut bd) = (b.alpha, b.beta_gamma(), b.beta_delta());
+                match p {
+                    P::Alpha => a = v,
+                    P::BetaGamma => bg = v,
+                    _ => bd = v,
+                }
+                *b = BoucWen::from_products(a, bg, bd, b.nu);
+            }
+        }
+        P::Cubic => o.extras.cubic_stiffness = v,
+        P::Quad => o.extras.quadratic_damping = v,
+        P::Coulomb => {
+            if let Some(c) = &mut o.extras.coulomb {
+                c.force = v
+            }
+        }
+        P::M2 | P::K2 | P::C2 => {
+            if let Some(s) = &mut o.extras.second_mass {
+                match p {
+                    P::M2 => s.mass = v,
+                    P::K2 => s.stiffness = v,
+                    _ => s.damping = v,
+                }
+            }
+        }
+    }
+}
+
+/// A record with input and output, and its sampling rate.
+#[derive(Debug, Clone, Copy)]
+pub struct Record<'a> {
+    /// Input force.
+    pub u: &'a [f64],
+    /// Measured output.
+    pub y: &'a [f64],
+    /// Sampling rate (Hz).
+    pub fs: f64,
+}
+
+/// Samples simulated before a range so that the model's state has forgotten the rest it
+/// starts from (the record's state there is unknown).
+pub const WARM_UP: usize = 2048;
+
+/// Simulate rows [a, b), starting from rest [`WARM_UP`] rows earlier (or at row 0).
+fn simulate(o: &Oscillator, rec: &Record<'_>, range: (usize, usize)) -> Option<Vec<f64>> {
+    let from = range.0.saturating_sub(WARM_UP);
+    let u = &rec.u[from..range.1];
+    let opts = SimOptions {
+        oversample: 4,
+        max_abs_state: 1e8,
+        ..SimOptions::default()
+    };
+    let y = hyst_sim::simulate(o, Input::Sampled(u), rec.fs, u.len(), &opts).ok()?;
+    Some(y[range.0 - from..].to_vec())
+}
+
+/// Held-out error of a model on rows [a, b).
+pub fn test_error(o: &Oscillator, rec: &Record<'_>, range: (usize, usize)) -> Option<Validation> {
+    let yhat = simulate(o, rec, range)?;
+    Some(epsilon(&yhat, &rec.y[range.0..range.1]))
+}
+
+fn residual(o: &Oscillator, rec: &Record<'_>, range: (usize, usize)) -> Option<Vec<f64>> {
+    let yhat = simulate(o, rec, range)?;
+    Some(
+        rec.y[range.0..range.1]
+            .iter()
+            .zip(&yhat)
+            .map(|(a, b)| a - b)
+            .collect(),
+    )
+}
+
+fn sse(r: &[f64]) -> f64 {
+    r.iter().map(|v| v * v).sum()
+}
+
+/// Output-error Levenberg–Marquardt fit of every free parameter of `o` on rows `range`.
+/// Returns the fitted model and its residual sum of squares, or `None` if every trial step
+/// diverged from the start.
+pub fn fit(
+    o: &Oscillator,
+    rec: &Record<'_>,
+    range: (usize, usize),
+    fit_mass: bool,
+    iterations: usize,
+) -> Option<(Oscillator, f64)> {
+    let ids = free(o, fit_mass);
+    let np = ids.len();
+    let scale: Vec<f64> = ids.iter().map(|&p| get(o, p).abs().max(1e-12)).collect();
+    let model_at = |x: &[f64]| {
+        let mut m = *o;
+        for (i, &p) in ids.iter().enumerate() {
+            set(&mut m, p, x[i] * scale[i]);
+        }
+        m
+    };
+    let mut x = vec![1.0; np];
+    for (i, &p) in ids.iter().enumerate() {
+        x[i] = get(o, p) / scale[i];
+    }
+    let mut cur = model_at(&x);
+    let mut r = residual(&cur, rec, range)?;
+    let mut c = sse(&r);
+    let mut lambda = 1e-3;
+    for _ in 0..iterations {
+        // Finite-difference Jacobian, one simulation per parameter, in parallel.
+        let cols: Vec<Option<Vec<f64>>> = (0..np)
+            .into_par_iter()
+            .map(|j| {
+                let h = 1e-6 * x[j].abs().max(1e-3);
+                let mut xj = x.clone();
+                xj[j] += h;
+                let rj = residual(&model_at(&xj), rec, range)?;
+                Some(rj.iter().zip(&r).map(|(a, b)| (a - b) / h).collect())
+            })
+            .collect();
+        let Some(cols) = cols.into_iter().collect::<Option<Vec<Vec<f64>>>>() else {
+            break;
+        };
+        let mut a = vec![vec![0.0; np]; np];
+        let mut g = vec![0.0; np];
+        for i in 0..np {
+            g[i] = cols[i].iter().zip(&r).map(|(p, q)| p * q).sum();
+            for j in i..np {
+                let v: f64 = cols[i].iter().zip(&cols[j]).map(|(p, q)| p * q).sum();
+                a[i][j] = v;
+                a[j][i] = v;
+            }
+        }
+        let mut improved = false;
+        while lambda < 1e10 {
+            let mut m = a.clone();
+            for (i, mi) in m.iter_mut().enumerate() {
+                mi[i] = mi[i] * (1.0 + lambda) + 1e-300;
+            }
+            let Some(step) = solve(m, g.clone()) else {
+                lambda *= 10.0;
+                continue;
+            };
+            let xn: Vec<f64> = x.iter().zip(&step).map(|(a, b)| a - b).collect();
+            let mn = model_at(&xn);
+            match (mn.validate(), residual(&mn, rec, range)) {
+                (Ok(()), Some(rn)) if sse(&rn) < c => {
+                    let cn = sse(&rn);
+                    improved = c - cn > 1e-9 * c;
+                    x = xn;
+                    cur = mn;
+                    r = rn;
+                    c = cn;
+                    lambda = (lambda * 0.3).max(1e-9);
+                    break;
+                }
+                _ => lambda *= 10.0,
+            }
+        }
+        if !improved {
+            break;
+        }
+    }
+    Some((cur, c))
+}
+
+fn solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
+    let n = b.len();
+    for col in 0..n {
+        let piv = (col..n).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
+        a.swap(col, piv);
+        b.swap(col, piv);
+        if a[col][col] == 0.0 || !a[col][col].is_finite() {
+            return None;
+        }
+        for row in col + 1..n {
+            let f = a[row][col] / a[col][col];
+            let pivot_row = a[col].clone();
+            for (k, v) in a[row].iter_mut().enumerate().skip(col) {
+                *v -= f * pivot_row[k];
+            }
+            b[row] -= f * b[col];
+        }
+    }
+    for col in (0..n).rev() {
+        let s: f64 = (col + 1..n).map(|k| a[col][k] * b[k]).sum();
+        b[col] = (b[col] - s) / a[col][col];
+    }
+    b.iter().all(|v| v.is_finite()).then_some(b)
+}
+
+/// Where the residual's power lies.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Spectrum {
+    /// Frequency of the residual's largest spectral peak (Hz).
+    pub peak_hz: f64,
+    /// Share of the residual power above 1.5× the model's resonance.
+    pub above_resonance: f64,
+    /// The model's resonance (Hz).
+    pub resonance_hz: f64,
+}
+
+fn periodogram_peak(r: &[f64], fs: f64, resonance_hz: f64) -> Spectrum {
+    // A coarse DFT scan (512 frequencies) is enough to locate the power.
+    let n = r.len().min(16384);
+    let r = &r[..n];
+    let mut best = (0.0, 0.0);
+    let (mut total, mut high) = (0.0, 0.0);
+    for p in 1..512 {
+        let f = fs / 2.0 * p as f64 / 512.0;
+        let w = 2.0 * std::f64::consts::PI * f / fs;
+        let (mut re, mut im) = (0.0, 0.0);
+        for (k, v) in r.iter().enumerate() {
+            let (s, c) = (w * k as f64).sin_cos();
+            re += v * c;
+            im -= v * s;
+        }
+        let pw = re * re + im * im;
+        total += pw;
+        if f > 1.5 * resonance_hz {
+            high += pw;
+        }
+        if pw > best.1 {
+            best = (f, pw);
+        }
+    }
+    Spectrum {
+        peak_hz: best.0,
+        above_resonance: if total > 0.0 { high / total } else { 0.0 },
+        resonance_hz,
+    }
+}
+
+/// The evidence for one candidate effect.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Evidence {
+    /// The candidate.
+    pub effect: Effect,
+    /// Share of the residual variance the refitted model explains.
+    pub variance_explained: f64,
+    /// Change of the BIC (negative favours the effect).
+    pub delta_bic: f64,
+    /// The refitted model, if the fit did not diverge.
+    pub model: Option<Oscillator>,
+    /// Why the candidate was not considered, if it was not.
+    pub rejected: Option<String>,
+}
+
+fn resonance_hz(o: &Oscillator) -> f64 {
+    let k = o.stiffness
+        + match o.restoring {
+            Restoring::BoucWen(b) => b.alpha,
+            Restoring::Zener(z) => z.k_inf,
+            Restoring::None => 0.0,
+        };
+    (k.max(0.0) / o.mass).sqrt() / (2.0 * std::f64::consts::PI)
+}
+
+/// Linear least squares of u = m ÿ + c ẏ + k y + θ g(y, ẏ) on the measured output
+/// (derivatives by the five-point stencil), for a plain oscillator plus one effect whose force
+/// is linear in θ. `None` when it does not apply or the regression is singular.
+fn equation_error_start(
+    start: &Oscillator,
+    e: Effect,
+    rec: &Record<'_>,
+    range: (usize, usize),
+    fit_mass: bool,
+) -> Option<Oscillator> {
+    let p = linear_coefficient(e)?;
+    if start.restoring != Restoring::None || start.extras.second_mass.is_some() {
+        return None;
+    }
+    let y = &rec.y[range.0..range.1];
+    let n = y.len();
+    if n < 16 {
+        return None;
+    }
+    let h = 1.0 / rec.fs;
+    let vs = start.extras.coulomb.map_or(1.0, |c| c.smoothing_velocity);
+    let g = |x: f64, v: f64| match e {
+        Effect::CubicStiffness => x * x * x,
+        Effect::QuadraticDamping => v * v.abs(),
+        _ => (v / vs).tanh(),
+    };
+    // Regressors: [ÿ (if the mass is fitted), ẏ, y, g]; target u (− m ÿ if the mass is known).
+    let np = if fit_mass { 4 } else { 3 };
+    let mut a = vec![vec![0.0; np]; np];
+    let mut b = vec![0.0; np];
+    for i in 2..n - 2 {
+        let v = (y[i - 2] - 8.0 * y[i - 1] + 8.0 * y[i + 1] - y[i + 2]) / (12.0 * h);
+        let acc = (-y[i - 2] + 16.0 * y[i - 1] - 30.0 * y[i] + 16.0 * y[i + 1] - y[i + 2])
+            / (12.0 * h * h);
+        let mut row = Vec::with_capacity(np);
+        if fit_mass {
+            row.push(acc);
+        }
+        row.extend([v, y[i], g(y[i], v)]);
+        let target = rec.u[range.0 + i] - if fit_mass { 0.0 } else { start.mass * acc };
+        for r in 0..np {
+            b[r] += row[r] * target;
+            for c in 0..np {
+                a[r][c] += row[r] * row[c];
+            }
+        }
+    }
+    let x = solve(a, b)?;
+    let mut m = *start;
+    let off = if fit_mass {
+        if x[0] <= 0.0 {
+            return None;
+        }
+        m.mass = x[0];
+        1
+    } else {
+        0
+    };
+    m.damping = x[off];
+    m.stiffness = x[off + 1];
+    set(&mut m, p, x[off + 2]);
+    (m.validate().is_ok() && x[off + 2] != 0.0).then_some(m)
+}
+
+/// The coefficient of an effect whose force is linear in it.
+fn linear_coefficient(e: Effect) -> Option<P> {
+    match e {
+        Effect::CubicStiffness => Some(P::Cubic),
+        Effect::QuadraticDamping => Some(P::Quad),
+        Effect::CoulombFriction => Some(P::Coulomb),
+        _ => None,
+    }
+}
+
+/// Add `effect` to `o` with a starting value sized from the record (σ of x and ẋ).
+fn with_effect(
+    o: &Oscillator,
+    effect: Effect,
+    sx: f64,
+    sv: f64,
+    peak_hz: f64,
+) -> Option<Oscillator> {
+    let mut m = *o;
+    let k = o.stiffness.abs().max(1e-12);
+    match effect {
+        Effect::CubicStiffness => m.extras.cubic_stiffness = 1e-3 * k / (sx * sx),
+        Effect::QuadraticDamping => {
+            m.extras.quadratic_damping = 1e-3 * o.damping.abs().max(1e-9) / sv
+        }
+        Effect::CoulombFriction => {
+            m.extras.coulomb = Some(Coulomb {
+                force: 1e-3 * k * sx,
+                smoothing_velocity: 0.05 * sv,
+            })
+        }
+        Effect::SecondMode => {
+            let w = 2.0 * std::f64::consts::PI * peak_hz.max(1e-3);
+            let m2 = 0.1 * o.mass;
+            m.extras.second_mass = Some(SecondMass {
+                mass: m2,
+                stiffness: m2 * w * w,
+                damping: 2.0 * 0.02 * m2 * w,
+            });
+        }
+        Effect::Hysteresis => {
+            if o.restoring != Restoring::None {
+                return None;
+            }
+            let alpha = 0.2 * k;
+            m.stiffness = 0.8 * o.stiffness;
+            m.restoring = Restoring::BoucWen(BoucWen::from_products(alpha, 0.2 / sx, 0.0, 1.0));
+        }
+    }
+    Some(m)
+}
+
+/// Try every candidate on `o` (already fitted, with residual sum of squares `c0`).
+pub fn diagnose(
+    o: &Oscillator,
+    c0: f64,
+    rec: &Record<'_>,
+    range: (usize, usize),
+    fit_mass: bool,
+) -> (Vec<Evidence>, Spectrum) {
+    let n = (range.1 - range.0) as f64;
+    let y = &rec.y[range.0..range.1];
+    let sx = (y.iter().map(|v| v * v).sum::<f64>() / n)
+        .sqrt()
+        .max(1e-300);
+    let sv = sx * 2.0 * std::f64::consts::PI * resonance_hz(o).max(1e-6);
+    let r0 = residual(o, rec, range).unwrap_or_default();
+    let spec = periodogram_peak(&r0, rec.fs, resonance_hz(o));
+    let p0 = free(o, fit_mass).len();
+    let ev = Effect::ALL
+        .iter()
+        .map(|&e| {
+            let Some(mut start) = with_effect(o, e, sx, sv, spec.peak_hz) else {
+                return Evidence {
+                    effect: e,
+                    variance_explained: 0.0,
+                    delta_bic: f64::INFINITY,
+                    model: None,
+                    rejected: Some("the model already has a restoring element".into()),
+                };
+            };
+            // For a force term linear in its coefficient, start from the least-squares
+            // projection of the residual on the output's sensitivity to that coefficient —
+            // or better, when the model is a plain oscillator, from the equation-error fit
+            // of m ÿ + c ẏ + k y + θ g(y, ẏ) = u on the measured record.
+            if let Some(eq) = equation_error_start(&start, e, rec, range, fit_mass) {
+                start = eq;
+            } else if let Some(p) = linear_coefficient(e) {
+                let theta = get(&start, p);
+                if let (Some(y1), Some(y0)) =
+                    (simulate(&start, rec, range), simulate(o, rec, range))
+                {
+                    let sens: Vec<f64> = y1.iter().zip(&y0).map(|(a, b)| (a - b) / theta).collect();
+                    let ss: f64 = sens.iter().map(|v| v * v).sum();
+                    if ss > 0.0 {
+                        let t = sens.iter().zip(&r0).map(|(a, b)| a * b).sum::<f64>() / ss;
+                        if t.is_finite() && t != 0.0 {
+                            set(&mut start, p, t);
+                        }
+                    }
+                }
+            }
+            match fit(&start, rec, range, fit_mass, 60) {
+                Some((m, c1)) if c1.is_finite() => {
+                    let dp = (free(&m, fit_mass).len() - p0) as f64;
+                    Evidence {
+                        effect: e,
+                        variance_explained: 1.0 - c1 / c0,
+                        delta_bic: n * (c1 / c0).ln() + dp * n.ln(),
+                        model: Some(m),
+                        rejected: None,
+                    }
+                }
+                _ => Evidence {
+                    effect: e,
+                    variance_explained: 0.0,
+                    delta_bic: f64::INFINITY,
+                    model: None,
+                    rejected: Some("the fit diverged with this effect".into()),
+                },
+            }
+        })
+        .collect();
+    (ev, spec)
+}
+
+/// One step of the loop.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Step {
+    /// The effect added, or `None` when nothing was significant.
+    pub effect: Option<Effect>,
+    /// Evidence for every candidate.
+    pub evidence: Vec<Evidence>,
+    /// Where the residual lay before this step.
+    pub spectrum: Spectrum,
+    /// Held-out errors (one per test range) before and after.
+    pub before: Vec<Validation>,
+    /// See `before`.
+    pub after: Vec<Validation>,
+}
+
+/// The whole loop's result.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Refinement {
+    /// The baseline model after the output-error fit.
+    pub baseline: Oscillator,
+    /// Steps in order; the last has `effect: None` unless the step limit was reached.
+    pub steps: Vec<Step>,
+    /// The final model.
+    pub model: Oscillator,
+    /// Held-out errors of the final model.
+    pub tests: Vec<Validation>,
+}
+
+/// ΔBIC below which an effect counts as significant (strong evidence).
+pub const SIGNIFICANT_BIC: f64 = -10.0;
+
+/// Refine `start` on the estimation rows and report on the test rows.
+pub fn refine(
+    start: &Oscillator,
+    rec: &Record<'_>,
+    estimate: (usize, usize),
+    tests: &[(usize, usize)],
+    fit_mass: bool,
+) -> Result<Refinement, IdentError> {
+    for &(a, b) in std::iter::once(&estimate).chain(tests) {
+        if a >= b || b > rec.u.len() || b > rec.y.len() {
+            return Err(IdentError::TooShort {
+                samples: rec.u.len().min(rec.y.len()),
+                needed: b,
+            });
+        }
+    }
+    if rec.u.len() != rec.y.len() {
+        return Err(IdentError::LengthMismatch {
+            input: rec.u.len(),
+            output: rec.y.len(),
+        });
+    }
+    let errs = |m: &Oscillator| -> Vec<Validation> {
+        tests
+            .iter()
+            .map(|&r| {
+                test_error(m, rec, r).unwrap_or(Validation {
+                    epsilon: f64::INFINITY,
+                    rms: f64::INFINITY,
+                })
+            })
+            .collect()
+    };
+    let (mut model, mut c) = fit(start, rec, estimate, fit_mass, 50).ok_or(IdentError::Sim(
+        hyst_sim::SimError::InvalidSignal {
+            what: "starting model diverges on the estimation record",
+            value: f64::NAN,
+        },
+    ))?;
+    let baseline = model;
+    let mut steps = Vec::new();
+    for _ in 0..3 {
+        let (evidence, spectrum) = diagnose(&model, c, rec, estimate, fit_mass);
+        let before = errs(&model);
+        let best = evidence
+            .iter()
+            .filter(|e| e.model.is_some())
+            .min_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic));
+        match best {
+            Some(b) if b.delta_bic < SIGNIFICANT_BIC => {
+                let m = b.model.expect("filtered on Some");
+                let after = errs(&m);
+                let e = b.effect;
+                c *= 1.0 - b.variance_explained;
+                model = m;
+                steps.push(Step {
+                    effect: Some(e),
+                    evidence,
+                    spectrum,
+                    before,
+                    after,
+                });
+            }
+            _ => {
+                let after = before.clone();
+                steps.push(Step {
+                    effect: None,
+                    evidence,
+                    spectrum,
+                    before,
+                    after,
+                });
+                break;
+            }
+        }
+    }
+    let tests_err = errs(&model);
+    Ok(Refinement {
+        baseline,
+        steps,
+        model,
+        tests: tests_err,
+    })
+}
+
+/// A linear starting model from the output-only pipeline's poles, with mass `m` (1 when
+/// unknown: the scale is then fitted with the input).
+pub fn linear_start(pair: crate::Complex64, m: f64) -> Oscillator {
+    Oscillator::linear(m, -2.0 * m * pair.re, m * pair.norm_sqr())
+}
+
+/// A Zener starting model.
+pub fn zener_start(m: f64, c: f64, k: f64, z: ZenerParams) -> Oscillator {
+    Oscillator::zener(m, c, k, z)
+}
+
+/// Which model the loop starts from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Start {
+    /// The linear oscillator from the dominant pole pair.
+    #[default]
+    Linear,
+    /// The Zener oscillator (falls back to linear without a real pole).
+    Zener,
+    /// The Bouc-Wen oscillator (falls back as above).
+    BoucWen,
+}
+
+/// The whole loop on a record: the output-only pipeline on the estimation rows gives the
+/// starting model (mass 1 and fitted when `mass` is `None`), then [`refine`].
+pub fn refine_record(
+    rec: &Record<'_>,
+    mass: Option<f64>,
+    start: Start,
+    estimate: (usize, usize),
+    tests: &[(usize, usize)],
+) -> Result<Refinement, IdentError> {
+    if rec.u.len() != rec.y.len() {
+        return Err(IdentError::LengthMismatch {
+            input: rec.u.len(),
+            output: rec.y.len(),
+        });
+    }
+    if estimate.0 >= estimate.1 || estimate.1 > rec.y.len() {
+        return Err(IdentError::TooShort {
+            samples: rec.y.len(),
+            needed: estimate.1,
+        });
+    }
+    let opts = crate::IdentOptions {
+        mass: mass.unwrap_or(1.0),
+        ..crate::IdentOptions::default()
+    };
+    let id = crate::identify(&rec.y[estimate.0..estimate.1], rec.fs, &opts)?;
+    let m = match start {
+        Start::Linear => id.models.linear,
+        Start::Zener => id.models.zener.unwrap_or(id.models.linear),
+        Start::BoucWen => id.models.bouc_wen.unwrap_or(id.models.linear),
+    };
+    refine(&m, rec, estimate, tests, mass.is_none())
+}
