@@ -48,6 +48,52 @@ enum Command {
     ///   hyst ident --data multisine_train.csv --fs 750 --mass 2 --skip 8192 --validate multisine_val.csv --json id.json
     #[command(verbatim_doc_comment)]
     Ident(IdentArgs),
+    /// Close the loop with input and output: refine a model by output error, trace the
+    /// residual to the effect the model lacks, add it, refit, and report the held-out error
+    /// before and after.
+    ///
+    /// Example (Silverbox: estimate on the multisine part, test on the arrow head):
+    ///   hyst refine --data SNLS80mV.csv --fs 610.3515625 --start linear --estimate 40650:105712 --test 100:40575 --test 100:32100 --json refine.json
+    #[command(verbatim_doc_comment)]
+    Refine(RefineArgs),
+}
+
+#[derive(Clone, Copy, ValueEnum, PartialEq, Eq, Debug)]
+enum StartArg {
+    Linear,
+    Zener,
+    BoucWen,
+}
+
+#[derive(Args, Debug)]
+struct RefineArgs {
+    /// Record with input and output columns (CSV with a header).
+    #[arg(long)]
+    data: PathBuf,
+    /// Sampling rate (Hz).
+    #[arg(long)]
+    fs: f64,
+    /// Mass (kg); without it the mass is estimated too.
+    #[arg(long)]
+    mass: Option<f64>,
+    /// Input column.
+    #[arg(long, default_value = "u")]
+    input_column: String,
+    /// Output column.
+    #[arg(long, default_value = "y")]
+    output_column: String,
+    /// Starting model class.
+    #[arg(long, value_enum, default_value = "linear")]
+    start: StartArg,
+    /// Estimation rows A:B (0-based, B excluded); default the first 75 %.
+    #[arg(long)]
+    estimate: Option<String>,
+    /// Test rows C:D (repeatable); default the last 25 %.
+    #[arg(long)]
+    test: Vec<String>,
+    /// Write the report as JSON here.
+    #[arg(long)]
+    json: Option<PathBuf>,
 }
 
 #[derive(Clone, Copy, ValueEnum, PartialEq, Eq, Debug)]
@@ -788,6 +834,147 @@ fn ident(a: &IdentArgs) -> Result<(), Error> {
     Ok(())
 }
 
+fn parse_rows(s: &str, what: &str, len: usize) -> Result<(usize, usize), Error> {
+    let bad = || {
+        fail(format!(
+            "{what} `{s}` is not A:B with 0 <= A < B <= {len} (the record's rows)"
+        ))
+    };
+    let (a, b) = s.split_once(':').ok_or_else(bad)?;
+    let (a, b): (usize, usize) = (
+        a.trim().parse().map_err(|_| bad())?,
+        b.trim().parse().map_err(|_| bad())?,
+    );
+    if a >= b || b > len {
+        return Err(bad());
+    }
+    Ok((a, b))
+}
+
+fn refine(a: &RefineArgs) -> Result<(), Error> {
+    use hyst::ident::refine::{self, Record, Start};
+    use serde_json::json;
+    let fs = check_fs(a.fs)?;
+    let t = read_csv(&a.data)?;
+    let u = t
+        .column(&a.input_column)
+        .map_err(|e| fail(format!("{e} (refine needs the input too)")))?;
+    let y = t.column(&a.output_column)?;
+    let n = y.len();
+    let estimate = match &a.estimate {
+        Some(s) => parse_rows(s, "--estimate", n)?,
+        None => (0, 3 * n / 4),
+    };
+    let tests: Vec<(usize, usize)> = if a.test.is_empty() {
+        vec![(3 * n / 4, n)]
+    } else {
+        a.test
+            .iter()
+            .map(|s| parse_rows(s, "--test", n))
+            .collect::<Result<_, _>>()?
+    };
+    if let Some(m) = a.mass {
+        if !(m.is_finite() && m > 0.0) {
+            return Err(fail(format!("--mass must be > 0 kg, got {m}")));
+        }
+    }
+    let start = match a.start {
+        StartArg::Linear => Start::Linear,
+        StartArg::Zener => Start::Zener,
+        StartArg::BoucWen => Start::BoucWen,
+    };
+    let rec = Record { u, y, fs };
+    let t0 = std::time::Instant::now();
+    let r = refine::refine_record(&rec, a.mass, start, estimate, &tests)
+        .map_err(|e| fail(format!("{}: {e}", a.data.display())))?;
+    let secs = t0.elapsed().as_secs_f64();
+    let pct = |v: f64| format!("{:.3} %", 100.0 * v);
+    println!(
+        "baseline (output-only start, refined with the input): {}",
+        osc_json(&r.baseline)
+    );
+    for s in &r.steps {
+        let name = s.effect.map_or("none", |e| e.name());
+        println!(
+            "step: {name}  (residual peak {:.2} Hz, share above 1.5x resonance {:.2})",
+            s.spectrum.peak_hz, s.spectrum.above_resonance
+        );
+        for e in &s.evidence {
+            println!(
+                "    {:<18} dBIC {:>12.1}  variance explained {:>7.3}{}",
+                e.effect.name(),
+                e.delta_bic,
+                e.variance_explained,
+                e.rejected
+                    .as_ref()
+                    .map_or(String::new(), |w| format!("  ({w})"))
+            );
+        }
+        for ((rows, b), af) in tests.iter().zip(&s.before).zip(&s.after) {
+            println!(
+                "    test {}:{}  eps {} -> {}  rms {:.4e} -> {:.4e}",
+                rows.0,
+                rows.1,
+                pct(b.epsilon),
+                pct(af.epsilon),
+                b.rms,
+                af.rms
+            );
+        }
+    }
+    println!("final model: {}", osc_json(&r.model));
+    println!("time: {secs:.1} s");
+    if let Some(path) = &a.json {
+        let first = r
+            .steps
+            .iter()
+            .find_map(|s| s.effect)
+            .map_or("none", |e| e.name());
+        let base_err: Vec<_> = r
+            .steps
+            .first()
+            .map(|s| s.before.clone())
+            .unwrap_or_default();
+        let steps: Vec<_> = r.steps.iter().map(|s| json!({
+            "effect": s.effect.map_or("none", |e| e.name()),
+            "evidence": s.evidence.iter().map(|e| json!({
+                "effect": e.effect.name(), "delta_bic": if e.delta_bic.is_finite() { json!(e.delta_bic) } else { json!(null) },
+                "variance_explained": e.variance_explained, "rejected": e.rejected,
+            })).collect::<Vec<_>>(),
+            "residual_peak_hz": s.spectrum.peak_hz,
+            "residual_share_above_resonance": s.spectrum.above_resonance,
+            "error_before": s.before.first().map(|v| v.epsilon),
+            "error_after": s.after.first().map(|v| v.epsilon),
+        })).collect();
+        let test_rows: Vec<_> = tests
+            .iter()
+            .enumerate()
+            .map(|(i, rows)| {
+                json!({
+                    "rows": [rows.0, rows.1],
+                    "rms_before": base_err.get(i).map(|v| v.rms),
+                    "rms_after": r.tests.get(i).map(|v| v.rms),
+                    "error_before": base_err.get(i).map(|v| v.epsilon),
+                    "error_after": r.tests.get(i).map(|v| v.epsilon),
+                })
+            })
+            .collect();
+        let doc = json!({
+            "effect": first,
+            "error_before": base_err.first().map(|v| v.epsilon),
+            "error_after": r.tests.first().map(|v| v.epsilon),
+            "steps": steps,
+            "tests": test_rows,
+            "model": hyst::params::oscillator_to_json(&r.model),
+            "baseline": hyst::params::oscillator_to_json(&r.baseline),
+            "seconds": secs,
+        });
+        std::fs::write(path, serde_json::to_string_pretty(&doc)?)
+            .map_err(|e| fail(format!("{}: {e}", path.display())))?;
+    }
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
@@ -795,6 +982,7 @@ fn main() -> ExitCode {
         Command::Excite(a) => excite(a),
         Command::Ssi(a) => ssi(a),
         Command::Ident(a) => ident(a),
+        Command::Refine(a) => refine(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

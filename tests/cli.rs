@@ -325,3 +325,52 @@ fn ident_record_too_short() {
         "{err}"
     );
 }
+
+#[test]
+fn refine_needs_an_input_column() {
+    let p = write(
+        "y_no_u.csv",
+        &format!(
+            "y\n{}",
+            (0..200)
+                .map(|k| format!("{}\n", (0.3 * k as f64).sin()))
+                .collect::<String>()
+        ),
+    );
+    let (ok, _, err) = hyst(&["refine", "--data", s(&p), "--fs", "100"]);
+    assert!(!ok);
+    assert!(
+        err.contains("no column `u`") && err.contains("refine needs the input"),
+        "{err}"
+    );
+}
+
+#[test]
+fn refine_rejects_bad_row_ranges() {
+    let p = write(
+        "uy.csv",
+        &format!(
+            "u,y\n{}",
+            (0..200)
+                .map(|k| format!("{},{}\n", (0.1 * k as f64).cos(), (0.3 * k as f64).sin()))
+                .collect::<String>()
+        ),
+    );
+    let (ok, _, err) = hyst(&[
+        "refine",
+        "--data",
+        s(&p),
+        "--fs",
+        "100",
+        "--estimate",
+        "150:100",
+    ]);
+    assert!(!ok);
+    assert!(err.contains("--estimate `150:100`"), "{err}");
+    let (ok, _, err) = hyst(&["refine", "--data", s(&p), "--fs", "100", "--test", "0:500"]);
+    assert!(!ok);
+    assert!(
+        err.contains("--test `0:500`") && err.contains("200"),
+        "{err}"
+    );
+}

@@ -184,12 +184,33 @@ fn bench_covssi() {
     println!("read_record_ms_1e6_10ch {:.2} ms", t * 1e3);
 }
 
+/// `hyst refine`'s loop on a 32768-sample record: a 10 Hz oscillator with an undeclared cubic
+/// spring under white noise at 200 Hz, estimate on 75 %, test on 25 %.
+fn bench_refine() {
+    use hyst_ident::refine::{self, Record, Start};
+    let n = 32768;
+    let w = 2.0 * std::f64::consts::PI * 10.0;
+    let mut o = Oscillator::linear(1.0, 2.0 * 0.02 * w, w * w);
+    let u = white_noise(n, 10.0, 31).expect("valid rms");
+    let y0 = simulate(&o, Input::Sampled(&u), 200.0, n, &SimOptions::default()).expect("stable");
+    let sx = (y0.iter().map(|v| v * v).sum::<f64>() / n as f64).sqrt();
+    o.extras.cubic_stiffness = 0.1 * o.stiffness / (sx * sx);
+    let y = simulate(&o, Input::Sampled(&u), 200.0, n, &SimOptions::default()).expect("stable");
+    let rec = Record { u: &u, y: &y, fs: 200.0 };
+    let t = best_of(1, || {
+        refine::refine_record(&rec, Some(1.0), Start::Linear, (0, 3 * n / 4), &[(3 * n / 4, n)])
+            .expect("refines")
+    });
+    println!("refine_s_32768 {t:.2} s");
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     match args.first().map(String::as_str) {
         Some("bench") => {
             bench();
             bench_covssi();
+            bench_refine();
         }
         Some("sweep") => sweep_cmd(&args[1..]),
         _ => usage(),

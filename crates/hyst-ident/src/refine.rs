@@ -400,12 +400,15 @@ fn resonance_hz(o: &Oscillator) -> f64 {
 /// is linear in θ. `None` when it does not apply or the regression is singular.
 fn equation_error_start(
     start: &Oscillator,
-    e: Effect,
+    e: Option<Effect>,
     rec: &Record<'_>,
     range: (usize, usize),
     fit_mass: bool,
 ) -> Option<Oscillator> {
-    let p = linear_coefficient(e)?;
+    let p = match e {
+        Some(e) => Some(linear_coefficient(e)?),
+        None => None,
+    };
     if start.restoring != Restoring::None || start.extras.second_mass.is_some() {
         return None;
     }
@@ -417,12 +420,13 @@ fn equation_error_start(
     let h = 1.0 / rec.fs;
     let vs = start.extras.coulomb.map_or(1.0, |c| c.smoothing_velocity);
     let g = |x: f64, v: f64| match e {
-        Effect::CubicStiffness => x * x * x,
-        Effect::QuadraticDamping => v * v.abs(),
+        Some(Effect::CubicStiffness) => x * x * x,
+        Some(Effect::QuadraticDamping) => v * v.abs(),
         _ => (v / vs).tanh(),
     };
-    // Regressors: [ÿ (if the mass is fitted), ẏ, y, g]; target u (− m ÿ if the mass is known).
-    let np = if fit_mass { 4 } else { 3 };
+    // Regressors: [ÿ (if the mass is fitted), ẏ, y, g (with an effect)]; target u (− m ÿ if
+    // the mass is known).
+    let np = usize::from(fit_mass) + 2 + usize::from(p.is_some());
     let mut a = vec![vec![0.0; np]; np];
     let mut b = vec![0.0; np];
     for i in 2..n - 2 {
@@ -433,7 +437,10 @@ fn equation_error_start(
         if fit_mass {
             row.push(acc);
         }
-        row.extend([v, y[i], g(y[i], v)]);
+        row.extend([v, y[i]]);
+        if p.is_some() {
+            row.push(g(y[i], v));
+        }
         let target = rec.u[range.0 + i] - if fit_mass { 0.0 } else { start.mass * acc };
         for r in 0..np {
             b[r] += row[r] * target;
@@ -455,8 +462,13 @@ fn equation_error_start(
     };
     m.damping = x[off];
     m.stiffness = x[off + 1];
-    set(&mut m, p, x[off + 2]);
-    (m.validate().is_ok() && x[off + 2] != 0.0).then_some(m)
+    if let Some(p) = p {
+        if x[off + 2] == 0.0 {
+            return None;
+        }
+        set(&mut m, p, x[off + 2]);
+    }
+    m.validate().is_ok().then_some(m)
 }
 
 /// The coefficient of an effect whose force is linear in it.
@@ -544,7 +556,7 @@ pub fn diagnose(
             // projection of the residual on the output's sensitivity to that coefficient —
             // or better, when the model is a plain oscillator, from the equation-error fit
             // of m ÿ + c ẏ + k y + θ g(y, ẏ) = u on the measured record.
-            if let Some(eq) = equation_error_start(&start, e, rec, range, fit_mass) {
+            if let Some(eq) = equation_error_start(&start, Some(e), rec, range, fit_mass) {
                 start = eq;
             } else if let Some(p) = linear_coefficient(e) {
                 let theta = get(&start, p);
@@ -561,7 +573,7 @@ pub fn diagnose(
                     }
                 }
             }
-            match fit(&start, rec, range, fit_mass, 60) {
+            match fit(&start, rec, range, fit_mass, 25) {
                 Some((m, c1)) if c1.is_finite() => {
                     let dp = (free(&m, fit_mass).len() - p0) as f64;
                     Evidence {
@@ -649,7 +661,19 @@ pub fn refine(
             })
             .collect()
     };
-    let (mut model, mut c) = fit(start, rec, estimate, fit_mass, 50).ok_or(IdentError::Sim(
+    // A plain oscillator's (m, c, k) also follow from the equation-error regression on the
+    // record, which fixes the input gain at once; start the output-error fit from whichever
+    // of the two starts simulates closer.
+    let eq = equation_error_start(start, None, rec, estimate, fit_mass);
+    let start = match eq {
+        Some(e) => {
+            let cost =
+                |m: &Oscillator| residual(m, rec, estimate).map_or(f64::INFINITY, |r| sse(&r));
+            if cost(&e) < cost(start) { e } else { *start }
+        }
+        None => *start,
+    };
+    let (mut model, mut c) = fit(&start, rec, estimate, fit_mass, 50).ok_or(IdentError::Sim(
         hyst_sim::SimError::InvalidSignal {
             what: "starting model diverges on the estimation record",
             value: f64::NAN,
