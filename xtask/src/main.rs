@@ -196,10 +196,20 @@ fn bench_refine() {
     let sx = (y0.iter().map(|v| v * v).sum::<f64>() / n as f64).sqrt();
     o.extras.cubic_stiffness = 0.1 * o.stiffness / (sx * sx);
     let y = simulate(&o, Input::Sampled(&u), 200.0, n, &SimOptions::default()).expect("stable");
-    let rec = Record { u: &u, y: &y, fs: 200.0 };
+    let rec = Record {
+        u: &u,
+        y: &y,
+        fs: 200.0,
+    };
     let t = best_of(1, || {
-        refine::refine_record(&rec, Some(1.0), Start::Linear, (0, 3 * n / 4), &[(3 * n / 4, n)])
-            .expect("refines")
+        refine::refine_record(
+            &rec,
+            Some(1.0),
+            Start::Linear,
+            (0, 3 * n / 4),
+            &[(3 * n / 4, n)],
+        )
+        .expect("refines")
     });
     println!("refine_s_32768 {t:.2} s");
 }
