@@ -873,10 +873,10 @@ fn refine(a: &RefineArgs) -> Result<(), Error> {
             .map(|s| parse_rows(s, "--test", n))
             .collect::<Result<_, _>>()?
     };
-    if let Some(m) = a.mass {
-        if !(m.is_finite() && m > 0.0) {
-            return Err(fail(format!("--mass must be > 0 kg, got {m}")));
-        }
+    if let Some(m) = a.mass
+        && !(m.is_finite() && m > 0.0)
+    {
+        return Err(fail(format!("--mass must be > 0 kg, got {m}")));
     }
     let start = match a.start {
         StartArg::Linear => Start::Linear,
