@@ -573,7 +573,14 @@ pub fn diagnose(
                     }
                 }
             }
-            match fit(&start, rec, range, fit_mass, 25) {
+            // Linear-in-coefficient effects start from a regression and converge in a few
+            // iterations; a second mode or a hysteretic element starts far and needs more.
+            let iterations = if linear_coefficient(e).is_some() {
+                25
+            } else {
+                60
+            };
+            match fit(&start, rec, range, fit_mass, iterations) {
                 Some((m, c1)) if c1.is_finite() => {
                     let dp = (free(&m, fit_mass).len() - p0) as f64;
                     Evidence {
