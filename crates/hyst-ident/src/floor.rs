@@ -77,15 +77,17 @@ fn lm<const P: usize>(mut p: [f64; P], r: impl Fn(&[f64; P]) -> Vec<C>) -> [f64;
         }
         let mut improved = false;
         while lambda < 1e12 {
-            let mut m = a;
-            for (i, mi) in m.iter_mut().enumerate() {
-                mi[i] *= 1.0 + lambda;
-            }
-            let mut x = g;
-            if !crate::solve_dense(&mut m, &mut x) {
+            let m: Vec<Vec<f64>> = (0..P)
+                .map(|i| {
+                    let mut row = a[i].to_vec();
+                    row[i] *= 1.0 + lambda;
+                    row
+                })
+                .collect();
+            let Some(x) = crate::solve(m, g.to_vec()) else {
                 lambda *= 10.0;
                 continue;
-            }
+            };
             let mut q = p;
             for j in 0..P {
                 q[j] -= x[j];

@@ -542,31 +542,29 @@ pub fn validate(
     Ok(epsilon(&yhat, y))
 }
 
-/// Solve the small dense system `a x = b` in place (partial pivoting); false if singular.
-#[allow(clippy::needless_range_loop)] // rows `row` and `col` of `a` are read and written together
-pub(crate) fn solve_dense<const P: usize>(a: &mut [[f64; P]; P], b: &mut [f64; P]) -> bool {
-    for col in 0..P {
-        let piv = (col..P)
-            .max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))
-            .unwrap_or(col);
+/// Solve the small dense system `a x = b` by Gaussian elimination with partial pivoting;
+/// `None` if it is singular or the result is not finite.
+pub(crate) fn solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
+    let n = b.len();
+    for col in 0..n {
+        let piv = (col..n).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
         a.swap(col, piv);
         b.swap(col, piv);
         if a[col][col] == 0.0 || !a[col][col].is_finite() {
-            return false;
+            return None;
         }
-        for row in col + 1..P {
+        for row in col + 1..n {
             let f = a[row][col] / a[col][col];
-            for k in col..P {
-                a[row][k] -= f * a[col][k];
+            let pivot_row = a[col].clone();
+            for (k, v) in a[row].iter_mut().enumerate().skip(col) {
+                *v -= f * pivot_row[k];
             }
             b[row] -= f * b[col];
         }
     }
-    for col in (0..P).rev() {
-        for k in col + 1..P {
-            b[col] -= a[col][k] * b[k];
-        }
-        b[col] /= a[col][col];
+    for col in (0..n).rev() {
+        let s: f64 = (col + 1..n).map(|k| a[col][k] * b[k]).sum();
+        b[col] = (b[col] - s) / a[col][col];
     }
-    b.iter().all(|v| v.is_finite())
+    b.iter().all(|v| v.is_finite()).then_some(b)
 }

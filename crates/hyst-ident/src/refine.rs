@@ -19,7 +19,7 @@ use hyst_model::{BoucWen, Coulomb, Oscillator, Restoring, SecondMass, ZenerParam
 use hyst_sim::{Input, SimOptions};
 use rayon::prelude::*;
 
-use crate::{IdentError, Validation, epsilon};
+use crate::{IdentError, Validation, epsilon, solve};
 
 /// An effect the loop can add.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -301,31 +301,6 @@ pub fn fit(
         }
     }
     Some((cur, c))
-}
-
-fn solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
-    let n = b.len();
-    for col in 0..n {
-        let piv = (col..n).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
-        a.swap(col, piv);
-        b.swap(col, piv);
-        if a[col][col] == 0.0 || !a[col][col].is_finite() {
-            return None;
-        }
-        for row in col + 1..n {
-            let f = a[row][col] / a[col][col];
-            let pivot_row = a[col].clone();
-            for (k, v) in a[row].iter_mut().enumerate().skip(col) {
-                *v -= f * pivot_row[k];
-            }
-            b[row] -= f * b[col];
-        }
-    }
-    for col in (0..n).rev() {
-        let s: f64 = (col + 1..n).map(|k| a[col][k] * b[k]).sum();
-        b[col] = (b[col] - s) / a[col][col];
-    }
-    b.iter().all(|v| v.is_finite()).then_some(b)
 }
 
 /// Where the residual's power lies.
