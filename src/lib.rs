@@ -13,3 +13,4 @@ pub use hyst_sim as sim;
 
 pub mod io;
 pub mod params;
+pub mod plot;

@@ -643,6 +643,80 @@ fn osc_json(o: &Oscillator) -> serde_json::Value {
     }
 }
 
+/// Figures like the paper's 3(a) (the correlation function) and 5 (time and PSD overlays of
+/// the identified models on the first validation record).
+fn ident_figures(
+    dir: &std::path::Path,
+    id: &hyst::ident::Identification,
+    validations: &[(String, Vec<f64>, Vec<f64>, bool)],
+) -> Result<(), Error> {
+    use hyst::plot::{chart, chart_log_y, colors};
+    let p = &id.prepared;
+    let lags = ((20.0 * p.fs / p.dominant_hz).ceil() as usize)
+        .min(p.y.len() / 2)
+        .max(2);
+    let r = hyst::covssi::corr::estimate(&[&p.y], &[0], lags);
+    let corr: Vec<(f64, f64)> =
+        r.r.iter()
+            .enumerate()
+            .map(|(k, v)| (k as f64 / p.fs, v[0]))
+            .collect();
+    chart(
+        &dir.join("fig3a_correlation.svg"),
+        "Fig. 3(a): unbiased autocorrelation of the output",
+        "lag (s)",
+        "R(τ) (m²)",
+        &[("R̂xx".into(), corr, colors::BLACK)],
+    )?;
+    let Some((name, u, y, periodic)) = validations.first() else {
+        return Ok(());
+    };
+    let fs = p.fs * p.decimation as f64;
+    let mut models: Vec<(&str, &hyst::model::Oscillator, plotters::style::RGBColor)> =
+        vec![("linear", &id.models.linear, colors::BLUE)];
+    if let Some(z) = &id.models.zener {
+        models.push(("Zener", z, colors::GREEN));
+    }
+    if let Some(b) = &id.models.bouc_wen {
+        models.push(("Bouc-Wen", b, colors::RED));
+    }
+    let n_time = ((0.5 * fs) as usize).min(y.len());
+    let t = |v: &[f64]| -> Vec<(f64, f64)> {
+        v.iter()
+            .take(n_time)
+            .enumerate()
+            .map(|(k, x)| (k as f64 / fs, *x))
+            .collect()
+    };
+    let psd = |v: &[f64]| -> Vec<(f64, f64)> {
+        let (f, s) = hyst::ident::welch_psd(v, fs, 512);
+        f.into_iter().zip(s).collect()
+    };
+    let mut time = vec![("measured".to_string(), t(y), colors::BLACK)];
+    let mut spec = vec![("measured".to_string(), psd(y), colors::BLACK)];
+    for (label, m, c) in models {
+        if let Ok(yhat) = hyst::ident::simulate_model(m, u, fs, *periodic) {
+            time.push((label.to_string(), t(&yhat), c));
+            spec.push((label.to_string(), psd(&yhat), c));
+        }
+    }
+    chart(
+        &dir.join("fig5a_time.svg"),
+        &format!("Fig. 5(a): response, {name}"),
+        "t (s)",
+        "x (m)",
+        &time,
+    )?;
+    chart_log_y(
+        &dir.join("fig5b_psd.svg"),
+        &format!("Fig. 5(b): PSD, {name}"),
+        "f (Hz)",
+        "PSD (m²/Hz)",
+        &spec,
+    )?;
+    Ok(())
+}
+
 fn ident(a: &IdentArgs) -> Result<(), Error> {
     use hyst::ident::{self, IdentOptions, Linearization};
     use serde_json::json;
@@ -830,6 +904,7 @@ fn ident(a: &IdentArgs) -> Result<(), Error> {
             "Stabilization diagram (output only)",
         );
         std::fs::write(&p, svg).map_err(|e| fail(format!("{}: {e}", p.display())))?;
+        ident_figures(dir, id, &validations)?;
     }
     Ok(())
 }

@@ -338,61 +338,7 @@ pub fn markdown(results: &[LevelResult], seconds: f64, samples: usize) -> String
     s
 }
 
-type Series = (String, Vec<(f64, f64)>, plotters::style::RGBColor);
-
-fn chart(path: &Path, title: &str, xl: &str, yl: &str, series: &[Series]) -> Result<(), String> {
-    use plotters::prelude::*;
-    let pts: Vec<(f64, f64)> = series
-        .iter()
-        .flat_map(|s| s.1.iter().copied())
-        .filter(|p| p.0.is_finite() && p.1.is_finite())
-        .collect();
-    if pts.is_empty() {
-        return Ok(());
-    }
-    let (x0, x1) = pts.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |a, p| {
-        (a.0.min(p.0), a.1.max(p.0))
-    });
-    let (y0, y1) = pts.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |a, p| {
-        (a.0.min(p.1), a.1.max(p.1))
-    });
-    let (dx, dy) = (
-        (x1 - x0).max(1e-12) * 0.05,
-        (y1 - y0).max(1e-12 * y1.abs().max(1.0)) * 0.1,
-    );
-    let root = SVGBackend::new(path, (640, 420)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| e.to_string())?;
-    let mut c = ChartBuilder::on(&root)
-        .caption(title, ("sans-serif", 18))
-        .margin(10)
-        .x_label_area_size(40)
-        .y_label_area_size(70)
-        .build_cartesian_2d(x0 - dx..x1 + dx, y0 - dy..y1 + dy)
-        .map_err(|e| e.to_string())?;
-    c.configure_mesh()
-        .x_desc(xl)
-        .y_desc(yl)
-        .draw()
-        .map_err(|e| e.to_string())?;
-    for (name, data, color) in series {
-        let color = *color;
-        let data: Vec<(f64, f64)> = data.iter().copied().filter(|p| p.1.is_finite()).collect();
-        c.draw_series(LineSeries::new(data.clone(), color.stroke_width(2)))
-            .map_err(|e| e.to_string())?
-            .label(name.as_str())
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 15, y)], color.stroke_width(2))
-            });
-        c.draw_series(data.iter().map(|&p| Circle::new(p, 3, color.filled())))
-            .map_err(|e| e.to_string())?;
-    }
-    c.configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .draw()
-        .map_err(|e| e.to_string())?;
-    root.present().map_err(|e| e.to_string())
-}
+use hyst::plot::chart;
 
 /// Write results.csv, results.md and the figures (6–10) into `out`.
 pub fn write(

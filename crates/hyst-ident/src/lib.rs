@@ -514,9 +514,26 @@ pub fn epsilon(yhat: &[f64], y: &[f64]) -> Validation {
     }
 }
 
-/// Step 5: simulate `model` with input `u` (RK4, 20 sub-steps) and compare with `y`.
-/// A `periodic` record is one steady-state period (simulated to steady state); otherwise the
-/// simulation starts from rest.
+/// The response of `model` to the input `u` (RK4, 20 sub-steps): for a `periodic` record one
+/// steady-state period, otherwise from rest.
+pub fn simulate_model(
+    model: &Oscillator,
+    u: &[f64],
+    fs: f64,
+    periodic: bool,
+) -> Result<Vec<f64>, IdentError> {
+    let opts = SimOptions {
+        decimation: Decimation::Subsample,
+        ..SimOptions::default()
+    };
+    Ok(if periodic {
+        hyst_sim::steady_state_period(model, u, fs, &opts, 1e-9, 200)?.y
+    } else {
+        hyst_sim::simulate(model, Input::Sampled(u), fs, u.len(), &opts)?
+    })
+}
+
+/// Step 5: simulate `model` with input `u` ([`simulate_model`]) and compare with `y`.
 pub fn validate(
     model: &Oscillator,
     u: &[f64],
@@ -530,16 +547,40 @@ pub fn validate(
             output: y.len(),
         });
     }
-    let opts = SimOptions {
-        decimation: Decimation::Subsample,
-        ..SimOptions::default()
-    };
-    let yhat = if periodic {
-        hyst_sim::steady_state_period(model, u, fs, &opts, 1e-9, 200)?.y
-    } else {
-        hyst_sim::simulate(model, Input::Sampled(u), fs, u.len(), &opts)?
-    };
-    Ok(epsilon(&yhat, y))
+    Ok(epsilon(&simulate_model(model, u, fs, periodic)?, y))
+}
+
+/// One-sided power spectral density by Welch's method (Hann window, `segment` samples, 50 %
+/// overlap): (frequencies in Hz, PSD in units²/Hz).
+pub fn welch_psd(y: &[f64], fs: f64, segment: usize) -> (Vec<f64>, Vec<f64>) {
+    let seg = segment.min(y.len()).max(2);
+    let win: Vec<f64> = (0..seg)
+        .map(|i| 0.5 - 0.5 * (2.0 * std::f64::consts::PI * i as f64 / seg as f64).cos())
+        .collect();
+    let u: f64 = win.iter().map(|w| w * w).sum();
+    let bins = seg / 2 + 1;
+    let mut acc = vec![0.0; bins];
+    let mut count = 0usize;
+    let mut start = 0;
+    while start + seg <= y.len() {
+        for (b, a) in acc.iter_mut().enumerate() {
+            let w = 2.0 * std::f64::consts::PI * b as f64 / seg as f64;
+            let (mut re, mut im) = (0.0, 0.0);
+            for (k, (v, wk)) in y[start..start + seg].iter().zip(&win).enumerate() {
+                let (sn, cs) = (w * k as f64).sin_cos();
+                re += v * wk * cs;
+                im -= v * wk * sn;
+            }
+            *a += re * re + im * im;
+        }
+        count += 1;
+        start += seg / 2;
+    }
+    let scale = 2.0 / (fs * u * count.max(1) as f64);
+    (
+        (0..bins).map(|b| b as f64 * fs / seg as f64).collect(),
+        acc.iter().map(|v| v * scale).collect(),
+    )
 }
 
 /// Solve the small dense system `a x = b` by Gaussian elimination with partial pivoting;
