@@ -94,6 +94,9 @@ struct RefineArgs {
     /// Write the report as JSON here.
     #[arg(long)]
     json: Option<PathBuf>,
+    /// Write figures (SVG) into this folder: residual spectra before/after, time overlays.
+    #[arg(long)]
+    svg_dir: Option<PathBuf>,
 }
 
 #[derive(Clone, Copy, ValueEnum, PartialEq, Eq, Debug)]
@@ -926,6 +929,69 @@ fn parse_rows(s: &str, what: &str, len: usize) -> Result<(usize, usize), Error> 
     Ok((a, b))
 }
 
+/// Residual spectra (estimation rows) of the baseline and the final model, and both models
+/// against the measured output over the first second of the first test range.
+fn refine_figures(
+    dir: &std::path::Path,
+    r: &hyst::ident::refine::Refinement,
+    rec: &hyst::ident::refine::Record<'_>,
+    estimate: (usize, usize),
+    test: (usize, usize),
+) -> Result<(), Error> {
+    use hyst::ident::refine::response;
+    use hyst::plot::{chart, chart_log_y, colors};
+    std::fs::create_dir_all(dir).map_err(|e| fail(format!("{}: {e}", dir.display())))?;
+    let y = &rec.y[estimate.0..estimate.1];
+    let resid = |m: &hyst::model::Oscillator| -> Vec<f64> {
+        response(m, rec, estimate)
+            .map(|h| y.iter().zip(&h).map(|(a, b)| a - b).collect())
+            .unwrap_or_default()
+    };
+    let psd = |v: &[f64]| -> Vec<(f64, f64)> {
+        let (f, s) = hyst::ident::welch_psd(v, rec.fs, 512);
+        f.into_iter().zip(s).collect()
+    };
+    chart_log_y(
+        &dir.join("residual_spectra.svg"),
+        "Residual spectra (estimation rows)",
+        "f (Hz)",
+        "PSD",
+        &[
+            ("baseline".into(), psd(&resid(&r.baseline)), colors::BLUE),
+            ("after the loop".into(), psd(&resid(&r.model)), colors::RED),
+        ],
+    )?;
+    let n = ((rec.fs) as usize).min(test.1 - test.0);
+    let t = |v: &[f64]| -> Vec<(f64, f64)> {
+        v.iter()
+            .take(n)
+            .enumerate()
+            .map(|(k, x)| (k as f64 / rec.fs, *x))
+            .collect()
+    };
+    let mut series = vec![(
+        "measured".to_string(),
+        t(&rec.y[test.0..test.1]),
+        colors::BLACK,
+    )];
+    for (label, m, c) in [
+        ("baseline", &r.baseline, colors::BLUE),
+        ("after the loop", &r.model, colors::RED),
+    ] {
+        if let Some(h) = response(m, rec, test) {
+            series.push((label.to_string(), t(&h), c));
+        }
+    }
+    chart(
+        &dir.join("time_overlay.svg"),
+        &format!("Test rows {}:{} (first second)", test.0, test.1),
+        "t (s)",
+        "y",
+        &series,
+    )?;
+    Ok(())
+}
+
 fn refine(a: &RefineArgs) -> Result<(), Error> {
     use hyst::ident::refine::{self, Record, Start};
     use serde_json::json;
@@ -998,6 +1064,9 @@ fn refine(a: &RefineArgs) -> Result<(), Error> {
         }
     }
     println!("final model: {}", osc_json(&r.model));
+    if let Some(dir) = &a.svg_dir {
+        refine_figures(dir, &r, &rec, estimate, tests[0])?;
+    }
     println!("time: {secs:.1} s");
     if let Some(path) = &a.json {
         let first = r

@@ -183,6 +183,12 @@ pub struct Record<'a> {
 /// starts from (the record's state there is unknown).
 pub const WARM_UP: usize = 2048;
 
+/// The model's output on rows [a, b), simulated from rest [`WARM_UP`] rows earlier (or at
+/// row 0).
+pub fn response(o: &Oscillator, rec: &Record<'_>, range: (usize, usize)) -> Option<Vec<f64>> {
+    simulate(o, rec, range)
+}
+
 /// Simulate rows [a, b), starting from rest [`WARM_UP`] rows earlier (or at row 0).
 fn simulate(o: &Oscillator, rec: &Record<'_>, range: (usize, usize)) -> Option<Vec<f64>> {
     let from = range.0.saturating_sub(WARM_UP);
