@@ -769,3 +769,45 @@ pub fn refine_record(
     };
     refine(&m, rec, estimate, tests, mass.is_none())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A candidate whose fit diverges is rejected, and the evidence says so. The record is
+    /// made so that the equation-error start of quadratic damping is strongly negative: the
+    /// model with it feeds energy in at every cycle and its simulation explodes.
+    #[test]
+    fn a_diverging_effect_is_rejected_with_the_reason() {
+        let fs = 100.0;
+        let n = 4000;
+        let w = 2.0 * std::f64::consts::PI * 2.0;
+        let (m, c, k, q) = (1.0, 1.0, w * w, 50.0);
+        let t = |i: usize| i as f64 / fs;
+        let y: Vec<f64> = (0..n).map(|i| 0.1 * (w * t(i)).sin()).collect();
+        let u: Vec<f64> = (0..n)
+            .map(|i| {
+                let (x, v, a) = (
+                    0.1 * (w * t(i)).sin(),
+                    0.1 * w * (w * t(i)).cos(),
+                    -0.1 * w * w * (w * t(i)).sin(),
+                );
+                m * a + c * v + k * x - q * v * v.abs()
+            })
+            .collect();
+        let rec = Record { u: &u, y: &y, fs };
+        let base = Oscillator::linear(m, c, k);
+        let c0 = sse(&residual(&base, &rec, (0, n)).expect("the linear model is stable"));
+        let (evidence, _) = diagnose(&base, c0, &rec, (0, n), false);
+        let quad = evidence
+            .iter()
+            .find(|e| e.effect == Effect::QuadraticDamping)
+            .expect("every candidate is reported");
+        assert_eq!(
+            quad.rejected.as_deref(),
+            Some("the fit diverged with this effect"),
+            "{quad:?}"
+        );
+        assert!(quad.model.is_none() && quad.delta_bic == f64::INFINITY);
+    }
+}
