@@ -214,12 +214,38 @@ fn bench_refine() {
     println!("refine_s_32768 {t:.2} s");
 }
 
+/// `hyst ident`'s identification step on its built-in record (the benchmark at 50 N, four
+/// multisine periods, noise 7.4e-6 m): steps 1-4, output only.
+fn bench_ident() {
+    let period = Multisine::benchmark(50.0)
+        .generate(11)
+        .expect("valid multisine");
+    let n = period.len();
+    let model = Oscillator::benchmark();
+    let mut y = simulate(
+        &model,
+        Input::Periodic(&period),
+        750.0,
+        5 * n,
+        &SimOptions::default(),
+    )
+    .expect("stable")
+    .split_off(n);
+    hyst_sim::excitation::add_noise(&mut y, 7.4e-6, 12).expect("valid noise");
+    let opts = hyst_ident::IdentOptions::default();
+    let t = best_of(5, || {
+        hyst_ident::identify(&y, 750.0, &opts).expect("identifiable")
+    });
+    println!("ident_ms_default_record {:.1} ms", t * 1e3);
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     match args.first().map(String::as_str) {
         Some("bench") => {
             bench();
             bench_covssi();
+            bench_ident();
             bench_refine();
         }
         Some("sweep") => sweep_cmd(&args[1..]),
