@@ -230,10 +230,23 @@ struct ExcitationArgs {
     /// Kind of excitation to generate.
     #[arg(long, value_enum, default_value = "multisine")]
     excitation: ExcitationKind,
-    /// RMS of the excitation (N).
+    #[command(flatten)]
+    signal: SignalArgs,
+    /// Sampling rate (Hz).
+    #[arg(long, default_value_t = 750.0)]
+    fs: f64,
+    /// Output CSV file.
+    #[arg(long)]
+    out: PathBuf,
+}
+
+/// The parameters of a generated excitation, shared by `simulate` and `excite`.
+#[derive(Args, Debug)]
+struct SignalArgs {
+    /// RMS of the generated excitation (N).
     #[arg(long, default_value_t = 50.0)]
     rms: f64,
-    /// Number of samples (for a multisine: one period).
+    /// Samples of the generated excitation (a multisine: one period).
     #[arg(long, default_value_t = 8192)]
     samples: usize,
     /// Seed of the random generator.
@@ -245,12 +258,6 @@ struct ExcitationArgs {
     /// Highest excited frequency (Hz).
     #[arg(long, default_value_t = 150.0)]
     f_max: f64,
-    /// Sampling rate (Hz).
-    #[arg(long, default_value_t = 750.0)]
-    fs: f64,
-    /// Output CSV file.
-    #[arg(long)]
-    out: PathBuf,
 }
 
 #[derive(Args, Debug)]
@@ -286,21 +293,8 @@ struct SimulateArgs {
     /// Generated excitation kind, when there is no --input.
     #[arg(long, value_enum)]
     excitation: Option<ExcitationKind>,
-    /// RMS of the generated excitation (N).
-    #[arg(long, default_value_t = 50.0)]
-    rms: f64,
-    /// Samples of the generated excitation (a multisine: one period, simulated to steady state).
-    #[arg(long, default_value_t = 8192)]
-    samples: usize,
-    /// Seed of the generated excitation.
-    #[arg(long, default_value_t = 1)]
-    seed: u64,
-    /// Lowest excited frequency of the generated excitation (Hz).
-    #[arg(long, default_value_t = 5.0)]
-    f_min: f64,
-    /// Highest excited frequency of the generated excitation (Hz).
-    #[arg(long, default_value_t = 150.0)]
-    f_max: f64,
+    #[command(flatten)]
+    signal: SignalArgs,
     /// Standard deviation of white measurement noise added to y (m).
     #[arg(long, default_value_t = 0.0)]
     noise: f64,
@@ -318,29 +312,20 @@ fn fail(msg: impl Into<String>) -> Error {
     msg.into().into()
 }
 
-fn generate(kind: ExcitationKind, a: &ExcitationLike) -> Result<Vec<f64>, Error> {
+fn generate(kind: ExcitationKind, a: &SignalArgs, fs: f64) -> Result<Vec<f64>, Error> {
     Ok(match kind {
         ExcitationKind::Multisine => {
-            Multisine::band(a.samples, a.fs, a.f_min, a.f_max, a.rms)?.generate(a.seed)?
+            Multisine::band(a.samples, fs, a.f_min, a.f_max, a.rms)?.generate(a.seed)?
         }
         ExcitationKind::White => white_noise(a.samples, a.rms, a.seed)?,
         ExcitationKind::Sweep => Sweep {
             amplitude: a.rms * std::f64::consts::SQRT_2,
             f0: a.f_min,
             f1: a.f_max,
-            duration: a.samples as f64 / a.fs,
+            duration: a.samples as f64 / fs,
         }
-        .sample(a.samples, a.fs)?,
+        .sample(a.samples, fs)?,
     })
-}
-
-struct ExcitationLike {
-    rms: f64,
-    samples: usize,
-    seed: u64,
-    f_min: f64,
-    f_max: f64,
-    fs: f64,
 }
 
 fn check_fs(fs: f64) -> Result<f64, Error> {
@@ -368,17 +353,7 @@ fn prime_factors(mut n: usize) -> Vec<usize> {
 
 fn excite(a: &ExcitationArgs) -> Result<(), Error> {
     let fs = check_fs(a.fs)?;
-    let u = generate(
-        a.excitation,
-        &ExcitationLike {
-            rms: a.rms,
-            samples: a.samples,
-            seed: a.seed,
-            f_min: a.f_min,
-            f_max: a.f_max,
-            fs,
-        },
-    )?;
+    let u = generate(a.excitation, &a.signal, fs)?;
     write_csv(&a.out, &["u"], &[&u])?;
     Ok(())
 }
@@ -406,17 +381,7 @@ fn simulate(a: &SimulateArgs) -> Result<(), Error> {
         }
         (None, Some(kind)) => {
             let fs = check_fs(a.fs.unwrap_or(750.0))?;
-            let u = generate(
-                kind,
-                &ExcitationLike {
-                    rms: a.rms,
-                    samples: a.samples,
-                    seed: a.seed,
-                    f_min: a.f_min,
-                    f_max: a.f_max,
-                    fs,
-                },
-            )?;
+            let u = generate(kind, &a.signal, fs)?;
             (u, fs, a.periodic || kind == ExcitationKind::Multisine)
         }
         (Some(_), Some(_)) => return Err(fail("give either --input or --excitation, not both")),

@@ -72,13 +72,9 @@ pub struct LevelResult {
 }
 
 fn eps_of(model: Option<&Oscillator>, u: &[f64], y: &[f64]) -> (f64, Vec<f64>) {
-    let Some(m) = model else {
-        return (f64::NAN, Vec::new());
-    };
-    let opts = SimOptions::default();
-    match hyst_sim::steady_state_period(m, u, FS, &opts, 1e-9, 200) {
-        Ok(ss) => (hyst_ident::epsilon(&ss.y, y).epsilon, ss.y),
-        Err(_) => (f64::NAN, Vec::new()),
+    match model.map(|m| hyst_ident::simulate_model(m, u, FS, true)) {
+        Some(Ok(yhat)) => (hyst_ident::epsilon(&yhat, y).epsilon, yhat),
+        _ => (f64::NAN, Vec::new()),
     }
 }
 

@@ -120,50 +120,49 @@ pub struct Floor {
     pub validation: Validation,
 }
 
-/// The best linear oscillator of mass `m` on one steady-state period (u, y) at `fs`,
-/// starting from `start` (c, k).
-pub fn linear(u: &[f64], y: &[f64], fs: f64, m: f64, start: (f64, f64)) -> Floor {
+/// Fit the frequency response `h(p, ω)` to one steady-state period by output error; returns
+/// the parameters and the error of the fitted model on the record.
+fn fit_class<const P: usize>(
+    u: &[f64],
+    y: &[f64],
+    fs: f64,
+    start: [f64; P],
+    h: impl Fn(&[f64; P], f64) -> C,
+) -> ([f64; P], Validation) {
     let n = u.len();
     let (su, sy) = spectra(u, y);
-    let h = |p: &[f64; 2], w: f64| C::new(1.0, 0.0) / C::new(p[1] - m * w * w, w * p[0]);
-    let p = lm([start.0, start.1], |p| {
+    let w = |i: usize| 2.0 * std::f64::consts::PI * i as f64 * fs / n as f64;
+    let p = lm(start, |p| {
         su.iter()
             .zip(&sy)
             .enumerate()
-            .map(|(i, (ui, yi))| {
-                let w = 2.0 * std::f64::consts::PI * i as f64 * fs / n as f64;
-                yi - h(p, w) * ui
-            })
+            .map(|(i, (ui, yi))| yi - h(p, w(i)) * ui)
             .collect()
     });
     let yhat = response(|w| h(&p, w), &su, n, fs);
+    (p, epsilon(&yhat, y))
+}
+
+/// The best linear oscillator of mass `m` on one steady-state period (u, y) at `fs`,
+/// starting from `start` (c, k).
+pub fn linear(u: &[f64], y: &[f64], fs: f64, m: f64, start: (f64, f64)) -> Floor {
+    let (p, validation) = fit_class(u, y, fs, [start.0, start.1], |p, w| {
+        C::new(1.0, 0.0) / C::new(p[1] - m * w * w, w * p[0])
+    });
     Floor {
         model: Oscillator::linear(m, p[0], p[1]),
-        validation: epsilon(&yhat, y),
+        validation,
     }
 }
 
 /// The best Zener oscillator of mass `m` on one steady-state period, starting from
 /// `start` (c, k, k∞, Ω).
 pub fn zener(u: &[f64], y: &[f64], fs: f64, m: f64, start: [f64; 4]) -> Floor {
-    let n = u.len();
-    let (su, sy) = spectra(u, y);
-    let h = |p: &[f64; 4], w: f64| {
+    let (p, validation) = fit_class(u, y, fs, start, |p, w| {
         let iw = C::new(0.0, w);
         let z = iw * p[2] / (iw + p[3]);
         C::new(1.0, 0.0) / (C::new(p[1] - m * w * w, w * p[0]) + z)
-    };
-    let p = lm(start, |p| {
-        su.iter()
-            .zip(&sy)
-            .enumerate()
-            .map(|(i, (ui, yi))| {
-                let w = 2.0 * std::f64::consts::PI * i as f64 * fs / n as f64;
-                yi - h(p, w) * ui
-            })
-            .collect()
     });
-    let yhat = response(|w| h(&p, w), &su, n, fs);
     Floor {
         model: Oscillator::zener(
             m,
@@ -174,6 +173,6 @@ pub fn zener(u: &[f64], y: &[f64], fs: f64, m: f64, start: [f64; 4]) -> Floor {
                 omega: p[3],
             },
         ),
-        validation: epsilon(&yhat, y),
+        validation,
     }
 }

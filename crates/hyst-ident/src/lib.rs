@@ -395,32 +395,45 @@ pub fn build_models(
     let linear = Oscillator::linear(m, -2.0 * m * sel.pair.re, m * sel.pair.norm_sqr());
     let amplitude = opts.amplitude.resolve(p.sigma_x)?;
     let mut notes = Vec::new();
-    let Some(real) = sel.real else {
-        return Ok(Models {
-            linear,
-            zener: None,
-            bouc_wen: None,
-            amplitude,
-            notes,
-        });
-    };
-    let fit = match hyst_linearize::zener_from_poles(m, sel.c, sel.pair, real) {
-        Ok(f) => f,
-        Err(e) => {
+    let (zener, bouc_wen) = match sel
+        .real
+        .map(|r| hyst_linearize::zener_from_poles(m, sel.c, sel.pair, r))
+    {
+        None => (None, None),
+        Some(Err(e)) => {
             notes.push(format!("no Zener model: {e}"));
-            return Ok(Models {
-                linear,
-                zener: None,
-                bouc_wen: None,
-                amplitude,
-                notes,
-            });
+            (None, None)
+        }
+        Some(Ok(fit)) => {
+            let bw = bouc_wen_from(&fit, sel, m, amplitude, opts.linearization, &mut notes);
+            (
+                Some(Oscillator::zener(m, sel.c, fit.k, fit.zener)),
+                bw.map(|b| Oscillator::bouc_wen(m, sel.c, fit.k, b)),
+            )
         }
     };
-    let zener = Oscillator::zener(m, sel.c, fit.k, fit.zener);
+    Ok(Models {
+        linear,
+        zener,
+        bouc_wen,
+        amplitude,
+        notes,
+    })
+}
+
+/// The Bouc-Wen element from the identified Zener: α by eq. (37), then (βγ, βδ) by eq. (38)
+/// or by exact inversion of the describing function (first order if that fails, noted).
+fn bouc_wen_from(
+    fit: &hyst_linearize::ZenerFit,
+    sel: &SelectedPoles,
+    m: f64,
+    amplitude: f64,
+    linearization: Linearization,
+    notes: &mut Vec<String>,
+) -> Option<BoucWen> {
     let w = sel.pair.norm();
     let alpha = hyst_linearize::paper::eq37_alpha(m, sel.c, fit.k, sel.pair.im);
-    let bw = match opts.linearization {
+    match linearization {
         Linearization::Paper => {
             let (bg, bd) = hyst_linearize::paper::eq38_beta(
                 alpha,
@@ -443,15 +456,7 @@ pub fn build_models(
                 }
             }
         }
-    };
-    let bouc_wen = bw.map(|b| Oscillator::bouc_wen(m, sel.c, fit.k, b));
-    Ok(Models {
-        linear,
-        zener: Some(zener),
-        bouc_wen,
-        amplitude,
-        notes,
-    })
+    }
 }
 
 /// Everything the pipeline found.

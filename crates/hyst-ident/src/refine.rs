@@ -15,7 +15,7 @@
 //!   ΔBIC is below −10 (strong evidence); noise alone cannot meet that, so it gives `none`.
 //! * **Loop** ([`refine`]): repeat while an effect is significant (at most three steps).
 
-use hyst_model::{BoucWen, Coulomb, Oscillator, Restoring, SecondMass, ZenerParams};
+use hyst_model::{BoucWen, Coulomb, Oscillator, Restoring, SecondMass};
 use hyst_sim::{Input, SimOptions};
 use rayon::prelude::*;
 
@@ -711,17 +711,6 @@ pub fn refine(
         model,
         tests: tests_err,
     })
-}
-
-/// A linear starting model from the output-only pipeline's poles, with mass `m` (1 when
-/// unknown: the scale is then fitted with the input).
-pub fn linear_start(pair: crate::Complex64, m: f64) -> Oscillator {
-    Oscillator::linear(m, -2.0 * m * pair.re, m * pair.norm_sqr())
-}
-
-/// A Zener starting model.
-pub fn zener_start(m: f64, c: f64, k: f64, z: ZenerParams) -> Oscillator {
-    Oscillator::zener(m, c, k, z)
 }
 
 /// Which model the loop starts from.
