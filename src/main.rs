@@ -132,10 +132,20 @@ struct IdentArgs {
     /// steady-state period; others are simulated from rest.
     #[arg(long, num_args = 1..)]
     validate: Vec<PathBuf>,
-    /// Mapping to Bouc-Wen parameters (default: whichever validates better; harmonic without
-    /// validation data).
+    /// Mapping from the poles to Bouc-Wen parameters (default: whichever validates better;
+    /// harmonic without validation data).
     #[arg(long, value_enum)]
     linearization: Option<LinearizationArg>,
+    /// The band LO:HI (Hz) on which the excitation's amplitude spectrum was flat (a
+    /// multisine's design; needs --period). The Bouc-Wen model is then fitted by flatness of
+    /// its implied input, and kept when it validates better than the mapped one (or when
+    /// there is nothing to validate on). The built-in default job uses 5:150.1.
+    #[arg(long)]
+    excitation_band: Option<String>,
+    /// Samples per period of the excitation (with --excitation-band); --data must start on a
+    /// period boundary (use --skip).
+    #[arg(long)]
+    period: Option<usize>,
     /// Write the results as JSON here.
     #[arg(long)]
     json: Option<PathBuf>,
@@ -616,6 +626,7 @@ fn osc_json(o: &Oscillator) -> serde_json::Value {
 fn ident_figures(
     dir: &std::path::Path,
     id: &hyst::ident::Identification,
+    bouc_wen: Option<&Oscillator>,
     validations: &[(String, Vec<f64>, Vec<f64>, bool)],
 ) -> Result<(), Error> {
     use hyst::plot::{chart, chart_log_y, colors};
@@ -645,7 +656,7 @@ fn ident_figures(
     if let Some(z) = &id.models.zener {
         models.push(("Zener", z, colors::GREEN));
     }
-    if let Some(b) = &id.models.bouc_wen {
+    if let Some(b) = bouc_wen {
         models.push(("Bouc-Wen", b, colors::RED));
     }
     let n_time = ((0.5 * fs) as usize).min(y.len());
@@ -683,6 +694,40 @@ fn ident_figures(
         &spec,
     )?;
     Ok(())
+}
+
+/// The excitation's design from --excitation-band/--period; the built-in job's when neither
+/// --data nor a band is given.
+fn excitation_band(a: &IdentArgs) -> Result<Option<hyst::ident::flatness::ExcitationBand>, Error> {
+    use hyst::ident::flatness::ExcitationBand;
+    match (&a.excitation_band, a.period) {
+        (None, None) if a.data.is_none() => Ok(Some(ExcitationBand::benchmark())),
+        (None, None) => Ok(None),
+        (None, Some(_)) => Err(fail("--period needs --excitation-band LO:HI")),
+        (Some(_), None) => Err(fail(
+            "--excitation-band needs --period (samples per period of the excitation)",
+        )),
+        (Some(b), Some(period)) => {
+            let bad = || {
+                fail(format!(
+                    "--excitation-band `{b}` is not LO:HI with 0 <= LO < HI (Hz)"
+                ))
+            };
+            let (lo, hi) = b.split_once(':').ok_or_else(bad)?;
+            let (lo, hi): (f64, f64) = (
+                lo.trim().parse().map_err(|_| bad())?,
+                hi.trim().parse().map_err(|_| bad())?,
+            );
+            if !(lo.is_finite() && hi.is_finite() && lo >= 0.0 && lo < hi) {
+                return Err(bad());
+            }
+            Ok(Some(ExcitationBand {
+                low_hz: lo,
+                high_hz: hi,
+                period,
+            }))
+        }
+    }
 }
 
 fn ident(a: &IdentArgs) -> Result<(), Error> {
@@ -746,12 +791,15 @@ fn ident(a: &IdentArgs) -> Result<(), Error> {
         None if validations.is_empty() => vec![Linearization::Harmonic],
         None => vec![Linearization::Harmonic, Linearization::Paper],
     };
+    let excitation = excitation_band(a)?;
     let t0 = std::time::Instant::now();
     let mut runs = Vec::new();
-    for lin in &choices {
+    for (i, lin) in choices.iter().enumerate() {
         let opts = IdentOptions {
             mass,
             linearization: *lin,
+            // The flatness fit does not depend on the mapping beyond its start: fit once.
+            excitation: if i == 0 { excitation } else { None },
             ..IdentOptions::default()
         };
         runs.push((
@@ -759,48 +807,66 @@ fn ident(a: &IdentArgs) -> Result<(), Error> {
             ident::identify(&y, fs, &opts).map_err(|e| fail(format!("{source}: {e}")))?,
         ));
     }
-    let ident_seconds = t0.elapsed().as_secs_f64() / choices.len() as f64;
-    // Validate every model of every run.
-    let mut table = Vec::new();
-    for (lin, id) in &runs {
-        let mut rows = Vec::new();
-        for (name, u, yv, periodic) in &validations {
-            let val = |m: Option<&Oscillator>| -> serde_json::Value {
-                match m {
-                    None => serde_json::Value::Null,
-                    Some(m) => match ident::validate(m, u, yv, fs, *periodic) {
-                        Ok(v) => json!({"epsilon": v.epsilon, "rms": v.rms}),
-                        Err(e) => json!({"error": e.to_string()}),
-                    },
-                }
-            };
-            rows.push(json!({
-                "file": name,
-                "linear": val(Some(&id.models.linear)),
-                "zener": val(id.models.zener.as_ref()),
-                "bouc_wen": val(id.models.bouc_wen.as_ref()),
-            }));
-        }
-        table.push((*lin, rows));
-    }
-    // Pick the mapping whose Bouc-Wen model validates better on the first record.
-    let score = |rows: &Vec<serde_json::Value>| {
-        rows.first()
-            .and_then(|r| r["bouc_wen"]["epsilon"].as_f64())
-            .unwrap_or(f64::INFINITY)
-    };
-    let best = (0..runs.len())
-        .min_by(|&i, &j| score(&table[i].1).total_cmp(&score(&table[j].1)))
-        .unwrap_or(0);
-    let (lin, id) = &runs[best];
-    let lin_name = match lin {
+    let ident_seconds = t0.elapsed().as_secs_f64();
+    let lin_name = |l: &Linearization| match l {
         Linearization::Paper => "paper",
         Linearization::Harmonic => "harmonic",
     };
+    // Bouc-Wen candidates: the flatness fit (if any), then each mapping.
+    let mut candidates: Vec<(String, Oscillator)> = Vec::new();
+    if let Some(f) = &runs[0].1.flatness {
+        candidates.push(("flatness".into(), f.model));
+    }
+    for (lin, id) in &runs {
+        if let Some(b) = id.models.bouc_wen_mapped {
+            candidates.push((lin_name(lin).into(), b));
+        }
+    }
+    let validate_on = |m: Option<&Oscillator>| -> Vec<serde_json::Value> {
+        validations
+            .iter()
+            .map(|(name, u, yv, periodic)| match m {
+                None => json!({"file": name, "epsilon": null}),
+                Some(m) => match ident::validate(m, u, yv, fs, *periodic) {
+                    Ok(v) => json!({"file": name, "epsilon": v.epsilon, "rms": v.rms}),
+                    Err(e) => json!({"file": name, "error": e.to_string()}),
+                },
+            })
+            .collect()
+    };
+    let cand_rows: Vec<Vec<serde_json::Value>> = candidates
+        .iter()
+        .map(|(_, m)| validate_on(Some(m)))
+        .collect();
+    // Keep the candidate that validates best on the first record; without validation data,
+    // the first (the flatness fit when the band is known, else the harmonic mapping).
+    let score = |rows: &Vec<serde_json::Value>| {
+        rows.first()
+            .and_then(|r| r["epsilon"].as_f64())
+            .unwrap_or(f64::INFINITY)
+    };
+    let best = (0..candidates.len())
+        .min_by(|&i, &j| score(&cand_rows[i]).total_cmp(&score(&cand_rows[j])))
+        .unwrap_or(0);
+    let id = &runs[0].1;
+    let bouc_wen = candidates.get(best).map(|c| c.1);
+    let route = candidates
+        .get(best)
+        .map_or("none".to_string(), |c| c.0.clone());
+    let lin_rows = validate_on(Some(&id.models.linear));
+    let zen_rows = validate_on(id.models.zener.as_ref());
+    let table: Vec<serde_json::Value> = validations
+        .iter()
+        .enumerate()
+        .map(|(i, (name, ..))| {
+            json!({"file": name, "linear": lin_rows[i], "zener": zen_rows[i],
+                "bouc_wen": cand_rows.get(best).map(|r| r[i].clone())})
+        })
+        .collect();
     let eps = |v: &serde_json::Value| {
         v["epsilon"]
             .as_f64()
-            .map_or("-".to_string(), |e| format!("{:.2} %", 100.0 * e))
+            .map_or("-".to_string(), |e| format!("{:.3} %", 100.0 * e))
     };
     println!("record: {source}");
     println!(
@@ -820,19 +886,37 @@ fn ident(a: &IdentArgs) -> Result<(), Error> {
     if let Some(z) = &id.models.zener {
         println!("zener: {}", osc_json(z));
     }
-    if let Some(b) = &id.models.bouc_wen {
-        println!("bouc_wen ({lin_name}): {}", osc_json(b));
+    if let Some(f) = &id.flatness {
+        println!(
+            "flatness fit: {} periods averaged, bins {}..={}, spread of |U| over the band {:.3} dB -> {:.3} dB in {} iterations, implied input RMS {:.3} N",
+            f.periods,
+            f.bins.0,
+            f.bins.1,
+            f.start_spread_db,
+            f.spread_db,
+            f.iterations,
+            f.input_rms
+        );
     }
-    for (l, rows) in &table {
+    for ((name, m), rows) in candidates.iter().zip(&cand_rows) {
+        let tag = if name == &route { " (kept)" } else { "" };
+        println!("bouc_wen [{name}]{tag}: {}", osc_json(m));
         for r in rows {
             println!(
-                "validation [{l:?}] {}: linear {}, zener {}, bouc_wen {}",
+                "  validation {}: {}",
                 r["file"].as_str().unwrap_or(""),
-                eps(&r["linear"]),
-                eps(&r["zener"]),
-                eps(&r["bouc_wen"])
+                eps(r)
             );
         }
+    }
+    for r in &table {
+        println!(
+            "validation {}: linear {}, zener {}, bouc_wen [{route}] {}",
+            r["file"].as_str().unwrap_or(""),
+            eps(&r["linear"]),
+            eps(&r["zener"]),
+            eps(&r["bouc_wen"])
+        );
     }
     for n in id
         .poles
@@ -847,16 +931,19 @@ fn ident(a: &IdentArgs) -> Result<(), Error> {
     if let Some(path) = &a.json {
         let doc = json!({
             "record": source,
-            "linearization": lin_name,
+            "linearization": lin_name(&choices[0]),
+            "bouc_wen_route": route,
             "prepared": {"fs_hz": id.prepared.fs, "decimation": id.prepared.decimation, "dominant_hz": id.prepared.dominant_hz,
                 "sigma_x": id.prepared.sigma_x, "skewness": id.prepared.skewness, "kurtosis": id.prepared.kurtosis},
             "poles": {"pair": [id.poles.pair.re, id.poles.pair.im], "real": id.poles.real, "c_source": id.poles.c_source},
             "amplitude": id.models.amplitude,
             "linear": osc_json(&id.models.linear),
             "zener": id.models.zener.as_ref().map(osc_json),
-            "bouc_wen": id.models.bouc_wen.as_ref().map(osc_json),
-            "validation": table[best].1,
-            "validation_all": table.iter().map(|(l, r)| json!({"linearization": format!("{l:?}").to_lowercase(), "rows": r})).collect::<Vec<_>>(),
+            "bouc_wen": bouc_wen.as_ref().map(osc_json),
+            "bouc_wen_candidates": candidates.iter().zip(&cand_rows).map(|((n, m), r)| json!({"route": n, "model": osc_json(m), "validation": r})).collect::<Vec<_>>(),
+            "flatness": id.flatness.as_ref().map(|f| json!({"periods": f.periods, "bins": [f.bins.0, f.bins.1],
+                "start_spread_db": f.start_spread_db, "spread_db": f.spread_db, "iterations": f.iterations, "input_rms": f.input_rms})),
+            "validation": table,
             "notes": id.poles.notes.iter().chain(&id.models.notes).chain(&id.ssi.notes).collect::<Vec<_>>(),
             "identification_seconds": ident_seconds,
         });
@@ -872,7 +959,7 @@ fn ident(a: &IdentArgs) -> Result<(), Error> {
             "Stabilization diagram (output only)",
         );
         std::fs::write(&p, svg).map_err(|e| fail(format!("{}: {e}", p.display())))?;
-        ident_figures(dir, id, &validations)?;
+        ident_figures(dir, id, bouc_wen.as_ref(), &validations)?;
     }
     Ok(())
 }

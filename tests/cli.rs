@@ -296,7 +296,39 @@ fn ident_default_job_writes_the_json_the_issue_asks_for() {
     // ε as fractions: the built-in case lands at a few per cent.
     let e = val["zener"]["epsilon"].as_f64().unwrap();
     assert!(e > 0.0 && e < 0.1, "{e}");
+    // The built-in job knows its excitation's band: the flatness route is kept, and its
+    // model validates far below the Zener's (measured 0.020 % against 3.81 %).
+    assert_eq!(v["bouc_wen_route"], "flatness");
+    let b = val["bouc_wen"]["epsilon"].as_f64().unwrap();
+    assert!(b < 0.1 * e, "{b} vs Zener {e}");
+    assert!((v["flatness"]["input_rms"].as_f64().unwrap() - 50.0).abs() < 0.5);
     assert!(dir.join("stabilization.svg").is_file());
+}
+
+#[test]
+fn ident_excitation_band_needs_a_period_and_a_valid_range() {
+    let p = write(
+        "y_band.csv",
+        &format!(
+            "y\n{}",
+            (0..500)
+                .map(|k| format!("{}\n", (0.3 * k as f64).sin()))
+                .collect::<String>()
+        ),
+    );
+    let base = ["ident", "--data", s(&p), "--fs", "750", "--mass", "2"];
+    let (ok, _, err) = hyst(&[&base[..], &["--excitation-band", "5:150"]].concat());
+    assert!(!ok);
+    assert!(err.contains("--excitation-band needs --period"), "{err}");
+    let (ok, _, err) = hyst(
+        &[
+            &base[..],
+            &["--excitation-band", "150:5", "--period", "400"],
+        ]
+        .concat(),
+    );
+    assert!(!ok);
+    assert!(err.contains("`150:5` is not LO:HI"), "{err}");
 }
 
 #[test]

@@ -44,6 +44,11 @@ fn section4_on_the_benchmark() {
             .expect("a real pole is found on this record");
         let zen_ms = ident::validate(&zen, &uv, &yv, 750.0, true).unwrap();
         let bw = id.models.bouc_wen.expect("the Bouc-Wen mapping succeeds");
+        assert_eq!(
+            id.models.bouc_wen_mapped,
+            Some(bw),
+            "no band given: the mapped model"
+        );
         let bw_ms = ident::validate(&bw, &uv, &yv, 750.0, true).unwrap();
         let sweep: Vec<String> = [Some(id.models.linear), Some(zen), Some(bw)]
             .iter()
@@ -64,10 +69,99 @@ fn section4_on_the_benchmark() {
         // Targets: within 10 % of the model classes' floors (3.98 % and 3.41 %).
         assert!(lin_ms.epsilon <= 0.044, "linear {}", lin_ms.epsilon);
         assert!(zen_ms.epsilon <= 0.0375, "zener {}", zen_ms.epsilon);
-        // The Bouc-Wen target (< 3.41 %) is not met yet: both routes land near 4–5.5 %
-        // (docs/results.md). This bound keeps the measured level from regressing.
+        // The paper's route through one amplitude does not meet the Bouc-Wen target
+        // (< 3.41 %): both mappings land near 4–5.5 % (docs/results.md); the flatness route
+        // below does. This bound keeps the mapped level from regressing.
         assert!(bw_ms.epsilon <= 0.06, "bouc-wen {}", bw_ms.epsilon);
     }
+}
+
+/// The flatness route (the excitation's band known, not its record): identified from the
+/// output of `multisine_train.csv` only, the Bouc-Wen model validates on both official records
+/// almost as well as the true model, its parameters land near the benchmark's, and the force
+/// it implies matches the recorded input the fit never saw.
+#[test]
+fn section4_flatness_route_beats_the_zener_floor() {
+    use hyst::ident::flatness::{self, ExcitationBand};
+    use hyst::model::Restoring;
+    let Some((u, y)) = common::load_uy("boucwen/multisine_train.csv") else {
+        return;
+    };
+    let Some((uv, yv)) = common::load_uy("boucwen/multisine_val.csv") else {
+        return;
+    };
+    let Some((us, ys)) = common::load_uy("boucwen/sinesweep_val.csv") else {
+        return;
+    };
+    let band = ExcitationBand::benchmark();
+    let opts = IdentOptions {
+        excitation: Some(band),
+        ..IdentOptions::default()
+    };
+    let id = ident::identify(&y[8192..], 750.0, &opts).unwrap();
+    let fit = id.flatness.as_ref().expect("the flatness fit runs");
+    let bw = id.models.bouc_wen.unwrap();
+    assert_eq!(bw, fit.model);
+    let ms = ident::validate(&bw, &uv, &yv, 750.0, true).unwrap();
+    let sw = ident::validate(&bw, &us, &ys, 750.0, false).unwrap();
+    let truth = Oscillator::benchmark();
+    let ms_true = ident::validate(&truth, &uv, &yv, 750.0, true).unwrap();
+    let sw_true = ident::validate(&truth, &us, &ys, 750.0, false).unwrap();
+    eprintln!(
+        "flatness: {fit:?}\nmultisine_val {:.4} % (true model {:.4} %), sinesweep_val {:.4} % (true model {:.4} %)",
+        100.0 * ms.epsilon,
+        100.0 * ms_true.epsilon,
+        100.0 * sw.epsilon,
+        100.0 * sw_true.epsilon
+    );
+    // The target: below the Zener floor, 3.41 %. Measured 0.024 %; the bound 0.1 %
+    // leaves room for the noise of the 4 averaged periods, which sets the parameter errors.
+    assert!(ms.epsilon < 1e-3, "{}", ms.epsilon);
+    // On the sweep the true model itself (RK4 here, Newmark in the record) is at 0.15 %.
+    assert!(
+        sw.epsilon < 2.0 * sw_true.epsilon,
+        "{} vs {}",
+        sw.epsilon,
+        sw_true.epsilon
+    );
+    let Restoring::BoucWen(b) = bw.restoring else {
+        panic!("{bw:?}")
+    };
+    // Against the benchmark's Table 1. Measured deviations ≤ 2 % for c and ≤ 0.7 % for the
+    // others; the sweep over 10–90 N (docs/results.md) shows the same scatter from noise.
+    let rel = |got: f64, want: f64| ((got - want) / want).abs();
+    assert!(rel(bw.damping, 10.0) < 0.05, "c {}", bw.damping);
+    assert!(rel(bw.stiffness, 5e4) < 0.02, "k {}", bw.stiffness);
+    assert!(rel(b.alpha, 5e4) < 0.02, "alpha {}", b.alpha);
+    assert!(rel(b.beta_gamma(), 800.0) < 0.02, "bg {}", b.beta_gamma());
+    assert!(rel(b.beta_delta(), -1100.0) < 0.02, "bd {}", b.beta_delta());
+    // Independent check: the implied force against the recorded input (never used), averaged
+    // over the same 4 periods, on the band (the record also excites bin 54, 4.94 Hz, below
+    // the band's 5 Hz: that line is removed from the recorded input). The RMS level to 0.5 %;
+    // the waveform to 5 % (measured 3.7 %: the measurement noise, 7.4e-6 m / 2 after
+    // averaging, amplified by |k − m·ω²| up to 1.8e6 N/m at 150 Hz).
+    let uh = flatness::implied_input(&bw, &y[8192..], 750.0, &band).unwrap();
+    let n = band.period;
+    let mut ua: Vec<f64> = (0..n)
+        .map(|i| (1..5).map(|k| u[k * n + i]).sum::<f64>() / 4.0)
+        .collect();
+    let phase = |i: usize| 2.0 * std::f64::consts::PI * (54 * i % n) as f64 / n as f64;
+    let (re, im) = ua.iter().enumerate().fold((0.0, 0.0), |(re, im), (i, v)| {
+        (re + v * phase(i).cos(), im - v * phase(i).sin())
+    });
+    for (i, v) in ua.iter_mut().enumerate() {
+        *v -= 2.0 / n as f64 * (re * phase(i).cos() - im * phase(i).sin());
+    }
+    let rms = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt();
+    let diff: Vec<f64> = uh.iter().zip(&ua).map(|(a, b)| a - b).collect();
+    eprintln!(
+        "implied input RMS {:.4} N, recorded {:.4} N, difference {:.4} N",
+        rms(&uh),
+        rms(&ua),
+        rms(&diff)
+    );
+    assert!(rel(rms(&uh), rms(&ua)) < 0.005);
+    assert!(rms(&diff) < 0.05 * rms(&ua));
 }
 
 /// At low amplitude the benchmark is nearly linear (0.2 N RMS: βγ·σₓ ≈ 0.005, so the hysteretic damping adds about 0.5 N s/m): the identified linear

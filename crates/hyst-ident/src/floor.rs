@@ -65,8 +65,8 @@ fn lm<const P: usize>(mut p: [f64; P], r: impl Fn(&[f64; P]) -> Vec<C>) -> [f64;
                 row[j] = (a - b) / h;
             }
         }
-        let mut a = [[0.0; P]; P];
-        let mut g = [0.0; P];
+        let mut a = vec![vec![0.0; P]; P];
+        let mut g = vec![0.0; P];
         for (row, ri) in jac.iter().zip(&cur) {
             for i in 0..P {
                 g[i] += (row[i].conj() * ri).re;
@@ -75,35 +75,19 @@ fn lm<const P: usize>(mut p: [f64; P], r: impl Fn(&[f64; P]) -> Vec<C>) -> [f64;
                 }
             }
         }
-        let mut improved = false;
-        while lambda < 1e12 {
-            let m: Vec<Vec<f64>> = (0..P)
-                .map(|i| {
-                    let mut row = a[i].to_vec();
-                    row[i] *= 1.0 + lambda;
-                    row
-                })
-                .collect();
-            let Some(x) = crate::solve(m, g.to_vec()) else {
-                lambda *= 10.0;
-                continue;
-            };
+        let improved = crate::lm_step(&a, &g, &mut lambda, |step| {
             let mut q = p;
-            for j in 0..P {
-                q[j] -= x[j];
+            for (v, s) in q.iter_mut().zip(step) {
+                *v -= s;
             }
             let rq = r(&q);
             let cq = cost(&rq);
-            if cq < c {
-                improved = c - cq > 1e-13 * c;
-                p = q;
-                cur = rq;
-                c = cq;
-                lambda = (lambda * 0.3).max(1e-12);
-                break;
-            }
-            lambda *= 10.0;
-        }
+            (cq < c).then(|| {
+                let significant = c - cq > 1e-13 * c;
+                (p, cur, c) = (q, rq, cq);
+                significant
+            })
+        });
         if !improved {
             break;
         }

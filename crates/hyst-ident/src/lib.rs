@@ -22,6 +22,7 @@
 
 #![warn(missing_docs)]
 
+pub mod flatness;
 pub mod floor;
 pub mod refine;
 
@@ -66,6 +67,32 @@ pub enum IdentError {
     NoStablePair {
         /// The dominant frequency of the spectrum.
         dominant_hz: f64,
+    },
+    /// The sampling rate is not a positive finite number.
+    #[error("sampling rate must be > 0 Hz, got {fs}")]
+    BadRate {
+        /// The rate given.
+        fs: f64,
+    },
+    /// The excitation band holds too few DFT bins of one period.
+    #[error(
+        "excitation band {low_hz}..{high_hz} Hz holds fewer than 9 DFT bins of a {period}-sample period at {fs} Hz"
+    )]
+    BadBand {
+        /// Lower edge (Hz).
+        low_hz: f64,
+        /// Upper edge (Hz).
+        high_hz: f64,
+        /// Sampling rate (Hz).
+        fs: f64,
+        /// Samples per period.
+        period: usize,
+    },
+    /// The model the flatness fit starts from cannot be used.
+    #[error("flatness fit: {reason}")]
+    BadStart {
+        /// Why.
+        reason: String,
     },
     /// Input and output records differ in length.
     #[error("input has {input} samples, output {output}")]
@@ -118,6 +145,9 @@ pub struct IdentOptions {
     pub linearization: Linearization,
     /// Amplitude A for the mapping (default σₓ).
     pub amplitude: Amplitude,
+    /// The excitation's design, when known: then the Bouc-Wen model is fitted by flatness of
+    /// its implied input ([`flatness`]), starting from the mapped one (default: unknown).
+    pub excitation: Option<flatness::ExcitationBand>,
 }
 
 impl Default for IdentOptions {
@@ -136,6 +166,7 @@ impl Default for IdentOptions {
             damping_guess: DampingGuess::default(),
             linearization: Linearization::default(),
             amplitude: Amplitude::SigmaX,
+            excitation: None,
         }
     }
 }
@@ -374,8 +405,11 @@ pub struct Models {
     pub linear: Oscillator,
     /// Zener oscillator, when a real pole was found and the mapping gives Ω > 0.
     pub zener: Option<Oscillator>,
-    /// Bouc-Wen oscillator, when the mapping succeeded.
+    /// Bouc-Wen oscillator: the flatness fit when the excitation band is known and the fit
+    /// succeeded, else the mapped one.
     pub bouc_wen: Option<Oscillator>,
+    /// Bouc-Wen oscillator from the poles by the chosen [`Linearization`], when it succeeded.
+    pub bouc_wen_mapped: Option<Oscillator>,
     /// Amplitude A used (m).
     pub amplitude: f64,
     /// Remarks.
@@ -415,6 +449,7 @@ pub fn build_models(
     Ok(Models {
         linear,
         zener,
+        bouc_wen_mapped: bouc_wen,
         bouc_wen,
         amplitude,
         notes,
@@ -470,6 +505,33 @@ pub struct Identification {
     pub poles: SelectedPoles,
     /// Step 4.
     pub models: Models,
+    /// Step 4b, when the excitation band is known: the flatness fit.
+    pub flatness: Option<flatness::FlatnessFit>,
+}
+
+/// Step 4b: fit the Bouc-Wen model by flatness of its implied input over the excitation band
+/// ([`flatness::fit`]), from the mapped Bouc-Wen model and from the linear one split evenly
+/// into k and α; the flatter of the two wins.
+pub fn fit_flatness(
+    y: &[f64],
+    fs: f64,
+    models: &Models,
+    band: &flatness::ExcitationBand,
+) -> Result<flatness::FlatnessFit, IdentError> {
+    // Both starts at once (rayon::join shares the caller's pool; no nested pools).
+    let from_linear = || flatness::fit(y, fs, band, &models.linear);
+    let (mapped, linear) = match &models.bouc_wen_mapped {
+        Some(b) => {
+            let (m, l) = rayon::join(|| flatness::fit(y, fs, band, b), from_linear);
+            (Some(m), l)
+        }
+        None => (None, from_linear()),
+    };
+    match (mapped, linear) {
+        (Some(Ok(m)), Ok(l)) => Ok(if m.spread_db <= l.spread_db { m } else { l }),
+        (Some(Ok(m)), Err(_)) => Ok(m),
+        (_, linear) => linear,
+    }
 }
 
 /// Run steps 1–4 on an output record `y` sampled at `fs`.
@@ -480,12 +542,28 @@ pub fn identify(y: &[f64], fs: f64, opts: &IdentOptions) -> Result<Identificatio
     let prepared = prepare(y, fs, opts)?;
     let ssi = run_ssi(&prepared, opts)?;
     let poles = select_poles(&ssi, &prepared, opts)?;
-    let models = build_models(&poles, &prepared, opts)?;
+    let mut models = build_models(&poles, &prepared, opts)?;
+    let flatness = match &opts.excitation {
+        None => None,
+        Some(band) => match fit_flatness(y, fs, &models, band) {
+            Ok(f) => {
+                models.bouc_wen = Some(f.model);
+                Some(f)
+            }
+            Err(e) => {
+                models.notes.push(format!(
+                    "flatness fit failed ({e}); the mapped Bouc-Wen model is kept"
+                ));
+                None
+            }
+        },
+    };
     Ok(Identification {
         prepared,
         ssi,
         poles,
         models,
+        flatness,
     })
 }
 
@@ -586,6 +664,33 @@ pub fn welch_psd(y: &[f64], fs: f64, segment: usize) -> (Vec<f64>, Vec<f64>) {
         (0..bins).map(|b| b as f64 * fs / seg as f64).collect(),
         acc.iter().map(|v| v * scale).collect(),
     )
+}
+
+/// One Levenberg–Marquardt step on the normal equations `a·step = g` (Gauss–Newton matrix and
+/// gradient of ½‖r‖²): the diagonal is damped by `1 + λ` and `λ` raised tenfold until `try_step`
+/// accepts the step (the caller moves to `x − step` when its cost is lower and returns
+/// `Some(significant)`, else `None`); on acceptance λ shrinks to 0.3 λ. Returns whether an
+/// accepted step lowered the cost significantly; `false` also when λ passes 1e10.
+pub(crate) fn lm_step(
+    a: &[Vec<f64>],
+    g: &[f64],
+    lambda: &mut f64,
+    mut try_step: impl FnMut(&[f64]) -> Option<bool>,
+) -> bool {
+    while *lambda < 1e10 {
+        let mut m = a.to_vec();
+        for (i, row) in m.iter_mut().enumerate() {
+            row[i] = row[i] * (1.0 + *lambda) + 1e-300;
+        }
+        if let Some(step) = solve(m, g.to_vec())
+            && let Some(significant) = try_step(&step)
+        {
+            *lambda = (*lambda * 0.3).max(1e-12);
+            return significant;
+        }
+        *lambda *= 10.0;
+    }
+    false
 }
 
 /// Solve the small dense system `a x = b` by Gaussian elimination with partial pivoting;

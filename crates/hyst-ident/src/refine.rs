@@ -276,32 +276,18 @@ pub fn fit(
                 a[j][i] = v;
             }
         }
-        let mut improved = false;
-        while lambda < 1e10 {
-            let mut m = a.clone();
-            for (i, mi) in m.iter_mut().enumerate() {
-                mi[i] = mi[i] * (1.0 + lambda) + 1e-300;
-            }
-            let Some(step) = solve(m, g.clone()) else {
-                lambda *= 10.0;
-                continue;
-            };
-            let xn: Vec<f64> = x.iter().zip(&step).map(|(a, b)| a - b).collect();
+        let improved = crate::lm_step(&a, &g, &mut lambda, |step| {
+            let xn: Vec<f64> = x.iter().zip(step).map(|(a, b)| a - b).collect();
             let mn = model_at(&xn);
-            match (mn.validate(), residual(&mn, rec, range)) {
-                (Ok(()), Some(rn)) if sse(&rn) < c => {
-                    let cn = sse(&rn);
-                    improved = c - cn > 1e-9 * c;
-                    x = xn;
-                    cur = mn;
-                    r = rn;
-                    c = cn;
-                    lambda = (lambda * 0.3).max(1e-9);
-                    break;
-                }
-                _ => lambda *= 10.0,
-            }
-        }
+            mn.validate().ok()?;
+            let rn = residual(&mn, rec, range)?;
+            let cn = sse(&rn);
+            (cn < c).then(|| {
+                let significant = c - cn > 1e-9 * c;
+                (x, cur, r, c) = (xn, mn, rn, cn);
+                significant
+            })
+        });
         if !improved {
             break;
         }
