@@ -215,7 +215,8 @@ fn bench_refine() {
 }
 
 /// `hyst ident`'s identification step on its built-in record (the benchmark at 50 N, four
-/// multisine periods, noise 7.4e-6 m): steps 1-4, output only.
+/// multisine periods, noise 7.4e-6 m): steps 1-4, output only; then step 4b, the flatness fit
+/// from both starts.
 fn bench_ident() {
     let period = Multisine::benchmark(50.0)
         .generate(11)
@@ -237,6 +238,12 @@ fn bench_ident() {
         hyst_ident::identify(&y, 750.0, &opts).expect("identifiable")
     });
     println!("ident_ms_default_record {:.1} ms", t * 1e3);
+    let id = hyst_ident::identify(&y, 750.0, &opts).expect("identifiable");
+    let band = hyst_ident::flatness::ExcitationBand::benchmark();
+    let t = best_of(5, || {
+        hyst_ident::fit_flatness(&y, 750.0, &id.models, &band).expect("fits")
+    });
+    println!("ident_flatness_ms_default_record {:.1} ms", t * 1e3);
 }
 
 fn main() {

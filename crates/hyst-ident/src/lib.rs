@@ -17,6 +17,10 @@
 //!    $(k, k_\infty, \Omega)$ by coefficient matching of eq. (32); Bouc-Wen with α from eq. (37)
 //!    and (βγ, βδ) from eq. (38) ([`Linearization::Paper`]) or from the exact inversion of the
 //!    describing function at $A$ ([`Linearization::Harmonic`]).
+//!
+//!    Step 4b, [`fit_flatness`], when the excitation's band is known
+//!    ([`IdentOptions::excitation`]): the Bouc-Wen parameters that make the implied input flat
+//!    over the band ([`flatness`]); this replaces the mapped Bouc-Wen model.
 //! 5. [`validate`]: simulate a model with a measured input and report
 //!    $\varepsilon = \text{RMS}(\hat y - y)/(\max y - \min y)$ (eq. 39) and the RMS.
 
