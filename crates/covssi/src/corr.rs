@@ -29,14 +29,27 @@ impl Correlations {
 
 /// Direct sums (reference implementation and fastest for few lags and channels).
 pub fn direct(y: &[&[f64]], refs: &[usize], lags: usize) -> Correlations {
+    direct_centred(y, refs, lags, &vec![0.0; y.len()])
+}
+
+/// [`direct`] of `y` minus `means` (one per channel), centred stretch by stretch.
+fn direct_centred(y: &[&[f64]], refs: &[usize], lags: usize, means: &[f64]) -> Correlations {
     let l = y.len();
     let nr = refs.len();
     let n = y[0].len();
     let mut acc = vec![vec![0.0; l * nr]; lags];
     const BLOCK: usize = 4096;
+    // Each channel's stretch [start, end + lags), centred, in a buffer that stays in cache.
+    let mut c: Vec<Vec<f64>> = vec![vec![0.0; BLOCK + lags]; l];
     let mut start = 0;
     while start < n {
         let end = (start + BLOCK).min(n);
+        let reach = (end + lags).min(n);
+        for ((ca, ya), m) in c.iter_mut().zip(y).zip(means) {
+            for (d, v) in ca.iter_mut().zip(&ya[start..reach]) {
+                *d = v - m;
+            }
+        }
         for (k, ak) in acc.iter_mut().enumerate() {
             if start + k >= n {
                 break;
@@ -45,11 +58,11 @@ pub fn direct(y: &[&[f64]], refs: &[usize], lags: usize) -> Correlations {
             if stop <= start {
                 continue;
             }
+            let len = stop - start;
             for (bi, &b) in refs.iter().enumerate() {
-                let yb = &y[b][start..stop];
-                for (a, ya) in y.iter().enumerate() {
-                    let ya = &ya[start + k..stop + k];
-                    ak[a + bi * l] += dot(ya, yb);
+                let yb = &c[b][..len];
+                for (a, ca) in c.iter().enumerate() {
+                    ak[a + bi * l] += dot(&ca[k..k + len], yb);
                 }
             }
         }
@@ -93,6 +106,11 @@ fn fft_size(lags: usize) -> usize {
 /// Segmented zero-padded FFT (exact, up to rounding). The record is split into stretches
 /// processed in parallel (rayon), each accumulating its own cross-spectra.
 pub fn fft(y: &[&[f64]], refs: &[usize], lags: usize) -> Correlations {
+    fft_centred(y, refs, lags, &vec![0.0; y.len()])
+}
+
+/// [`fft`] of `y` minus `means` (one per channel), centred as each block is transformed.
+fn fft_centred(y: &[&[f64]], refs: &[usize], lags: usize, means: &[f64]) -> Correlations {
     use rayon::prelude::*;
     let l = y.len();
     let nr = refs.len();
@@ -109,7 +127,16 @@ pub fn fft(y: &[&[f64]], refs: &[usize], lags: usize) -> Correlations {
         .par_iter()
         .map(|&b0| {
             let b1 = (b0 + per).min(nblocks);
-            accumulate(y, refs, lags, m, block, b0 * block, (b1 * block).min(n))
+            accumulate(
+                y,
+                means,
+                refs,
+                lags,
+                m,
+                block,
+                b0 * block,
+                (b1 * block).min(n),
+            )
         })
         .collect();
     // Sum the stretches: acc holds, per pair (a, b), re[bins] then im[bins].
@@ -146,9 +173,12 @@ pub fn fft(y: &[&[f64]], refs: &[usize], lags: usize) -> Correlations {
     }
 }
 
-/// Cross-spectra Σ conj(X_ref) · Y over the blocks starting in [from, to).
+/// Cross-spectra Σ conj(X_ref) · Y of the centred channels over the blocks starting in
+/// [from, to).
+#[allow(clippy::too_many_arguments)]
 fn accumulate(
     y: &[&[f64]],
+    means: &[f64],
     refs: &[usize],
     lags: usize,
     m: usize,
@@ -173,9 +203,11 @@ fn accumulate(
     while start < to {
         let bend = (start + block).min(n);
         let send = (start + block + lags - 1).min(n);
-        let mut transform = |src: &[f64], re: &mut [f64], im: &mut [f64]| {
-            buf.fill(0.0);
-            buf[..src.len()].copy_from_slice(src);
+        let mut transform = |src: &[f64], mean: f64, re: &mut [f64], im: &mut [f64]| {
+            for (d, v) in buf.iter_mut().zip(src) {
+                *d = v - mean;
+            }
+            buf[src.len()..].fill(0.0);
             fwd.process_with_scratch(&mut buf, &mut spec, &mut scratch)
                 .expect("sizes from the plan");
             for (k, c) in spec.iter().enumerate() {
@@ -185,11 +217,11 @@ fn accumulate(
         };
         for (bi, &b) in refs.iter().enumerate() {
             let s = bi * bins..(bi + 1) * bins;
-            transform(&y[b][start..bend], &mut xr[s.clone()], &mut xi[s]);
+            transform(&y[b][start..bend], means[b], &mut xr[s.clone()], &mut xi[s]);
         }
         for (a, ya) in y.iter().enumerate() {
             let s = a * bins..(a + 1) * bins;
-            transform(&ya[start..send], &mut yr[s.clone()], &mut yi[s]);
+            transform(&ya[start..send], means[a], &mut yr[s.clone()], &mut yi[s]);
         }
         for bi in 0..nr {
             let (br, bim) = (
@@ -214,6 +246,16 @@ fn accumulate(
 
 /// The cheaper of [`direct`] and [`fft`] for this size.
 pub fn estimate(y: &[&[f64]], refs: &[usize], lags: usize) -> Correlations {
+    estimate_centred(y, refs, lags, &vec![0.0; y.len()])
+}
+
+/// [`estimate`] of `y` minus `means` (one per channel), without a centred copy of the record.
+pub(crate) fn estimate_centred(
+    y: &[&[f64]],
+    refs: &[usize],
+    lags: usize,
+    means: &[f64],
+) -> Correlations {
     let l = y.len() as f64;
     let nr = refs.len() as f64;
     let m = fft_size(lags) as f64;
@@ -222,8 +264,8 @@ pub fn estimate(y: &[&[f64]], refs: &[usize], lags: usize) -> Correlations {
     let direct_cost = l * nr * lags as f64;
     let fft_cost = ((l + nr) * 1.25 * m * m.log2() + l * nr * 2.0 * m) / (m - lags as f64);
     if direct_cost <= fft_cost {
-        direct(y, refs, lags)
+        direct_centred(y, refs, lags, means)
     } else {
-        fft(y, refs, lags)
+        fft_centred(y, refs, lags, means)
     }
 }

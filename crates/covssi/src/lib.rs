@@ -46,6 +46,7 @@ pub use linalg::C64 as Complex64;
 pub use stabilize::{Mode, Pole, PoleStatus, RealPoleCluster, Rejection, Stability};
 
 use linalg::{C64, Dense};
+use rayon::prelude::*;
 
 /// Errors of identification.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -298,9 +299,12 @@ pub struct SsiResult {
     pub notes: Vec<String>,
 }
 
-fn check_channels(y: &[&[f64]]) -> Result<usize, SsiError> {
+/// Check the channels (equal lengths, finite, not constant) and return their length and means,
+/// reading each channel once.
+fn check_channels(y: &[&[f64]]) -> Result<(usize, Vec<f64>), SsiError> {
     let first = y.first().ok_or(SsiError::NoChannels)?;
     let n = first.len();
+    let mut means = Vec::with_capacity(y.len());
     for (c, ch) in y.iter().enumerate() {
         if ch.len() != n {
             return Err(SsiError::LengthMismatch {
@@ -309,7 +313,12 @@ fn check_channels(y: &[&[f64]]) -> Result<usize, SsiError> {
                 expected: n,
             });
         }
-        if let Some((index, &value)) = ch.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        // A sum is finite only if every sample is (barring overflow): one pass in the common
+        // case, a search for the culprit only when it is not.
+        let sum: f64 = ch.iter().sum();
+        if !sum.is_finite()
+            && let Some((index, &value)) = ch.iter().enumerate().find(|(_, v)| !v.is_finite())
+        {
             return Err(SsiError::NonFinite {
                 channel: c,
                 index,
@@ -322,8 +331,15 @@ fn check_channels(y: &[&[f64]]) -> Result<usize, SsiError> {
                 value: ch[0],
             });
         }
+        let mean = if sum.is_finite() {
+            sum / n.max(1) as f64
+        } else {
+            // Finite samples whose sum overflows.
+            ch.iter().map(|v| v / n as f64).sum()
+        };
+        means.push(mean);
     }
-    Ok(n)
+    Ok((n, means))
 }
 
 fn check_fs(fs: f64) -> Result<(), SsiError> {
@@ -360,7 +376,7 @@ fn references(opts: &SsiOptions, l: usize) -> Result<Vec<usize>, SsiError> {
 /// The channels' means are removed first.
 pub fn identify(y: &[&[f64]], fs: f64, opts: &SsiOptions) -> Result<SsiResult, SsiError> {
     check_fs(fs)?;
-    let n = check_channels(y)?;
+    let (n, means) = check_channels(y)?;
     let i = opts.block_rows.resolve(fs)?;
     let lags = 2 * i;
     if n < lags + 1 {
@@ -372,15 +388,7 @@ pub fn identify(y: &[&[f64]], fs: f64, opts: &SsiOptions) -> Result<SsiResult, S
         });
     }
     let refs = references(opts, y.len())?;
-    let centred: Vec<Vec<f64>> = y
-        .iter()
-        .map(|c| {
-            let mean = c.iter().sum::<f64>() / n as f64;
-            c.iter().map(|v| v - mean).collect()
-        })
-        .collect();
-    let views: Vec<&[f64]> = centred.iter().map(|c| c.as_slice()).collect();
-    let corr = corr::estimate(&views, &refs, lags);
+    let corr = corr::estimate_centred(y, &refs, lags, &means);
     identify_from_correlations(&corr, fs, i, opts)
 }
 
@@ -473,34 +481,39 @@ pub fn identify_from_correlations(
             m.set(a, b, d);
         }
     }
-    let mut orders = Vec::new();
-    let mut order = opts.order_step;
-    while order <= max_order {
-        // B = R_n⁻¹ M_n is similar to A_n = S^{-1/2} B S^{1/2}; shapes are U_top ψ_B.
-        let mut bmat = Dense::zeros(order, order);
-        for col in 0..order {
-            for row in (0..order).rev() {
-                let mut v = m.at(row, col);
-                for k in row + 1..order {
-                    v -= rr.at(row, k) * bmat.at(k, col);
+    // Orders are independent: in parallel (rayon; faer single-threaded inside), collected
+    // in order, so the result does not depend on the thread count.
+    let order_list: Vec<usize> = (1..=max_order / opts.order_step)
+        .map(|k| k * opts.order_step)
+        .collect();
+    let orders = order_list
+        .par_iter()
+        .map(|&order| {
+            // B = R_n⁻¹ M_n is similar to A_n = S^{-1/2} B S^{1/2}; shapes are U_top ψ_B.
+            let mut bmat = Dense::zeros(order, order);
+            for col in 0..order {
+                for row in (0..order).rev() {
+                    let mut v = m.at(row, col);
+                    for k in row + 1..order {
+                        v -= rr.at(row, k) * bmat.at(k, col);
+                    }
+                    bmat.set(row, col, v / rr.at(row, row));
                 }
-                bmat.set(row, col, v / rr.at(row, row));
             }
-        }
-        let (mu, vecs) = linalg::eigen(&bmat).map_err(SsiError::LinearAlgebra)?;
-        let mut poles = Vec::new();
-        for (j, muj) in mu.iter().enumerate() {
-            if muj.im < 0.0 {
-                continue; // the conjugate partner is kept
+            let (mu, vecs) = linalg::eigen(&bmat).map_err(SsiError::LinearAlgebra)?;
+            let mut poles = Vec::new();
+            for (j, muj) in mu.iter().enumerate() {
+                if muj.im < 0.0 {
+                    continue; // the conjugate partner is kept
+                }
+                let shape: Vec<C64> = (0..l)
+                    .map(|a| (0..order).map(|k| vecs[j * order + k] * u.at(a, k)).sum())
+                    .collect();
+                poles.push(stabilize::Pole::new(*muj, fs, shape));
             }
-            let shape: Vec<C64> = (0..l)
-                .map(|a| (0..order).map(|k| vecs[j * order + k] * u.at(a, k)).sum())
-                .collect();
-            poles.push(stabilize::Pole::new(*muj, fs, shape));
-        }
-        orders.push(OrderPoles { order, poles });
-        order += opts.order_step;
-    }
+            Ok(OrderPoles { order, poles })
+        })
+        .collect::<Result<Vec<OrderPoles>, SsiError>>()?;
     let spectrum = spectrum_from_correlations(corr, fs);
     let mut diagram = StabilizationDiagram {
         orders,
