@@ -802,10 +802,35 @@ fn ident(a: &IdentArgs) -> Result<(), Error> {
             excitation: if i == 0 { excitation } else { None },
             ..IdentOptions::default()
         };
-        runs.push((
-            *lin,
-            ident::identify(&y, fs, &opts).map_err(|e| fail(format!("{source}: {e}")))?,
-        ));
+        let id = match ident::identify(&y, fs, &opts) {
+            Ok(id) => id,
+            Err(e @ ident::IdentError::NoStablePair { .. }) => {
+                // Save the diagram the user needs to see why.
+                let path = a
+                    .svg_dir
+                    .clone()
+                    .unwrap_or_else(|| PathBuf::from("."))
+                    .join("stabilization.svg");
+                let saved = ident::prepare(&y, fs, &opts)
+                    .and_then(|p| ident::run_ssi(&p, &opts).map(|r| (p, r)))
+                    .ok()
+                    .and_then(|(p, r)| {
+                        let svg = hyst::covssi::svg::stabilization_svg(
+                            &r.diagram,
+                            Some(4.0 * p.dominant_hz),
+                            "Stabilization diagram (no stable pair found)",
+                        );
+                        std::fs::create_dir_all(path.parent()?).ok()?;
+                        std::fs::write(&path, svg).ok()
+                    });
+                return Err(fail(match saved {
+                    Some(()) => format!("{source}: {e}; diagram saved to {}", path.display()),
+                    None => format!("{source}: {e}"),
+                }));
+            }
+            Err(e) => return Err(fail(format!("{source}: {e}"))),
+        };
+        runs.push((*lin, id));
     }
     let ident_seconds = t0.elapsed().as_secs_f64();
     let lin_name = |l: &Linearization| match l {

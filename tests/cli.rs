@@ -306,6 +306,35 @@ fn ident_default_job_writes_the_json_the_issue_asks_for() {
 }
 
 #[test]
+fn ident_without_a_stable_pair_says_so_and_saves_the_diagram() {
+    // White noise has no resonance.
+    let noise = hyst::sim::excitation::white_noise(20000, 1.0, 3).unwrap();
+    let p = write(
+        "y_noise.csv",
+        &format!(
+            "y\n{}",
+            noise.iter().map(|v| format!("{v}\n")).collect::<String>()
+        ),
+    );
+    let dir = tmp("ident_nopair_svg");
+    let (ok, _, err) = hyst(&[
+        "ident",
+        "--data",
+        s(&p),
+        "--fs",
+        "750",
+        "--mass",
+        "2",
+        "--svg-dir",
+        s(&dir),
+    ]);
+    assert!(!ok);
+    assert!(err.contains("no oscillating pole pair"), "{err}");
+    assert!(err.contains("diagram saved to"), "{err}");
+    assert!(dir.join("stabilization.svg").is_file());
+}
+
+#[test]
 fn ident_excitation_band_needs_a_period_and_a_valid_range() {
     let p = write(
         "y_band.csv",
