@@ -280,17 +280,31 @@ where
     F: FnMut(usize, usize) -> (f64, f64, f64),
 {
     let mut s = K::load(&s0);
+    // The output is written by index into a buffer sized up front: no call (a `push` that
+    // might grow the vector) in the loop, so the state and the kernel's constants can stay
+    // in registers across sub-steps instead of being saved around a possible call.
+    let start = sink.out.len();
+    let per = if sink.fine { run.r } else { 1 };
+    sink.out.resize(start + run.n_intervals * per, 0.0);
+    let out = &mut sink.out[start..];
     for k in 0..run.n_intervals {
-        for i in 0..run.r {
-            let (u0, um, u1) = input(k, i);
-            s = kernel::rk4_step(kern, &s, run.h, u0, um, u1);
-            if sink.fine {
-                sink.out.push(s[0]);
+        if sink.fine {
+            let row = &mut out[k * per..(k + 1) * per];
+            for (i, o) in row.iter_mut().enumerate() {
+                let (u0, um, u1) = input(k, i);
+                s = kernel::rk4_step(kern, &s, run.h, u0, um, u1);
+                *o = s[0];
             }
+        } else {
+            for i in 0..run.r {
+                let (u0, um, u1) = input(k, i);
+                s = kernel::rk4_step(kern, &s, run.h, u0, um, u1);
+            }
+            out[k] = s[0];
         }
-        run.check(k, &s)?;
-        if !sink.fine {
-            sink.out.push(s[0]);
+        if let Err(e) = run.check(k, &s) {
+            sink.out.truncate(start + k * per);
+            return Err(e);
         }
     }
     Ok(K::store(&s))
