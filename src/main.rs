@@ -142,8 +142,8 @@ struct IdentArgs {
     /// there is nothing to validate on). The built-in default job uses 5:150.1.
     #[arg(long)]
     excitation_band: Option<String>,
-    /// Samples per period of the excitation (with --excitation-band); --data must start on a
-    /// period boundary (use --skip).
+    /// Samples per period of the excitation (with --excitation-band); --data must hold whole
+    /// periods of the steady state (use --skip to drop a start-up transient).
     #[arg(long)]
     period: Option<usize>,
     /// Write the results as JSON here.
@@ -913,8 +913,10 @@ fn ident(a: &IdentArgs) -> Result<(), Error> {
     }
     if let Some(f) = &id.flatness {
         println!(
-            "flatness fit: {} periods averaged, bins {}..={}, spread of |U| over the band {:.3} dB -> {:.3} dB in {} iterations, implied input RMS {:.3} N",
+            "flatness fit: {} periods averaged (aperiodicity {}), bins {}..={}, spread of |U| over the band {:.3} dB -> {:.3} dB in {} iterations, implied input RMS {:.3} N",
             f.periods,
+            f.aperiodicity
+                .map_or("-".to_string(), |a| format!("{a:.3}")),
             f.bins.0,
             f.bins.1,
             f.start_spread_db,
@@ -966,7 +968,7 @@ fn ident(a: &IdentArgs) -> Result<(), Error> {
             "zener": id.models.zener.as_ref().map(osc_json),
             "bouc_wen": bouc_wen.as_ref().map(osc_json),
             "bouc_wen_candidates": candidates.iter().zip(&cand_rows).map(|((n, m), r)| json!({"route": n, "model": osc_json(m), "validation": r})).collect::<Vec<_>>(),
-            "flatness": id.flatness.as_ref().map(|f| json!({"periods": f.periods, "bins": [f.bins.0, f.bins.1],
+            "flatness": id.flatness.as_ref().map(|f| json!({"periods": f.periods, "aperiodicity": f.aperiodicity, "bins": [f.bins.0, f.bins.1],
                 "start_spread_db": f.start_spread_db, "spread_db": f.spread_db, "iterations": f.iterations, "input_rms": f.input_rms})),
             "validation": table,
             "notes": id.poles.notes.iter().chain(&id.models.notes).chain(&id.ssi.notes).collect::<Vec<_>>(),

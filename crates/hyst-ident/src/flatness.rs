@@ -75,6 +75,10 @@ pub struct FlatnessFit {
     pub input_rms: f64,
     /// Whole periods averaged.
     pub periods: usize,
+    /// RMS difference between the record's last and first whole periods over the averaged
+    /// period's RMS (`None` with one period): near 0 when the record is periodic with the
+    /// given period (measurement noise only), of order 1 or more when it is not.
+    pub aperiodicity: Option<f64>,
     /// The band's DFT bins (inclusive).
     pub bins: (usize, usize),
     /// Levenberg–Marquardt iterations taken.
@@ -93,6 +97,9 @@ struct Period {
     v_fine: Vec<f64>,
     /// Displacement at the first fine node (warm-up start).
     x0: f64,
+    /// RMS of (last period − first period) over the averaged period's RMS; `None` with one
+    /// period.
+    aperiodicity: Option<f64>,
 }
 
 const UP: usize = 8;
@@ -139,6 +146,12 @@ impl Period {
         }
         let mean = avg.iter().sum::<f64>() / n as f64;
         avg.iter_mut().for_each(|v| *v -= mean);
+        let rms =
+            |it: &mut dyn Iterator<Item = f64>| (it.map(|v| v * v).sum::<f64>() / n as f64).sqrt();
+        let aperiodicity = (p >= 2).then(|| {
+            let (first, last) = (&y[..n], &y[(p - 1) * n..p * n]);
+            rms(&mut first.iter().zip(last).map(|(a, b)| b - a)) / rms(&mut avg.iter().copied())
+        });
         let x = fft(&avg);
         let w = |i: usize| 2.0 * std::f64::consts::PI * i as f64 * fs / n as f64;
         let v: Vec<C> = x
@@ -167,6 +180,7 @@ impl Period {
                 a,
                 v_fine,
                 x0: avg[0],
+                aperiodicity,
             },
             p,
         ))
@@ -383,6 +397,7 @@ pub fn fit(
         spread_db: spread_db(&cur.r),
         input_rms,
         periods,
+        aperiodicity: p.aperiodicity,
         bins: band,
         iterations,
     })
@@ -485,6 +500,22 @@ mod tests {
         }
         assert!(f.spread_db < 0.01 * f.start_spread_db, "{f:?}");
         assert_eq!(f.periods, 2);
+    }
+
+    /// A periodic record folded with its own period has an aperiodicity of rounding size;
+    /// folded with a wrong one, of order 1.
+    #[test]
+    fn aperiodicity_flags_a_wrong_period() {
+        let truth = Oscillator::benchmark();
+        let (_, y, band) = record(&truth, 30.0, 3, 2);
+        let right = fit(&y, FS, &band, &truth).unwrap();
+        assert!(right.aperiodicity.unwrap() < 1e-9, "{right:?}");
+        let wrong = ExcitationBand {
+            period: 1000,
+            ..band
+        };
+        let w = fit(&y, FS, &wrong, &truth).unwrap();
+        assert!(w.aperiodicity.unwrap() > 0.5, "{w:?}");
     }
 
     #[test]

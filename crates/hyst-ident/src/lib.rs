@@ -513,6 +513,14 @@ pub struct Identification {
     pub flatness: Option<flatness::FlatnessFit>,
 }
 
+/// Above this aperiodicity ([`flatness::FlatnessFit::aperiodicity`]) the pipeline warns: the
+/// benchmark's records sit near 0.02 (measurement noise); folded with a wrong period the
+/// training record gives 2.8.
+const APERIODIC: f64 = 0.1;
+/// Above this spread of the implied input over the band (dB RMS) the pipeline warns: the
+/// benchmark's fits end near 0.2 dB, the mapped starts near 2 dB.
+const NOT_FLAT_DB: f64 = 1.0;
+
 /// Step 4b: fit the Bouc-Wen model by flatness of its implied input over the excitation band
 /// ([`flatness::fit`]), from the mapped Bouc-Wen model and from the linear one split evenly
 /// into k and α; the flatter of the two wins.
@@ -551,6 +559,19 @@ pub fn identify(y: &[f64], fs: f64, opts: &IdentOptions) -> Result<Identificatio
         None => None,
         Some(band) => match fit_flatness(y, fs, &models, band) {
             Ok(f) => {
+                if let Some(a) = f.aperiodicity.filter(|&a| a > APERIODIC) {
+                    models.notes.push(format!(
+                        "the record's first and last periods of {} samples differ by {:.0} % of its RMS: is it periodic with that period, and in steady state?",
+                        band.period,
+                        100.0 * a
+                    ));
+                }
+                if f.spread_db > NOT_FLAT_DB {
+                    models.notes.push(format!(
+                        "the fitted model's implied input still varies by {:.2} dB RMS over the band: check the band and the period, or the model class",
+                        f.spread_db
+                    ));
+                }
                 models.bouc_wen = Some(f.model);
                 Some(f)
             }
