@@ -14,7 +14,7 @@ use hyst_sim::{Input, SimOptions, simulate};
 
 fn usage() -> ! {
     eprintln!(
-        "usage: cargo xtask bench\n       cargo xtask sweep [--levels FROM:TO:STEP] [--samples N] [--seed S] [--out DIR]"
+        "usage: cargo xtask bench [rk4] [covssi] [ident] [refine]\n       cargo xtask sweep [--levels FROM:TO:STEP] [--samples N] [--seed S] [--out DIR]"
     );
     std::process::exit(2)
 }
@@ -105,6 +105,32 @@ fn bench() {
         simulate(&model, Input::Periodic(&period), fs, n, &opts).expect("stable")
     });
     println!("rk4_ns_per_step_periodic_input {:.2} ns", t / steps * 1e9);
+    c_reference();
+}
+
+/// Build and run `bench/rk4_reference.c` (a plain hand-written RK4 loop of the same
+/// oscillator and sizes) with the system's C compiler, so that the Rust loop is compared with
+/// C under the same machine load; says so when there is no C compiler.
+fn c_reference() {
+    let src = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("bench/rk4_reference.c");
+    let exe = std::env::temp_dir().join(format!("hyst-rk4-reference-{}", std::process::id()));
+    let built = std::process::Command::new("cc")
+        .args(["-O3", "-march=native", "-ffp-contract=fast", "-o"])
+        .arg(&exe)
+        .arg(&src)
+        .arg("-lm")
+        .status()
+        .map(|s| s.success())
+        .unwrap_or(false);
+    let out = built
+        .then(|| std::process::Command::new(&exe).output().ok())
+        .flatten()
+        .and_then(|o| String::from_utf8(o.stdout).ok());
+    let _ = std::fs::remove_file(&exe);
+    match out.as_deref().and_then(|s| s.split_whitespace().next()) {
+        Some(ns) => println!("c_reference_rk4_ns_per_step {ns} ns"),
+        None => println!("c_reference_rk4_ns_per_step unavailable (no working `cc`)"),
+    }
 }
 
 /// Response of a 5-mode linear system (1.1–9.3 Hz, 1–4 % damping) at 50 Hz to white noise,
@@ -250,10 +276,23 @@ fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     match args.first().map(String::as_str) {
         Some("bench") => {
-            bench();
-            bench_covssi();
-            bench_ident();
-            bench_refine();
+            // `cargo xtask bench [GROUP...]`: all groups, or only those named.
+            let groups: [(&str, fn()); 4] = [
+                ("rk4", bench),
+                ("covssi", bench_covssi),
+                ("ident", bench_ident),
+                ("refine", bench_refine),
+            ];
+            let wanted = &args[1..];
+            if let Some(bad) = wanted.iter().find(|w| groups.iter().all(|(g, _)| g != w)) {
+                eprintln!("unknown bench group `{bad}`; groups: rk4, covssi, ident, refine");
+                std::process::exit(2);
+            }
+            for (name, run) in groups {
+                if wanted.is_empty() || wanted.iter().any(|w| w == name) {
+                    run();
+                }
+            }
         }
         Some("sweep") => sweep_cmd(&args[1..]),
         _ => usage(),
