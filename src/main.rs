@@ -621,6 +621,42 @@ fn osc_json(o: &Oscillator) -> serde_json::Value {
     }
 }
 
+/// The amplitude spectrum of the force each Bouc-Wen candidate implies, over the
+/// excitation's band (dB re 1 N): the flatness fit is flat where the mapped models are not.
+fn implied_input_figure(
+    dir: &std::path::Path,
+    candidates: &[(String, Oscillator)],
+    y: &[f64],
+    fs: f64,
+    band: &hyst::ident::flatness::ExcitationBand,
+) -> Result<(), Error> {
+    use hyst::plot::{chart, colors};
+    let palette = [colors::RED, colors::BLUE, colors::GREEN, colors::BLACK];
+    // Drawn in reverse so that the first candidate (the flatness fit) lies on top.
+    let series: Vec<_> = candidates
+        .iter()
+        .enumerate()
+        .rev()
+        .filter_map(|(i, (name, m))| {
+            let col = &palette[i % palette.len()];
+            let spec = hyst::ident::flatness::implied_spectrum(m, y, fs, band).ok()?;
+            let db = spec
+                .iter()
+                .map(|&(f, a)| (f, 20.0 * a.max(1e-300).log10()))
+                .collect();
+            Some((name.clone(), db, *col))
+        })
+        .collect();
+    chart(
+        &dir.join("implied_input_spectrum.svg"),
+        "Implied input over the excitation band (output only)",
+        "f (Hz)",
+        "|Û| per line (dB re 1 N)",
+        &series,
+    )?;
+    Ok(())
+}
+
 /// Figures like the paper's 3(a) (the correlation function) and 5 (time and PSD overlays of
 /// the identified models on the first validation record).
 fn ident_figures(
@@ -987,6 +1023,9 @@ fn ident(a: &IdentArgs) -> Result<(), Error> {
         );
         std::fs::write(&p, svg).map_err(|e| fail(format!("{}: {e}", p.display())))?;
         ident_figures(dir, id, bouc_wen.as_ref(), &validations)?;
+        if let Some(band) = excitation.filter(|_| id.flatness.is_some()) {
+            implied_input_figure(dir, &candidates, &y, fs, &band)?;
+        }
     }
     Ok(())
 }

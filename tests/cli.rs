@@ -303,6 +303,7 @@ fn ident_default_job_writes_the_json_the_issue_asks_for() {
     assert!(b < 0.1 * e, "{b} vs Zener {e}");
     assert!((v["flatness"]["input_rms"].as_f64().unwrap() - 50.0).abs() < 0.5);
     assert!(dir.join("stabilization.svg").is_file());
+    assert!(dir.join("implied_input_spectrum.svg").is_file());
 }
 
 #[test]

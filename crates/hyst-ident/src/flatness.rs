@@ -403,16 +403,14 @@ pub fn fit(
     })
 }
 
-/// The implied input $\hat u(t)$ of a Bouc-Wen (ν = 1) or linear oscillator over one period of
-/// the record (whole periods averaged): the force that, applied to the model, would produce
-/// the measured output, on the excitation's band (bins outside it, where the measurement
-/// noise amplified by $m\omega^2$ would dominate, are set to zero).
-pub fn implied_input(
+/// The implied input's spectrum, bins 0..=n/2 of one averaged period, zero outside the band;
+/// and the period length.
+fn implied(
     model: &Oscillator,
     y: &[f64],
     fs: f64,
     band: &ExcitationBand,
-) -> Result<Vec<f64>, IdentError> {
+) -> Result<(Vec<C>, usize), IdentError> {
     let q = theta(model).ok_or_else(|| not_bouc_wen(model))?;
     let (p, _) = Period::new(y, fs, band.period)?;
     let (lo, hi) = band.bins(fs);
@@ -423,7 +421,7 @@ pub fn implied_input(
                 "the hysteresis state of {q:?} (c, k, α, βγ, βδ) diverges on this record"
             ),
         })?;
-    let spec: Vec<C> = (0..=p.n / 2)
+    let spec = (0..=p.n / 2)
         .map(|i| {
             if (lo..=hi).contains(&i) {
                 p.a[i] * model.mass + p.v[i] * q[0] + p.x[i] * q[1] + ws[i] * q[2]
@@ -432,7 +430,37 @@ pub fn implied_input(
             }
         })
         .collect();
-    Ok(ifft(&spec, p.n))
+    Ok((spec, p.n))
+}
+
+/// The implied input $\hat u(t)$ of a Bouc-Wen (ν = 1) or linear oscillator over one period of
+/// the record (whole periods averaged): the force that, applied to the model, would produce
+/// the measured output, on the excitation's band (bins outside it, where the measurement
+/// noise amplified by $m\omega^2$ would dominate, are set to zero).
+pub fn implied_input(
+    model: &Oscillator,
+    y: &[f64],
+    fs: f64,
+    band: &ExcitationBand,
+) -> Result<Vec<f64>, IdentError> {
+    let (spec, n) = implied(model, y, fs, band)?;
+    Ok(ifft(&spec, n))
+}
+
+/// The implied input's amplitude spectrum over the band: (frequency in Hz, amplitude in N of
+/// each line) for every DFT bin of one (averaged) period inside the band. Flat at the
+/// excitation's line amplitude when the model is right.
+pub fn implied_spectrum(
+    model: &Oscillator,
+    y: &[f64],
+    fs: f64,
+    band: &ExcitationBand,
+) -> Result<Vec<(f64, f64)>, IdentError> {
+    let (spec, n) = implied(model, y, fs, band)?;
+    let (lo, hi) = band.bins(fs);
+    Ok((lo..=hi)
+        .map(|i| (i as f64 * fs / n as f64, 2.0 * spec[i].norm() / n as f64))
+        .collect())
 }
 
 #[cfg(test)]
