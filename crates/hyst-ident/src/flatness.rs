@@ -282,8 +282,8 @@ fn spread_db(r: &[f64]) -> f64 {
 }
 
 /// Fit the Bouc-Wen oscillator (ν = 1, mass fixed) to the output record `y` (sampled at `fs`,
-/// starting on a period boundary of the excitation; whole periods are averaged, a partial one
-/// at the end is ignored) by flatness of its implied input over `band`, from `start` (a
+/// in periodic steady state; where a period starts does not matter, since |Û_k| does not
+/// change with a time shift; whole periods are averaged, a partial one at the end is ignored) by flatness of its implied input over `band`, from `start` (a
 /// Bouc-Wen oscillator with ν = 1 or a linear one).
 pub fn fit(
     y: &[f64],

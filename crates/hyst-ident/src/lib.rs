@@ -539,7 +539,16 @@ pub fn fit_flatness(
         }
         None => (None, from_linear()),
     };
-    match (mapped, linear) {
+    // A fit whose parameters do not make a valid oscillator is a failed fit.
+    let valid = |r: Result<flatness::FlatnessFit, IdentError>| {
+        r.and_then(|f| match f.model.validate() {
+            Ok(()) => Ok(f),
+            Err(e) => Err(IdentError::BadStart {
+                reason: format!("the fit ended on an invalid model ({e})"),
+            }),
+        })
+    };
+    match (mapped.map(valid), valid(linear)) {
         (Some(Ok(m)), Ok(l)) => Ok(if m.spread_db <= l.spread_db { m } else { l }),
         (Some(Ok(m)), Err(_)) => Ok(m),
         (_, linear) => linear,
