@@ -500,16 +500,24 @@ pub fn identify_from_correlations(
                     bmat.set(row, col, v / rr.at(row, row));
                 }
             }
-            let (mu, vecs) = linalg::eigen(&bmat).map_err(SsiError::LinearAlgebra)?;
             let mut poles = Vec::new();
-            for (j, muj) in mu.iter().enumerate() {
-                if muj.im < 0.0 {
-                    continue; // the conjugate partner is kept
+            if l == 1 {
+                // One channel: the shape is the single entry 1; eigenvalues suffice.
+                let mu = linalg::eigenvalues(&bmat).map_err(SsiError::LinearAlgebra)?;
+                for muj in mu.iter().filter(|m| m.im >= 0.0) {
+                    poles.push(stabilize::Pole::new(*muj, fs, vec![C64::new(1.0, 0.0)]));
                 }
-                let shape: Vec<C64> = (0..l)
-                    .map(|a| (0..order).map(|k| vecs[j * order + k] * u.at(a, k)).sum())
-                    .collect();
-                poles.push(stabilize::Pole::new(*muj, fs, shape));
+            } else {
+                let (mu, vecs) = linalg::eigen(&bmat).map_err(SsiError::LinearAlgebra)?;
+                for (j, muj) in mu.iter().enumerate() {
+                    if muj.im < 0.0 {
+                        continue; // the conjugate partner is kept
+                    }
+                    let shape: Vec<C64> = (0..l)
+                        .map(|a| (0..order).map(|k| vecs[j * order + k] * u.at(a, k)).sum())
+                        .collect();
+                    poles.push(stabilize::Pole::new(*muj, fs, shape));
+                }
             }
             Ok(OrderPoles { order, poles })
         })

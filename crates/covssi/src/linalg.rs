@@ -78,6 +78,34 @@ pub(crate) fn thin_svd_u(a: &Dense) -> Result<(Dense, Vec<f64>), String> {
     Ok((Dense::from_faer(u.as_ref()), sv))
 }
 
+/// Eigenvalues of a real square matrix (no eigenvectors: several times cheaper). Real
+/// eigenvalues have an imaginary part of exactly zero; a conjugate pair is adjacent.
+pub(crate) fn eigenvalues(a: &Dense) -> Result<Vec<C64>, String> {
+    let n = a.rows;
+    let par = Par::Seq;
+    let mut s_re = Diag::<f64>::zeros(n);
+    let mut s_im = Diag::<f64>::zeros(n);
+    let mut buf = MemBuffer::new(evd::evd_scratch::<f64>(
+        n,
+        ComputeEigenvectors::No,
+        ComputeEigenvectors::No,
+        par,
+        Default::default(),
+    ));
+    evd::evd_real(
+        a.view(),
+        s_re.as_mut(),
+        s_im.as_mut(),
+        None,
+        None,
+        par,
+        MemStack::new(&mut buf),
+        Default::default(),
+    )
+    .map_err(|e| format!("eigenvalues did not converge: {e:?}"))?;
+    Ok((0..n).map(|j| C64::new(s_re[j], s_im[j])).collect())
+}
+
 /// Eigenvalues and right eigenvectors of a real square matrix; eigenvector `j` is column `j`
 /// of the returned column-major complex buffer (n × n). Real eigenvalues have an imaginary
 /// part of exactly zero.
