@@ -78,17 +78,29 @@ pub(crate) fn thin_svd_u(a: &Dense) -> Result<(Dense, Vec<f64>), String> {
     Ok((Dense::from_faer(u.as_ref()), sv))
 }
 
-/// Eigenvalues of a real square matrix (no eigenvectors: several times cheaper). Real
-/// eigenvalues have an imaginary part of exactly zero; a conjugate pair is adjacent.
-pub(crate) fn eigenvalues(a: &Dense) -> Result<Vec<C64>, String> {
+/// faer's real eigen-decomposition: real and imaginary parts of the eigenvalues and, when
+/// asked, the eigenvector columns (a conjugate pair in two adjacent real columns).
+struct EvdParts {
+    re: Vec<f64>,
+    im: Vec<f64>,
+    vectors: Option<Mat<f64>>,
+}
+
+fn evd_parts(a: &Dense, vectors: bool) -> Result<EvdParts, String> {
     let n = a.rows;
     let par = Par::Seq;
+    let mut u = vectors.then(|| Mat::<f64>::zeros(n, n));
     let mut s_re = Diag::<f64>::zeros(n);
     let mut s_im = Diag::<f64>::zeros(n);
+    let want = if vectors {
+        ComputeEigenvectors::Yes
+    } else {
+        ComputeEigenvectors::No
+    };
     let mut buf = MemBuffer::new(evd::evd_scratch::<f64>(
         n,
         ComputeEigenvectors::No,
-        ComputeEigenvectors::No,
+        want,
         par,
         Default::default(),
     ));
@@ -97,13 +109,28 @@ pub(crate) fn eigenvalues(a: &Dense) -> Result<Vec<C64>, String> {
         s_re.as_mut(),
         s_im.as_mut(),
         None,
-        None,
+        u.as_mut().map(|m| m.as_mut()),
         par,
         MemStack::new(&mut buf),
         Default::default(),
     )
-    .map_err(|e| format!("eigenvalues did not converge: {e:?}"))?;
-    Ok((0..n).map(|j| C64::new(s_re[j], s_im[j])).collect())
+    .map_err(|e| format!("eigen-decomposition did not converge: {e:?}"))?;
+    Ok(EvdParts {
+        re: (0..n).map(|j| s_re[j]).collect(),
+        im: (0..n).map(|j| s_im[j]).collect(),
+        vectors: u,
+    })
+}
+
+/// Eigenvalues of a real square matrix (no eigenvectors: cheaper). Real eigenvalues have an
+/// imaginary part of exactly zero.
+pub(crate) fn eigenvalues(a: &Dense) -> Result<Vec<C64>, String> {
+    let p = evd_parts(a, false)?;
+    Ok(p.re
+        .iter()
+        .zip(&p.im)
+        .map(|(&r, &i)| C64::new(r, i))
+        .collect())
 }
 
 /// Eigenvalues and right eigenvectors of a real square matrix; eigenvector `j` is column `j`
@@ -111,28 +138,12 @@ pub(crate) fn eigenvalues(a: &Dense) -> Result<Vec<C64>, String> {
 /// part of exactly zero.
 pub(crate) fn eigen(a: &Dense) -> Result<(Vec<C64>, Vec<C64>), String> {
     let n = a.rows;
-    let par = Par::Seq;
-    let mut u = Mat::<f64>::zeros(n, n);
-    let mut s_re = Diag::<f64>::zeros(n);
-    let mut s_im = Diag::<f64>::zeros(n);
-    let mut buf = MemBuffer::new(evd::evd_scratch::<f64>(
-        n,
-        ComputeEigenvectors::No,
-        ComputeEigenvectors::Yes,
-        par,
-        Default::default(),
-    ));
-    evd::evd_real(
-        a.view(),
-        s_re.as_mut(),
-        s_im.as_mut(),
-        None,
-        Some(u.as_mut()),
-        par,
-        MemStack::new(&mut buf),
-        Default::default(),
-    )
-    .map_err(|e| format!("eigen-decomposition did not converge: {e:?}"))?;
+    let EvdParts {
+        re: s_re,
+        im: s_im,
+        vectors,
+    } = evd_parts(a, true)?;
+    let u = vectors.ok_or("eigenvectors were not computed")?;
     let mut vals = vec![C64::new(0.0, 0.0); n];
     let mut vecs = vec![C64::new(0.0, 0.0); n * n];
     let mut j = 0;
