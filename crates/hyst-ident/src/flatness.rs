@@ -25,12 +25,10 @@
 //! warm-up from $w = x$ (the small-βγ limit).
 
 use hyst_model::{BoucWen, Oscillator, Restoring};
-use realfft::RealFftPlanner;
-use realfft::num_complex::Complex;
 
 use crate::IdentError;
 
-type C = Complex<f64>;
+use crate::fft::{C, irfft, rfft};
 
 /// What is known of the excitation's design (not its record).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -104,30 +102,6 @@ struct Period {
 
 const UP: usize = 8;
 
-fn fft(x: &[f64]) -> Vec<C> {
-    let mut planner = RealFftPlanner::<f64>::new();
-    let f = planner.plan_fft_forward(x.len());
-    let mut buf = x.to_vec();
-    let mut out = f.make_output_vec();
-    f.process(&mut buf, &mut out).expect("sizes from the plan");
-    out
-}
-
-fn ifft(spec: &[C], n: usize) -> Vec<f64> {
-    let mut planner = RealFftPlanner::<f64>::new();
-    let f = planner.plan_fft_inverse(n);
-    let mut buf = spec.to_vec();
-    buf[0].im = 0.0;
-    if n.is_multiple_of(2)
-        && let Some(last) = buf.last_mut()
-    {
-        last.im = 0.0;
-    }
-    let mut out = f.make_output_vec();
-    f.process(&mut buf, &mut out).expect("sizes from the plan");
-    out.iter().map(|v| v / n as f64).collect()
-}
-
 impl Period {
     fn new(y: &[f64], fs: f64, period: usize) -> Result<(Self, usize), IdentError> {
         let n = period;
@@ -152,7 +126,7 @@ impl Period {
             let (first, last) = (&y[..n], &y[(p - 1) * n..p * n]);
             rms(&mut first.iter().zip(last).map(|(a, b)| b - a)) / rms(&mut avg.iter().copied())
         });
-        let x = fft(&avg);
+        let x = rfft(&avg);
         let w = |i: usize| 2.0 * std::f64::consts::PI * i as f64 * fs / n as f64;
         let v: Vec<C> = x
             .iter()
@@ -170,7 +144,7 @@ impl Period {
         for (si, vi) in s.iter_mut().zip(v.iter().take(n.div_ceil(2))) {
             *si = vi * (nf as f64 / n as f64);
         }
-        let v_fine = ifft(&s, nf);
+        let v_fine = irfft(&s, nf);
         Ok((
             Self {
                 n,
@@ -211,7 +185,7 @@ impl Period {
                 return None;
             }
         }
-        let spec = fft(&out);
+        let spec = rfft(&out);
         Some(
             spec.iter()
                 .take(self.n / 2 + 1)
@@ -444,7 +418,7 @@ pub fn implied_input(
     band: &ExcitationBand,
 ) -> Result<Vec<f64>, IdentError> {
     let (spec, n) = implied(model, y, fs, band)?;
-    Ok(ifft(&spec, n))
+    Ok(irfft(&spec, n))
 }
 
 /// The implied input's amplitude spectrum over the band: (frequency in Hz, amplitude in N of

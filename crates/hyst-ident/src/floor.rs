@@ -10,27 +10,13 @@
 //! model of the class can validate better than this on that record.
 
 use hyst_model::{Oscillator, ZenerParams};
-use realfft::RealFftPlanner;
-use realfft::num_complex::Complex;
 
+use crate::fft::{C, irfft, rfft};
 use crate::{Validation, epsilon};
 
-type C = Complex<f64>;
-
-fn spectra(u: &[f64], y: &[f64]) -> (Vec<C>, Vec<C>) {
-    let mut planner = RealFftPlanner::<f64>::new();
-    let f = planner.plan_fft_forward(u.len());
-    let (mut bu, mut by) = (u.to_vec(), y.to_vec());
-    let (mut su, mut sy) = (f.make_output_vec(), f.make_output_vec());
-    f.process(&mut bu, &mut su).expect("sizes from the plan");
-    f.process(&mut by, &mut sy).expect("sizes from the plan");
-    (su, sy)
-}
-
+/// The output of the linear model `h(ω)` driven by one period with spectrum `u` (length n).
 fn response(h: impl Fn(f64) -> C, u: &[C], n: usize, fs: f64) -> Vec<f64> {
-    let mut planner = RealFftPlanner::<f64>::new();
-    let inv = planner.plan_fft_inverse(n);
-    let mut spec: Vec<C> = u
+    let spec: Vec<C> = u
         .iter()
         .enumerate()
         .map(|(i, ui)| {
@@ -38,14 +24,7 @@ fn response(h: impl Fn(f64) -> C, u: &[C], n: usize, fs: f64) -> Vec<f64> {
             h(w) * ui
         })
         .collect();
-    spec[0].im = 0.0;
-    if let Some(last) = spec.last_mut() {
-        last.im = 0.0;
-    }
-    let mut out = inv.make_output_vec();
-    inv.process(&mut spec, &mut out)
-        .expect("sizes from the plan");
-    out.iter().map(|v| v / n as f64).collect()
+    irfft(&spec, n)
 }
 
 /// Levenberg–Marquardt on complex residuals `r(p)` (finite differences).
@@ -114,7 +93,7 @@ fn fit_class<const P: usize>(
     h: impl Fn(&[f64; P], f64) -> C,
 ) -> ([f64; P], Validation) {
     let n = u.len();
-    let (su, sy) = spectra(u, y);
+    let (su, sy) = (rfft(u), rfft(y));
     let w = |i: usize| 2.0 * std::f64::consts::PI * i as f64 * fs / n as f64;
     let p = lm(start, |p| {
         su.iter()

@@ -26,6 +26,7 @@
 
 #![warn(missing_docs)]
 
+mod fft;
 pub mod flatness;
 pub mod floor;
 pub mod refine;
