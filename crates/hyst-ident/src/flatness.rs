@@ -336,16 +336,7 @@ pub fn fit(
         if !fd_ok {
             break;
         }
-        let mut a = vec![vec![0.0; 5]; 5];
-        let mut g = vec![0.0; 5];
-        for i in 0..5 {
-            g[i] = cols[i].iter().zip(&cur.r).map(|(x, y)| x * y).sum();
-            for j in i..5 {
-                let v: f64 = cols[i].iter().zip(&cols[j]).map(|(x, y)| x * y).sum();
-                a[i][j] = v;
-                a[j][i] = v;
-            }
-        }
+        let (a, g) = crate::normal_equations(&cols, &cur.r);
         let improved = crate::lm_step(&a, &g, &mut lambda, |step| {
             let mut qn = q;
             for (v, s) in qn.iter_mut().zip(step) {

@@ -701,6 +701,22 @@ pub fn welch_psd(y: &[f64], fs: f64, segment: usize) -> (Vec<f64>, Vec<f64>) {
     )
 }
 
+/// Gauss–Newton matrix JᵀJ and gradient Jᵀr from the Jacobian's columns and the residuals.
+pub(crate) fn normal_equations(cols: &[Vec<f64>], r: &[f64]) -> (Vec<Vec<f64>>, Vec<f64>) {
+    let np = cols.len();
+    let mut a = vec![vec![0.0; np]; np];
+    let mut g = vec![0.0; np];
+    for i in 0..np {
+        g[i] = cols[i].iter().zip(r).map(|(p, q)| p * q).sum();
+        for j in i..np {
+            let v: f64 = cols[i].iter().zip(&cols[j]).map(|(p, q)| p * q).sum();
+            a[i][j] = v;
+            a[j][i] = v;
+        }
+    }
+    (a, g)
+}
+
 /// One Levenberg–Marquardt step on the normal equations `a·step = g` (Gauss–Newton matrix and
 /// gradient of ½‖r‖²): the diagonal is damped by `1 + λ` and `λ` raised tenfold until `try_step`
 /// accepts the step (the caller moves to `x − step` when its cost is lower and returns

@@ -266,16 +266,7 @@ pub fn fit(
         let Some(cols) = cols.into_iter().collect::<Option<Vec<Vec<f64>>>>() else {
             break;
         };
-        let mut a = vec![vec![0.0; np]; np];
-        let mut g = vec![0.0; np];
-        for i in 0..np {
-            g[i] = cols[i].iter().zip(&r).map(|(p, q)| p * q).sum();
-            for j in i..np {
-                let v: f64 = cols[i].iter().zip(&cols[j]).map(|(p, q)| p * q).sum();
-                a[i][j] = v;
-                a[j][i] = v;
-            }
-        }
+        let (a, g) = crate::normal_equations(&cols, &r);
         let improved = crate::lm_step(&a, &g, &mut lambda, |step| {
             let xn: Vec<f64> = x.iter().zip(step).map(|(a, b)| a - b).collect();
             let mn = model_at(&xn);
