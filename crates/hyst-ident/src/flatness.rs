@@ -160,6 +160,11 @@ impl Period {
         ))
     }
 
+    /// Bin `i` of the implied input of θ = `q` with mass `m`, given w's spectrum `ws`.
+    fn implied_at(&self, i: usize, m: f64, q: &[f64; 5], ws: &[C]) -> C {
+        self.a[i] * m + self.v[i] * q[0] + self.x[i] * q[1] + ws[i] * q[2]
+    }
+
     /// The spectrum (bins 0..=n/2) of w for (βγ, βδ), or None if w is not finite.
     fn w_spectrum(&self, bg: f64, bd: f64) -> Option<Vec<C>> {
         let steps = UP * self.n;
@@ -234,9 +239,7 @@ struct Eval {
 fn evaluate(p: &Period, m: f64, q: &[f64; 5], band: (usize, usize)) -> Option<Eval> {
     let ws = p.w_spectrum(q[3], q[4])?;
     let (lo, hi) = band;
-    let u: Vec<C> = (lo..=hi)
-        .map(|i| p.a[i] * m + p.v[i] * q[0] + p.x[i] * q[1] + ws[i] * q[2])
-        .collect();
+    let u: Vec<C> = (lo..=hi).map(|i| p.implied_at(i, m, q, &ws)).collect();
     let mut r: Vec<f64> = u.iter().map(|x| x.norm().ln()).collect();
     if r.iter().any(|v| !v.is_finite()) {
         return None;
@@ -257,20 +260,19 @@ fn spread_db(r: &[f64]) -> f64 {
 
 /// Fit the Bouc-Wen oscillator (ν = 1, mass fixed) to the output record `y` (sampled at `fs`,
 /// in periodic steady state; where a period starts does not matter, since |Û_k| does not
-/// change with a time shift; whole periods are averaged, a partial one at the end is ignored) by flatness of its implied input over `band`, from `start` (a
-/// Bouc-Wen oscillator with ν = 1 or a linear one).
+/// change with a time shift; whole periods are averaged, a partial one at the end is ignored)
+/// by flatness of its implied input over `band`, from each of `starts` (Bouc-Wen oscillators
+/// with ν = 1 or linear ones; in parallel, on one averaged period). The flattest fit that ends
+/// on a valid oscillator wins; if none does, the last start's error is returned.
 pub fn fit(
     y: &[f64],
     fs: f64,
     band: &ExcitationBand,
-    start: &Oscillator,
+    starts: &[Oscillator],
 ) -> Result<FlatnessFit, IdentError> {
+    use rayon::prelude::*;
     if !(fs.is_finite() && fs > 0.0) {
         return Err(IdentError::BadRate { fs });
-    }
-    let m = start.mass;
-    if !(m.is_finite() && m > 0.0) {
-        return Err(IdentError::NonPositiveMass { mass: m });
     }
     let (lo, hi) = band.bins(fs);
     let ordered = band.low_hz.is_finite() && band.high_hz.is_finite() && band.low_hz < band.high_hz;
@@ -283,15 +285,50 @@ pub fn fit(
         });
     }
     let (p, periods) = Period::new(y, fs, band.period)?;
+    let fits: Vec<Result<FlatnessFit, IdentError>> = starts
+        .par_iter()
+        .map(|start| {
+            let f = fit_from(&p, periods, (lo, hi), start)?;
+            f.model.validate().map_err(|e| IdentError::BadStart {
+                reason: format!("the fit ended on an invalid model ({e})"),
+            })?;
+            Ok(f)
+        })
+        .collect();
+    let mut best: Option<FlatnessFit> = None;
+    let mut last_err = IdentError::BadStart {
+        reason: "no starting model given".to_string(),
+    };
+    for f in fits {
+        match f {
+            Ok(f) if best.as_ref().is_none_or(|b| f.spread_db < b.spread_db) => best = Some(f),
+            Ok(_) => {}
+            Err(e) => last_err = e,
+        }
+    }
+    best.ok_or(last_err)
+}
+
+/// Levenberg–Marquardt from one start on the prepared period.
+fn fit_from(
+    p: &Period,
+    periods: usize,
+    band: (usize, usize),
+    start: &Oscillator,
+) -> Result<FlatnessFit, IdentError> {
+    let m = start.mass;
+    if !(m.is_finite() && m > 0.0) {
+        return Err(IdentError::NonPositiveMass { mass: m });
+    }
+    let (lo, _) = band;
     let mut q = theta(start).ok_or_else(|| not_bouc_wen(start))?;
     if q[2] == 0.0 {
         // A linear start: split its stiffness evenly, hysteresis scale from the record.
         let sx = (p.x.iter().skip(1).map(|x| 2.0 * x.norm_sqr()).sum::<f64>()).sqrt() / p.n as f64;
         q = [q[0], 0.5 * q[1], 0.5 * q[1], 0.5 / sx, 0.0];
     }
-    let band = (lo, hi);
     let cost = |e: &Eval| e.r.iter().map(|v| v * v).sum::<f64>();
-    let mut cur = evaluate(&p, m, &q, band).ok_or_else(|| IdentError::BadStart {
+    let mut cur = evaluate(p, m, &q, band).ok_or_else(|| IdentError::BadStart {
         reason: format!(
             "the implied input of the starting model {q:?} (c, k, α, βγ, βδ) is not finite"
         ),
@@ -342,7 +379,7 @@ pub fn fit(
             for (v, s) in qn.iter_mut().zip(step) {
                 *v -= s;
             }
-            let e = evaluate(&p, m, &qn, band)?;
+            let e = evaluate(p, m, &qn, band)?;
             let cn = cost(&e);
             (cn < c).then(|| {
                 let significant = c - cn > 1e-10 * c;
@@ -389,7 +426,7 @@ fn implied(
     let spec = (0..=p.n / 2)
         .map(|i| {
             if (lo..=hi).contains(&i) {
-                p.a[i] * model.mass + p.v[i] * q[0] + p.x[i] * q[1] + ws[i] * q[2]
+                p.implied_at(i, model.mass, &q, &ws)
             } else {
                 C::new(0.0, 0.0)
             }
@@ -476,7 +513,7 @@ mod tests {
         let truth = Oscillator::benchmark();
         let (_, y, band) = record(&truth, 40.0, 2, 5);
         let start = Oscillator::linear(2.0, 60.0, 1.2e5);
-        let f = fit(&y, FS, &band, &start).unwrap();
+        let f = fit(&y, FS, &band, &[start]).unwrap();
         let Restoring::BoucWen(b) = f.model.restoring else {
             panic!("{f:?}")
         };
@@ -501,13 +538,13 @@ mod tests {
     fn aperiodicity_flags_a_wrong_period() {
         let truth = Oscillator::benchmark();
         let (_, y, band) = record(&truth, 30.0, 3, 2);
-        let right = fit(&y, FS, &band, &truth).unwrap();
+        let right = fit(&y, FS, &band, &[truth]).unwrap();
         assert!(right.aperiodicity.unwrap() < 1e-9, "{right:?}");
         let wrong = ExcitationBand {
             period: 1000,
             ..band
         };
-        let w = fit(&y, FS, &wrong, &truth).unwrap();
+        let w = fit(&y, FS, &wrong, &[truth]).unwrap();
         assert!(w.aperiodicity.unwrap() > 0.5, "{w:?}");
     }
 
@@ -517,7 +554,7 @@ mod tests {
         let (_, y, band) = record(&truth, 20.0, 1, 1);
         // Shorter than one period.
         assert!(matches!(
-            fit(&y[..1000], FS, &band, &truth),
+            fit(&y[..1000], FS, &band, &[truth]),
             Err(IdentError::TooShort { samples: 1000, .. })
         ));
         // A band with too few bins.
@@ -527,11 +564,11 @@ mod tests {
             ..band
         };
         assert!(matches!(
-            fit(&y, FS, &narrow, &truth),
+            fit(&y, FS, &narrow, &[truth]),
             Err(IdentError::BadBand { .. })
         ));
         assert!(matches!(
-            fit(&y, 0.0, &band, &truth),
+            fit(&y, 0.0, &band, &[truth]),
             Err(IdentError::BadRate { .. })
         ));
         let zener = Oscillator::zener(
@@ -543,11 +580,11 @@ mod tests {
                 omega: 50.0,
             },
         );
-        let e = fit(&y, FS, &band, &zener).unwrap_err();
+        let e = fit(&y, FS, &band, &[zener]).unwrap_err();
         assert!(e.to_string().contains("Bouc-Wen with ν = 1"), "{e}");
         let massless = Oscillator { mass: 0.0, ..truth };
         assert!(matches!(
-            fit(&y, FS, &band, &massless),
+            fit(&y, FS, &band, &[massless]),
             Err(IdentError::NonPositiveMass { .. })
         ));
     }

@@ -531,29 +531,13 @@ pub fn fit_flatness(
     models: &Models,
     band: &flatness::ExcitationBand,
 ) -> Result<flatness::FlatnessFit, IdentError> {
-    // Both starts at once (rayon::join shares the caller's pool; no nested pools).
-    let from_linear = || flatness::fit(y, fs, band, &models.linear);
-    let (mapped, linear) = match &models.bouc_wen_mapped {
-        Some(b) => {
-            let (m, l) = rayon::join(|| flatness::fit(y, fs, band, b), from_linear);
-            (Some(m), l)
-        }
-        None => (None, from_linear()),
-    };
-    // A fit whose parameters do not make a valid oscillator is a failed fit.
-    let valid = |r: Result<flatness::FlatnessFit, IdentError>| {
-        r.and_then(|f| match f.model.validate() {
-            Ok(()) => Ok(f),
-            Err(e) => Err(IdentError::BadStart {
-                reason: format!("the fit ended on an invalid model ({e})"),
-            }),
-        })
-    };
-    match (mapped.map(valid), valid(linear)) {
-        (Some(Ok(m)), Ok(l)) => Ok(if m.spread_db <= l.spread_db { m } else { l }),
-        (Some(Ok(m)), Err(_)) => Ok(m),
-        (_, linear) => linear,
-    }
+    // Both starts at once (rayon shares the caller's pool; no nested pools).
+    let starts: Vec<Oscillator> = models
+        .bouc_wen_mapped
+        .into_iter()
+        .chain([models.linear])
+        .collect();
+    flatness::fit(y, fs, band, &starts)
 }
 
 /// Run steps 1–4 on an output record `y` sampled at `fs`.
