@@ -829,44 +829,50 @@ fn ident(a: &IdentArgs) -> Result<(), Error> {
     };
     let excitation = excitation_band(a)?;
     let t0 = std::time::Instant::now();
-    let mut runs = Vec::new();
-    for (i, lin) in choices.iter().enumerate() {
-        let opts = IdentOptions {
-            mass,
+    let opts = IdentOptions {
+        mass,
+        linearization: choices[0],
+        excitation,
+        ..IdentOptions::default()
+    };
+    let id = match ident::identify(&y, fs, &opts) {
+        Ok(id) => id,
+        Err(e @ ident::IdentError::NoStablePair { .. }) => {
+            // Save the diagram the user needs to see why.
+            let path = a
+                .svg_dir
+                .clone()
+                .unwrap_or_else(|| PathBuf::from("."))
+                .join("stabilization.svg");
+            let saved = ident::prepare(&y, fs, &opts)
+                .and_then(|p| ident::run_ssi(&p, &opts).map(|r| (p, r)))
+                .ok()
+                .and_then(|(p, r)| {
+                    let svg = hyst::covssi::svg::stabilization_svg(
+                        &r.diagram,
+                        Some(4.0 * p.dominant_hz),
+                        "Stabilization diagram (no stable pair found)",
+                    );
+                    std::fs::create_dir_all(path.parent()?).ok()?;
+                    std::fs::write(&path, svg).ok()
+                });
+            return Err(fail(match saved {
+                Some(()) => format!("{source}: {e}; diagram saved to {}", path.display()),
+                None => format!("{source}: {e}"),
+            }));
+        }
+        Err(e) => return Err(fail(format!("{source}: {e}"))),
+    };
+    // The other mappings share steps 1-3: only the models are built again.
+    let mut mapped = vec![(choices[0], id.models.bouc_wen_mapped)];
+    for lin in &choices[1..] {
+        let o = IdentOptions {
             linearization: *lin,
-            // The flatness fit does not depend on the mapping beyond its start: fit once.
-            excitation: if i == 0 { excitation } else { None },
-            ..IdentOptions::default()
+            ..opts.clone()
         };
-        let id = match ident::identify(&y, fs, &opts) {
-            Ok(id) => id,
-            Err(e @ ident::IdentError::NoStablePair { .. }) => {
-                // Save the diagram the user needs to see why.
-                let path = a
-                    .svg_dir
-                    .clone()
-                    .unwrap_or_else(|| PathBuf::from("."))
-                    .join("stabilization.svg");
-                let saved = ident::prepare(&y, fs, &opts)
-                    .and_then(|p| ident::run_ssi(&p, &opts).map(|r| (p, r)))
-                    .ok()
-                    .and_then(|(p, r)| {
-                        let svg = hyst::covssi::svg::stabilization_svg(
-                            &r.diagram,
-                            Some(4.0 * p.dominant_hz),
-                            "Stabilization diagram (no stable pair found)",
-                        );
-                        std::fs::create_dir_all(path.parent()?).ok()?;
-                        std::fs::write(&path, svg).ok()
-                    });
-                return Err(fail(match saved {
-                    Some(()) => format!("{source}: {e}; diagram saved to {}", path.display()),
-                    None => format!("{source}: {e}"),
-                }));
-            }
-            Err(e) => return Err(fail(format!("{source}: {e}"))),
-        };
-        runs.push((*lin, id));
+        let models = ident::build_models(&id.poles, &id.prepared, &o)
+            .map_err(|e| fail(format!("{source}: {e}")))?;
+        mapped.push((*lin, models.bouc_wen_mapped));
     }
     let ident_seconds = t0.elapsed().as_secs_f64();
     let lin_name = |l: &Linearization| match l {
@@ -875,12 +881,12 @@ fn ident(a: &IdentArgs) -> Result<(), Error> {
     };
     // Bouc-Wen candidates: the flatness fit (if any), then each mapping.
     let mut candidates: Vec<(String, Oscillator)> = Vec::new();
-    if let Some(f) = &runs[0].1.flatness {
+    if let Some(f) = &id.flatness {
         candidates.push(("flatness".into(), f.model));
     }
-    for (lin, id) in &runs {
-        if let Some(b) = id.models.bouc_wen_mapped {
-            candidates.push((lin_name(lin).into(), b));
+    for (lin, b) in &mapped {
+        if let Some(b) = b {
+            candidates.push((lin_name(lin).into(), *b));
         }
     }
     let validate_on = |m: Option<&Oscillator>| -> Vec<serde_json::Value> {
@@ -909,7 +915,6 @@ fn ident(a: &IdentArgs) -> Result<(), Error> {
     let best = (0..candidates.len())
         .min_by(|&i, &j| score(&cand_rows[i]).total_cmp(&score(&cand_rows[j])))
         .unwrap_or(0);
-    let id = &runs[0].1;
     let bouc_wen = candidates.get(best).map(|c| c.1);
     let route = candidates
         .get(best)
@@ -1022,7 +1027,7 @@ fn ident(a: &IdentArgs) -> Result<(), Error> {
             "Stabilization diagram (output only)",
         );
         std::fs::write(&p, svg).map_err(|e| fail(format!("{}: {e}", p.display())))?;
-        ident_figures(dir, id, bouc_wen.as_ref(), &validations)?;
+        ident_figures(dir, &id, bouc_wen.as_ref(), &validations)?;
         if let Some(band) = excitation.filter(|_| id.flatness.is_some()) {
             implied_input_figure(dir, &candidates, &y, fs, &band)?;
         }
