@@ -302,10 +302,7 @@ where
             }
             out[k] = s[0];
         }
-        if let Err(e) = run.check(k, &s) {
-            sink.out.truncate(start + k * per);
-            return Err(e);
-        }
+        run.check(k, &s)?;
     }
     Ok(K::store(&s))
 }
