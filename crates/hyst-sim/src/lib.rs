@@ -280,6 +280,7 @@ where
     F: FnMut(usize, usize) -> (f64, f64, f64),
 {
     let mut s = K::load(&s0);
+    let rk4 = kernel::Rk4::new(kern, run.h);
     // The output is written by index into a buffer sized up front: no call (a `push` that
     // might grow the vector) in the loop, so the state and the kernel's constants can stay
     // in registers across sub-steps instead of being saved around a possible call.
@@ -292,13 +293,13 @@ where
             let row = &mut out[k * per..(k + 1) * per];
             for (i, o) in row.iter_mut().enumerate() {
                 let (u0, um, u1) = input(k, i);
-                s = kernel::rk4_step(kern, &s, run.h, u0, um, u1);
+                s = rk4.step(&s, u0, um, u1);
                 *o = s[0];
             }
         } else {
             for i in 0..run.r {
                 let (u0, um, u1) = input(k, i);
-                s = kernel::rk4_step(kern, &s, run.h, u0, um, u1);
+                s = rk4.step(&s, u0, um, u1);
             }
             out[k] = s[0];
         }
