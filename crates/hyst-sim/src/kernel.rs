@@ -237,19 +237,20 @@ pub(crate) fn choose(o: &Oscillator) -> Choice<'_> {
     }
 }
 
-/// Classic RK4 with half the step folded into the kernel's constants.
+/// Classic RK4 with the step folded into the kernel's constants.
 ///
-/// With Kᵢ = h/2·kᵢ computed by the kernel scaled by h/2, y₂ = y + K₁, y₃ = y + K₂ and
-/// y₄ = y + 2K₃, the update y + h/6·(k₁ + 2k₂ + 2k₃ + k₄) equals
-/// (y₂ + 2y₃ + 2K₃)/3 + K₄/3. The first two stages are then one call of
+/// With Kᵢ = h/2·kᵢ computed by the kernel scaled by h/2, y₂ = y + K₁, y₃ = y + K₂ and, by
+/// the kernel scaled by h, y₄ = y + h·k₃, the update y + h/6·(k₁ + 2k₂ + 2k₃ + k₄) equals
+/// (y₂ − y + 2y₃ + y₄)/3 + K₄/3. The first three stages are then one call of
 /// [`Kernel::f_plus`] each, with y folded into the innermost sums, and the sum of the first
 /// three stages is formed while the last is evaluated: the chain of dependent operations
-/// is two fused multiply-adds shorter per step than stage-by-stage `y + a·f(y)`.
-/// llvm-mca (Sapphire Rapids) puts the Bouc-Wen loop at 51 cycles per step against 55
-/// before; run interleaved with the previous kernel in `cargo xtask bench rk4`, it was
-/// faster in 10 of 12 pairs of runs.
+/// is three fused multiply-adds shorter per step than stage-by-stage `y + a·f(y)`.
+/// llvm-mca (Sapphire Rapids) puts the Bouc-Wen loop at 48 cycles per step against 55 for
+/// that form; a third scaled copy (h/6, to fold the last stage too) spills constants out
+/// of registers and is slower.
 pub(crate) struct Rk4<K> {
     half: K,
+    full: K,
 }
 
 impl<K> Rk4<K> {
@@ -259,6 +260,7 @@ impl<K> Rk4<K> {
     {
         Rk4 {
             half: kernel.scaled(0.5 * h),
+            full: kernel.scaled(h),
         }
     }
 
@@ -271,9 +273,9 @@ impl<K> Rk4<K> {
         const THIRD: f64 = 1.0 / 3.0;
         let y2 = self.half.f_plus(y, y, u0);
         let y3 = self.half.f_plus(y, &y2, um);
-        let k3 = self.half.f(&y3, um);
-        let y4 = std::array::from_fn(|i| fma(2.0, k3[i], y[i]));
-        let base: [f64; N] = std::array::from_fn(|i| THIRD * fma(2.0, y3[i] + k3[i], y2[i]));
+        let y4 = self.full.f_plus(y, &y3, um);
+        let base: [f64; N] =
+            std::array::from_fn(|i| THIRD * (fma(2.0, y3[i], y2[i] - y[i]) + y4[i]));
         let k4 = self.half.f(&y4, u1);
         std::array::from_fn(|i| fma(THIRD, k4[i], base[i]))
     }
