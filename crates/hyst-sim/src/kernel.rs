@@ -320,11 +320,23 @@ mod tests {
     ) {
         let fast = Rk4::new(k, h).step(&K::load(s), u[0], u[1], u[2]);
         let slow = textbook_rk4(o, s, h, u[0], u[1], u[2]);
+        // Size of the rates' terms: a rate that is a small difference of large terms is
+        // rounded at the size of its terms in either form.
+        let (x, v, z) = (s[0].abs(), s[1].abs(), s[2].abs());
+        let ua = u.iter().fold(0.0f64, |m, w| m.max(w.abs()));
+        let extra = match &o.restoring {
+            Restoring::BoucWen(b) => {
+                b.alpha * v + (b.beta_gamma().abs() + b.beta_delta().abs()) * v * z
+            }
+            Restoring::Zener(zp) => zp.k_inf * v + zp.omega * z,
+            _ => 0.0,
+        };
+        let terms = h * (v + (ua + o.damping * v + o.stiffness * x + z) / o.mass + extra);
         for i in 0..N {
             // The folded form rounds y₂, y₃ and their sum (values of the state's size)
-            // where the textbook form rounds only the increments: agreement to a few
-            // units of rounding of the state itself.
-            let scale = s[i].abs() + (slow[i] - s[i]).abs() + 1e-12;
+            // where the textbook form rounds only the increments: agreement to a few tens
+            // of units of rounding of the state, its increment and the rates' terms.
+            let scale = s[i].abs() + (slow[i] - s[i]).abs() + terms + 1e-12;
             assert!(
                 (fast[i] - slow[i]).abs() <= 1e-14 * scale,
                 "{i}: {} vs {}",
