@@ -3,7 +3,7 @@
 
 mod common;
 
-use hyst::covssi::{self, BlockRows, PoleStatus, SsiOptions, Stability, StabilityCriteria};
+use hyst::covssi::{self, BlockRows, PoleStatus, SsiOptions, StabilityCriteria};
 
 fn load(rel: &str, cols: &[&str]) -> Option<Vec<Vec<f64>>> {
     let p = common::data_file(rel)?;
@@ -71,11 +71,7 @@ const TOOLS_SDOF: [[(f64, f64); 2]; 1] = [[(0.08, -3.4), (0.06, -4.6)]];
 /// damping ratio of every pole flagged fully stable (frequency, damping, and MAC for several
 /// channels) within ±5 % of the true frequency, across all orders. Errors in %.
 fn readme_median(res: &covssi::SsiResult, f_true: f64, z_true: f64) -> (f64, f64) {
-    let top = if res.diagram.channels > 1 {
-        Stability::FrequencyDampingShape
-    } else {
-        Stability::FrequencyDamping
-    };
+    let top = res.diagram.full_stability();
     let (mut f, mut z): (Vec<f64>, Vec<f64>) = res
         .diagram
         .orders

@@ -282,6 +282,18 @@ pub struct StabilizationDiagram {
     pub channels: usize,
 }
 
+impl StabilizationDiagram {
+    /// The label a pole needs to count as fully stable and join a [`Mode`]: stable in
+    /// frequency, damping and shape with several channels, in frequency and damping with one.
+    pub fn full_stability(&self) -> Stability {
+        if self.channels > 1 {
+            Stability::FrequencyDampingShape
+        } else {
+            Stability::FrequencyDamping
+        }
+    }
+}
+
 /// Everything [`identify`] finds.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SsiResult {

@@ -339,11 +339,7 @@ pub(crate) fn cluster(
     d: &StabilizationDiagram,
     opts: &SsiOptions,
 ) -> (Vec<Mode>, Vec<RealPoleCluster>, Vec<String>) {
-    let top = if d.channels > 1 {
-        Stability::FrequencyDampingShape
-    } else {
-        Stability::FrequencyDamping
-    };
+    let top = d.full_stability();
     let min_size = opts
         .min_cluster_size
         .unwrap_or_else(|| (d.orders.len() / 5).max(3));
