@@ -487,6 +487,7 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
                 "frequency_std_hz": m.frequency_std_hz,
                 "damping_std": m.damping_std,
                 "poles": m.members.len(),
+                "members": m.members,
                 "shape": m.shape.iter().map(|v| c64(*v)).collect::<Vec<_>>(),
                 "shape_std": m.shape_std,
                 "lambda": c64(m.lambda),

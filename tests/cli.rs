@@ -221,6 +221,29 @@ fn ssi_writes_modes_json_and_svg() {
     for key in ["frequency_std_hz", "damping_std", "poles", "shape"] {
         assert!(!m[key].is_null(), "{key}");
     }
+    // Each member names a pole of the per-order list: (order, index), one per order, and
+    // `poles` counts them; the member poles' mean frequency is the mode's.
+    let members = m["members"].as_array().unwrap();
+    assert_eq!(members.len() as u64, m["poles"].as_u64().unwrap());
+    let mut mean = 0.0;
+    for pair in members {
+        let (order, index) = (pair[0].as_u64().unwrap(), pair[1].as_u64().unwrap());
+        let o = v["orders"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|o| o["order"].as_u64() == Some(order))
+            .expect("the member's order is listed");
+        let p = &o["poles"][index as usize];
+        assert_eq!(p["label"], "stable_fd", "{p}");
+        mean += p["frequency_hz"].as_f64().unwrap() / members.len() as f64;
+    }
+    // The mean of the same numbers, summed in another order: rounding only.
+    approx::assert_relative_eq!(
+        mean,
+        m["frequency_hz"].as_f64().unwrap(),
+        max_relative = 1e-12
+    );
     assert!(v["real_poles"].is_array());
     let first = &v["orders"][5]["poles"][0];
     assert!(first["label"].is_string() && first["lambda"].is_array());

@@ -17,8 +17,10 @@
 //!    $d\omega = |\omega_h-\omega_j|/\max$, $d\zeta$ likewise, $1-\text{MAC}$ for several channels;
 //!    eq. 31 for real poles) and labelled [`PoleStatus`]: stable in frequency, in frequency and
 //!    damping, also in shape, a stable real pole — or rejected, with the criterion and by how much.
-//! 5. Fully stable poles are clustered into [`Mode`]s (mean ± standard deviation), stable real
-//!    poles into [`RealPoleCluster`]s.
+//! 5. Fully stable poles are clustered into [`Mode`]s (mean ± standard deviation) by their
+//!    distance in the complex plane, $|\lambda_i-\lambda_j|/\max(|\lambda_i|,|\lambda_j|)$, so that
+//!    poles of one frequency but different damping stay apart; stable real poles into
+//!    [`RealPoleCluster`]s.
 //!
 //! ```
 //! # use covssi::{identify, SsiOptions, BlockRows};
@@ -229,7 +231,8 @@ pub struct SsiOptions {
     pub max_damping: f64,
     /// Reference channels (indices); default: all.
     pub references: Option<Vec<usize>>,
-    /// Stable poles within this relative frequency gap belong to one mode. Default: 0.02.
+    /// Stable poles within this relative distance, |λᵢ − λⱼ| / max(|λᵢ|, |λⱼ|), belong to one
+    /// mode (single linkage). Default: 0.02.
     pub cluster_tolerance: f64,
     /// A mode needs at least this many stable poles; default: max(3, orders / 5).
     pub min_cluster_size: Option<usize>,

@@ -305,6 +305,7 @@ fn normalise(shape: &[C64]) -> Vec<C64> {
 
 /// Group candidates (sorted by `key`) into runs whose neighbours differ by at most `tol`
 /// relatively; keep one member per order (the nearest to the run's median); drop small runs.
+/// Used for real poles, which have one coordinate.
 fn runs(
     mut cand: Vec<(f64, usize, usize)>,
     tol: f64,
@@ -335,6 +336,88 @@ fn runs(
         .collect()
 }
 
+/// Relative distance of two poles in the complex plane, |λa − λb| / max(|λa|, |λb|). Unlike a
+/// frequency gap it separates poles of one frequency but different damping: a physical mode
+/// and a lightly damped noise pole beside it.
+fn pole_distance(a: C64, b: C64) -> f64 {
+    let m = a.norm().max(b.norm());
+    if m == 0.0 { 0.0 } else { (a - b).norm() / m }
+}
+
+fn find(parent: &mut [usize], mut i: usize) -> usize {
+    while parent[i] != i {
+        parent[i] = parent[parent[i]];
+        i = parent[i];
+    }
+    i
+}
+
+/// Cluster oscillating poles, given as (order index, pole index), by single linkage: two poles
+/// join when their [`pole_distance`] is at most `tol` and, with several channels, their shapes
+/// agree within `mac` (1 − MAC). Each cluster keeps one pole per order, the one nearest its
+/// centre (the median of Re λ and of Im λ over the cluster); clusters with fewer than
+/// `min_size` orders are dropped.
+fn pole_clusters(
+    d: &StabilizationDiagram,
+    mut cand: Vec<(usize, usize)>,
+    tol: f64,
+    mac_tol: f64,
+    min_size: usize,
+) -> Vec<Vec<(usize, usize)>> {
+    let pole = |&(o, p): &(usize, usize)| &d.orders[o].poles[p];
+    cand.sort_by(|a, b| pole(a).frequency_hz.total_cmp(&pole(b).frequency_hz));
+    let mut parent: Vec<usize> = (0..cand.len()).collect();
+    for (i, ca) in cand.iter().enumerate() {
+        let a = pole(ca);
+        // |Δλ| ≥ |Δ|λ||: once the frequencies differ by more than `tol`, so do the poles.
+        for (j, cb) in cand.iter().enumerate().skip(i + 1) {
+            let b = pole(cb);
+            if rel(a.frequency_hz, b.frequency_hz) > tol {
+                break;
+            }
+            let near = pole_distance(a.lambda, b.lambda) <= tol
+                && (d.channels == 1 || 1.0 - mac(&a.shape, &b.shape) <= mac_tol);
+            if near {
+                let (ra, rb) = (find(&mut parent, i), find(&mut parent, j));
+                parent[ra.max(rb)] = ra.min(rb);
+            }
+        }
+    }
+    let mut groups: Vec<Vec<(usize, usize)>> = Vec::new();
+    let mut slot = vec![usize::MAX; cand.len()];
+    for (i, &c) in cand.iter().enumerate() {
+        let r = find(&mut parent, i);
+        if slot[r] == usize::MAX {
+            slot[r] = groups.len();
+            groups.push(Vec::new());
+        }
+        groups[slot[r]].push(c);
+    }
+    groups
+        .into_iter()
+        .map(|g| {
+            let median = |f: &dyn Fn(C64) -> f64| {
+                let mut v: Vec<f64> = g.iter().map(|m| f(pole(m).lambda)).collect();
+                v.sort_by(f64::total_cmp);
+                v[v.len() / 2]
+            };
+            let centre = C64::new(median(&|l| l.re), median(&|l| l.im));
+            let mut best: Vec<(usize, usize)> = Vec::new();
+            for m in g {
+                let dist = |x: &(usize, usize)| (pole(x).lambda - centre).norm();
+                match best.iter_mut().find(|b| b.0 == m.0) {
+                    Some(b) if dist(&m) < dist(b) => *b = m,
+                    Some(_) => {}
+                    None => best.push(m),
+                }
+            }
+            best.sort_unstable();
+            best
+        })
+        .filter(|g| g.len() >= min_size)
+        .collect()
+}
+
 pub(crate) fn cluster(
     d: &StabilizationDiagram,
     opts: &SsiOptions,
@@ -348,7 +431,7 @@ pub(crate) fn cluster(
     for (oi, o) in d.orders.iter().enumerate() {
         for (pi, p) in o.poles.iter().enumerate() {
             match p.status {
-                PoleStatus::Stable(s) if s == top => osc.push((p.frequency_hz, oi, pi)),
+                PoleStatus::Stable(s) if s == top => osc.push((oi, pi)),
                 PoleStatus::Stable(Stability::Real) => real.push((-p.lambda.re, oi, pi)),
                 _ => {}
             }
@@ -356,49 +439,48 @@ pub(crate) fn cluster(
     }
     let mut notes = Vec::new();
     let n_osc = osc.len();
-    let modes: Vec<Mode> = runs(osc, opts.cluster_tolerance, min_size)
-        .into_iter()
-        .map(|run| {
-            let poles: Vec<&Pole> = run.iter().map(|&(_, o, p)| &d.orders[o].poles[p]).collect();
-            let f: Vec<f64> = poles.iter().map(|p| p.frequency_hz).collect();
-            let z: Vec<f64> = poles.iter().map(|p| p.damping_ratio).collect();
-            let (fm, fs) = mean_std(&f);
-            let (zm, zs) = mean_std(&z);
-            let shapes: Vec<Vec<C64>> = poles.iter().map(|p| normalise(&p.shape)).collect();
-            let l = shapes[0].len();
-            let k = shapes.len() as f64;
-            let mean: Vec<C64> = (0..l)
-                .map(|a| shapes.iter().map(|s| s[a]).sum::<C64>() / k)
-                .collect();
-            let spread: Vec<f64> = (0..l)
-                .map(|a| {
-                    let v = shapes
-                        .iter()
-                        .map(|s| (s[a] - mean[a]).norm_sqr())
-                        .sum::<f64>();
-                    if shapes.len() > 1 {
-                        (v / (k - 1.0)).sqrt()
-                    } else {
-                        0.0
-                    }
-                })
-                .collect();
-            let lambda = poles.iter().map(|p| p.lambda).sum::<C64>() / k;
-            Mode {
-                frequency_hz: fm,
-                frequency_std_hz: fs,
-                damping_ratio: zm,
-                damping_std: zs,
-                shape: mean,
-                shape_std: spread,
-                members: run
-                    .iter()
-                    .map(|&(_, o, p)| (d.orders[o].order, p))
-                    .collect(),
-                lambda,
-            }
-        })
-        .collect();
+    let mut modes: Vec<Mode> =
+        pole_clusters(d, osc, opts.cluster_tolerance, opts.criteria.mac, min_size)
+            .into_iter()
+            .map(|run| {
+                let poles: Vec<&Pole> = run.iter().map(|&(o, p)| &d.orders[o].poles[p]).collect();
+                let f: Vec<f64> = poles.iter().map(|p| p.frequency_hz).collect();
+                let z: Vec<f64> = poles.iter().map(|p| p.damping_ratio).collect();
+                let (fm, fs) = mean_std(&f);
+                let (zm, zs) = mean_std(&z);
+                let shapes: Vec<Vec<C64>> = poles.iter().map(|p| normalise(&p.shape)).collect();
+                let l = shapes[0].len();
+                let k = shapes.len() as f64;
+                let mean: Vec<C64> = (0..l)
+                    .map(|a| shapes.iter().map(|s| s[a]).sum::<C64>() / k)
+                    .collect();
+                let spread: Vec<f64> = (0..l)
+                    .map(|a| {
+                        let v = shapes
+                            .iter()
+                            .map(|s| (s[a] - mean[a]).norm_sqr())
+                            .sum::<f64>();
+                        if shapes.len() > 1 {
+                            (v / (k - 1.0)).sqrt()
+                        } else {
+                            0.0
+                        }
+                    })
+                    .collect();
+                let lambda = poles.iter().map(|p| p.lambda).sum::<C64>() / k;
+                Mode {
+                    frequency_hz: fm,
+                    frequency_std_hz: fs,
+                    damping_ratio: zm,
+                    damping_std: zs,
+                    shape: mean,
+                    shape_std: spread,
+                    members: run.iter().map(|&(o, p)| (d.orders[o].order, p)).collect(),
+                    lambda,
+                }
+            })
+            .collect();
+    modes.sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
     if modes.is_empty() {
         notes.push(if n_osc == 0 {
             "no pole was stable in frequency and damping at any order: no mode found (try more block rows, a higher order, or looser thresholds)".to_string()
@@ -427,4 +509,57 @@ pub(crate) fn cluster(
         })
         .collect();
     (modes, real_clusters, notes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{OrderPoles, SsiOptions, StabilizationDiagram};
+
+    /// A pole of natural frequency `f` Hz and damping `zeta`, as covssi makes it from a
+    /// discrete eigenvalue at 20 Hz, labelled fully stable for one channel.
+    fn stable_pole(f: f64, zeta: f64) -> Pole {
+        let fs = 20.0;
+        let w = 2.0 * std::f64::consts::PI * f;
+        let lambda = C64::new(-zeta * w, w * (1.0 - zeta * zeta).sqrt());
+        let mut p = Pole::new((lambda / fs).exp(), fs, vec![C64::new(1.0, 0.0)]);
+        p.status = PoleStatus::Stable(Stability::FrequencyDamping);
+        p
+    }
+
+    /// A physical mode (4.05 Hz, 5 % damping) and, from order 6 up, a lightly damped noise
+    /// pole (1.5 %) at nearly the same frequency, nearer the mode's median frequency than the
+    /// physical pole is. Clustered by frequency alone, the mode took the noise pole at those
+    /// orders (its mean damping fell to about 3 %); by distance in the complex plane the two
+    /// stay apart.
+    #[test]
+    fn a_noise_pole_at_the_same_frequency_does_not_join_the_mode() {
+        let orders: Vec<OrderPoles> = (1..=10)
+            .map(|order| {
+                let jitter = 1e-4 * (order as f64 - 5.0);
+                let mut poles = vec![stable_pole(4.05 + jitter, 0.05)];
+                if order >= 6 {
+                    poles.push(stable_pole(4.05 + jitter / 10.0, 0.015));
+                }
+                OrderPoles { order, poles }
+            })
+            .collect();
+        let d = StabilizationDiagram {
+            orders,
+            fs: 20.0,
+            channels: 1,
+            ..StabilizationDiagram::default()
+        };
+        let opts = SsiOptions {
+            min_cluster_size: Some(3),
+            ..SsiOptions::default()
+        };
+        let (modes, _, _) = cluster(&d, &opts);
+        assert_eq!(modes.len(), 2, "{modes:?}");
+        // Members are exact poles of damping 0.05 and 0.015: only rounding separates them.
+        approx::assert_relative_eq!(modes[0].damping_ratio, 0.015, max_relative = 1e-9);
+        assert_eq!(modes[0].members.len(), 5);
+        approx::assert_relative_eq!(modes[1].damping_ratio, 0.05, max_relative = 1e-9);
+        assert_eq!(modes[1].members.len(), 10);
+    }
 }
