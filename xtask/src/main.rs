@@ -3,7 +3,10 @@
 //! - `cargo xtask bench` prints one line per figure, `name value unit`.
 //! - `cargo xtask sweep [--levels 10:90:10] [--samples N] [--seed S] [--out DIR]` runs the
 //!   paper's Section 5 amplitude study (see `sweep.rs`).
+//! - `cargo xtask compare-tools [--seeds N] [--first-seed S] [--timing]` runs covssi beside
+//!   pyOMA2 and koma (see `compare.rs`).
 
+mod compare;
 mod sweep;
 
 use std::time::Instant;
@@ -14,7 +17,7 @@ use hyst_sim::{Input, SimOptions, simulate};
 
 fn usage() -> ! {
     eprintln!(
-        "usage: cargo xtask bench [rk4] [covssi] [ident] [refine]\n       cargo xtask sweep [--levels FROM:TO:STEP] [--samples N] [--seed S] [--out DIR]"
+        "usage: cargo xtask bench [rk4] [covssi] [ident] [refine]\n       cargo xtask sweep [--levels FROM:TO:STEP] [--samples N] [--seed S] [--out DIR]\n       cargo xtask compare-tools [--seeds N] [--first-seed S] [--timing]"
     );
     std::process::exit(2)
 }
@@ -295,6 +298,12 @@ fn main() {
             }
         }
         Some("sweep") => sweep_cmd(&args[1..]),
+        Some("compare-tools") => {
+            if let Err(e) = compare::run(&args[1..]) {
+                eprintln!("error: {e}");
+                std::process::exit(1);
+            }
+        }
         _ => usage(),
     }
 }

@@ -1,0 +1,326 @@
+"""covssi against pyOMA2 and koma on the OMA records, with the same settings and statistic.
+
+Run by `cargo xtask compare-tools` (which makes a virtual environment with the pinned tools
+under target/ and passes the paths); not part of `cargo test`: it needs Python packages.
+
+What it does, for each tool (pyOMA2 1.4.3 `cov_R`, koma-python 1.3.6 `covssi`, and covssi
+through the `hyst ssi` command):
+  1. the records in ../shared/data/oma (the files the README's table was made from);
+  2. `--seeds` fresh records of the same two systems (3-DOF chain, SDOF), made here by exact
+     zero-order-hold discretisation, white force at every DOF, 5 % white measurement noise;
+  3. `--timing`: the identification step at N = 1e6 (one BLAS thread) for the same four cases
+     as `cargo xtask bench covssi`.
+Settings as the README: max order 40, dF 1 %, dzeta 5 %, MAC 0.97; 20 block rows for three
+channels, 60 for one. The statistic as the README: the median frequency and the median damping
+of the poles each tool flags stable within +-5 % of the true frequency. Errors in % of the truth.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import subprocess
+import sys
+import tempfile
+import time
+import logging
+import warnings
+
+import numpy as np
+from scipy import linalg
+
+warnings.filterwarnings("ignore")
+logging.disable(logging.INFO)  # pyOMA2 logs every step
+os.environ.setdefault("TQDM_DISABLE", "1")  # and draws progress bars
+
+FS = 20.0
+N = 65536
+MAX_ORDER = 40
+DF, DZ, DMAC = 0.01, 0.05, 0.03
+
+
+# ---------------------------------------------------------------------------- systems
+def chain_3dof():
+    k = 200.0
+    K = k * np.array([[2.0, -1.0, 0.0], [-1.0, 2.0, -1.0], [0.0, -1.0, 1.0]])
+    w2, phi = linalg.eigh(K)  # M = I: mass-normalised shapes
+    w = np.sqrt(w2)
+    zeta = np.array([0.01, 0.02, 0.05])
+    C = phi @ np.diag(2.0 * zeta * w) @ phi.T
+    return np.eye(3), C, K
+
+
+def sdof():
+    w = 2.0 * math.pi * 1.5
+    return np.eye(1), np.array([[2.0 * 0.02 * w]]), np.array([[w * w]])
+
+
+def truth(M, C, K):
+    """Natural frequencies |lambda|/2pi and damping -Re(lambda)/|lambda| of the continuous model."""
+    n = M.shape[0]
+    A = np.block([[np.zeros((n, n)), np.eye(n)], [-K, -C]])
+    lam = linalg.eigvals(A)
+    lam = sorted((l for l in lam if l.imag > 0), key=abs)
+    return [(abs(l) / (2 * math.pi), -l.real / abs(l)) for l in lam]
+
+
+def simulate(M, C, K, seed, n=N, fs=FS, noise=0.05):
+    """Displacements of M q'' + C q' + K q = f, f white and held over each step (exact ZOH)."""
+    d = M.shape[0]
+    Minv = linalg.inv(M)
+    A = np.block([[np.zeros((d, d)), np.eye(d)], [-Minv @ K, -Minv @ C]])
+    B = np.vstack([np.zeros((d, d)), Minv])
+    big = linalg.expm(np.block([[A, B], [np.zeros((d, 2 * d + d))]]) / fs)
+    Ad, Bd = big[: 2 * d, : 2 * d], big[: 2 * d, 2 * d :]
+    rng = np.random.default_rng(seed)
+    f = rng.standard_normal((n + 2000, d))
+    x = np.zeros(2 * d)
+    y = np.empty((n + 2000, d))
+    for t in range(n + 2000):
+        y[t] = x[:d]
+        x = Ad @ x + Bd @ f[t]
+    y = y[2000:]  # drop the start from rest
+    y = y + noise * y.std(axis=0) * rng.standard_normal(y.shape)
+    return y
+
+
+# ---------------------------------------------------------------------------- statistic
+def median_errors(freqs, damps, f_true, z_true):
+    sel = [(f, z) for f, z in zip(freqs, damps) if abs(f - f_true) <= 0.05 * f_true]
+    if not sel:
+        return (math.nan, math.nan)
+    fm = float(np.median([s[0] for s in sel]))
+    zm = float(np.median([s[1] for s in sel]))
+    return (100.0 * (fm - f_true) / f_true, 100.0 * (zm - z_true) / z_true)
+
+
+# ---------------------------------------------------------------------------- the tools
+def run_pyoma2(y, br):
+    from pyoma2.algorithms import SSI as SSIcov
+
+    one = y.shape[1] == 1
+    hc = {"xi_max": 0.2, "mpc_lim": 0.5, "mpd_lim": 0.5, "CoV_max": 0.2}
+    if one:  # a one-element shape has MPC 1 (or NaN): the defaults reject every pole
+        hc = {"xi_max": 0.2, "mpc_lim": None, "mpd_lim": None, "CoV_max": None}
+    alg = SSIcov(
+        name="cov_R",
+        method="cov_R",
+        br=br,
+        ordmax=MAX_ORDER,
+        sc={"err_fn": DF, "err_xi": DZ, "err_phi": DMAC},
+        hc=hc,
+    )
+    alg._set_data(y, FS)
+    res = alg.run()
+    lab = np.asarray(res.Lab)
+    fn = np.asarray(res.Fn_poles)
+    xi = np.asarray(res.Xi_poles)
+    keep = (lab == 1) & np.isfinite(fn)
+    return fn[keep], xi[keep]
+
+
+def run_koma(y, br):
+    from koma import oma
+
+    orders = np.arange(2, MAX_ORDER + 2, 2)
+    lam, phi, ords = oma.covssi(y, FS, br, orders, showinfo=False)
+    vr = {"freq": [0, np.inf], "damping": [0, np.inf], "mpc": [0, 1]}
+    if y.shape[1] == 1:
+        vr["mpc"] = [-1.0, 2.0]  # MPC is exactly 1 for one channel: the default range drops it
+    # stability level 2 (stable against each of the two previous orders): the setting that
+    # reproduces the README's koma column on the shared records
+    ls, _, _, _ = oma.find_stable_poles(
+        lam, phi, ords, 2, stabcrit={"freq": DF, "damping": DZ, "mac": DMAC}, valid_range=vr
+    )
+    ls = np.asarray(ls)
+    return np.abs(ls) / (2 * math.pi), -ls.real / np.abs(ls)
+
+
+def run_covssi(hyst, y, br, tmp):
+    names = [f"y{j + 1}" for j in range(y.shape[1])]
+    csv = os.path.join(tmp, "rec.csv")
+    np.savetxt(csv, y, delimiter=",", header=",".join(names), comments="", fmt="%.17g")
+    out = os.path.join(tmp, "rec.json")
+    subprocess.run(
+        [hyst, "ssi", "--input", csv, "--fs", str(FS), "--block-rows", str(br),
+         "--max-order", str(MAX_ORDER), "--df", str(DF), "--dzeta", str(DZ),
+         "--dmac", str(DMAC), "--json", out],
+        check=True, stdout=subprocess.DEVNULL,
+    )
+    doc = json.load(open(out))
+    top = "stable_fdm" if y.shape[1] > 1 else "stable_fd"
+    poles = [p for o in doc["orders"] for p in o["poles"] if p["label"] == top]
+    modes = [(m["frequency_hz"], m["damping_ratio"], m["poles"]) for m in doc["modes"]]
+    return (
+        np.array([p["frequency_hz"] for p in poles]),
+        np.array([p["damping_ratio"] for p in poles]),
+        modes,
+    )
+
+
+def mode_errors(modes, f_true, z_true):
+    """covssi's own report: the mode (cluster) with most members within +-5 % of the truth."""
+    near = [m for m in modes if abs(m[0] - f_true) <= 0.05 * f_true]
+    if not near:
+        return (math.nan, math.nan)
+    f, z, _ = max(near, key=lambda m: m[2])
+    return (100.0 * (f - f_true) / f_true, 100.0 * (z - z_true) / z_true)
+
+
+CASES = [
+    # name, system, channels, block rows, file, columns
+    ("3 channels", chain_3dof, [0, 1, 2], 20, "data_3dof.csv", ["y1", "y2", "y3"]),
+    ("channel y1", chain_3dof, [0], 60, "data_3dof.csv", ["y1"]),
+    ("SDOF", sdof, [0], 60, "data_sdof.csv", ["y"]),
+]
+TOOLS = ["pyOMA2", "koma", "covssi", "covssi mode"]
+
+
+def run_all(hyst, y, br, tr, tmp):
+    out = {}
+    f, z = run_pyoma2(y, br)
+    out["pyOMA2"] = [median_errors(f, z, *t) for t in tr]
+    f, z = run_koma(y, br)
+    out["koma"] = [median_errors(f, z, *t) for t in tr]
+    f, z, modes = run_covssi(hyst, y, br, tmp)
+    out["covssi"] = [median_errors(f, z, *t) for t in tr]
+    out["covssi mode"] = [mode_errors(modes, *t) for t in tr]
+    return out
+
+
+def read_csv_columns(path, cols):
+    with open(path) as fh:
+        header = fh.readline().strip().split(",")
+    data = np.loadtxt(path, delimiter=",", skiprows=1)
+    return data[:, [header.index(c) for c in cols]]
+
+
+def files(hyst, data_dir, tmp):
+    print("## The shared records (errors in %, frequency / damping)\n")
+    print("| case | mode | " + " | ".join(TOOLS) + " |")
+    print("|---|---|" + "---|" * len(TOOLS))
+    for name, system, _, br, fname, cols in CASES:
+        y = read_csv_columns(os.path.join(data_dir, fname), cols)
+        tr = truth(*system())
+        res = run_all(hyst, y, br, tr, tmp)
+        for j in range(len(tr)):
+            cells = [f"{res[t][j][0]:+.3f} / {res[t][j][1]:+.2f}" for t in TOOLS]
+            print(f"| {name} | {j + 1} | " + " | ".join(cells) + " |")
+    print()
+
+
+def seeds(hyst, count, first, tmp):
+    print(f"## {count} fresh records per case (seeds {first}..{first + count - 1})\n")
+    print("RMS error over seeds (bias = mean error), frequency % / damping %.\n")
+    print("| case | mode | " + " | ".join(TOOLS) + " |")
+    print("|---|---|" + "---|" * len(TOOLS))
+    wins = {}
+    for name, system, chans, br, _, _ in CASES:
+        M, C, K = system()
+        tr = truth(M, C, K)
+        errs = {t: [] for t in TOOLS}
+        for s in range(first, first + count):
+            y = simulate(M, C, K, seed=s)[:, chans]
+            res = run_all(hyst, y, br, tr, tmp)
+            for t in TOOLS:
+                errs[t].append(res[t])
+            print(f"  {name} seed {s}: " + "; ".join(
+                f"{t} " + " ".join(f"{e[0]:+.3f}/{e[1]:+.2f}" for e in res[t]) for t in TOOLS
+            ), file=sys.stderr)
+        for j in range(len(tr)):
+            cells = []
+            for t in TOOLS:
+                e = np.array([r[j] for r in errs[t]])
+                rms = np.sqrt(np.nanmean(e**2, axis=0))
+                bias = np.nanmean(e, axis=0)
+                missing = int(np.isnan(e[:, 0]).sum())
+                miss = f", {missing} missed" if missing else ""
+                cells.append(
+                    f"{rms[0]:.3f} ({bias[0]:+.3f}) / {rms[1]:.2f} ({bias[1]:+.2f}){miss}"
+                )
+            print(f"| {name} | {j + 1} | " + " | ".join(cells) + " |")
+            # how often covssi's (README-statistic) error is no larger than both tools' errors
+            for k, what in ((0, "f"), (1, "zeta")):
+                c = np.array([abs(r[j][k]) for r in errs["covssi"]])
+                p = np.array([abs(r[j][k]) for r in errs["pyOMA2"]])
+                q = np.array([abs(r[j][k]) for r in errs["koma"]])
+                wins[(name, j + 1, what)] = int(np.sum((c <= p) & (c <= q)))
+    print()
+    print("Seeds on which covssi's error is at most both tools' (README statistic):\n")
+    print("| case | mode | frequency | damping |")
+    print("|---|---|---|---|")
+    for name, _, _, _, _, _ in CASES:
+        j = 1
+        while (name, j, "f") in wins:
+            print(f"| {name} | {j} | {wins[(name, j, 'f')]}/{count} | {wins[(name, j, 'zeta')]}/{count} |")
+            j += 1
+    print()
+
+
+def timing(hyst_unused, repeats=7):
+    """Identification step at N = 1e6 for the bench's four cases: median of `repeats` runs."""
+    from koma import oma
+    from pyoma2.algorithms import SSI as SSIcov
+
+    rng = np.random.default_rng(7)
+    n = 1_000_000
+    M, C, K = chain_3dof()
+    base = simulate(M, C, K, seed=7, n=n)
+    # ten channels: mixtures of the three displacements plus noise (as the bench's record)
+    mix = rng.standard_normal((3, 10))
+    y10 = base @ mix + 0.05 * rng.standard_normal((n, 10))
+    print("## Identification step at N = 1e6 on this machine (one BLAS thread), median of "
+          f"{repeats} runs, ms\n")
+    print("| case | pyOMA2 cov_R | koma |")
+    print("|---|---|---|")
+    for name, ch, br, order in [("1 channel", 1, 20, 40), ("3 channels", 3, 20, 40),
+                                ("10 channels", 10, 20, 40), ("10 channels, 50 block rows", 10, 50, 100)]:
+        y = y10[:, :ch].copy()
+        # the rank bounds the order: pyOMA2 needs it below l·(br − 1), the rows of its shifted
+        # observability matrix (the bench gives covssi up to l·br)
+        order = min(order, ch * (br - 1))
+        row = []
+        for tool in ("pyoma2", "koma"):
+            ts = []
+            for _ in range(repeats if tool == "pyoma2" or ch < 10 else 3):
+                t0 = time.perf_counter()
+                if tool == "pyoma2":
+                    alg = SSIcov(name="t", method="cov_R", br=br, ordmax=order,
+                                 hc={"xi_max": 0.2, "mpc_lim": None, "mpd_lim": None, "CoV_max": None})
+                    alg._set_data(y, FS)
+                    alg.run()
+                else:
+                    oma.covssi(y, FS, br, np.arange(2, order + 2, 2), showinfo=False)
+                ts.append(time.perf_counter() - t0)
+            row.append(f"{1e3 * float(np.median(ts)):.0f}")
+        print(f"| {name} | " + " | ".join(row) + " |")
+    print()
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--hyst", required=True, help="path to the hyst binary (release)")
+    ap.add_argument("--data", required=True, help="the shared oma/ folder")
+    ap.add_argument("--seeds", type=int, default=60)
+    ap.add_argument("--first-seed", type=int, default=201)
+    ap.add_argument("--timing", action="store_true")
+    a = ap.parse_args()
+    import koma  # noqa: F401  (fail early if the tools are missing)
+    import pyoma2  # noqa: F401
+
+    from importlib.metadata import version
+
+    print(f"pyOMA-2 {version('pyOMA-2')}, koma-python {version('koma-python')}, "
+          f"numpy {np.__version__}\n")
+    with tempfile.TemporaryDirectory() as tmp:
+        files(a.hyst, a.data, tmp)
+        if a.seeds > 0:
+            seeds(a.hyst, a.seeds, a.first_seed, tmp)
+    if a.timing:
+        timing(a.hyst)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,89 @@
+//! `cargo xtask compare-tools [--seeds N] [--first-seed S] [--timing]`: covssi beside the two
+//! Python tools of `../shared/data/oma/README.md`, pyOMA2 and koma, with the same settings and
+//! the same statistic, on the shared records, on fresh records of the same systems over noise
+//! seeds, and (`--timing`) the tools' identification step at N = 1e6 on this machine.
+//!
+//! The tools run in a virtual environment made on first use under `target/compare-venv`
+//! (`python3 -m venv`, then pip installs the pinned versions from PyPI); the comparison itself
+//! is `xtask/compare/oma_tools.py`, which drives covssi through `hyst ssi`. Not part of
+//! `cargo test`: it needs Python and the network on first use, and takes minutes.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The versions whose numbers the OMA README quotes.
+const TOOLS: [&str; 2] = ["pyOMA-2==1.4.3", "koma-python==1.3.6"];
+
+fn run_ok(cmd: &mut Command, what: &str) -> Result<(), String> {
+    let status = cmd
+        .status()
+        .map_err(|e| format!("{what}: could not start: {e}"))?;
+    if status.success() {
+        Ok(())
+    } else {
+        Err(format!("{what}: failed ({status})"))
+    }
+}
+
+pub fn run(args: &[String]) -> Result<(), String> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .ok_or("no workspace root")?
+        .to_path_buf();
+    let data = hyst::io::data_dir()
+        .ok_or("no shared data folder: set HYST_DATA_DIR or provide ../shared/data")?
+        .join("oma");
+    if !data.join("data_3dof.csv").is_file() {
+        return Err(format!("{}: data_3dof.csv is missing", data.display()));
+    }
+    // `cargo xtask` runs the release build of this binary: hyst is built beside it.
+    let bin_dir: PathBuf = std::env::current_exe()
+        .map_err(|e| format!("where is xtask: {e}"))?
+        .parent()
+        .ok_or("xtask has no folder")?
+        .to_path_buf();
+    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+    run_ok(
+        Command::new(cargo)
+            .args(["build", "--release", "--quiet", "--bin", "hyst"])
+            .current_dir(&root),
+        "cargo build --release --bin hyst",
+    )?;
+    let hyst = bin_dir.join("hyst");
+    let venv = bin_dir
+        .parent()
+        .ok_or("the target folder has no parent")?
+        .join("compare-venv");
+    let python = venv.join("bin").join("python");
+    if !python.is_file() {
+        eprintln!(
+            "making {} with {} (first use only)",
+            venv.display(),
+            TOOLS.join(", ")
+        );
+        run_ok(
+            Command::new("python3").args(["-m", "venv"]).arg(&venv),
+            "python3 -m venv",
+        )?;
+        run_ok(
+            Command::new(&python)
+                .args(["-m", "pip", "install", "--quiet"])
+                .args(TOOLS),
+            "pip install",
+        )?;
+    }
+    run_ok(
+        Command::new(&python)
+            .arg(root.join("xtask/compare/oma_tools.py"))
+            .arg("--hyst")
+            .arg(&hyst)
+            .arg("--data")
+            .arg(&data)
+            .args(args)
+            // One BLAS thread, as the README's timings.
+            .env("OMP_NUM_THREADS", "1")
+            .env("OPENBLAS_NUM_THREADS", "1")
+            .env("MKL_NUM_THREADS", "1"),
+        "oma_tools.py",
+    )
+}
