@@ -562,4 +562,81 @@ mod tests {
         approx::assert_relative_eq!(modes[1].damping_ratio, 0.05, max_relative = 1e-9);
         assert_eq!(modes[1].members.len(), 10);
     }
+
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(300))]
+
+        /// Whatever the poles: each mode has at most one member per order and only fully
+        /// stable members, the modes come by increasing frequency, a mode's mean frequency
+        /// lies within its members', and rotating the pole lists of every order (which renames
+        /// the poles) changes no mode.
+        #[test]
+        fn modes_take_one_stable_pole_per_order_whatever_the_pole_order(
+            orders in prop::collection::vec(
+                prop::collection::vec((1.0f64..5.0, 0.005f64..0.1, any::<bool>()), 0..6),
+                3..15,
+            ),
+            rot in 0usize..6,
+        ) {
+            let build = |rotate: usize| {
+                let orders: Vec<OrderPoles> = orders
+                    .iter()
+                    .enumerate()
+                    .map(|(o, ps)| {
+                        let mut poles: Vec<Pole> = ps
+                            .iter()
+                            .map(|&(f, z, full)| {
+                                let mut p = stable_pole(f, z);
+                                if !full {
+                                    p.status = PoleStatus::Stable(Stability::Frequency);
+                                }
+                                p
+                            })
+                            .collect();
+                        if !poles.is_empty() {
+                            let r = rotate % poles.len();
+                            poles.rotate_left(r);
+                        }
+                        OrderPoles { order: o + 1, poles }
+                    })
+                    .collect();
+                StabilizationDiagram { orders, fs: 20.0, channels: 1, ..StabilizationDiagram::default() }
+            };
+            let opts = SsiOptions { min_cluster_size: Some(3), ..SsiOptions::default() };
+            let d = build(0);
+            let (modes, _, _) = cluster(&d, &opts);
+            for pair in modes.windows(2) {
+                prop_assert!(pair[0].frequency_hz <= pair[1].frequency_hz);
+            }
+            for m in &modes {
+                prop_assert!(m.members.len() >= 3);
+                let mut seen: Vec<usize> = m.members.iter().map(|&(o, _)| o).collect();
+                seen.dedup();
+                prop_assert_eq!(seen.len(), m.members.len(), "one pole per order: {:?}", m.members);
+                let f: Vec<f64> = m
+                    .members
+                    .iter()
+                    .map(|&(o, i)| {
+                        let p = &d.orders[o - 1].poles[i];
+                        assert_eq!(p.status, PoleStatus::Stable(Stability::FrequencyDamping));
+                        p.frequency_hz
+                    })
+                    .collect();
+                let (lo, hi) = f.iter().fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+                // A mean lies within the range of what it averages, up to its rounding.
+                prop_assert!(m.frequency_hz >= lo * (1.0 - 1e-15) && m.frequency_hz <= hi * (1.0 + 1e-15));
+            }
+            let (rotated, _, _) = cluster(&build(rot), &opts);
+            prop_assert_eq!(rotated.len(), modes.len());
+            for (a, b) in modes.iter().zip(&rotated) {
+                // The same poles, summed in the same order (one per order, by order): equal.
+                prop_assert_eq!(a.frequency_hz, b.frequency_hz);
+                prop_assert_eq!(a.damping_ratio, b.damping_ratio);
+                let orders_of = |m: &Mode| m.members.iter().map(|&(o, _)| o).collect::<Vec<_>>();
+                prop_assert_eq!(orders_of(a), orders_of(b));
+            }
+        }
+    }
 }
