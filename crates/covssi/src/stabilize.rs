@@ -322,18 +322,28 @@ fn runs(
     out.into_iter()
         .map(|run| {
             let med = run[run.len() / 2].0;
-            let mut best: Vec<(f64, usize, usize)> = Vec::new();
-            for c in run {
-                match best.iter_mut().find(|b| b.1 == c.1) {
-                    Some(b) if (c.0 - med).abs() < (b.0 - med).abs() => *b = c,
-                    Some(_) => {}
-                    None => best.push(c),
-                }
-            }
-            best
+            one_per_order(run, |c| c.1, |c| (c.0 - med).abs())
         })
         .filter(|run| run.len() >= min_size)
         .collect()
+}
+
+/// Keep one member per order (`order` of a member), the one with the smallest `dist`; the
+/// first met wins a tie. Members keep the order they came in.
+fn one_per_order<T>(
+    members: Vec<T>,
+    order: impl Fn(&T) -> usize,
+    dist: impl Fn(&T) -> f64,
+) -> Vec<T> {
+    let mut best: Vec<T> = Vec::new();
+    for m in members {
+        match best.iter_mut().find(|b| order(b) == order(&m)) {
+            Some(b) if dist(&m) < dist(b) => *b = m,
+            Some(_) => {}
+            None => best.push(m),
+        }
+    }
+    best
 }
 
 /// Relative distance of two poles in the complex plane, |λa − λb| / max(|λa|, |λb|). Unlike a
@@ -402,15 +412,7 @@ fn pole_clusters(
                 v[v.len() / 2]
             };
             let centre = C64::new(median(&|l| l.re), median(&|l| l.im));
-            let mut best: Vec<(usize, usize)> = Vec::new();
-            for m in g {
-                let dist = |x: &(usize, usize)| (pole(x).lambda - centre).norm();
-                match best.iter_mut().find(|b| b.0 == m.0) {
-                    Some(b) if dist(&m) < dist(b) => *b = m,
-                    Some(_) => {}
-                    None => best.push(m),
-                }
-            }
+            let mut best = one_per_order(g, |m| m.0, |m| (pole(m).lambda - centre).norm());
             best.sort_unstable();
             best
         })
