@@ -197,7 +197,17 @@ def read_csv_columns(path, cols):
     return data[:, [header.index(c) for c in cols]]
 
 
+def check_truth(data_dir):
+    """The systems made here are the README's: their poles match its truth files."""
+    for system, fname in ((chain_3dof, "truth_3dof.json"), (sdof, "truth_sdof.json")):
+        ref = json.load(open(os.path.join(data_dir, fname)))
+        for (f, z), fr, zr in zip(truth(*system()), ref["fn_hz"], ref["zeta"]):
+            if abs(f - fr) > 1e-9 * fr or abs(z - zr) > 1e-9 * zr:
+                raise SystemExit(f"{fname}: system made here has {f} Hz / {z}, file {fr} / {zr}")
+
+
 def files(hyst, data_dir, tmp):
+    check_truth(data_dir)
     print("## The shared records (errors in %, frequency / damping)\n")
     print("| case | mode | " + " | ".join(TOOLS) + " |")
     print("|---|---|" + "---|" * len(TOOLS))
