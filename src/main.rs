@@ -559,8 +559,13 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
         .map_err(|e| fail(format!("{}: {e}", svg.display())))?;
     }
     for m in &res.modes {
+        // Members come by increasing order: the first and last give the span of orders.
+        let span = match (m.members.first(), m.members.last()) {
+            (Some(lo), Some(hi)) => format!(", orders {}–{}", lo.0, hi.0),
+            _ => String::new(),
+        };
         println!(
-            "mode {:>9.4} ± {:.4} Hz  damping {:.4} ± {:.4}  ({} poles)",
+            "mode {:>9.4} ± {:.4} Hz  damping {:.4} ± {:.4}  ({} poles{span})",
             m.frequency_hz,
             m.frequency_std_hz,
             m.damping_ratio,

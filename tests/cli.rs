@@ -225,6 +225,14 @@ fn ssi_writes_modes_json_and_svg() {
     // `poles` counts them; the member poles' mean frequency is the mode's.
     let members = m["members"].as_array().unwrap();
     assert_eq!(members.len() as u64, m["poles"].as_u64().unwrap());
+    // The printed line gives the span of orders, the first and last member's.
+    let span = format!(
+        "({} poles, orders {}–{})",
+        members.len(),
+        members[0][0],
+        members[members.len() - 1][0]
+    );
+    assert!(out.contains(&span), "{span} not in {out}");
     let mut mean = 0.0;
     for pair in members {
         let (order, index) = (pair[0].as_u64().unwrap(), pair[1].as_u64().unwrap());

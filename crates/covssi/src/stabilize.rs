@@ -263,7 +263,8 @@ pub struct Mode {
     pub shape: Vec<C64>,
     /// Standard deviation of the scaled shapes' entries (magnitude of the complex spread).
     pub shape_std: Vec<f64>,
-    /// Member poles as (order, index in that order's pole list).
+    /// Member poles as (order, index in that order's pole list), one per order, by increasing
+    /// order.
     pub members: Vec<(usize, usize)>,
     /// Mean continuous-time pole (rad/s).
     pub lambda: C64,
