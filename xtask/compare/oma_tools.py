@@ -9,7 +9,10 @@ through the `hyst ssi` command):
   2. `--seeds` fresh records of the same two systems (3-DOF chain, SDOF), made here by exact
      zero-order-hold discretisation, white force at every DOF, 5 % white measurement noise;
   3. `--timing`: the identification step at N = 1e6 (one BLAS thread) for the same four cases
-     as `cargo xtask bench covssi`.
+     as `cargo xtask bench covssi`;
+  4. `--clusters`: covssi alone over the same seeds: three ways to take a mode's value from its
+     member poles, and the spurious clusters. Pass `--hyst` of another build (e.g. an older
+     commit's) to compare clusterings.
 Settings as the README: max order 40, dF 1 %, dzeta 5 %, MAC 0.97; 20 block rows for three
 channels, 60 for one. The statistic as the README: the median frequency and the median damping
 of the poles each tool flags stable within +-5 % of the true frequency. Errors in % of the truth.
@@ -157,6 +160,7 @@ def run_covssi(hyst, y, br, tmp):
         np.array([p["frequency_hz"] for p in poles]),
         np.array([p["damping_ratio"] for p in poles]),
         modes,
+        doc,
     )
 
 
@@ -184,7 +188,7 @@ def run_all(hyst, y, br, tr, tmp):
     out["pyOMA2"] = [median_errors(f, z, *t) for t in tr]
     f, z = run_koma(y, br)
     out["koma"] = [median_errors(f, z, *t) for t in tr]
-    f, z, modes = run_covssi(hyst, y, br, tmp)
+    f, z, modes, _ = run_covssi(hyst, y, br, tmp)
     out["covssi"] = [median_errors(f, z, *t) for t in tr]
     out["covssi mode"] = [mode_errors(modes, *t) for t in tr]
     return out
@@ -269,6 +273,100 @@ def seeds(hyst, count, first, tmp):
     print()
 
 
+UNPHYSICAL = ("rejected_nyquist", "rejected_unstable", "rejected_damping_limit")
+
+
+def cluster_statistics(doc, tr, nchan):
+    """covssi's modes from one document: errors of three mode values (mean of the members, what
+    covssi reports; median of the members; mean of the members whose matched pole at the previous
+    order was fully stable too, koma's stability level 2), and the clusters far from every true
+    mode (spurious) with their member counts and first orders."""
+    top = "stable_fdm" if nchan > 1 else "stable_fd"
+    by_order = {o["order"]: o["poles"] for o in doc["orders"]}
+
+    def previous_stable(order, p):
+        for back in (1, 2):  # as covssi: a real pole may sit at every other order only
+            q = [x for x in by_order.get(order - back, [])
+                 if not x["real"] and x["label"] not in UNPHYSICAL]
+            if q:
+                return min(q, key=lambda x: abs(x["frequency_hz"] - p["frequency_hz"]))["label"] == top
+        return False
+
+    values = {"mean": [], "median": [], "level 2": []}
+    for f_true, z_true in tr:
+        near = [m for m in doc["modes"] if abs(m["frequency_hz"] - f_true) <= 0.05 * f_true]
+        if not near:
+            for v in values.values():
+                v.append((math.nan, math.nan))
+            continue
+        m = max(near, key=lambda m: m["poles"])
+        members = [(o, by_order[o][i]) for o, i in m["members"]]
+        level2 = [p for o, p in members if previous_stable(o, p)]
+
+        def err(ps, stat):
+            if not ps:
+                return (math.nan, math.nan)
+            f = stat([p["frequency_hz"] for p in ps])
+            z = stat([p["damping_ratio"] for p in ps])
+            return (100.0 * (f - f_true) / f_true, 100.0 * (z - z_true) / z_true)
+
+        values["mean"].append(err([p for _, p in members], np.mean))
+        values["median"].append(err([p for _, p in members], np.median))
+        values["level 2"].append(err(level2, np.mean))
+    spurious = [(m["poles"], m["members"][0][0]) for m in doc["modes"]
+                if not any(abs(m["frequency_hz"] - f) <= 0.05 * f for f, _ in tr)]
+    physical = [(m["poles"], m["members"][0][0]) for m in doc["modes"]
+                if any(abs(m["frequency_hz"] - f) <= 0.05 * f for f, _ in tr)]
+    return values, spurious, physical
+
+
+def clusters(hyst, count, first, tmp):
+    print(f"## covssi's modes over {count} fresh records (seeds {first}..{first + count - 1})\n")
+    print("RMS error of three mode values, frequency % / damping %: the mean of a mode's "
+          "members (what covssi reports), their median, and the mean of the members stable at "
+          "level 2.\n")
+    print("| case | mode | mean | median | level 2 |")
+    print("|---|---|---|---|---|")
+    spur_rows = []
+    for name, system, chans, br, _, _ in CASES:
+        M, C, K = system()
+        tr = truth(M, C, K)
+        acc = {k: [[] for _ in tr] for k in ("mean", "median", "level 2")}
+        spur, phys = [], []
+        for s in range(first, first + count):
+            y = simulate(M, C, K, seed=s)[:, chans]
+            doc = run_covssi(hyst, y, br, tmp)[3]
+            values, sp, ph = cluster_statistics(doc, tr, y.shape[1])
+            for k, v in values.items():
+                for j, e in enumerate(v):
+                    acc[k][j].append(e)
+            spur += sp
+            phys += ph
+        for j in range(len(tr)):
+            cells = []
+            for k in ("mean", "median", "level 2"):
+                r = np.sqrt(np.nanmean(np.array(acc[k][j]) ** 2, axis=0))
+                cells.append(f"{r[0]:.3f} / {r[1]:.2f}")
+            print(f"| {name} | {j + 1} | " + " | ".join(cells) + " |")
+        pm = np.array([p[0] for p in phys])
+        row = f"| {name} | {len(spur)} | "
+        if spur:
+            sm = np.array([p[0] for p in spur])
+            sf = np.array([p[1] for p in spur])
+            row += f"{sm.max()} | {int(np.min(sf))}–{int(np.max(sf))} (median {np.median(sf):g}) | "
+        else:
+            row += "– | – | "
+        row += f"{np.percentile(pm, 5):.1f} |"
+        spur_rows.append(row)
+    print("\nClusters far (> 5 %) from every true mode, over all records:\n")
+    print("| case | spurious clusters | their most members | their first orders | "
+          "5 % quantile of the physical modes' members |")
+    print("|---|---|---|---|---|")
+    for r in spur_rows:
+        print(r)
+    print()
+
+
 def timing(hyst_unused, repeats=7):
     """Identification step at N = 1e6 for the bench's four cases: median of `repeats` runs."""
     from koma import oma
@@ -316,6 +414,8 @@ def main():
     ap.add_argument("--seeds", type=int, default=60)
     ap.add_argument("--first-seed", type=int, default=201)
     ap.add_argument("--timing", action="store_true")
+    ap.add_argument("--clusters", action="store_true",
+                    help="also: covssi's mode values and spurious clusters over the same seeds")
     a = ap.parse_args()
     import koma  # noqa: F401  (fail early if the tools are missing)
     import pyoma2  # noqa: F401
@@ -328,6 +428,8 @@ def main():
         files(a.hyst, a.data, tmp)
         if a.seeds > 0:
             seeds(a.hyst, a.seeds, a.first_seed, tmp)
+        if a.clusters:
+            clusters(a.hyst, a.seeds, a.first_seed, tmp)
     if a.timing:
         timing(a.hyst)
 
