@@ -91,7 +91,7 @@ def simulate(M, C, K, seed, n=N, fs=FS, noise=0.05):
 
 # ---------------------------------------------------------------------------- statistic
 def median_errors(freqs, damps, f_true, z_true):
-    sel = [(f, z) for f, z in zip(freqs, damps) if abs(f - f_true) <= 0.05 * f_true]
+    sel = [(f, z) for f, z in zip(freqs, damps) if near(f, f_true)]
     if not sel:
         return (math.nan, math.nan)
     fm = float(np.median([s[0] for s in sel]))
@@ -155,22 +155,31 @@ def run_covssi(hyst, y, br, tmp):
     doc = json.load(open(out))
     top = "stable_fdm" if y.shape[1] > 1 else "stable_fd"
     poles = [p for o in doc["orders"] for p in o["poles"] if p["label"] == top]
-    modes = [(m["frequency_hz"], m["damping_ratio"], m["poles"]) for m in doc["modes"]]
     return (
         np.array([p["frequency_hz"] for p in poles]),
         np.array([p["damping_ratio"] for p in poles]),
-        modes,
         doc,
     )
 
 
+def near(f, f_true):
+    """Within +-5 % of the true frequency: the README's window."""
+    return abs(f - f_true) <= 0.05 * f_true
+
+
+def reported_mode(modes, f_true):
+    """covssi's own report for a true mode: the mode (cluster) with most members within the
+    window, or None."""
+    candidates = [m for m in modes if near(m["frequency_hz"], f_true)]
+    return max(candidates, key=lambda m: m["poles"]) if candidates else None
+
+
 def mode_errors(modes, f_true, z_true):
-    """covssi's own report: the mode (cluster) with most members within +-5 % of the truth."""
-    near = [m for m in modes if abs(m[0] - f_true) <= 0.05 * f_true]
-    if not near:
+    m = reported_mode(modes, f_true)
+    if m is None:
         return (math.nan, math.nan)
-    f, z, _ = max(near, key=lambda m: m[2])
-    return (100.0 * (f - f_true) / f_true, 100.0 * (z - z_true) / z_true)
+    return (100.0 * (m["frequency_hz"] - f_true) / f_true,
+            100.0 * (m["damping_ratio"] - z_true) / z_true)
 
 
 CASES = [
@@ -188,9 +197,9 @@ def run_all(hyst, y, br, tr, tmp):
     out["pyOMA2"] = [median_errors(f, z, *t) for t in tr]
     f, z = run_koma(y, br)
     out["koma"] = [median_errors(f, z, *t) for t in tr]
-    f, z, modes, _ = run_covssi(hyst, y, br, tmp)
+    f, z, doc = run_covssi(hyst, y, br, tmp)
     out["covssi"] = [median_errors(f, z, *t) for t in tr]
-    out["covssi mode"] = [mode_errors(modes, *t) for t in tr]
+    out["covssi mode"] = [mode_errors(doc["modes"], *t) for t in tr]
     return out
 
 
@@ -294,12 +303,11 @@ def cluster_statistics(doc, tr, nchan):
 
     values = {"mean": [], "median": [], "level 2": []}
     for f_true, z_true in tr:
-        near = [m for m in doc["modes"] if abs(m["frequency_hz"] - f_true) <= 0.05 * f_true]
-        if not near:
+        m = reported_mode(doc["modes"], f_true)
+        if m is None:
             for v in values.values():
                 v.append((math.nan, math.nan))
             continue
-        m = max(near, key=lambda m: m["poles"])
         members = [(o, by_order[o][i]) for o, i in m["members"]]
         level2 = [p for o, p in members if previous_stable(o, p)]
 
@@ -313,10 +321,10 @@ def cluster_statistics(doc, tr, nchan):
         values["mean"].append(err([p for _, p in members], np.mean))
         values["median"].append(err([p for _, p in members], np.median))
         values["level 2"].append(err(level2, np.mean))
-    spurious = [(m["poles"], m["members"][0][0]) for m in doc["modes"]
-                if not any(abs(m["frequency_hz"] - f) <= 0.05 * f for f, _ in tr)]
-    physical = [(m["poles"], m["members"][0][0]) for m in doc["modes"]
-                if any(abs(m["frequency_hz"] - f) <= 0.05 * f for f, _ in tr)]
+    spurious, physical = [], []
+    for m in doc["modes"]:
+        physical_mode = any(near(m["frequency_hz"], f) for f, _ in tr)
+        (physical if physical_mode else spurious).append((m["poles"], m["members"][0][0]))
     return values, spurious, physical
 
 
@@ -335,7 +343,7 @@ def clusters(hyst, count, first, tmp):
         spur, phys = [], []
         for s in range(first, first + count):
             y = simulate(M, C, K, seed=s)[:, chans]
-            doc = run_covssi(hyst, y, br, tmp)[3]
+            doc = run_covssi(hyst, y, br, tmp)[2]
             values, sp, ph = cluster_statistics(doc, tr, y.shape[1])
             for k, v in values.items():
                 for j, e in enumerate(v):
