@@ -21,6 +21,9 @@
 //!    distance in the complex plane, $|\lambda_i-\lambda_j|/\max(|\lambda_i|,|\lambda_j|)$, so that
 //!    poles of one frequency but different damping stay apart; stable real poles into
 //!    [`RealPoleCluster`]s.
+//! 6. Optionally, [`refine()`]: the modes fitted to the whole record by maximum likelihood
+//!    (Whittle), with standard errors, the modes the record does not support dropped, and a
+//!    check that the record follows the model ([`refine`](mod@refine) module).
 //!
 //! ```
 //! # use covssi::{identify, SsiOptions, BlockRows};
@@ -39,12 +42,14 @@
 
 pub mod corr;
 mod linalg;
+pub mod refine;
 mod stabilize;
 #[cfg(feature = "svg")]
 pub mod svg;
 
 pub use corr::Correlations;
 pub use linalg::C64 as Complex64;
+pub use refine::{DroppedMode, RefineOptions, RefinedMode, Refinement, refine};
 pub use stabilize::{Mode, Pole, PoleStatus, RealPoleCluster, Rejection, Stability};
 
 use linalg::{C64, Dense};
@@ -130,6 +135,24 @@ pub enum SsiError {
     /// A dense linear-algebra routine failed.
     #[error("linear algebra failed: {0}")]
     LinearAlgebra(String),
+    /// The record is too short to refine this many modes by maximum likelihood.
+    #[error(
+        "{samples} samples are too few to refine {modes} modes: the likelihood needs at least {needed}"
+    )]
+    TooShortToRefine {
+        /// Samples given.
+        samples: usize,
+        /// Modes to refine.
+        modes: usize,
+        /// Minimum number of samples.
+        needed: usize,
+    },
+    /// The maximum-likelihood refinement could not proceed.
+    #[error("refinement failed: {reason}")]
+    Refinement {
+        /// Why.
+        reason: &'static str,
+    },
 }
 
 /// How many block rows i the Toeplitz matrix has (it uses lags 1 … 2i−1).

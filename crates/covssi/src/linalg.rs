@@ -6,8 +6,9 @@
 use faer::diag::Diag;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::evd::{self, ComputeEigenvectors};
+use faer::linalg::solvers::{DenseSolveCore, Solve};
 use faer::linalg::svd::{self, ComputeSvdVectors};
-use faer::{Mat, MatRef, Par};
+use faer::{Accum, Mat, MatMut, MatRef, Par, Side};
 
 pub use realfft::num_complex::Complex64 as C64;
 
@@ -166,6 +167,64 @@ pub(crate) fn eigen(a: &Dense) -> Result<(Vec<C64>, Vec<C64>), String> {
         }
     }
     Ok((vals, vecs))
+}
+
+/// `out += dᵀ d` (a Gram matrix update), single-threaded.
+pub(crate) fn gram_add(d: &Dense, out: &mut Dense) {
+    debug_assert_eq!((out.rows, out.cols), (d.cols, d.cols));
+    let dv = d.view();
+    let o = MatMut::from_column_major_slice_mut(&mut out.data, d.cols, d.cols);
+    faer::linalg::matmul::matmul(o, Accum::Add, dv.transpose(), dv, 1.0, Par::Seq);
+}
+
+/// `out += aᵀ b`, single-threaded.
+pub(crate) fn tn_add(a: &Dense, b: &Dense, out: &mut Dense) {
+    debug_assert_eq!((out.rows, out.cols, a.rows), (a.cols, b.cols, b.rows));
+    let o = MatMut::from_column_major_slice_mut(&mut out.data, a.cols, b.cols);
+    faer::linalg::matmul::matmul(o, Accum::Add, a.view().transpose(), b.view(), 1.0, Par::Seq);
+}
+
+/// `a b a` for symmetric `a` and `b` (the sandwich covariance `F⁻¹ J F⁻¹`).
+pub(crate) fn sandwich(a: &Dense, b: &Dense) -> Dense {
+    let n = a.rows;
+    let mut ab = Mat::<f64>::zeros(n, n);
+    faer::linalg::matmul::matmul(
+        ab.as_mut(),
+        Accum::Replace,
+        a.view(),
+        b.view(),
+        1.0,
+        Par::Seq,
+    );
+    let mut aba = Mat::<f64>::zeros(n, n);
+    faer::linalg::matmul::matmul(
+        aba.as_mut(),
+        Accum::Replace,
+        ab.as_ref(),
+        a.view(),
+        1.0,
+        Par::Seq,
+    );
+    Dense::from_faer(aba.as_ref())
+}
+
+/// Solve `a x = b` for symmetric positive definite `a` (Cholesky); `None` if `a` is not
+/// numerically positive definite.
+pub(crate) fn spd_solve(a: &Dense, b: &[f64]) -> Option<Vec<f64>> {
+    let llt = a.view().llt(Side::Lower).ok()?;
+    let rhs = MatRef::from_column_major_slice(b, b.len(), 1);
+    let x = llt.solve(rhs);
+    let v: Vec<f64> = (0..b.len()).map(|i| x[(i, 0)]).collect();
+    v.iter().all(|x| x.is_finite()).then_some(v)
+}
+
+/// Inverse of a symmetric positive definite matrix; `None` if it is not numerically positive
+/// definite.
+pub(crate) fn spd_inverse(a: &Dense) -> Option<Dense> {
+    let llt = a.view().llt(Side::Lower).ok()?;
+    let inv = llt.inverse();
+    let d = Dense::from_faer(inv.as_ref());
+    d.data.iter().all(|x| x.is_finite()).then_some(d)
 }
 
 #[cfg(test)]

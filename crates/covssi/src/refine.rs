@@ -1,0 +1,1137 @@
+//! Maximum-likelihood refinement of the modes in the frequency domain.
+//!
+//! SSI-COV is consistent but not efficient: it sees the record only through a few dozen
+//! correlation lags. This step takes its modes as a start and fits them to the whole record by
+//! the Whittle likelihood of the periodograms $I_c(\omega_k) = |\sum_n y_c(n) e^{-i\omega_k n}|^2/N$,
+//!
+//! $$ L(\theta) = \sum_c \sum_k \Big[\ln S_c(\omega_k) + \frac{I_c(\omega_k)}{S_c(\omega_k)}\Big],
+//! \qquad S_c(\omega) = \sigma_c^2\,\frac{|B_c(e^{i\omega})|^2}{|A(e^{i\omega})|^2}, $$
+//!
+//! where $A(z) = \prod_j (z-\mu_j)(z-\bar\mu_j)$ holds the modes' discrete poles
+//! $\mu_j = e^{\lambda_j/f_s}$, shared by all channels, and $B_c$ is a monic polynomial of the
+//! same degree $2m$ for each channel (the spectrum of any sampled linear system driven by white
+//! noise plus white measurement noise has this form). Each pole is parametrised by
+//! $\ln\omega_j$ and $\operatorname{logit}\zeta_j$. $L$ is minimised by Fisher scoring with a
+//! Levenberg–Marquardt safeguard: the expected Hessian of $L$ is
+//! $F = \sum_{c,k} \nabla\ln S_c\,\nabla\ln S_c^\top$, which also gives the asymptotic covariance
+//! $F^{-1}$ of the estimates and so each mode's standard errors. For several channels the
+//! channels are treated as independent (a composite likelihood): still consistent, but the
+//! standard errors ignore the channels' coherence.
+//!
+//! Which modes are real is decided by the record, with the BIC penalty of one mode's
+//! parameters, $\tfrac12(2+2l)\ln K$ for $l$ channels and $K$ frequencies, as the bar:
+//! 1. the strong SSI modes (at least half the largest member count) are fitted together, so
+//!    that every peak has its pole from the start (a pole left to travel to a peak without one
+//!    can end in a poor local optimum); the others are added one at a time, most members
+//!    first, each kept when adding it lowers $L$ by at least the penalty (two starts per step:
+//!    fresh numerators, and the current model with the new pole cancelled by a numerator zero,
+//!    from which $L$ cannot rise);
+//! 2. each kept mode's *evidence* is the rise of $L$ when it is removed, the other poles held
+//!    and the numerators refitted. For the decision everything is then let move from there
+//!    (a pole sharing a peak with another then costs little to remove); while the weakest
+//!    such rise is below the penalty, that mode goes.
+//!
+//! So spurious clusters of the stabilization diagram do not enter the final model. Whether
+//! the record follows the model at all is [`Refinement::misfit`]: under the model the ratios
+//! $I_c/S_c$ are unit exponential variables.
+//!
+//! Real poles are not part of this model; records whose spectrum needs one are better read from
+//! the SSI result.
+
+use crate::linalg::{self, C64, Dense};
+use crate::{Mode, SsiError};
+use rayon::prelude::*;
+use realfft::RealFftPlanner;
+
+/// Above this [`Refinement::misfit`] the record does not follow the model.
+pub const MISFIT_LIMIT: f64 = 0.05;
+
+/// Kolmogorov–Smirnov distance of the sample `x` from the unit exponential law.
+fn ks_exponential(mut x: Vec<f64>) -> f64 {
+    x.sort_by(f64::total_cmp);
+    let n = x.len() as f64;
+    x.iter()
+        .enumerate()
+        .map(|(i, &v)| {
+            let f = 1.0 - (-v.max(0.0)).exp();
+            (f - i as f64 / n).abs().max(((i + 1) as f64 / n - f).abs())
+        })
+        .fold(0.0, f64::max)
+}
+
+/// Options of [`refine`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct RefineOptions {
+    /// Largest number of scoring iterations per fit. Default: 200.
+    pub max_iterations: usize,
+    /// A fit has converged when an accepted step lowers `L` by less than this. Default: 1e-6.
+    pub tolerance: f64,
+    /// Drop modes whose evidence is below the BIC penalty. Default: true.
+    pub select: bool,
+}
+
+impl Default for RefineOptions {
+    fn default() -> Self {
+        RefineOptions {
+            max_iterations: 200,
+            tolerance: 1e-6,
+            select: true,
+        }
+    }
+}
+
+/// A mode after refinement.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RefinedMode {
+    /// Index of the SSI mode it started from.
+    pub source: usize,
+    /// Natural frequency |λ|/2π (Hz).
+    pub frequency_hz: f64,
+    /// Damping ratio −Re λ/|λ|.
+    pub damping_ratio: f64,
+    /// Standard error of the frequency (Hz) from the Fisher information; `None` if that is
+    /// singular.
+    pub frequency_se_hz: Option<f64>,
+    /// Standard error of the damping ratio; `None` if the Fisher information is singular.
+    pub damping_se: Option<f64>,
+    /// Continuous-time pole (rad/s).
+    pub lambda: C64,
+    /// Rise of `L` (negative log-likelihood) when this mode is removed, the other poles held
+    /// and the numerators refitted: what this mode explains that the others, where they are,
+    /// do not. At least [`Refinement::penalty`] when selecting.
+    pub evidence: f64,
+}
+
+/// An SSI mode the likelihood does not support.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DroppedMode {
+    /// Index of the SSI mode.
+    pub source: usize,
+    /// Its SSI frequency (Hz).
+    pub frequency_hz: f64,
+    /// Below [`Refinement::penalty`]: the fall of `L` when it was added (forward step), or
+    /// its rise when it was removed from the model and everything refitted (backward step).
+    pub evidence: f64,
+}
+
+/// What [`refine`] finds.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Refinement {
+    /// Kept modes, by increasing frequency.
+    pub modes: Vec<RefinedMode>,
+    /// Dropped SSI modes, in the order they were dropped (forward, then backward).
+    pub dropped: Vec<DroppedMode>,
+    /// BIC penalty of one mode, ½(2 + 2l) ln K.
+    pub penalty: f64,
+    /// `L` of the final model.
+    pub neg_log_likelihood: f64,
+    /// How far the record is from the model: the Kolmogorov–Smirnov distance between the
+    /// ratios I/S (every channel and frequency) and the unit exponential law they follow when
+    /// the model holds. Near 0 when it does (0.003–0.004 on the shared OMA records); large
+    /// when the excitation is not broadband random (0.59 on the F-16's multisine record) or
+    /// the record holds what the model lacks. Above [`MISFIT_LIMIT`] the refined values
+    /// should not be trusted.
+    pub misfit: f64,
+    /// Frequencies K used (0 < ω < π).
+    pub frequencies: usize,
+    /// Scoring iterations of the final fit.
+    pub iterations: usize,
+}
+
+/// Refine `modes` (e.g. [`crate::SsiResult::modes`]) on the channels `y` sampled at `fs` Hz.
+pub fn refine(
+    y: &[&[f64]],
+    fs: f64,
+    modes: &[Mode],
+    opts: &RefineOptions,
+) -> Result<Refinement, SsiError> {
+    crate::check_fs(fs)?;
+    let (n, means) = crate::check_channels(y)?;
+    let m = modes.len();
+    let l = y.len();
+    let params = 2 * m + l * (2 * m + 1);
+    // Enough frequencies that the Fisher information can be estimated: ten per parameter.
+    let needed = 2 * (10 * params + 1) + 2;
+    if n < needed {
+        return Err(SsiError::TooShortToRefine {
+            samples: n,
+            modes: m,
+            needed,
+        });
+    }
+    let model = Model::new(y, &means, fs);
+    let penalty = 0.5 * (2.0 + 2.0 * l as f64) * (model.k() as f64).ln();
+    // 1. The strong SSI modes (at least half the largest member count) are fitted together:
+    //    each then has a pole at its place from the start, and no pole has to travel to a
+    //    peak left without one. The others are added one at a time, most members first, and
+    //    kept when L falls by at least the penalty; two starts for each, fresh numerators and
+    //    the current model with the new pole cancelled by a numerator zero (L cannot rise),
+    //    the better counts.
+    let most = modes.iter().map(|md| md.members.len()).max().unwrap_or(0);
+    let (core, mut weak): (Vec<usize>, Vec<usize>) =
+        (0..m).partition(|&k| 2 * modes[k].members.len() >= most);
+    weak.sort_by(|&a, &b| modes[b].members.len().cmp(&modes[a].members.len()));
+    let start: Vec<C64> = core.iter().map(|&k| modes[k].lambda).collect();
+    let mut fit = model.fit(&start, opts, opts.tolerance, false)?;
+    let mut sources = core;
+    let mut dropped = Vec::new();
+    for &cand in &weak {
+        let mut trial = fit.lambdas.clone();
+        trial.push(modes[cand].lambda);
+        let fresh = model.fit(&trial, opts, opts.tolerance, false);
+        let nested = model
+            .nested_start(&fit, modes[cand].lambda)
+            .map(|th| model.fit_from(th, trial.len(), opts, opts.tolerance, false));
+        let next = match (fresh, nested) {
+            (Ok(a), Some(Ok(b))) => {
+                if a.l <= b.l {
+                    a
+                } else {
+                    b
+                }
+            }
+            (Ok(a), _) => a,
+            (Err(_), Some(Ok(b))) => b,
+            (Err(e), _) => return Err(e),
+        };
+        let evidence = fit.l - next.l;
+        if !opts.select || evidence >= penalty {
+            fit = next;
+            sources.push(cand);
+        } else {
+            dropped.push(DroppedMode {
+                source: cand,
+                frequency_hz: modes[cand].frequency_hz,
+                evidence,
+            });
+        }
+    }
+    // Evidence fits need L only to well within the penalty.
+    let loose = 1e-3;
+    // 2. Evidence of each kept mode: the rise of L when it is removed, the other poles held
+    //    and the numerators refitted. For the decision, everything is then let move from
+    //    there: the other poles stay at their own peaks unless the removed one shared a peak
+    //    with them, and then the rise is small. While the weakest rise is below the penalty,
+    //    that mode goes.
+    let evidence = loop {
+        let without: Vec<(f64, Fit)> = (0..fit.lambdas.len())
+            .into_par_iter()
+            .map(|k| {
+                let mut rest = fit.lambdas.clone();
+                rest.remove(k);
+                let held = model.fit(&rest, opts, loose, true)?;
+                let free = model.fit_from(held.theta, rest.len(), opts, loose, false)?;
+                Ok((held.l - fit.l, free))
+            })
+            .collect::<Result<_, SsiError>>()?;
+        let weakest = without
+            .iter()
+            .map(|(_, free)| free.l - fit.l)
+            .enumerate()
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        match weakest {
+            Some((k, ev)) if opts.select && ev < penalty => {
+                let src = nearest_mode(modes, fit.lambdas[k]).unwrap_or(sources[k]);
+                sources.remove(k);
+                dropped.push(DroppedMode {
+                    source: src,
+                    frequency_hz: modes[src].frequency_hz,
+                    evidence: ev,
+                });
+                let (_, next) = without.into_iter().nth(k).expect("k < modes");
+                fit =
+                    model.fit_from(next.theta, next.lambdas.len(), opts, opts.tolerance, false)?;
+            }
+            _ => break without.iter().map(|(held, _)| *held).collect::<Vec<f64>>(),
+        }
+    };
+    // Asymptotic covariance: F⁻¹ for one channel; for several, the composite likelihood's
+    // sandwich F⁻¹ J F⁻¹, J the covariance of the score given the channels' coherence.
+    let cov = linalg::spd_inverse(&fit.fisher).and_then(|fi| {
+        if l == 1 {
+            return Some(fi);
+        }
+        let j = model.eval(&fit.theta, fit.lambdas.len(), What::Sandwich)?.f;
+        Some(linalg::sandwich(&fi, &j))
+    });
+    let mk = fit.lambdas.len();
+    let mut kept: Vec<RefinedMode> = fit
+        .lambdas
+        .iter()
+        .enumerate()
+        .map(|(j, &lam)| {
+            let w = lam.norm();
+            let zeta = -lam.re / w;
+            let (fse, zse) = match &cov {
+                Some(c) => (
+                    Some(c.at(j, j).max(0.0).sqrt() * w / (2.0 * std::f64::consts::PI)),
+                    Some(c.at(mk + j, mk + j).max(0.0).sqrt() * zeta * (1.0 - zeta)),
+                ),
+                None => (None, None),
+            };
+            // Poles may trade places while fitting: name the nearest SSI mode.
+            let source = nearest_mode(modes, lam).unwrap_or(sources[j]);
+            RefinedMode {
+                source,
+                frequency_hz: w / (2.0 * std::f64::consts::PI),
+                damping_ratio: zeta,
+                frequency_se_hz: fse,
+                damping_se: zse,
+                lambda: lam,
+                evidence: evidence[j],
+            }
+        })
+        .collect();
+    kept.sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
+    let misfit = model
+        .eval(&fit.theta, fit.lambdas.len(), What::Ratios)
+        .map_or(1.0, |e| ks_exponential(e.ratios));
+    Ok(Refinement {
+        modes: kept,
+        dropped,
+        penalty,
+        neg_log_likelihood: fit.l,
+        misfit,
+        frequencies: model.k(),
+        iterations: fit.iterations,
+    })
+}
+
+/// The periodograms and what the model needs of the record.
+struct Model<'a> {
+    y: &'a [&'a [f64]],
+    means: &'a [f64],
+    fs: f64,
+    /// e^{iω_k}, 0 < ω_k < π.
+    z: Vec<C64>,
+    /// Periodogram of each channel at ω_k.
+    i: Vec<Vec<f64>>,
+    /// Squared coherence γ²_ab(ω_k) of each channel pair a < b at index `pair(a, b, l)`
+    /// (empty otherwise), from periodograms smoothed over 2·COHERENCE_HALF_WIDTH + 1 bins.
+    coherence: Vec<Vec<f64>>,
+}
+
+/// Half-width (bins) of the smoothing that estimates the channels' coherence.
+const COHERENCE_HALF_WIDTH: usize = 16;
+
+/// A fitted model.
+struct Fit {
+    theta: Vec<f64>,
+    lambdas: Vec<C64>,
+    l: f64,
+    fisher: Dense,
+    iterations: usize,
+}
+
+/// What [`Model::eval`] computes besides L.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum What {
+    /// L alone.
+    Value,
+    /// The score U = −∇L and the Fisher information F.
+    Fisher,
+    /// U, and the covariance J of the score in place of F.
+    Sandwich,
+    /// The ratios I/S of every channel and frequency.
+    Ratios,
+}
+
+/// L and what was asked for besides (empty otherwise).
+struct Eval {
+    l: f64,
+    u: Vec<f64>,
+    f: Dense,
+    ratios: Vec<f64>,
+}
+
+const CHUNK: usize = 2048;
+
+fn logistic(s: f64) -> f64 {
+    1.0 / (1.0 + (-s).exp())
+}
+
+/// Real coefficients (highest power first, leading 1) of ∏ (z − r).
+fn poly(roots: &[C64]) -> Vec<f64> {
+    let mut c = vec![C64::new(1.0, 0.0)];
+    for r in roots {
+        let mut next = vec![C64::new(0.0, 0.0); c.len() + 1];
+        for (k, ck) in c.iter().enumerate() {
+            next[k] += ck;
+            next[k + 1] -= ck * r;
+        }
+        c = next;
+    }
+    c.iter().map(|v| v.re).collect()
+}
+
+/// Discrete poles μ, μ̄ of each mode, or `None` when a natural frequency reaches Nyquist.
+fn discrete_poles(lambdas: &[C64], fs: f64) -> Option<Vec<C64>> {
+    let mut mu = Vec::with_capacity(2 * lambdas.len());
+    for lam in lambdas {
+        if lam.norm() / fs >= std::f64::consts::PI || !lam.re.is_finite() {
+            return None;
+        }
+        let u = (lam / fs).exp();
+        mu.push(u);
+        mu.push(u.conj());
+    }
+    Some(mu)
+}
+
+impl<'a> Model<'a> {
+    fn new(y: &'a [&'a [f64]], means: &'a [f64], fs: f64) -> Self {
+        let n = y[0].len();
+        let k_max = (n - 1) / 2; // 0 < ω_k = 2πk/N < π
+        let mut planner = RealFftPlanner::<f64>::new();
+        let fft = planner.plan_fft_forward(n);
+        let spectra: Vec<Vec<C64>> = y
+            .iter()
+            .zip(means)
+            .map(|(ch, mean)| {
+                let mut buf: Vec<f64> = ch.iter().map(|v| v - mean).collect();
+                let mut spec = fft.make_output_vec();
+                // Lengths match the plan, so this cannot fail.
+                fft.process(&mut buf, &mut spec).expect("FFT lengths");
+                spec[1..=k_max].to_vec()
+            })
+            .collect();
+        let i: Vec<Vec<f64>> = spectra
+            .iter()
+            .map(|s| s.iter().map(|c| c.norm_sqr() / n as f64).collect())
+            .collect();
+        let l = y.len();
+        let mut coherence = vec![Vec::new(); l * l];
+        for a in 0..l {
+            for b in a + 1..l {
+                coherence[pair(a, b, l)] = smoothed_coherence(&spectra[a], &spectra[b]);
+            }
+        }
+        let z = (1..=k_max)
+            .map(|k| C64::from_polar(1.0, 2.0 * std::f64::consts::PI * k as f64 / n as f64))
+            .collect();
+        Model {
+            y,
+            means,
+            fs,
+            z,
+            i,
+            coherence,
+        }
+    }
+
+    fn k(&self) -> usize {
+        self.z.len()
+    }
+
+    fn unpack(&self, th: &[f64], m: usize) -> Vec<C64> {
+        (0..m)
+            .map(|j| {
+                let w = th[j].exp();
+                let zeta = logistic(th[m + j]);
+                w * C64::new(-zeta, (1.0 - zeta * zeta).sqrt())
+            })
+            .collect()
+    }
+
+    /// Starting numerator of channel c: σ² and B from the autocovariances of the record
+    /// filtered by A (an MA process of order 2m), tapered by a triangle so that the spectrum
+    /// they describe is positive (a biased autocovariance times a triangle is a positive
+    /// definite sequence), then factored.
+    fn start_numerator(&self, c: usize, mu: &[C64]) -> Vec<f64> {
+        let q = mu.len();
+        let a = poly(mu);
+        let y = self.y[c];
+        let mean = self.means[c];
+        let e: Vec<f64> = (0..y.len() - q)
+            .map(|t| (0..=q).map(|k| a[k] * (y[t + q - k] - mean)).sum())
+            .collect();
+        let r: Vec<f64> = (0..=q)
+            .map(|k| {
+                let biased = e[..e.len() - k]
+                    .iter()
+                    .zip(&e[k..])
+                    .map(|(u, v)| u * v)
+                    .sum::<f64>()
+                    / e.len() as f64;
+                biased * (1.0 - k as f64 / (q + 1) as f64)
+            })
+            .collect();
+        let flat = {
+            let mut v = vec![r[0].ln()];
+            v.extend(std::iter::repeat_n(0.0, q));
+            v
+        };
+        if q == 0 || r[q].abs() < 1e-12 * r[0] {
+            return flat;
+        }
+        // Roots of z^q · Σ_k r_|k| z^k (degree 2q), by the companion matrix; they pair as
+        // (z, 1/z̄), and the q inside the unit circle make B minimum-phase.
+        let deg = 2 * q;
+        let coef: Vec<f64> = (0..=deg)
+            .map(|k| r[(k as isize - q as isize).unsigned_abs()])
+            .collect();
+        let mut comp = Dense::zeros(deg, deg);
+        for k in 0..deg {
+            comp.set(0, k, -coef[k + 1] / coef[0]);
+            if k + 1 < deg {
+                comp.set(k + 1, k, 1.0);
+            }
+        }
+        let Ok(mut roots) = linalg::eigenvalues(&comp) else {
+            return flat;
+        };
+        roots.sort_by(|a, b| a.norm().total_cmp(&b.norm()));
+        let inside: Vec<C64> = roots[..q]
+            .iter()
+            .map(|z| {
+                if z.norm() > 0.98 {
+                    z * (0.98 / z.norm())
+                } else {
+                    *z
+                }
+            })
+            .collect();
+        let b = poly(&inside);
+        let grid = 256;
+        let mean_b2 = (0..grid)
+            .map(|g| {
+                let w = std::f64::consts::PI * (g as f64 + 0.5) / grid as f64;
+                let zc = C64::from_polar(1.0, -w);
+                let mut acc = C64::new(0.0, 0.0);
+                let mut p = C64::new(1.0, 0.0);
+                for bk in &b {
+                    acc += bk * p;
+                    p *= zc;
+                }
+                acc.norm_sqr()
+            })
+            .sum::<f64>()
+            / grid as f64;
+        let mut v = vec![(r[0] / mean_b2).ln()];
+        v.extend_from_slice(&b[1..]);
+        if v.iter().all(|x| x.is_finite()) {
+            v
+        } else {
+            flat
+        }
+    }
+
+    /// L at θ and what `what` asks for besides. `None` when θ is outside the model (a pole at
+    /// Nyquist, a numerator zero on the unit circle, overflow).
+    fn eval(&self, th: &[f64], m: usize, what: What) -> Option<Eval> {
+        let derivs = matches!(what, What::Fisher | What::Sandwich);
+        let sandwich = what == What::Sandwich;
+        let ratios = what == What::Ratios;
+        let l = self.i.len();
+        let q = 2 * m;
+        let per = 2 * m + q + 1;
+        let np = 2 * m + l * (q + 1);
+        let lambdas = self.unpack(th, m);
+        let mu = discrete_poles(&lambdas, self.fs)?;
+        // dμ/dθ for each mode: by ln ω (dλ = λ) and by logit ζ.
+        let dmu: Vec<[C64; 2]> = lambdas
+            .iter()
+            .enumerate()
+            .map(|(j, lam)| {
+                let w = lam.norm();
+                let zeta = -lam.re / w;
+                let sq = (1.0 - zeta * zeta).sqrt();
+                let dl_dz = w * C64::new(-1.0, -zeta / sq) * (zeta * (1.0 - zeta));
+                [mu[2 * j] * lam / self.fs, mu[2 * j] * dl_dz / self.fs]
+            })
+            .collect();
+        let nchunks = self.k().div_ceil(CHUNK);
+        let (nu, nf) = if derivs { (np, np) } else { (0, 0) };
+        let zero = || Eval {
+            l: 0.0,
+            u: vec![0.0; nu],
+            f: Dense::zeros(nf, nf),
+            ratios: Vec::new(),
+        };
+        let partial = (0..nchunks)
+            .into_par_iter()
+            .map(|ci| {
+                let lo = ci * CHUNK;
+                let hi = (lo + CHUNK).min(self.k());
+                let mut acc = zero();
+                let mut d = if derivs {
+                    vec![Dense::zeros(hi - lo, per); l]
+                } else {
+                    Vec::new()
+                };
+                let mut da = vec![0.0; 2 * m];
+                let mut pw = vec![C64::new(0.0, 0.0); q + 1];
+                for (row, kk) in (lo..hi).enumerate() {
+                    let z = self.z[kk];
+                    let mut log_a2 = 0.0;
+                    for j in 0..m {
+                        let d1 = z - mu[2 * j];
+                        let d2 = z - mu[2 * j + 1];
+                        log_a2 += d1.norm_sqr().ln() + d2.norm_sqr().ln();
+                        if derivs {
+                            for (t, dm) in dmu[j].iter().enumerate() {
+                                da[t * m + j] = -2.0 * (dm / d1).re - 2.0 * (dm.conj() / d2).re;
+                            }
+                        }
+                    }
+                    let zc = z.conj();
+                    pw[0] = C64::new(1.0, 0.0);
+                    for k in 1..=q {
+                        pw[k] = pw[k - 1] * zc;
+                    }
+                    for (c, ic_all) in self.i.iter().enumerate() {
+                        let off = 2 * m + c * (q + 1);
+                        let b = pw[0]
+                            + pw[1..]
+                                .iter()
+                                .zip(&th[off + 1..=off + q])
+                                .map(|(p, bk)| p * bk)
+                                .sum::<C64>();
+                        let b2 = b.norm_sqr();
+                        let log_s = th[off] + b2.ln() - log_a2;
+                        let s = log_s.exp();
+                        let ic = ic_all[kk];
+                        acc.l += log_s + ic / s;
+                        if ratios {
+                            acc.ratios.push(ic / s);
+                        }
+                        if derivs {
+                            let dc = &mut d[c];
+                            for (t, dat) in da.iter().enumerate() {
+                                dc.set(row, t, -dat);
+                            }
+                            dc.set(row, 2 * m, 1.0);
+                            let bc = b.conj();
+                            for (k, pk) in pw.iter().enumerate().skip(1) {
+                                dc.set(row, 2 * m + k, 2.0 * (pk * bc).re / b2);
+                            }
+                            let r = ic / s - 1.0;
+                            for t in 0..per {
+                                acc.u[global(t, m, off)] += dc.at(row, t) * r;
+                            }
+                        }
+                    }
+                }
+                if derivs {
+                    // F: Σ_c D_cᵀ D_c. With `sandwich`, the covariance of the score instead,
+                    // J = Σ_{c,c'} D_cᵀ diag(γ²_cc') D_c' (cov(I_c/S_c, I_c'/S_c') = γ²_cc').
+                    let mut block = Dense::zeros(per, per);
+                    for (c, dc) in d.iter().enumerate() {
+                        let off = 2 * m + c * (q + 1);
+                        for (c2, dc2) in d.iter().enumerate() {
+                            if c2 != c && !sandwich {
+                                continue;
+                            }
+                            block.data.iter_mut().for_each(|v| *v = 0.0);
+                            if c2 == c {
+                                linalg::gram_add(dc, &mut block);
+                            } else {
+                                let g = &self.coherence[pair(c, c2, l)][lo..hi];
+                                let mut scaled = dc2.clone();
+                                for t in 0..per {
+                                    for (row, gr) in g.iter().enumerate() {
+                                        scaled.set(row, t, scaled.at(row, t) * gr);
+                                    }
+                                }
+                                linalg::tn_add(dc, &scaled, &mut block);
+                            }
+                            let off2 = 2 * m + c2 * (q + 1);
+                            for a in 0..per {
+                                for b in 0..per {
+                                    let (ga, gb) = (global(a, m, off), global(b, m, off2));
+                                    acc.f.set(ga, gb, acc.f.at(ga, gb) + block.at(a, b));
+                                }
+                            }
+                        }
+                    }
+                }
+                acc
+            })
+            .reduce(zero, |mut a, b| {
+                a.l += b.l;
+                a.u.iter_mut().zip(&b.u).for_each(|(x, y)| *x += y);
+                a.f.data
+                    .iter_mut()
+                    .zip(&b.f.data)
+                    .for_each(|(x, y)| *x += y);
+                a.ratios.extend(b.ratios);
+                a
+            });
+        partial.l.is_finite().then_some(partial)
+    }
+
+    /// Fit a model with the given starting poles (numerators from [`Self::start_numerator`]);
+    /// `tol` is the convergence threshold on L. With `hold_poles` only the numerators move.
+    fn fit(
+        &self,
+        start: &[C64],
+        opts: &RefineOptions,
+        tol: f64,
+        hold_poles: bool,
+    ) -> Result<Fit, SsiError> {
+        let m = start.len();
+        let l = self.i.len();
+        let mut th: Vec<f64> = start.iter().map(|s| s.norm().ln()).collect();
+        th.extend(start.iter().map(|s| {
+            let zeta = (-s.re / s.norm()).clamp(1e-6, 0.99);
+            (zeta / (1.0 - zeta)).ln()
+        }));
+        let mu = discrete_poles(start, self.fs).ok_or(SsiError::Refinement {
+            reason: "a starting pole is at or above the Nyquist frequency",
+        })?;
+        for c in 0..l {
+            th.extend(self.start_numerator(c, &mu));
+        }
+        self.fit_from(th, m, opts, tol, hold_poles)
+    }
+
+    /// The start that nests `prev` in a model with one more mode `new`: its pole pair is
+    /// cancelled by a numerator zero pair, so the spectrum and L are exactly `prev`'s. The
+    /// fit from here can only lower L.
+    fn nested_start(&self, prev: &Fit, new: C64) -> Option<Vec<f64>> {
+        let m = prev.lambdas.len();
+        let q = 2 * m;
+        let mu = discrete_poles(&[new], self.fs)?[0];
+        let factor = [1.0, -2.0 * mu.re, mu.norm_sqr()];
+        let zeta = (-new.re / new.norm()).clamp(1e-6, 0.99);
+        let mut th: Vec<f64> = prev.theta[..m].to_vec();
+        th.push(new.norm().ln());
+        th.extend_from_slice(&prev.theta[m..2 * m]);
+        th.push((zeta / (1.0 - zeta)).ln());
+        for c in 0..self.i.len() {
+            let off = 2 * m + c * (q + 1);
+            th.push(prev.theta[off]);
+            let mut b = vec![1.0];
+            b.extend_from_slice(&prev.theta[off + 1..off + 1 + q]);
+            let mut nb = vec![0.0; q + 3];
+            for (k, bk) in b.iter().enumerate() {
+                for (t, ft) in factor.iter().enumerate() {
+                    nb[k + t] += bk * ft;
+                }
+            }
+            th.extend_from_slice(&nb[1..]);
+        }
+        Some(th)
+    }
+
+    /// Fisher scoring with a Levenberg–Marquardt safeguard from θ.
+    fn fit_from(
+        &self,
+        mut th: Vec<f64>,
+        m: usize,
+        opts: &RefineOptions,
+        tol: f64,
+        hold_poles: bool,
+    ) -> Result<Fit, SsiError> {
+        let mut cur = self
+            .eval(&th, m, What::Fisher)
+            .ok_or(SsiError::Refinement {
+                reason: "the starting model has a non-finite likelihood",
+            })?;
+        let mut nu = 1e-3;
+        let mut iterations = 0;
+        while iterations < opts.max_iterations {
+            iterations += 1;
+            let mut accepted = None;
+            for _ in 0..30 {
+                let mut a = cur.f.clone();
+                for t in 0..a.rows {
+                    let dg = cur.f.at(t, t);
+                    a.set(t, t, dg * (1.0 + nu) + 1e-12 * (1.0 + dg));
+                }
+                let mut u = cur.u.clone();
+                if hold_poles {
+                    // Rows and columns of the pole parameters become identity, their score 0.
+                    for (t, ut) in u.iter_mut().enumerate().take(2 * m) {
+                        for k in 0..a.rows {
+                            a.set(t, k, 0.0);
+                            a.set(k, t, 0.0);
+                        }
+                        a.set(t, t, 1.0);
+                        *ut = 0.0;
+                    }
+                }
+                if let Some(step) = linalg::spd_solve(&a, &u) {
+                    let trial: Vec<f64> = th.iter().zip(&step).map(|(x, s)| x + s).collect();
+                    if let Some(e) = self.eval(&trial, m, What::Value)
+                        && e.l < cur.l
+                    {
+                        accepted = Some((trial, e.l));
+                        break;
+                    }
+                }
+                nu *= 10.0;
+            }
+            let Some((trial, l_new)) = accepted else {
+                break; // no step lowers L: a minimum to working precision
+            };
+            let gain = cur.l - l_new;
+            th = trial;
+            cur = self
+                .eval(&th, m, What::Fisher)
+                .ok_or(SsiError::Refinement {
+                    reason: "the likelihood became non-finite at an accepted step",
+                })?;
+            nu = (nu / 10.0).max(1e-12);
+            // Converged when even a full Gauss–Newton step would gain less than `tol` (the
+            // Newton decrement ½ Uᵀ F⁻¹ U); a small gain alone may be a short damped step.
+            let decrement = linalg::spd_solve(&with_ridge(&cur.f), &masked(&cur.u, m, hold_poles))
+                .map(|x| {
+                    0.5 * x
+                        .iter()
+                        .zip(&masked(&cur.u, m, hold_poles))
+                        .map(|(a, b)| a * b)
+                        .sum::<f64>()
+                });
+            if gain < tol && decrement.is_none_or(|d| d < tol) {
+                break;
+            }
+        }
+        Ok(Fit {
+            lambdas: self.unpack(&th, m),
+            theta: th,
+            l: cur.l,
+            fisher: cur.f,
+            iterations,
+        })
+    }
+}
+
+/// `f` with 1e-12·(1 + F_tt) added to its diagonal, so that a semi-definite F still factors.
+fn with_ridge(f: &Dense) -> Dense {
+    let mut a = f.clone();
+    for t in 0..a.rows {
+        let dg = f.at(t, t);
+        a.set(t, t, dg + 1e-12 * (1.0 + dg));
+    }
+    a
+}
+
+/// The score with the pole entries zeroed when the poles are held.
+fn masked(u: &[f64], m: usize, hold_poles: bool) -> Vec<f64> {
+    let mut v = u.to_vec();
+    if hold_poles {
+        v.iter_mut().take(2 * m).for_each(|x| *x = 0.0);
+    }
+    v
+}
+
+/// Index of the mode whose pole is nearest λ, relative to |λ|.
+fn nearest_mode(modes: &[Mode], lam: C64) -> Option<usize> {
+    modes
+        .iter()
+        .enumerate()
+        .min_by(|a, b| {
+            (a.1.lambda - lam)
+                .norm()
+                .total_cmp(&(b.1.lambda - lam).norm())
+        })
+        .map(|(k, _)| k)
+}
+
+/// γ² = |Σ X_a X̄_b|² / (Σ|X_a|² Σ|X_b|²) over a window of neighbouring bins.
+fn smoothed_coherence(xa: &[C64], xb: &[C64]) -> Vec<f64> {
+    let k = xa.len();
+    let h = COHERENCE_HALF_WIDTH;
+    // Prefix sums make every window O(1).
+    let mut cross = vec![C64::new(0.0, 0.0); k + 1];
+    let mut pa = vec![0.0; k + 1];
+    let mut pb = vec![0.0; k + 1];
+    for t in 0..k {
+        cross[t + 1] = cross[t] + xa[t] * xb[t].conj();
+        pa[t + 1] = pa[t] + xa[t].norm_sqr();
+        pb[t + 1] = pb[t] + xb[t].norm_sqr();
+    }
+    (0..k)
+        .map(|t| {
+            let (lo, hi) = (t.saturating_sub(h), (t + h + 1).min(k));
+            let den = (pa[hi] - pa[lo]) * (pb[hi] - pb[lo]);
+            if den > 0.0 {
+                ((cross[hi] - cross[lo]).norm_sqr() / den).min(1.0)
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
+
+/// Index of the unordered channel pair (a, b), a ≠ b, among l channels.
+fn pair(a: usize, b: usize, l: usize) -> usize {
+    let (a, b) = if a < b { (a, b) } else { (b, a) };
+    a * l + b
+}
+
+/// Global index of local parameter `t` of a channel block starting at `off`: the first 2m are
+/// the shared pole parameters.
+fn global(t: usize, m: usize, off: usize) -> usize {
+    if t < 2 * m { t } else { off + t - 2 * m }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::rngs::Xoshiro256PlusPlus;
+    use rand::{RngExt, SeedableRng};
+    use rand_distr::StandardNormal;
+    use std::f64::consts::PI;
+
+    const FS: f64 = 20.0;
+
+    fn pole(f: f64, zeta: f64) -> C64 {
+        2.0 * PI * f * C64::new(-zeta, (1.0 - zeta * zeta).sqrt())
+    }
+
+    /// Response at FS of oscillators (f Hz, ζ) to white noise: each a 2-state block with the
+    /// exact discrete poles e^{λ/fs}, seen through `gains` (one row per channel), plus white
+    /// measurement noise of `noise` times each channel's noise-free standard deviation.
+    fn record(
+        n: usize,
+        modes: &[(f64, f64)],
+        gains: &[Vec<f64>],
+        noise: f64,
+        seed: u64,
+    ) -> Vec<Vec<f64>> {
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+        let mut x = vec![[0.0f64; 2]; modes.len()];
+        let warm = 2000;
+        let mut out = vec![Vec::with_capacity(n); gains.len()];
+        for t in 0..n + warm {
+            for (j, &(f, z)) in modes.iter().enumerate() {
+                let mu = (pole(f, z) / FS).exp();
+                let [p, q] = x[j];
+                let w0: f64 = rng.sample(StandardNormal);
+                let w1: f64 = rng.sample(StandardNormal);
+                x[j] = [mu.re * p - mu.im * q + w0, mu.im * p + mu.re * q + w1];
+            }
+            if t >= warm {
+                for (c, g) in gains.iter().enumerate() {
+                    out[c].push(g.iter().zip(&x).map(|(a, s)| a * s[0]).sum());
+                }
+            }
+        }
+        for ch in &mut out {
+            let sd = (ch.iter().map(|v| v * v).sum::<f64>() / n as f64).sqrt();
+            for v in ch.iter_mut() {
+                *v += noise * sd * rng.sample::<f64, _>(StandardNormal);
+            }
+        }
+        out
+    }
+
+    /// An SSI mode with only what `refine` reads (its pole and member count) meaningful.
+    fn mode(f: f64, zeta: f64, members: usize) -> Mode {
+        Mode {
+            frequency_hz: f,
+            frequency_std_hz: 0.0,
+            damping_ratio: zeta,
+            damping_std: 0.0,
+            shape: vec![C64::new(1.0, 0.0)],
+            shape_std: vec![0.0],
+            members: (0..members).map(|k| (k + 1, 0)).collect(),
+            lambda: pole(f, zeta),
+        }
+    }
+
+    fn views(y: &[Vec<f64>]) -> Vec<&[f64]> {
+        y.iter().map(|c| c.as_slice()).collect()
+    }
+
+    #[test]
+    fn score_is_minus_the_gradient_of_l() {
+        let y = record(
+            4096,
+            &[(1.5, 0.02), (3.0, 0.04)],
+            &[vec![1.0, 0.5], vec![-0.3, 1.0]],
+            0.1,
+            1,
+        );
+        let v = views(&y);
+        let means = vec![0.0; 2];
+        let model = Model::new(&v, &means, FS);
+        let th = [
+            pole(1.52, 0.0).norm().ln(),
+            pole(2.9, 0.0).norm().ln(),
+            (0.03f64 / 0.97).ln(),
+            (0.05f64 / 0.95).ln(),
+            0.2,
+            -0.4,
+            0.3,
+            0.1,
+            -0.05, // channel 0: ln σ², b1..b4
+            -0.1,
+            0.2,
+            -0.1,
+            0.05,
+            0.02, // channel 1
+        ];
+        let e = model.eval(&th, 2, What::Fisher).unwrap();
+        for t in 0..th.len() {
+            let h = 1e-6;
+            let (mut a, mut b) = (th, th);
+            a[t] += h;
+            b[t] -= h;
+            let num = (model.eval(&a, 2, What::Value).unwrap().l
+                - model.eval(&b, 2, What::Value).unwrap().l)
+                / (2.0 * h);
+            // Central differences of a sum of ~4000 terms: agreement to 1e-6 relative.
+            assert!(
+                (num + e.u[t]).abs() <= 1e-6 * num.abs().max(1.0),
+                "parameter {t}: {num} vs {}",
+                -e.u[t]
+            );
+        }
+    }
+
+    #[test]
+    fn a_duplicated_channel_changes_neither_estimate_nor_standard_error() {
+        let y = record(16384, &[(1.5, 0.02)], &[vec![1.0]], 0.05, 2);
+        let start = [mode(1.52, 0.03, 30)];
+        let one = refine(&[&y[0]], FS, &start, &RefineOptions::default()).unwrap();
+        let two = refine(&[&y[0], &y[0]], FS, &start, &RefineOptions::default()).unwrap();
+        let (a, b) = (&one.modes[0], &two.modes[0]);
+        // Same estimator (the composite likelihood is twice the single one): equal to the
+        // optimizer's tolerance; the sandwich's J counts the copy's perfect coherence, so the
+        // standard errors agree too.
+        assert!(
+            (a.lambda - b.lambda).norm() < 1e-6 * a.lambda.norm(),
+            "{a:?} {b:?}"
+        );
+        let rel = |x: Option<f64>, y: Option<f64>| (x.unwrap() - y.unwrap()).abs() / x.unwrap();
+        assert!(
+            rel(a.frequency_se_hz, b.frequency_se_hz) < 1e-3,
+            "{a:?} {b:?}"
+        );
+        assert!(rel(a.damping_se, b.damping_se) < 1e-3, "{a:?} {b:?}");
+    }
+
+    #[test]
+    fn scaling_a_channel_leaves_the_poles() {
+        let y = record(
+            8192,
+            &[(1.5, 0.02), (3.2, 0.05)],
+            &[vec![1.0, 0.7]],
+            0.05,
+            3,
+        );
+        let scaled: Vec<f64> = y[0].iter().map(|v| v * 1e3).collect();
+        let start = [mode(1.5, 0.02, 30), mode(3.2, 0.05, 20)];
+        let a = refine(&[&y[0]], FS, &start, &RefineOptions::default()).unwrap();
+        let b = refine(&[&scaled], FS, &start, &RefineOptions::default()).unwrap();
+        for (p, q) in a.modes.iter().zip(&b.modes) {
+            assert!(
+                (p.lambda - q.lambda).norm() < 1e-6 * p.lambda.norm(),
+                "{p:?} {q:?}"
+            );
+        }
+    }
+
+    /// Over 40 records of a known oscillator, started 1 % and 30 % off: the errors divided by
+    /// the reported standard errors have an RMS near 1 (its own sampling spread over 40 records
+    /// is about 0.11, so 0.7–1.4 is a 3σ band), and a spurious starting mode is dropped.
+    #[test]
+    fn standard_errors_are_calibrated_and_a_spurious_mode_is_dropped() {
+        let (f0, z0) = (1.5, 0.02);
+        let (mut zf, mut zz) = (Vec::new(), Vec::new());
+        for seed in 0..40 {
+            let y = record(16384, &[(f0, z0)], &[vec![1.0]], 0.05, 100 + seed);
+            let start = [mode(f0 * 1.01, z0 * 1.3, 30), mode(3.3, 0.03, 10)];
+            let r = refine(&[&y[0]], FS, &start, &RefineOptions::default()).unwrap();
+            assert_eq!(r.modes.len(), 1, "seed {seed}: {r:?}");
+            assert_eq!(r.dropped.len(), 1, "seed {seed}: {r:?}");
+            assert_eq!(r.dropped[0].source, 1);
+            assert!(r.misfit < MISFIT_LIMIT, "seed {seed}: misfit {}", r.misfit);
+            let m = &r.modes[0];
+            zf.push((m.frequency_hz - f0) / m.frequency_se_hz.unwrap());
+            zz.push((m.damping_ratio - z0) / m.damping_se.unwrap());
+        }
+        let rms = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt();
+        let (rf, rz) = (rms(&zf), rms(&zz));
+        assert!((0.7..1.4).contains(&rf), "frequency z-scores RMS {rf}");
+        assert!((0.7..1.4).contains(&rz), "damping z-scores RMS {rz}");
+    }
+
+    /// Three modes seen from one channel, as on the 3-DOF record's channel y1: every mode is
+    /// found where it is, within 5 of its standard errors, on every record. (An earlier
+    /// selection fitted one mode first and added the others; on some records the first pole
+    /// moved to the strongest peak and the rest ended in a poor local optimum, e.g. a mode of
+    /// zero damping 1.7 % below the 1 Hz mode.)
+    #[test]
+    fn three_modes_from_one_channel_are_each_found() {
+        let truth = [(1.0, 0.01), (2.8, 0.02), (4.05, 0.05)];
+        for seed in 0..8 {
+            let y = record(32768, &truth, &[vec![1.0, 0.5, 0.25]], 0.05, 200 + seed);
+            // Member counts as SSI gave them on the record where the earlier selection failed
+            // (seed 227 of `cargo xtask compare-tools`): the 2.8 Hz mode has the most.
+            let start: Vec<Mode> = truth
+                .iter()
+                .zip([35, 36, 27])
+                .map(|(&(f, z), members)| mode(f * 1.005, z * 1.2, members))
+                .collect();
+            let r = refine(&[&y[0]], FS, &start, &RefineOptions::default()).unwrap();
+            assert_eq!(r.modes.len(), 3, "seed {seed}: {r:?}");
+            for (m, &(f, z)) in r.modes.iter().zip(&truth) {
+                assert!(
+                    (m.frequency_hz - f).abs() < 5.0 * m.frequency_se_hz.unwrap(),
+                    "seed {seed}: {m:?}"
+                );
+                assert!(
+                    (m.damping_ratio - z).abs() < 5.0 * m.damping_se.unwrap(),
+                    "seed {seed}: {m:?}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_line_spectrum_is_flagged_as_misfit() {
+        // A sum of sines (a multisine's line spectrum) plus a little noise.
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(5);
+        let y: Vec<f64> = (0..8192)
+            .map(|n| {
+                let t = n as f64 / FS;
+                (1..40)
+                    .map(|k| (2.0 * PI * 0.1 * k as f64 * t + k as f64).sin())
+                    .sum::<f64>()
+                    + 0.01 * rng.sample::<f64, _>(StandardNormal)
+            })
+            .collect();
+        let r = refine(&[&y], FS, &[mode(1.5, 0.02, 30)], &RefineOptions::default()).unwrap();
+        assert!(r.misfit > MISFIT_LIMIT, "misfit {}", r.misfit);
+    }
+
+    #[test]
+    fn bad_input_is_an_error() {
+        let y = record(4096, &[(1.5, 0.02)], &[vec![1.0]], 0.05, 6);
+        let start = [mode(1.5, 0.02, 30)];
+        let opts = RefineOptions::default();
+        assert!(matches!(
+            refine(&[&y[0][..40]], FS, &start, &opts),
+            Err(SsiError::TooShortToRefine {
+                samples: 40,
+                modes: 1,
+                ..
+            })
+        ));
+        let mut nan = y[0].clone();
+        nan[7] = f64::NAN;
+        assert!(matches!(
+            refine(&[&nan], FS, &start, &opts),
+            Err(SsiError::NonFinite {
+                channel: 0,
+                index: 7,
+                ..
+            })
+        ));
+        assert!(matches!(
+            refine(&[&y[0]], 0.0, &start, &opts),
+            Err(SsiError::NonPositiveRate { .. })
+        ));
+        assert!(matches!(
+            refine(&[&y[0]], FS, &[mode(12.0, 0.02, 30)], &opts),
+            Err(SsiError::Refinement { .. })
+        ));
+        // No modes: an empty model, nothing kept.
+        let r = refine(&[&y[0]], FS, &[], &opts).unwrap();
+        assert!(r.modes.is_empty() && r.dropped.is_empty());
+    }
+}
