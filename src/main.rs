@@ -201,6 +201,11 @@ struct SsiArgs {
     /// Draw the stabilization diagram as SVG here.
     #[arg(long)]
     svg: Option<PathBuf>,
+    /// Skip the maximum-likelihood refinement of the modes (on by default: it fits the modes
+    /// to the whole record, gives each a standard error, and drops the modes the record does
+    /// not support).
+    #[arg(long)]
+    no_refine: bool,
 }
 
 #[derive(Clone, Copy, ValueEnum, PartialEq, Eq, Debug)]
@@ -538,12 +543,55 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
             json!({"order": o.order, "poles": poles})
         })
         .collect();
+    let refined = if a.no_refine || res.modes.is_empty() {
+        None
+    } else {
+        Some(
+            covssi::refine(
+                &views,
+                fs_used,
+                &res.modes,
+                &covssi::RefineOptions::default(),
+            )
+            .map_err(|e| {
+                fail(format!(
+                    "{}: columns {}: {e}",
+                    a.input.display(),
+                    names.join(",")
+                ))
+            })?,
+        )
+    };
+    let refined_json = refined.as_ref().map(|r| {
+        json!({
+            "modes": r.modes.iter().map(|m| json!({
+                "frequency_hz": m.frequency_hz,
+                "damping_ratio": m.damping_ratio,
+                "frequency_se_hz": m.frequency_se_hz,
+                "damping_se": m.damping_se,
+                "lambda": c64(m.lambda),
+                "evidence": m.evidence,
+                "ssi_mode": m.source,
+            })).collect::<Vec<_>>(),
+            "dropped": r.dropped.iter().map(|d| json!({
+                "ssi_mode": d.source,
+                "frequency_hz": d.frequency_hz,
+                "evidence": d.evidence,
+            })).collect::<Vec<_>>(),
+            "penalty": r.penalty,
+            "neg_log_likelihood": r.neg_log_likelihood,
+            "misfit": r.misfit,
+            "frequencies": r.frequencies,
+            "iterations": r.iterations,
+        })
+    });
     let doc = json!({
         "input": a.input.display().to_string(),
         "channels": names,
         "fs_hz": fs_used,
         "block_rows": res.block_rows,
         "modes": modes,
+        "refined": refined_json,
         "real_poles": real,
         "notes": res.notes,
         "orders": orders,
@@ -583,6 +631,41 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
     }
     for n in &res.notes {
         println!("note: {n}");
+    }
+    if let Some(r) = &refined {
+        println!(
+            "refined by maximum likelihood ({} frequencies; a mode needs evidence above {:.1}):",
+            r.frequencies, r.penalty
+        );
+        let se = |v: Option<f64>| v.map_or("?".to_string(), |v| format!("{v:.4}"));
+        for m in &r.modes {
+            println!(
+                "mode {:>9.4} ± {} Hz  damping {:.4} ± {}  (evidence {:.0}, from SSI mode {})",
+                m.frequency_hz,
+                se(m.frequency_se_hz),
+                m.damping_ratio,
+                se(m.damping_se),
+                m.evidence,
+                m.source
+            );
+        }
+        for d in &r.dropped {
+            println!(
+                "dropped SSI mode {} at {:.4} Hz: evidence {:.1}",
+                d.source, d.frequency_hz, d.evidence
+            );
+        }
+        if r.misfit > covssi::refine::MISFIT_LIMIT {
+            println!(
+                "warning: the record does not follow the refinement's model (misfit {:.3} > {}): \
+                 the excitation may not be broadband random (e.g. a multisine), or the record \
+                 holds what the model lacks; trust the SSI modes above instead",
+                r.misfit,
+                covssi::refine::MISFIT_LIMIT
+            );
+        } else {
+            println!("misfit {:.3} (the record follows the model)", r.misfit);
+        }
     }
     Ok(())
 }

@@ -253,9 +253,56 @@ fn ssi_writes_modes_json_and_svg() {
         max_relative = 1e-12
     );
     assert!(v["real_poles"].is_array());
+    // The maximum-likelihood refinement (on by default): one mode, the 1.5 Hz oscillator;
+    // every other SSI mode dropped; the truth (1.5 Hz, 2 %) within 4 standard errors; the
+    // record follows the model.
+    let r = &v["refined"];
+    let kept = r["modes"].as_array().unwrap();
+    assert_eq!(kept.len(), 1, "{r}");
+    assert_eq!(
+        r["dropped"].as_array().unwrap().len(),
+        modes.len() - 1,
+        "{r}"
+    );
+    let k = &kept[0];
+    let f_err = (k["frequency_hz"].as_f64().unwrap() - 1.5).abs();
+    let z_err = (k["damping_ratio"].as_f64().unwrap() - 0.02).abs();
+    assert!(f_err < 4.0 * k["frequency_se_hz"].as_f64().unwrap(), "{k}");
+    assert!(z_err < 4.0 * k["damping_se"].as_f64().unwrap(), "{k}");
+    assert!(
+        k["evidence"].as_f64().unwrap() > r["penalty"].as_f64().unwrap(),
+        "{k}"
+    );
+    assert!(r["misfit"].as_f64().unwrap() < 0.05, "{r}");
+    assert!(out.contains("refined by maximum likelihood"), "{out}");
     let first = &v["orders"][5]["poles"][0];
     assert!(first["label"].is_string() && first["lambda"].is_array());
     assert!(std::fs::read_to_string(&svg).unwrap().starts_with("<svg"));
+}
+
+#[test]
+fn ssi_without_refinement() {
+    let Some(path) = common::data_file("oma/data_sdof.csv") else {
+        return;
+    };
+    let json = tmp("sdof_plain.json");
+    let (ok, out, err) = hyst(&[
+        "ssi",
+        "--input",
+        s(&path),
+        "--fs",
+        "20",
+        "--block-rows",
+        "60",
+        "--json",
+        s(&json),
+        "--no-refine",
+    ]);
+    assert!(ok, "{err}");
+    assert!(!out.contains("refined"), "{out}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert!(v["refined"].is_null() && !v["modes"].as_array().unwrap().is_empty());
 }
 
 #[test]
