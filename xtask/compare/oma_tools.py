@@ -174,12 +174,41 @@ def reported_mode(modes, f_true):
     return max(candidates, key=lambda m: m["poles"]) if candidates else None
 
 
-def mode_errors(modes, f_true, z_true):
-    m = reported_mode(modes, f_true)
+def refined_mode(doc, f_true):
+    """covssi's maximum-likelihood report for a true mode: the refined mode within the window
+    with the most evidence (the nearer on a tie), or None."""
+    refined = (doc.get("refined") or {}).get("modes", [])
+    candidates = [m for m in refined if near(m["frequency_hz"], f_true)]
+    if not candidates:
+        return None
+    return max(candidates, key=lambda m: (m["evidence"], -abs(m["frequency_hz"] - f_true)))
+
+
+def percent_errors(m, f_true, z_true):
+    """Errors of a reported mode (a dict with frequency_hz and damping_ratio, or None) in % of
+    the truth."""
     if m is None:
         return (math.nan, math.nan)
     return (100.0 * (m["frequency_hz"] - f_true) / f_true,
             100.0 * (m["damping_ratio"] - z_true) / z_true)
+
+
+def refined_errors(doc, f_true, z_true):
+    return percent_errors(refined_mode(doc, f_true), f_true, z_true)
+
+
+def refined_z_scores(doc, f_true, z_true):
+    """(estimate - truth) / standard error, for frequency and damping: ~N(0, 1) if the
+    standard errors are right."""
+    m = refined_mode(doc, f_true)
+    if m is None or m["frequency_se_hz"] is None or m["damping_se"] is None:
+        return (math.nan, math.nan)
+    return ((m["frequency_hz"] - f_true) / m["frequency_se_hz"],
+            (m["damping_ratio"] - z_true) / m["damping_se"])
+
+
+def mode_errors(modes, f_true, z_true):
+    return percent_errors(reported_mode(modes, f_true), f_true, z_true)
 
 
 CASES = [
@@ -188,7 +217,7 @@ CASES = [
     ("channel y1", chain_3dof, [0], 60, "data_3dof.csv", ["y1"]),
     ("SDOF", sdof, [0], 60, "data_sdof.csv", ["y"]),
 ]
-TOOLS = ["pyOMA2", "koma", "covssi", "covssi mode"]
+TOOLS = ["pyOMA2", "koma", "covssi", "covssi mode", "covssi ML"]
 
 
 def run_all(hyst, y, br, tr, tmp):
@@ -200,6 +229,8 @@ def run_all(hyst, y, br, tr, tmp):
     f, z, doc = run_covssi(hyst, y, br, tmp)
     out["covssi"] = [median_errors(f, z, *t) for t in tr]
     out["covssi mode"] = [mode_errors(doc["modes"], *t) for t in tr]
+    out["covssi ML"] = [refined_errors(doc, *t) for t in tr]
+    out["z"] = [refined_z_scores(doc, *t) for t in tr]
     return out
 
 
@@ -239,15 +270,15 @@ def seeds(hyst, count, first, tmp):
     print("RMS error over seeds (bias = mean error), frequency % / damping %.\n")
     print("| case | mode | " + " | ".join(TOOLS) + " |")
     print("|---|---|" + "---|" * len(TOOLS))
-    wins = {}
+    wins, ratios, zrows = {}, [], []
     for name, system, chans, br, _, _ in CASES:
         M, C, K = system()
         tr = truth(M, C, K)
-        errs = {t: [] for t in TOOLS}
+        errs = {t: [] for t in TOOLS + ["z"]}
         for s in range(first, first + count):
             y = simulate(M, C, K, seed=s)[:, chans]
             res = run_all(hyst, y, br, tr, tmp)
-            for t in TOOLS:
+            for t in TOOLS + ["z"]:
                 errs[t].append(res[t])
             print(f"  {name} seed {s}: " + "; ".join(
                 f"{t} " + " ".join(f"{e[0]:+.3f}/{e[1]:+.2f}" for e in res[t]) for t in TOOLS
@@ -264,22 +295,66 @@ def seeds(hyst, count, first, tmp):
                     f"{rms[0]:.3f} ({bias[0]:+.3f}) / {rms[1]:.2f} ({bias[1]:+.2f}){miss}"
                 )
             print(f"| {name} | {j + 1} | " + " | ".join(cells) + " |")
-            # how often covssi's (README-statistic) error is no larger than both tools' errors
+            # how often covssi's error (README statistic; maximum likelihood) is no larger
+            # than both tools' errors
             for k, what in ((0, "f"), (1, "zeta")):
-                c = np.array([abs(r[j][k]) for r in errs["covssi"]])
                 p = np.array([abs(r[j][k]) for r in errs["pyOMA2"]])
                 q = np.array([abs(r[j][k]) for r in errs["koma"]])
-                wins[(name, j + 1, what)] = int(np.sum((c <= p) & (c <= q)))
+                for t in ("covssi", "covssi ML"):
+                    c = np.array([abs(r[j][k]) for r in errs[t]])
+                    wins[(name, j + 1, what, t)] = int(np.sum((c <= p) & (c <= q)))
+            ratios.append((name, j + 1, rms_ratios(errs, j)))
+            z = np.array([r[j] for r in errs["z"]])
+            zrows.append((name, j + 1, np.sqrt(np.nanmean(z**2, axis=0)), int(np.sum(~np.isnan(z[:, 0])))))
     print()
-    print("Seeds on which covssi's error is at most both tools' (README statistic):\n")
+    print("Seeds on which covssi's error is at most both tools' (README statistic | maximum "
+          "likelihood):\n")
     print("| case | mode | frequency | damping |")
     print("|---|---|---|---|")
     for name, _, _, _, _, _ in CASES:
         j = 1
-        while (name, j, "f") in wins:
-            print(f"| {name} | {j} | {wins[(name, j, 'f')]}/{count} | {wins[(name, j, 'zeta')]}/{count} |")
+        while (name, j, "f", "covssi") in wins:
+            cells = [" / ".join(f"{wins[(name, j, w, t)]}" for t in ("covssi", "covssi ML"))
+                     for w in ("f", "zeta")]
+            print(f"| {name} | {j} | {cells[0]} of {count} | {cells[1]} of {count} |")
             j += 1
     print()
+    print("RMS error of covssi ML over each tool's, frequency / damping, with a 95 % interval "
+          "from resampling the seeds (paired: the same records); below 1 = covssi ML closer:\n")
+    print("| case | mode | over pyOMA2 | over koma |")
+    print("|---|---|---|---|")
+    for name, j, r in ratios:
+        cells = [" / ".join(f"{m:.2f} [{lo:.2f}, {hi:.2f}]" for m, lo, hi in r[t])
+                 for t in ("pyOMA2", "koma")]
+        print(f"| {name} | {j} | {cells[0]} | {cells[1]} |")
+    print()
+    print("Calibration of covssi ML's standard errors: RMS of (estimate - truth) / standard "
+          "error, frequency / damping (1 if they are right):\n")
+    print("| case | mode | frequency | damping | records |")
+    print("|---|---|---|---|---|")
+    for name, j, zr, nrec in zrows:
+        print(f"| {name} | {j} | {zr[0]:.2f} | {zr[1]:.2f} | {nrec} |")
+    print()
+
+
+def rms_ratios(errs, j, draws=2000):
+    """RMS(covssi ML) / RMS(tool) for frequency and damping, with a 95 % paired bootstrap
+    interval over the seeds."""
+    rng = np.random.default_rng(0)
+    ml = np.array([r[j] for r in errs["covssi ML"]])
+    out = {}
+    for t in ("pyOMA2", "koma"):
+        e = np.array([r[j] for r in errs[t]])
+        ok = ~np.isnan(ml[:, 0]) & ~np.isnan(e[:, 0])
+        a, b = ml[ok], e[ok]
+        cells = []
+        for k in (0, 1):
+            ratio = np.sqrt(np.mean(a[:, k] ** 2) / np.mean(b[:, k] ** 2))
+            idx = rng.integers(0, len(a), size=(draws, len(a)))
+            boot = np.sqrt(np.mean(a[idx, k] ** 2, axis=1) / np.mean(b[idx, k] ** 2, axis=1))
+            cells.append((ratio, *np.percentile(boot, [2.5, 97.5])))
+        out[t] = cells
+    return out
 
 
 UNPHYSICAL = ("rejected_nyquist", "rejected_unstable", "rejected_damping_limit")

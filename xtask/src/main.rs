@@ -211,6 +211,32 @@ fn bench_covssi() {
     // The floor: reading the 10-channel record once (a sum over every sample).
     let t = best_of(5, || all.iter().map(|c| c.iter().sum::<f64>()).sum::<f64>());
     println!("read_record_ms_1e6_10ch {:.2} ms", t * 1e3);
+    // The maximum-likelihood refinement of the SSI modes (not part of the times above): on
+    // records of the OMA files' length and on the long one.
+    for (name, len, ch) in [
+        ("covssi_refine_ms_65536_1ch", 65536usize, 1usize),
+        ("covssi_refine_ms_65536_3ch", 65536, 3),
+        ("covssi_refine_ms_1e6_1ch", n, 1),
+    ] {
+        let views: Vec<&[f64]> = all[..ch].iter().map(|c| &c[..len]).collect();
+        let opts = SsiOptions {
+            block_rows: BlockRows::Count(20),
+            max_order: Some(40),
+            ..SsiOptions::default()
+        };
+        let res = identify(&views, 50.0, &opts).expect("identifiable");
+        let ro = hyst::covssi::RefineOptions::default();
+        let t = best_of(2, || {
+            hyst::covssi::refine(&views, 50.0, &res.modes, &ro).expect("refines")
+        });
+        let r = hyst::covssi::refine(&views, 50.0, &res.modes, &ro).expect("refines");
+        println!(
+            "{name} {:.0} ms ({} SSI modes in, {} kept)",
+            t * 1e3,
+            res.modes.len(),
+            r.modes.len()
+        );
+    }
 }
 
 /// `hyst refine`'s loop on a 32768-sample record: a 10 Hz oscillator with an undeclared cubic
