@@ -640,19 +640,19 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
         let se = |v: Option<f64>| v.map_or("?".to_string(), |v| format!("{v:.4}"));
         for m in &r.modes {
             println!(
-                "mode {:>9.4} ± {} Hz  damping {:.4} ± {}  (evidence {:.0}, from SSI mode {})",
+                "mode {:>9.4} ± {} Hz  damping {:.4} ± {}  (evidence {:.0}; SSI mode at {:.4} Hz)",
                 m.frequency_hz,
                 se(m.frequency_se_hz),
                 m.damping_ratio,
                 se(m.damping_se),
                 m.evidence,
-                m.source
+                res.modes[m.source].frequency_hz
             );
         }
         for d in &r.dropped {
             println!(
-                "dropped SSI mode {} at {:.4} Hz: evidence {:.1}",
-                d.source, d.frequency_hz, d.evidence
+                "dropped the SSI mode at {:.4} Hz: evidence {:.1}",
+                d.frequency_hz, d.evidence
             );
         }
         if r.misfit > covssi::refine::MISFIT_LIMIT {
