@@ -221,7 +221,7 @@ fn bench_covssi() {
         let views: Vec<&[f64]> = all[..ch].iter().map(|c| &c[..len]).collect();
         let opts = SsiOptions {
             block_rows: BlockRows::Count(20),
-            max_order: Some(40),
+            max_order: Some(40.min(20 * ch)),
             ..SsiOptions::default()
         };
         let res = identify(&views, 50.0, &opts).expect("identifiable");

@@ -179,9 +179,16 @@ pub fn refine(
         let mut trial = fit.lambdas.clone();
         trial.push(modes[cand].lambda);
         let fresh = model.fit(&trial, opts, opts.tolerance, false);
-        let nested = model
-            .nested_start(&fit, modes[cand].lambda)
-            .map(|th| model.fit_from(th, trial.len(), opts, opts.tolerance, false));
+        let nested = model.nested_start(&fit, modes[cand].lambda).map(|th| {
+            model.fit_from(
+                th,
+                trial.len(),
+                opts,
+                opts.tolerance,
+                false,
+                f64::NEG_INFINITY,
+            )
+        });
         let next = match (fresh, nested) {
             (Ok(a), Some(Ok(b))) => {
                 if a.l <= b.l {
@@ -206,8 +213,14 @@ pub fn refine(
             });
         }
     }
-    // Evidence fits need L only to well within the penalty.
+    // Evidence fits need L only to well within the penalty, and a model missing one of
+    // its real modes descends slowly while its poles wander (hundreds of iterations, seconds
+    // each fit) without coming near the penalty: 40 iterations decide.
     let loose = 1e-3;
+    let eopts = RefineOptions {
+        max_iterations: opts.max_iterations.min(40),
+        ..opts.clone()
+    };
     // 2. Evidence of each kept mode: the rise of L when it is removed, the other poles held
     //    and the numerators refitted. For the decision, everything is then let move from
     //    there: the other poles stay at their own peaks unless the removed one shared a peak
@@ -219,8 +232,15 @@ pub fn refine(
             .map(|k| {
                 let mut rest = fit.lambdas.clone();
                 rest.remove(k);
-                let held = model.fit(&rest, opts, loose, true)?;
-                let free = model.fit_from(held.theta, rest.len(), opts, loose, false)?;
+                let held = model.fit(&rest, &eopts, loose, true)?;
+                // Once L is within the penalty of the full model's, the mode goes whatever
+                // further iterations would find: stop there.
+                let enough = if opts.select {
+                    fit.l + penalty
+                } else {
+                    f64::NEG_INFINITY
+                };
+                let free = model.fit_from(held.theta, rest.len(), &eopts, loose, false, enough)?;
                 Ok((held.l - fit.l, free))
             })
             .collect::<Result<_, SsiError>>()?;
@@ -239,8 +259,14 @@ pub fn refine(
                     evidence: ev,
                 });
                 let (_, next) = without.into_iter().nth(k).expect("k < modes");
-                fit =
-                    model.fit_from(next.theta, next.lambdas.len(), opts, opts.tolerance, false)?;
+                fit = model.fit_from(
+                    next.theta,
+                    next.lambdas.len(),
+                    opts,
+                    opts.tolerance,
+                    false,
+                    f64::NEG_INFINITY,
+                )?;
             }
             _ => break without.iter().map(|(held, _)| *held).collect::<Vec<f64>>(),
         }
@@ -682,7 +708,7 @@ impl<'a> Model<'a> {
         for c in 0..l {
             th.extend(self.start_numerator(c, &mu));
         }
-        self.fit_from(th, m, opts, tol, hold_poles)
+        self.fit_from(th, m, opts, tol, hold_poles, f64::NEG_INFINITY)
     }
 
     /// The start that nests `prev` in a model with one more mode `new`: its pole pair is
@@ -714,7 +740,8 @@ impl<'a> Model<'a> {
         Some(th)
     }
 
-    /// Fisher scoring with a Levenberg–Marquardt safeguard from θ.
+    /// Fisher scoring with a Levenberg–Marquardt safeguard from θ; stops early once L is below
+    /// `stop_below`.
     fn fit_from(
         &self,
         mut th: Vec<f64>,
@@ -722,6 +749,7 @@ impl<'a> Model<'a> {
         opts: &RefineOptions,
         tol: f64,
         hold_poles: bool,
+        stop_below: f64,
     ) -> Result<Fit, SsiError> {
         let mut cur = self
             .eval(&th, m, What::Fisher)
@@ -783,7 +811,7 @@ impl<'a> Model<'a> {
                         .map(|(a, b)| a * b)
                         .sum::<f64>()
                 });
-            if gain < tol && decrement.is_none_or(|d| d < tol) {
+            if (gain < tol && decrement.is_none_or(|d| d < tol)) || cur.l < stop_below {
                 break;
             }
         }
