@@ -403,6 +403,20 @@ def cluster_statistics(doc, tr, nchan):
     return values, spurious, physical
 
 
+def refined_census(doc, tr):
+    """(extra refined modes: far from every true mode or a second one near a true mode, true
+    modes with no refined mode near, 1 if the misfit warning is raised), or None without a
+    refinement."""
+    r = doc.get("refined")
+    if r is None:
+        return None
+    ms = r["modes"]
+    far = sum(1 for m in ms if not any(near(m["frequency_hz"], f) for f, _ in tr))
+    dup = sum(max(0, sum(near(m["frequency_hz"], f) for m in ms) - 1) for f, _ in tr)
+    missed = sum(1 for f, _ in tr if not any(near(m["frequency_hz"], f) for m in ms))
+    return (far + dup, missed, int(r["misfit"] > 0.05))
+
+
 def clusters(hyst, count, first, tmp):
     print(f"## covssi's modes over {count} fresh records (seeds {first}..{first + count - 1})\n")
     print("RMS error of three mode values, frequency % / damping %: the mean of a mode's "
@@ -411,6 +425,7 @@ def clusters(hyst, count, first, tmp):
     print("| case | mode | mean | median | level 2 |")
     print("|---|---|---|---|---|")
     spur_rows = []
+    refined_counts = {name: [] for name, *_ in CASES}
     for name, system, chans, br, _, _ in CASES:
         M, C, K = system()
         tr = truth(M, C, K)
@@ -419,6 +434,7 @@ def clusters(hyst, count, first, tmp):
         for s in range(first, first + count):
             y = simulate(M, C, K, seed=s)[:, chans]
             doc = run_covssi(hyst, y, br, tmp)[2]
+            refined_counts[name].append(refined_census(doc, tr))
             values, sp, ph = cluster_statistics(doc, tr, y.shape[1])
             for k, v in values.items():
                 for j, e in enumerate(v):
@@ -447,6 +463,16 @@ def clusters(hyst, count, first, tmp):
     print("|---|---|---|---|---|")
     for r in spur_rows:
         print(r)
+    print()
+    print("The maximum-likelihood refinement's modes over the same records (absent from the "
+          "table when the hyst given has no refinement):\n")
+    print("| case | records | with an extra refined mode | true modes missed | misfit warnings |")
+    print("|---|---|---|---|---|")
+    for name, rows in refined_counts.items():
+        rows = [r for r in rows if r is not None]
+        if rows:
+            print(f"| {name} | {len(rows)} | {sum(r[0] > 0 for r in rows)} | "
+                  f"{sum(r[1] for r in rows)} | {sum(r[2] for r in rows)} |")
     print()
 
 
@@ -499,6 +525,9 @@ def main():
     ap.add_argument("--timing", action="store_true")
     ap.add_argument("--clusters", action="store_true",
                     help="also: covssi's mode values and spurious clusters over the same seeds")
+    ap.add_argument("--covssi-only", action="store_true",
+                    help="skip the tools (the shared records and the seed tables): with "
+                         "--clusters, covssi alone")
     a = ap.parse_args()
     import koma  # noqa: F401  (fail early if the tools are missing)
     import pyoma2  # noqa: F401
@@ -508,9 +537,10 @@ def main():
     print(f"pyOMA-2 {version('pyOMA-2')}, koma-python {version('koma-python')}, "
           f"numpy {np.__version__}\n")
     with tempfile.TemporaryDirectory() as tmp:
-        files(a.hyst, a.data, tmp)
-        if a.seeds > 0:
-            seeds(a.hyst, a.seeds, a.first_seed, tmp)
+        if not a.covssi_only:
+            files(a.hyst, a.data, tmp)
+            if a.seeds > 0:
+                seeds(a.hyst, a.seeds, a.first_seed, tmp)
         if a.clusters:
             clusters(a.hyst, a.seeds, a.first_seed, tmp)
     if a.timing:
