@@ -176,31 +176,7 @@ pub fn refine(
     let mut sources = core;
     let mut dropped = Vec::new();
     for &cand in &weak {
-        let mut trial = fit.lambdas.clone();
-        trial.push(modes[cand].lambda);
-        let fresh = model.fit(&trial, opts, opts.tolerance, false);
-        let nested = model.nested_start(&fit, modes[cand].lambda).map(|th| {
-            model.fit_from(
-                th,
-                trial.len(),
-                opts,
-                opts.tolerance,
-                false,
-                f64::NEG_INFINITY,
-            )
-        });
-        let next = match (fresh, nested) {
-            (Ok(a), Some(Ok(b))) => {
-                if a.l <= b.l {
-                    a
-                } else {
-                    b
-                }
-            }
-            (Ok(a), _) => a,
-            (Err(_), Some(Ok(b))) => b,
-            (Err(e), _) => return Err(e),
-        };
+        let next = model.fit_with(&fit, modes[cand].lambda, opts)?;
         let evidence = fit.l - next.l;
         if !opts.select || evidence >= penalty {
             fit = next;
@@ -738,6 +714,30 @@ impl<'a> Model<'a> {
             th.extend_from_slice(&nb[1..]);
         }
         Some(th)
+    }
+
+    /// `prev` with the mode `new` added, refitted from two starts, fresh numerators and
+    /// [`Self::nested_start`]; the better fit.
+    fn fit_with(&self, prev: &Fit, new: C64, opts: &RefineOptions) -> Result<Fit, SsiError> {
+        let mut trial = prev.lambdas.clone();
+        trial.push(new);
+        let fresh = self.fit(&trial, opts, opts.tolerance, false);
+        let nested = self.nested_start(prev, new).map(|th| {
+            self.fit_from(
+                th,
+                trial.len(),
+                opts,
+                opts.tolerance,
+                false,
+                f64::NEG_INFINITY,
+            )
+        });
+        match (fresh, nested) {
+            (Ok(a), Some(Ok(b))) => Ok(if a.l <= b.l { a } else { b }),
+            (Ok(a), _) => Ok(a),
+            (Err(_), Some(Ok(b))) => Ok(b),
+            (Err(e), _) => Err(e),
+        }
     }
 
     /// Fisher scoring with a Levenberg–Marquardt safeguard from θ; stops early once L is below
