@@ -348,6 +348,13 @@ struct Eval {
 
 const CHUNK: usize = 2048;
 
+/// A pole's parameters: ln ω and logit ζ (ζ clamped to [1e-6, 0.99] so that both are finite);
+/// [`Model::unpack`] is the inverse.
+fn pole_params(lam: C64) -> (f64, f64) {
+    let zeta = (-lam.re / lam.norm()).clamp(1e-6, 0.99);
+    (lam.norm().ln(), (zeta / (1.0 - zeta)).ln())
+}
+
 fn logistic(s: f64) -> f64 {
     1.0 / (1.0 + (-s).exp())
 }
@@ -673,11 +680,8 @@ impl<'a> Model<'a> {
     ) -> Result<Fit, SsiError> {
         let m = start.len();
         let l = self.i.len();
-        let mut th: Vec<f64> = start.iter().map(|s| s.norm().ln()).collect();
-        th.extend(start.iter().map(|s| {
-            let zeta = (-s.re / s.norm()).clamp(1e-6, 0.99);
-            (zeta / (1.0 - zeta)).ln()
-        }));
+        let (mut th, logits): (Vec<f64>, Vec<f64>) = start.iter().map(|&s| pole_params(s)).unzip();
+        th.extend(logits);
         let mu = discrete_poles(start, self.fs).ok_or(SsiError::Refinement {
             reason: "a starting pole is at or above the Nyquist frequency",
         })?;
@@ -695,11 +699,11 @@ impl<'a> Model<'a> {
         let q = 2 * m;
         let mu = discrete_poles(&[new], self.fs)?[0];
         let factor = [1.0, -2.0 * mu.re, mu.norm_sqr()];
-        let zeta = (-new.re / new.norm()).clamp(1e-6, 0.99);
+        let (ln_w, logit_zeta) = pole_params(new);
         let mut th: Vec<f64> = prev.theta[..m].to_vec();
-        th.push(new.norm().ln());
+        th.push(ln_w);
         th.extend_from_slice(&prev.theta[m..2 * m]);
-        th.push((zeta / (1.0 - zeta)).ln());
+        th.push(logit_zeta);
         for c in 0..self.i.len() {
             let off = 2 * m + c * (q + 1);
             th.push(prev.theta[off]);
@@ -762,21 +766,17 @@ impl<'a> Model<'a> {
             iterations += 1;
             let mut accepted = None;
             for _ in 0..30 {
-                let mut a = cur.f.clone();
-                for t in 0..a.rows {
-                    let dg = cur.f.at(t, t);
-                    a.set(t, t, dg * (1.0 + nu) + 1e-12 * (1.0 + dg));
-                }
-                let mut u = cur.u.clone();
+                let mut a = damped(&cur.f, nu);
+                let u = masked(&cur.u, m, hold_poles);
                 if hold_poles {
-                    // Rows and columns of the pole parameters become identity, their score 0.
-                    for (t, ut) in u.iter_mut().enumerate().take(2 * m) {
+                    // Rows and columns of the pole parameters become identity (their score is
+                    // 0): the poles do not move.
+                    for t in 0..2 * m {
                         for k in 0..a.rows {
                             a.set(t, k, 0.0);
                             a.set(k, t, 0.0);
                         }
                         a.set(t, t, 1.0);
-                        *ut = 0.0;
                     }
                 }
                 if let Some(step) = linalg::spd_solve(&a, &u) {
@@ -803,14 +803,9 @@ impl<'a> Model<'a> {
             nu = (nu / 10.0).max(1e-12);
             // Converged when even a full Gauss–Newton step would gain less than `tol` (the
             // Newton decrement ½ Uᵀ F⁻¹ U); a small gain alone may be a short damped step.
-            let decrement = linalg::spd_solve(&with_ridge(&cur.f), &masked(&cur.u, m, hold_poles))
-                .map(|x| {
-                    0.5 * x
-                        .iter()
-                        .zip(&masked(&cur.u, m, hold_poles))
-                        .map(|(a, b)| a * b)
-                        .sum::<f64>()
-                });
+            let u = masked(&cur.u, m, hold_poles);
+            let decrement = linalg::spd_solve(&damped(&cur.f, 0.0), &u)
+                .map(|x| 0.5 * x.iter().zip(&u).map(|(a, b)| a * b).sum::<f64>());
             if (gain < tol && decrement.is_none_or(|d| d < tol)) || cur.l < stop_below {
                 break;
             }
@@ -825,12 +820,13 @@ impl<'a> Model<'a> {
     }
 }
 
-/// `f` with 1e-12·(1 + F_tt) added to its diagonal, so that a semi-definite F still factors.
-fn with_ridge(f: &Dense) -> Dense {
+/// `f` with its diagonal F_tt raised to F_tt·(1 + ν) (Levenberg–Marquardt damping) plus
+/// 1e-12·(1 + F_tt), so that a semi-definite F still factors.
+fn damped(f: &Dense, nu: f64) -> Dense {
     let mut a = f.clone();
     for t in 0..a.rows {
         let dg = f.at(t, t);
-        a.set(t, t, dg + 1e-12 * (1.0 + dg));
+        a.set(t, t, dg * (1.0 + nu) + 1e-12 * (1.0 + dg));
     }
     a
 }
