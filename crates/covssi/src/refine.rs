@@ -39,6 +39,7 @@
 //! the SSI result.
 
 use crate::linalg::{self, C64, Dense};
+use crate::stabilize::pole_distance;
 use crate::{Mode, SsiError};
 use rayon::prelude::*;
 use realfft::RealFftPlanner;
@@ -83,7 +84,7 @@ impl Default for RefineOptions {
 /// A mode after refinement.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RefinedMode {
-    /// Index of the SSI mode it started from.
+    /// Index of the SSI mode nearest it (poles may trade places while fitting).
     pub source: usize,
     /// Natural frequency |λ|/2π (Hz).
     pub frequency_hz: f64,
@@ -105,7 +106,7 @@ pub struct RefinedMode {
 /// An SSI mode the likelihood does not support.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DroppedMode {
-    /// Index of the SSI mode.
+    /// Index of the SSI mode (for one dropped from the final model: the nearest to its pole).
     pub source: usize,
     /// Its SSI frequency (Hz).
     pub frequency_hz: f64,
@@ -173,14 +174,12 @@ pub fn refine(
     weak.sort_by(|&a, &b| modes[b].members.len().cmp(&modes[a].members.len()));
     let start: Vec<C64> = core.iter().map(|&k| modes[k].lambda).collect();
     let mut fit = model.fit(&start, opts, opts.tolerance, false)?;
-    let mut sources = core;
     let mut dropped = Vec::new();
     for &cand in &weak {
         let next = model.fit_with(&fit, modes[cand].lambda, opts)?;
         let evidence = fit.l - next.l;
         if !opts.select || evidence >= penalty {
             fit = next;
-            sources.push(cand);
         } else {
             dropped.push(DroppedMode {
                 source: cand,
@@ -227,8 +226,7 @@ pub fn refine(
             .min_by(|a, b| a.1.total_cmp(&b.1));
         match weakest {
             Some((k, ev)) if opts.select && ev < penalty => {
-                let src = nearest_mode(modes, fit.lambdas[k]).unwrap_or(sources[k]);
-                sources.remove(k);
+                let src = nearest_mode(modes, fit.lambdas[k]);
                 dropped.push(DroppedMode {
                     source: src,
                     frequency_hz: modes[src].frequency_hz,
@@ -271,10 +269,8 @@ pub fn refine(
                 ),
                 None => (None, None),
             };
-            // Poles may trade places while fitting: name the nearest SSI mode.
-            let source = nearest_mode(modes, lam).unwrap_or(sources[j]);
             RefinedMode {
-                source,
+                source: nearest_mode(modes, lam),
                 frequency_hz: w / (2.0 * std::f64::consts::PI),
                 damping_ratio: zeta,
                 frequency_se_hz: fse,
@@ -840,17 +836,15 @@ fn masked(u: &[f64], m: usize, hold_poles: bool) -> Vec<f64> {
     v
 }
 
-/// Index of the mode whose pole is nearest λ, relative to |λ|.
-fn nearest_mode(modes: &[Mode], lam: C64) -> Option<usize> {
+/// Index of the mode whose pole is nearest λ, by the clustering's relative distance. Poles may
+/// trade places while fitting, so a fitted pole is named by this rather than by the mode it
+/// started from. (Every fitted pole started from one of `modes`, so they are not empty.)
+fn nearest_mode(modes: &[Mode], lam: C64) -> usize {
     modes
         .iter()
         .enumerate()
-        .min_by(|a, b| {
-            (a.1.lambda - lam)
-                .norm()
-                .total_cmp(&(b.1.lambda - lam).norm())
-        })
-        .map(|(k, _)| k)
+        .min_by(|a, b| pole_distance(a.1.lambda, lam).total_cmp(&pole_distance(b.1.lambda, lam)))
+        .map_or(0, |(k, _)| k)
 }
 
 /// γ² = |Σ X_a X̄_b|² / (Σ|X_a|² Σ|X_b|²) over a window of neighbouring bins.

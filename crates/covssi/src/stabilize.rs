@@ -350,7 +350,7 @@ fn one_per_order<T>(
 /// Relative distance of two poles in the complex plane, |λa − λb| / max(|λa|, |λb|). Unlike a
 /// frequency gap it separates poles of one frequency but different damping: a physical mode
 /// and a lightly damped noise pole beside it.
-fn pole_distance(a: C64, b: C64) -> f64 {
+pub(crate) fn pole_distance(a: C64, b: C64) -> f64 {
     let m = a.norm().max(b.norm());
     if m == 0.0 { 0.0 } else { (a - b).norm() / m }
 }
