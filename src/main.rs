@@ -475,13 +475,15 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
         references: a.references.clone(),
         ..SsiOptions::default()
     };
-    let res = covssi::identify(&views, fs_used, &opts).map_err(|e| {
+    // Errors of covssi name the file and the columns they came from.
+    let context = |e: covssi::SsiError| {
         fail(format!(
             "{}: columns {}: {e}",
             a.input.display(),
             names.join(",")
         ))
-    })?;
+    };
+    let res = covssi::identify(&views, fs_used, &opts).map_err(context)?;
     let modes: Vec<_> = res
         .modes
         .iter()
@@ -553,13 +555,7 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
                 &res.modes,
                 &covssi::RefineOptions::default(),
             )
-            .map_err(|e| {
-                fail(format!(
-                    "{}: columns {}: {e}",
-                    a.input.display(),
-                    names.join(",")
-                ))
-            })?,
+            .map_err(context)?,
         )
     };
     let refined_json = refined.as_ref().map(|r| {
