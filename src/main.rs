@@ -577,6 +577,7 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
             "penalty": r.penalty,
             "neg_log_likelihood": r.neg_log_likelihood,
             "misfit": r.misfit,
+            "misfit_limit": covssi::refine::MISFIT_LIMIT,
             "frequencies": r.frequencies,
             "iterations": r.iterations,
         })

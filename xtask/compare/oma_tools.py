@@ -414,7 +414,7 @@ def refined_census(doc, tr):
     far = sum(1 for m in ms if not any(near(m["frequency_hz"], f) for f, _ in tr))
     dup = sum(max(0, sum(near(m["frequency_hz"], f) for m in ms) - 1) for f, _ in tr)
     missed = sum(1 for f, _ in tr if not any(near(m["frequency_hz"], f) for m in ms))
-    return (far + dup, missed, int(r["misfit"] > 0.05))
+    return (far + dup, missed, int(r["misfit"] > r["misfit_limit"]))
 
 
 def clusters(hyst, count, first, tmp):
