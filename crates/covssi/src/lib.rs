@@ -22,8 +22,9 @@
 //!    poles of one frequency but different damping stay apart; stable real poles into
 //!    [`RealPoleCluster`]s.
 //! 6. Optionally, [`refine()`]: the modes fitted to the whole record by maximum likelihood
-//!    (Whittle), with standard errors, the modes the record does not support dropped, and a
-//!    check that the record follows the model ([`refine`](mod@refine) module).
+//!    (Whittle; for 2–4 channels jointly, cross-spectra included), with standard errors, the
+//!    modes the record does not support dropped, and a check that the record follows the model
+//!    ([`refine`](mod@refine) module).
 //!
 //! ```
 //! # use covssi::{identify, SsiOptions, BlockRows};

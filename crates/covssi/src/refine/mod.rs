@@ -35,6 +35,13 @@
 //! the record follows the model at all is [`Refinement::misfit`]: under the model the ratios
 //! $I_c/S_c$ are unit exponential variables.
 //!
+//! 3. For 2 to [`JOINT_MAX_CHANNELS`] channels the chosen modes are then fitted once more by
+//!    the *joint* likelihood of all channels, cross-spectra included (the `joint` module:
+//!    $S(\omega) = B\,\Sigma\,B^H/|A|^2$ with a monic matrix numerator), whose $F^{-1}$ is the
+//!    exact asymptotic covariance. A mode every channel sees weakly is then seen through all
+//!    of them at once (on the shared 3-DOF record, the 4 Hz mode's damping standard error goes
+//!    from 3.1 % to 2.2 %, the Cramér–Rao bound).
+//!
 //! Real poles are not part of this model; records whose spectrum needs one are better read from
 //! the SSI result.
 
@@ -43,6 +50,12 @@ use crate::stabilize::pole_distance;
 use crate::{Mode, SsiError};
 use rayon::prelude::*;
 use realfft::RealFftPlanner;
+
+mod joint;
+
+/// Most channels fitted by the joint likelihood; its cost grows as l⁶ (l² parameters per
+/// numerator coefficient, l² observations per frequency).
+pub const JOINT_MAX_CHANNELS: usize = 4;
 
 /// Above this [`Refinement::misfit`] the record does not follow the model.
 pub const MISFIT_LIMIT: f64 = 0.05;
@@ -69,6 +82,10 @@ pub struct RefineOptions {
     pub tolerance: f64,
     /// Drop modes whose evidence is below the BIC penalty. Default: true.
     pub select: bool,
+    /// For 2 to [`JOINT_MAX_CHANNELS`] channels, fit the chosen modes once more by the joint
+    /// likelihood of all channels (cross-spectra included) and report its estimates and
+    /// standard errors. Default: true.
+    pub joint: bool,
 }
 
 impl Default for RefineOptions {
@@ -77,6 +94,7 @@ impl Default for RefineOptions {
             max_iterations: 200,
             tolerance: 1e-6,
             select: true,
+            joint: true,
         }
     }
 }
@@ -137,6 +155,10 @@ pub struct Refinement {
     pub frequencies: usize,
     /// Scoring iterations of the final fit.
     pub iterations: usize,
+    /// Whether the estimates, standard errors, `neg_log_likelihood` and `misfit` are the
+    /// joint likelihood's (see [`RefineOptions::joint`]); the evidence is always the
+    /// per-channel likelihood's, by which the modes were chosen.
+    pub joint: bool,
 }
 
 /// Refine `modes` (e.g. [`crate::SsiResult::modes`]) on the channels `y` sampled at `fs` Hz.
@@ -245,16 +267,46 @@ pub fn refine(
             _ => break without.iter().map(|(held, _)| *held).collect::<Vec<f64>>(),
         }
     };
-    // Asymptotic covariance: F⁻¹ for one channel; for several, the composite likelihood's
-    // sandwich F⁻¹ J F⁻¹, J the covariance of the score given the channels' coherence.
-    let cov = linalg::spd_inverse(&fit.fisher).and_then(|fi| {
-        if l == 1 {
-            return Some(fi);
-        }
-        let j = model.eval(&fit.theta, fit.lambdas.len(), What::Sandwich)?.f;
-        Some(linalg::sandwich(&fi, &j))
-    });
+    // 3. The chosen modes fitted once more by the joint likelihood, when asked and when the
+    //    record has enough frequencies for its parameters (ten observations each, a frequency
+    //    giving l² of them). If that fails the per-channel fit stands.
     let mk = fit.lambdas.len();
+    let joint_fit = (opts.joint
+        && (2..=JOINT_MAX_CHANNELS).contains(&l)
+        && mk > 0
+        && model.k() * l * l >= 10 * joint::parameters(l, mk))
+    .then(|| {
+        let jm = joint::Joint::new(&model.x, &model.z, fs);
+        let start = jm.start(&fit.theta, mk)?;
+        let jf = jm.fit(start, mk, opts).ok()?;
+        let ratios = jm.ratios(&jf.theta, mk)?;
+        // Its asymptotic covariance is F⁻¹ (an exact likelihood); a singular F means the
+        // channels are degenerate for it (e.g. one a copy of another).
+        let cov = linalg::spd_inverse(&jf.fisher)?;
+        Some((jf, ratios, cov))
+    })
+    .flatten();
+    let joint = joint_fit.is_some();
+    let misfit;
+    // Asymptotic covariance: F⁻¹ for the joint likelihood and for one channel; for the
+    // per-channel likelihood of several, the composite likelihood's sandwich F⁻¹ J F⁻¹, J the
+    // covariance of the score given the channels' coherence.
+    let cov = if let Some((jf, ratios, cov)) = joint_fit {
+        misfit = ks_exponential(ratios);
+        fit = jf;
+        Some(cov)
+    } else {
+        misfit = model
+            .eval(&fit.theta, mk, What::Ratios)
+            .map_or(1.0, |e| ks_exponential(e.ratios));
+        linalg::spd_inverse(&fit.fisher).and_then(|fi| {
+            if l == 1 {
+                return Some(fi);
+            }
+            let j = model.eval(&fit.theta, mk, What::Sandwich)?.f;
+            Some(linalg::sandwich(&fi, &j))
+        })
+    };
     let mut kept: Vec<RefinedMode> = fit
         .lambdas
         .iter()
@@ -281,9 +333,6 @@ pub fn refine(
         })
         .collect();
     kept.sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
-    let misfit = model
-        .eval(&fit.theta, fit.lambdas.len(), What::Ratios)
-        .map_or(1.0, |e| ks_exponential(e.ratios));
     Ok(Refinement {
         modes: kept,
         dropped,
@@ -292,6 +341,7 @@ pub fn refine(
         misfit,
         frequencies: model.k(),
         iterations: fit.iterations,
+        joint,
     })
 }
 
@@ -304,6 +354,8 @@ struct Model<'a> {
     z: Vec<C64>,
     /// Periodogram of each channel at ω_k.
     i: Vec<Vec<f64>>,
+    /// Discrete Fourier transform of each channel at ω_k over √N (so that I_c = |x_c|²).
+    x: Vec<Vec<C64>>,
     /// Squared coherence γ²_ab(ω_k) of each channel pair a < b at index `pair(a, b, l)`
     /// (empty otherwise), from periodograms smoothed over 2·COHERENCE_HALF_WIDTH + 1 bins.
     coherence: Vec<Vec<f64>>,
@@ -342,13 +394,50 @@ struct Eval {
     ratios: Vec<f64>,
 }
 
+impl Eval {
+    /// Nothing summed yet, with room for the score and Fisher information of `np` parameters
+    /// (0 when they are not asked for).
+    fn zero(np: usize) -> Self {
+        Eval {
+            l: 0.0,
+            u: vec![0.0; np],
+            f: Dense::zeros(np, np),
+            ratios: Vec::new(),
+        }
+    }
+
+    /// The sums over two sets of frequencies, as one.
+    fn merge(mut self, other: Self) -> Self {
+        self.l += other.l;
+        self.u.iter_mut().zip(&other.u).for_each(|(x, y)| *x += y);
+        self.f
+            .data
+            .iter_mut()
+            .zip(&other.f.data)
+            .for_each(|(x, y)| *x += y);
+        self.ratios.extend(other.ratios);
+        self
+    }
+}
+
 const CHUNK: usize = 2048;
 
 /// A pole's parameters: ln ω and logit ζ (ζ clamped to [1e-6, 0.99] so that both are finite);
-/// [`Model::unpack`] is the inverse.
+/// [`unpack`] is the inverse.
 fn pole_params(lam: C64) -> (f64, f64) {
     let zeta = (-lam.re / lam.norm()).clamp(1e-6, 0.99);
     (lam.norm().ln(), (zeta / (1.0 - zeta)).ln())
+}
+
+/// The poles λ_j of θ's first 2m entries (ln ω, then logit ζ); [`pole_params`] is the inverse.
+fn unpack(th: &[f64], m: usize) -> Vec<C64> {
+    (0..m)
+        .map(|j| {
+            let w = th[j].exp();
+            let zeta = logistic(th[m + j]);
+            w * C64::new(-zeta, (1.0 - zeta * zeta).sqrt())
+        })
+        .collect()
 }
 
 fn logistic(s: f64) -> f64 {
@@ -367,6 +456,53 @@ fn poly(roots: &[C64]) -> Vec<f64> {
         c = next;
     }
     c.iter().map(|v| v.re).collect()
+}
+
+/// The denominator |A(e^{iω})|² of the spectrum: the discrete poles of θ's modes and their
+/// derivatives by the pole parameters.
+struct Denominator {
+    /// μ_j, μ̄_j of each mode.
+    mu: Vec<C64>,
+    /// dμ_j/d(ln ω_j) and dμ_j/d(logit ζ_j).
+    dmu: Vec<[C64; 2]>,
+}
+
+impl Denominator {
+    /// `None` when a natural frequency reaches Nyquist.
+    fn new(th: &[f64], m: usize, fs: f64) -> Option<Self> {
+        let lambdas = unpack(th, m);
+        let mu = discrete_poles(&lambdas, fs)?;
+        let dmu = lambdas
+            .iter()
+            .enumerate()
+            .map(|(j, lam)| {
+                let w = lam.norm();
+                let zeta = -lam.re / w;
+                let sq = (1.0 - zeta * zeta).sqrt();
+                let dl_dz = w * C64::new(-1.0, -zeta / sq) * (zeta * (1.0 - zeta));
+                [mu[2 * j] * lam / fs, mu[2 * j] * dl_dz / fs]
+            })
+            .collect();
+        Some(Denominator { mu, dmu })
+    }
+
+    /// ln|A(z)|² at z on the unit circle; with `derivs`, `da[t]` = ∂ ln|A|²/∂θ_t for the 2m
+    /// pole parameters.
+    fn at(&self, z: C64, derivs: bool, da: &mut [f64]) -> f64 {
+        let m = self.dmu.len();
+        let mut log_a2 = 0.0;
+        for (j, dm_j) in self.dmu.iter().enumerate() {
+            let d1 = z - self.mu[2 * j];
+            let d2 = z - self.mu[2 * j + 1];
+            log_a2 += d1.norm_sqr().ln() + d2.norm_sqr().ln();
+            if derivs {
+                for (t, dm) in dm_j.iter().enumerate() {
+                    da[t * m + j] = -2.0 * (dm / d1).re - 2.0 * (dm.conj() / d2).re;
+                }
+            }
+        }
+        log_a2
+    }
 }
 
 /// Discrete poles μ, μ̄ of each mode, or `None` when a natural frequency reaches Nyquist.
@@ -404,6 +540,11 @@ impl<'a> Model<'a> {
             .iter()
             .map(|s| s.iter().map(|c| c.norm_sqr() / n as f64).collect())
             .collect();
+        let scale = 1.0 / (n as f64).sqrt();
+        let x = spectra
+            .iter()
+            .map(|s| s.iter().map(|c| c * scale).collect())
+            .collect();
         let l = y.len();
         let mut coherence = vec![Vec::new(); l * l];
         for a in 0..l {
@@ -420,22 +561,13 @@ impl<'a> Model<'a> {
             fs,
             z,
             i,
+            x,
             coherence,
         }
     }
 
     fn k(&self) -> usize {
         self.z.len()
-    }
-
-    fn unpack(&self, th: &[f64], m: usize) -> Vec<C64> {
-        (0..m)
-            .map(|j| {
-                let w = th[j].exp();
-                let zeta = logistic(th[m + j]);
-                w * C64::new(-zeta, (1.0 - zeta * zeta).sqrt())
-            })
-            .collect()
     }
 
     /// Starting numerator of channel c: σ² and B from the autocovariances of the record
@@ -531,28 +663,9 @@ impl<'a> Model<'a> {
         let q = 2 * m;
         let per = 2 * m + q + 1;
         let np = 2 * m + l * (q + 1);
-        let lambdas = self.unpack(th, m);
-        let mu = discrete_poles(&lambdas, self.fs)?;
-        // dμ/dθ for each mode: by ln ω (dλ = λ) and by logit ζ.
-        let dmu: Vec<[C64; 2]> = lambdas
-            .iter()
-            .enumerate()
-            .map(|(j, lam)| {
-                let w = lam.norm();
-                let zeta = -lam.re / w;
-                let sq = (1.0 - zeta * zeta).sqrt();
-                let dl_dz = w * C64::new(-1.0, -zeta / sq) * (zeta * (1.0 - zeta));
-                [mu[2 * j] * lam / self.fs, mu[2 * j] * dl_dz / self.fs]
-            })
-            .collect();
+        let den = Denominator::new(th, m, self.fs)?;
         let nchunks = self.k().div_ceil(CHUNK);
-        let (nu, nf) = if derivs { (np, np) } else { (0, 0) };
-        let zero = || Eval {
-            l: 0.0,
-            u: vec![0.0; nu],
-            f: Dense::zeros(nf, nf),
-            ratios: Vec::new(),
-        };
+        let zero = || Eval::zero(if derivs { np } else { 0 });
         let partial = (0..nchunks)
             .into_par_iter()
             .map(|ci| {
@@ -568,17 +681,7 @@ impl<'a> Model<'a> {
                 let mut pw = vec![C64::new(0.0, 0.0); q + 1];
                 for (row, kk) in (lo..hi).enumerate() {
                     let z = self.z[kk];
-                    let mut log_a2 = 0.0;
-                    for j in 0..m {
-                        let d1 = z - mu[2 * j];
-                        let d2 = z - mu[2 * j + 1];
-                        log_a2 += d1.norm_sqr().ln() + d2.norm_sqr().ln();
-                        if derivs {
-                            for (t, dm) in dmu[j].iter().enumerate() {
-                                da[t * m + j] = -2.0 * (dm / d1).re - 2.0 * (dm.conj() / d2).re;
-                            }
-                        }
-                    }
+                    let log_a2 = den.at(z, derivs, &mut da);
                     let zc = z.conj();
                     pw[0] = C64::new(1.0, 0.0);
                     for k in 1..=q {
@@ -652,16 +755,7 @@ impl<'a> Model<'a> {
                 }
                 acc
             })
-            .reduce(zero, |mut a, b| {
-                a.l += b.l;
-                a.u.iter_mut().zip(&b.u).for_each(|(x, y)| *x += y);
-                a.f.data
-                    .iter_mut()
-                    .zip(&b.f.data)
-                    .for_each(|(x, y)| *x += y);
-                a.ratios.extend(b.ratios);
-                a
-            });
+            .reduce(zero, Eval::merge);
         partial.l.is_finite().then_some(partial)
     }
 
@@ -740,80 +834,94 @@ impl<'a> Model<'a> {
         }
     }
 
-    /// Fisher scoring with a Levenberg–Marquardt safeguard from θ; stops early once L is below
-    /// `stop_below`.
+    /// [`scoring`] on this model's likelihood.
     fn fit_from(
         &self,
-        mut th: Vec<f64>,
+        th: Vec<f64>,
         m: usize,
         opts: &RefineOptions,
         tol: f64,
         hold_poles: bool,
         stop_below: f64,
     ) -> Result<Fit, SsiError> {
-        let mut cur = self
-            .eval(&th, m, What::Fisher)
-            .ok_or(SsiError::Refinement {
-                reason: "the starting model has a non-finite likelihood",
-            })?;
-        let mut nu = 1e-3;
-        let mut iterations = 0;
-        while iterations < opts.max_iterations {
-            iterations += 1;
-            let mut accepted = None;
-            for _ in 0..30 {
-                let mut a = damped(&cur.f, nu);
-                let u = masked(&cur.u, m, hold_poles);
-                if hold_poles {
-                    // Rows and columns of the pole parameters become identity (their score is
-                    // 0): the poles do not move.
-                    for t in 0..2 * m {
-                        for k in 0..a.rows {
-                            a.set(t, k, 0.0);
-                            a.set(k, t, 0.0);
-                        }
-                        a.set(t, t, 1.0);
-                    }
-                }
-                if let Some(step) = linalg::spd_solve(&a, &u) {
-                    let trial: Vec<f64> = th.iter().zip(&step).map(|(x, s)| x + s).collect();
-                    if let Some(e) = self.eval(&trial, m, What::Value)
-                        && e.l < cur.l
-                    {
-                        accepted = Some((trial, e.l));
-                        break;
-                    }
-                }
-                nu *= 10.0;
-            }
-            let Some((trial, l_new)) = accepted else {
-                break; // no step lowers L: a minimum to working precision
-            };
-            let gain = cur.l - l_new;
-            th = trial;
-            cur = self
-                .eval(&th, m, What::Fisher)
-                .ok_or(SsiError::Refinement {
-                    reason: "the likelihood became non-finite at an accepted step",
-                })?;
-            nu = (nu / 10.0).max(1e-12);
-            // Converged when even a full Gauss–Newton step would gain less than `tol` (the
-            // Newton decrement ½ Uᵀ F⁻¹ U); a small gain alone may be a short damped step.
-            let u = masked(&cur.u, m, hold_poles);
-            let decrement = linalg::spd_solve(&damped(&cur.f, 0.0), &u)
-                .map(|x| 0.5 * x.iter().zip(&u).map(|(a, b)| a * b).sum::<f64>());
-            if (gain < tol && decrement.is_none_or(|d| d < tol)) || cur.l < stop_below {
-                break;
-            }
-        }
-        Ok(Fit {
-            lambdas: self.unpack(&th, m),
-            theta: th,
-            l: cur.l,
-            fisher: cur.f,
-            iterations,
-        })
+        let eval = |t: &[f64], derivs: bool| {
+            self.eval(t, m, if derivs { What::Fisher } else { What::Value })
+        };
+        scoring(eval, th, m, opts, tol, hold_poles, stop_below)
     }
+}
+
+/// Fisher scoring with a Levenberg–Marquardt safeguard from θ, whose first 2m entries are the
+/// poles' ln ω and logit ζ; `eval(θ, true)` gives L, the score and the Fisher information,
+/// `eval(θ, false)` L alone (`None` outside the model). Stops early once L is below
+/// `stop_below`.
+fn scoring(
+    eval: impl Fn(&[f64], bool) -> Option<Eval>,
+    mut th: Vec<f64>,
+    m: usize,
+    opts: &RefineOptions,
+    tol: f64,
+    hold_poles: bool,
+    stop_below: f64,
+) -> Result<Fit, SsiError> {
+    let mut cur = eval(&th, true).ok_or(SsiError::Refinement {
+        reason: "the starting model has a non-finite likelihood",
+    })?;
+    let mut nu = 1e-3;
+    let mut iterations = 0;
+    while iterations < opts.max_iterations {
+        iterations += 1;
+        let mut accepted = None;
+        for _ in 0..30 {
+            let mut a = damped(&cur.f, nu);
+            let u = masked(&cur.u, m, hold_poles);
+            if hold_poles {
+                // Rows and columns of the pole parameters become identity (their score is
+                // 0): the poles do not move.
+                for t in 0..2 * m {
+                    for k in 0..a.rows {
+                        a.set(t, k, 0.0);
+                        a.set(k, t, 0.0);
+                    }
+                    a.set(t, t, 1.0);
+                }
+            }
+            if let Some(step) = linalg::spd_solve(&a, &u) {
+                let trial: Vec<f64> = th.iter().zip(&step).map(|(x, s)| x + s).collect();
+                if let Some(e) = eval(&trial, false)
+                    && e.l < cur.l
+                {
+                    accepted = Some((trial, e.l));
+                    break;
+                }
+            }
+            nu *= 10.0;
+        }
+        let Some((trial, l_new)) = accepted else {
+            break; // no step lowers L: a minimum to working precision
+        };
+        let gain = cur.l - l_new;
+        th = trial;
+        cur = eval(&th, true).ok_or(SsiError::Refinement {
+            reason: "the likelihood became non-finite at an accepted step",
+        })?;
+        nu = (nu / 10.0).max(1e-12);
+        // Converged when even a full Gauss–Newton step would gain less than `tol` (the
+        // Newton decrement ½ Uᵀ F⁻¹ U); a small gain alone may be a short damped step.
+        let u = masked(&cur.u, m, hold_poles);
+        let decrement = linalg::spd_solve(&damped(&cur.f, 0.0), &u)
+            .map(|x| 0.5 * x.iter().zip(&u).map(|(a, b)| a * b).sum::<f64>());
+        if (gain < tol && decrement.is_none_or(|d| d < tol)) || cur.l < stop_below {
+            break;
+        }
+    }
+    Ok(Fit {
+        lambdas: unpack(&th, m),
+        theta: th,
+        l: cur.l,
+        fisher: cur.f,
+        iterations,
+    })
 }
 
 /// `f` with its diagonal F_tt raised to F_tt·(1 + ν) (Levenberg–Marquardt damping) plus
@@ -886,7 +994,7 @@ fn global(t: usize, m: usize, off: usize) -> usize {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use rand::rngs::Xoshiro256PlusPlus;
     use rand::{RngExt, SeedableRng};
@@ -902,7 +1010,7 @@ mod tests {
     /// Response at FS of oscillators (f Hz, ζ) to white noise: each a 2-state block with the
     /// exact discrete poles e^{λ/fs}, seen through `gains` (one row per channel), plus white
     /// measurement noise of `noise` times each channel's noise-free standard deviation.
-    fn record(
+    pub(super) fn record(
         n: usize,
         modes: &[(f64, f64)],
         gains: &[Vec<f64>],
@@ -937,7 +1045,7 @@ mod tests {
     }
 
     /// An SSI mode with only what `refine` reads (its pole and member count) meaningful.
-    fn mode(f: f64, zeta: f64, members: usize) -> Mode {
+    pub(super) fn mode(f: f64, zeta: f64, members: usize) -> Mode {
         Mode {
             frequency_hz: f,
             frequency_std_hz: 0.0,
@@ -1007,9 +1115,11 @@ mod tests {
         let one = refine(&[&y[0]], FS, &start, &RefineOptions::default()).unwrap();
         let two = refine(&[&y[0], &y[0]], FS, &start, &RefineOptions::default()).unwrap();
         let (a, b) = (&one.modes[0], &two.modes[0]);
-        // Same estimator (the composite likelihood is twice the single one): equal to the
-        // optimizer's tolerance; the sandwich's J counts the copy's perfect coherence, so the
-        // standard errors agree too.
+        // The joint likelihood does not apply to a copy (the spectral matrix is singular), so
+        // the per-channel fit stands. Same estimator (the composite likelihood is twice the
+        // single one): equal to the optimizer's tolerance; the sandwich's J counts the copy's
+        // perfect coherence, so the standard errors agree too.
+        assert!(!two.joint);
         assert!(
             (a.lambda - b.lambda).norm() < 1e-6 * a.lambda.norm(),
             "{a:?} {b:?}"
