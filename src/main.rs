@@ -206,6 +206,10 @@ struct SsiArgs {
     /// not support).
     #[arg(long)]
     no_refine: bool,
+    /// Refine with each channel's likelihood alone, not the joint likelihood of all channels
+    /// (which uses their cross-spectra; on by default for 2 to 4 channels).
+    #[arg(long)]
+    no_joint: bool,
 }
 
 #[derive(Clone, Copy, ValueEnum, PartialEq, Eq, Debug)]
@@ -553,7 +557,10 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
                 &views,
                 fs_used,
                 &res.modes,
-                &covssi::RefineOptions::default(),
+                &covssi::RefineOptions {
+                    joint: !a.no_joint,
+                    ..Default::default()
+                },
             )
             .map_err(context)?,
         )
@@ -580,6 +587,7 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
             "misfit_limit": covssi::refine::MISFIT_LIMIT,
             "frequencies": r.frequencies,
             "iterations": r.iterations,
+            "joint": r.joint,
         })
     });
     let doc = json!({
@@ -631,8 +639,14 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
     }
     if let Some(r) = &refined {
         println!(
-            "refined by maximum likelihood ({} frequencies; a mode needs evidence above {:.1}):",
-            r.frequencies, r.penalty
+            "refined by maximum likelihood ({} frequencies, {}; a mode needs evidence above {:.1}):",
+            r.frequencies,
+            if r.joint {
+                "channels jointly"
+            } else {
+                "each channel's spectrum"
+            },
+            r.penalty
         );
         let se = |v: Option<f64>| v.map_or("?".to_string(), |v| format!("{v:.4}"));
         for m in &r.modes {

@@ -274,6 +274,10 @@ fn ssi_writes_modes_json_and_svg() {
         "{k}"
     );
     assert!(r["misfit"].as_f64().unwrap() < 0.05, "{r}");
+    assert_eq!(
+        r["joint"], false,
+        "one channel has no joint likelihood: {r}"
+    );
     assert!(out.contains("refined by maximum likelihood"), "{out}");
     let first = &v["orders"][5]["poles"][0];
     assert!(first["label"].is_string() && first["lambda"].is_array());
@@ -303,6 +307,43 @@ fn ssi_without_refinement() {
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert!(v["refined"].is_null() && !v["modes"].as_array().unwrap().is_empty());
+}
+
+/// Three channels are refined jointly by default and each alone with `--no-joint`; the JSON
+/// and the printed header say which, and both find the three modes.
+#[test]
+fn ssi_joint_and_per_channel_refinement() {
+    let Some(path) = common::data_file("oma/data_3dof.csv") else {
+        return;
+    };
+    for (flag, joint, header) in [
+        (None, true, "channels jointly"),
+        (Some("--no-joint"), false, "each channel's spectrum"),
+    ] {
+        let json = tmp(&format!("3dof_joint_{joint}.json"));
+        let mut args = vec![
+            "ssi",
+            "--input",
+            s(&path),
+            "--fs",
+            "20",
+            "--columns",
+            "y1,y2,y3",
+            "--block-rows",
+            "20",
+            "--json",
+            s(&json),
+        ];
+        args.extend(flag);
+        let (ok, out, err) = hyst(&args);
+        assert!(ok, "{err}");
+        assert!(out.contains(header), "{out}");
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        let r = &v["refined"];
+        assert_eq!(r["joint"], joint, "{r}");
+        assert_eq!(r["modes"].as_array().unwrap().len(), 3, "{r}");
+    }
 }
 
 #[test]

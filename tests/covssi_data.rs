@@ -126,7 +126,8 @@ const TRUTH_3DOF: [(f64, f64); 3] = [
 /// The maximum-likelihood refinement of the SSI modes: exactly one refined mode per true
 /// mode (the spurious SSI clusters dropped), each within 4 of its own standard errors of the
 /// truth (the standard errors are checked against the truth over 30 and 60 fresh records by
-/// `cargo xtask compare-tools`; see docs/covssi.md), and the record following the model.
+/// `cargo xtask compare-tools`; see docs/covssi.md), the record following the model, and the
+/// three channels fitted jointly.
 fn check_refined(
     name: &str,
     y: &[&[f64]],
@@ -136,6 +137,8 @@ fn check_refined(
 ) {
     let r = covssi::refine(y, 20.0, &res.modes, &covssi::RefineOptions::default()).unwrap();
     assert_eq!(r.modes.len(), truth.len(), "{name}: {r:?}");
+    // Several channels are fitted jointly (cross-spectra included).
+    assert_eq!(r.joint, y.len() > 1, "{name}");
     assert!(
         r.misfit < covssi::refine::MISFIT_LIMIT,
         "{name}: misfit {}",
