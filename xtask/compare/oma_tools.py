@@ -12,7 +12,10 @@ through the `hyst ssi` command):
      as `cargo xtask bench covssi`;
   4. `--clusters`: covssi alone over the same seeds: three ways to take a mode's value from its
      member poles, and the spurious clusters. Pass `--hyst` of another build (e.g. an older
-     commit's) to compare clusterings.
+     commit's) to compare clusterings;
+  5. `--crb`: the Cramer-Rao bound of the frequencies and damping ratios on records of these
+     systems (the smallest standard deviation any unbiased estimator can have), computed
+     here from the exact spectral matrix, independently of covssi.
 Settings as the README: max order 40, dF 1 %, dzeta 5 %, MAC 0.97; 20 block rows for three
 channels, 60 for one. The statistic as the README: the median frequency and the median damping
 of the poles each tool flags stable within +-5 % of the true frequency. Errors in % of the truth.
@@ -141,7 +144,7 @@ def run_koma(y, br):
     return np.abs(ls) / (2 * math.pi), -ls.real / np.abs(ls)
 
 
-def run_covssi(hyst, y, br, tmp):
+def run_covssi(hyst, y, br, tmp, extra=()):
     names = [f"y{j + 1}" for j in range(y.shape[1])]
     csv = os.path.join(tmp, "rec.csv")
     np.savetxt(csv, y, delimiter=",", header=",".join(names), comments="", fmt="%.17g")
@@ -149,7 +152,7 @@ def run_covssi(hyst, y, br, tmp):
     subprocess.run(
         [hyst, "ssi", "--input", csv, "--fs", str(FS), "--block-rows", str(br),
          "--max-order", str(MAX_ORDER), "--df", str(DF), "--dzeta", str(DZ),
-         "--dmac", str(DMAC), "--json", out],
+         "--dmac", str(DMAC), "--json", out, *extra],
         check=True, stdout=subprocess.DEVNULL,
     )
     doc = json.load(open(out))
@@ -217,7 +220,7 @@ CASES = [
     ("channel y1", chain_3dof, [0], 60, "data_3dof.csv", ["y1"]),
     ("SDOF", sdof, [0], 60, "data_sdof.csv", ["y"]),
 ]
-TOOLS = ["pyOMA2", "koma", "covssi", "covssi mode", "covssi ML"]
+TOOLS = ["pyOMA2", "koma", "covssi", "covssi mode", "covssi ML", "covssi ML per channel"]
 
 
 def run_all(hyst, y, br, tr, tmp):
@@ -230,6 +233,12 @@ def run_all(hyst, y, br, tr, tmp):
     out["covssi"] = [median_errors(f, z, *t) for t in tr]
     out["covssi mode"] = [mode_errors(doc["modes"], *t) for t in tr]
     out["covssi ML"] = [refined_errors(doc, *t) for t in tr]
+    # The per-channel likelihood alone (for one channel it is the same likelihood).
+    if y.shape[1] > 1:
+        _, _, per = run_covssi(hyst, y, br, tmp, ["--no-joint"])
+        out["covssi ML per channel"] = [refined_errors(per, *t) for t in tr]
+    else:
+        out["covssi ML per channel"] = out["covssi ML"]
     out["z"] = [refined_z_scores(doc, *t) for t in tr]
     return out
 
@@ -321,12 +330,12 @@ def seeds(hyst, count, first, tmp):
     print()
     print("RMS error of covssi ML over each tool's, frequency / damping, with a 95 % interval "
           "from resampling the seeds (paired: the same records); below 1 = covssi ML closer:\n")
-    print("| case | mode | over pyOMA2 | over koma |")
-    print("|---|---|---|---|")
+    print("| case | mode | over pyOMA2 | over koma | over covssi ML per channel |")
+    print("|---|---|---|---|---|")
     for name, j, r in ratios:
         cells = [" / ".join(f"{m:.2f} [{lo:.2f}, {hi:.2f}]" for m, lo, hi in r[t])
-                 for t in ("pyOMA2", "koma")]
-        print(f"| {name} | {j} | {cells[0]} | {cells[1]} |")
+                 for t in ("pyOMA2", "koma", "covssi ML per channel")]
+        print(f"| {name} | {j} | {cells[0]} | {cells[1]} | {cells[2]} |")
     print()
     print("Calibration of covssi ML's standard errors: RMS of (estimate - truth) / standard "
           "error, frequency / damping (1 if they are right):\n")
@@ -343,7 +352,7 @@ def rms_ratios(errs, j, draws=2000):
     rng = np.random.default_rng(0)
     ml = np.array([r[j] for r in errs["covssi ML"]])
     out = {}
-    for t in ("pyOMA2", "koma"):
+    for t in ("pyOMA2", "koma", "covssi ML per channel"):
         e = np.array([r[j] for r in errs[t]])
         ok = ~np.isnan(ml[:, 0]) & ~np.isnan(e[:, 0])
         a, b = ml[ok], e[ok]
@@ -516,6 +525,102 @@ def timing(hyst_unused, repeats=7):
     print()
 
 
+# ---------------------------------------------------------------------------- Cramer-Rao bound
+def discrete(M, C, K):
+    """Ad, Bd of the exact zero-order-hold discretisation used by `simulate`."""
+    d = M.shape[0]
+    Minv = linalg.inv(M)
+    A = np.block([[np.zeros((d, d)), np.eye(d)], [-Minv @ K, -Minv @ C]])
+    B = np.vstack([np.zeros((d, d)), Minv])
+    big = linalg.expm(np.block([[A, B], [np.zeros((d, 2 * d + d))]]) / FS)
+    return big[: 2 * d, : 2 * d], big[: 2 * d, 2 * d :]
+
+
+def covariance_model(M, C, K, chans, noise=0.05):
+    """The records' exact second-order model in covariance form: the output covariances
+    R_j = sum_r (c_r g_r^T mu_r^(j-1) + conj) for j >= 1, and R_0 with the measurement noise.
+    Returns the modes (f Hz, zeta, c_r, g_r) by frequency, and R_0."""
+    Ad, Bd = discrete(M, C, K)
+    d = M.shape[0]
+    Sx = linalg.solve_discrete_lyapunov(Ad, Bd @ Bd.T)
+    Cy = np.eye(2 * d)[:d][chans]
+    G = Ad @ Sx @ Cy.T
+    R0 = Cy @ Sx @ Cy.T
+    R0 = R0 + np.diag(noise**2 * np.diag(R0))
+    mu, V = linalg.eig(Ad)
+    Vi = linalg.inv(V)
+    modes = []
+    for i in sorted((i for i in range(len(mu)) if mu[i].imag > 0), key=lambda i: abs(np.log(mu[i]))):
+        lam = np.log(mu[i]) * FS
+        modes.append((abs(lam) / (2 * math.pi), -lam.real / abs(lam), Cy @ V[:, i], Vi[i, :] @ G))
+    return modes, R0
+
+
+def spectral_matrix(p, l, m, om):
+    """S(omega) = R_0 + P(z) + P(z)^H, P(z) = sum_r c_r g_r^T / (z - mu_r) + conj, z = e^(i omega),
+    from the parameter vector p = per mode (f, zeta, Re c, Im c, Re g, Im g), then R_0's upper
+    triangle."""
+    z = np.exp(1j * om)
+    S = np.zeros((len(om), l, l), complex)
+    k = 0
+    for _ in range(m):
+        f, zeta = p[k], p[k + 1]
+        w = 2 * math.pi * f
+        mu = np.exp((-zeta * w + 1j * w * math.sqrt(1 - zeta * zeta)) / FS)
+        c = p[k + 2 : k + 2 + l] + 1j * p[k + 2 + l : k + 2 + 2 * l]
+        g = p[k + 2 + 2 * l : k + 2 + 3 * l] + 1j * p[k + 2 + 3 * l : k + 2 + 4 * l]
+        k += 2 + 4 * l
+        R = np.outer(c, g)
+        P = R[None] / (z - mu)[:, None, None] + np.conj(R)[None] / (z - np.conj(mu))[:, None, None]
+        S += P + np.conj(np.transpose(P, (0, 2, 1)))
+    iu = np.triu_indices(l)
+    R0 = np.zeros((l, l))
+    R0[iu] = p[k:]
+    R0 = R0 + np.triu(R0, 1).T
+    return S + R0[None]
+
+
+def cramer_rao(system, chans, n=N, grid=8192):
+    """Standard deviation bound (in % of the truth) of each mode's frequency and damping ratio
+    from n samples: the inverse of the Whittle Fisher information
+    F_ij = sum_k tr(S^-1 dS_i S^-1 dS_j) over the n/2 frequencies in (0, pi), the derivatives
+    by central differences. The parametrisation has redundant directions (c_r alpha, g_r /
+    alpha), so F is inverted on its range (pseudo-inverse); the frequencies and damping ratios
+    are identifiable, so their bound is unaffected."""
+    modes, R0 = covariance_model(*system(), chans)
+    l, m = len(chans), len(modes)
+    p = []
+    for f, zeta, c, g in modes:
+        p += [f, zeta, *c.real, *c.imag, *g.real, *g.imag]
+    p = np.array(p + list(R0[np.triu_indices(l)]))
+    om = (np.arange(grid) + 0.5) * math.pi / grid
+    Si = np.linalg.inv(spectral_matrix(p, l, m, om))
+    D = []
+    for i in range(len(p)):
+        h = 1e-6 * max(abs(p[i]), 1e-3)
+        a, b = p.copy(), p.copy()
+        a[i] += h
+        b[i] -= h
+        D.append(Si @ ((spectral_matrix(a, l, m, om) - spectral_matrix(b, l, m, om)) / (2 * h)))
+    F = np.array([[np.einsum("kab,kba->k", Di, Dj).real.mean() * n / 2 for Dj in D] for Di in D])
+    cov = np.linalg.pinv(F, rcond=1e-12)
+    out, k = [], 0
+    for f, zeta, _, _ in modes:
+        out.append((100 * math.sqrt(cov[k, k]) / f, 100 * math.sqrt(cov[k + 1, k + 1]) / zeta))
+        k += 2 + 4 * l
+    return out
+
+
+def crb_table():
+    print(f"## Cramer-Rao bound at N = {N} (standard deviation, % of the truth, frequency / damping)\n")
+    print("| case | mode | bound |")
+    print("|---|---|---|")
+    for name, system, chans, _, _, _ in CASES:
+        for j, (bf, bz) in enumerate(cramer_rao(system, chans)):
+            print(f"| {name} | {j + 1} | {bf:.3f} / {bz:.2f} |")
+    print()
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--hyst", required=True, help="path to the hyst binary (release)")
@@ -528,7 +633,12 @@ def main():
     ap.add_argument("--covssi-only", action="store_true",
                     help="skip the tools (the shared records and the seed tables): with "
                          "--clusters, covssi alone")
+    ap.add_argument("--crb", action="store_true",
+                    help="print the Cramer-Rao bound of the estimates and stop")
     a = ap.parse_args()
+    if a.crb:
+        crb_table()
+        return
     import koma  # noqa: F401  (fail early if the tools are missing)
     import pyoma2  # noqa: F401
 

@@ -1,9 +1,11 @@
-//! `cargo xtask compare-tools [--seeds N] [--first-seed S] [--timing] [--clusters] [--covssi-only]`: covssi
-//! beside the two Python tools of `../shared/data/oma/README.md`, pyOMA2 and koma, with the
-//! same settings and the same statistic, on the shared records, on fresh records of the same
-//! systems over noise seeds, (`--timing`) the tools' identification step at N = 1e6 on this
-//! machine, and (`--clusters`) covssi's mode values and spurious clusters over the same seeds
-//! (with `--covssi-only`, without running the tools).
+//! `cargo xtask compare-tools [--seeds N] [--first-seed S] [--timing] [--clusters] [--covssi-only] [--crb]`:
+//! covssi beside the two Python tools of `../shared/data/oma/README.md`, pyOMA2 and koma, with
+//! the same settings and the same statistic, on the shared records, on fresh records of the
+//! same systems over noise seeds, (`--timing`) the tools' identification step at N = 1e6 on
+//! this machine, and (`--clusters`) covssi's mode values and spurious clusters over the same
+//! seeds (with `--covssi-only`, without running the tools). `--crb` prints the Cramér–Rao
+//! bound of the estimates on these systems' records instead, computed from their exact
+//! spectral matrix.
 //!
 //! The tools run in a virtual environment made on first use under `target/compare-venv`
 //! (`python3 -m venv`, then pip installs the pinned versions from PyPI); the comparison itself
