@@ -2,21 +2,26 @@
 //! Fourier transforms $x_k$, cross-spectra included,
 //!
 //! $$ L(\theta) = \sum_k \Big[\ln\det S(\omega_k) + x_k^H S(\omega_k)^{-1} x_k\Big], \qquad
-//! S(\omega) = \frac{B(e^{i\omega})\,\Sigma\,B(e^{i\omega})^H}{|A(e^{i\omega})|^2}, $$
+//! S = H\,\Sigma\,H^H,\quad
+//! H(z) = I + \sum_r \Big[\frac{c_r k_r^\top}{z-\mu_r} + \frac{\bar c_r \bar k_r^\top}{z-\bar\mu_r}\Big], $$
 //!
-//! with the same scalar $A$ (the modes' poles), a monic $l\times l$ matrix polynomial
-//! $B(z) = I + \sum_{j=1}^{2m} B_j z^{-j}$ and $\Sigma = \Lambda\Lambda^\top$ ($\Lambda$ lower
-//! triangular, its diagonal by logarithms). The spectral matrix of any sampled linear system of
-//! $m$ modes driven by white noise, plus white measurement noise, has this form (its innovation
-//! form over the common denominator $A$). For one channel it is the per-channel model.
+//! the innovation form of a sampled linear system of $m$ modes driven by white noise, plus
+//! white measurement noise, in modal coordinates: each mode enters through its discrete pole
+//! $\mu_r$ (shared with the per-channel model), its shape $c_r$ and its gain $k_r$ from the
+//! innovations ($k_r$ normalised to 1 in one component), and $\Sigma = \Lambda\Lambda^\top$
+//! ($\Lambda$ lower triangular, its diagonal by logarithms). For one channel $H = B/A$ in
+//! partial fractions, the per-channel model. (A common denominator with a matrix numerator,
+//! $S = B\Sigma B^H/|A|^2$, describes the same spectra but must place $l-1$ zeros next to each
+//! lightly damped pole to cancel it off the mode's shape; those near-cancellations made its
+//! scoring crawl on low-noise records.)
 //!
-//! With $\varepsilon_k = |A|\,\Lambda^{-1}B^{-1}x_k$ (the whitened transform) the score and the
+//! With $\varepsilon_k = \Lambda^{-1}H^{-1}x_k$ (the whitened transform) the score and the
 //! Fisher information are sums over $k$ of $\operatorname{tr}\big((\varepsilon\varepsilon^H - I)X_t\big)$
-//! and $\operatorname{tr}(X_s X_t)$, where $X_t = \Lambda^{-1}B^{-1}(\partial_t S)B^{-H}\Lambda^{-\top}|A|^2$
+//! and $\operatorname{tr}(X_s X_t)$, where $X_t = \Lambda^{-1}H^{-1}(\partial_t S)H^{-H}\Lambda^{-\top}$
 //! is Hermitian: stacking each $X_t$'s $l^2$ real coordinates makes both a least-squares
 //! product.
 
-use super::{Denominator, Eval, Fit, RefineOptions, scoring};
+use super::{Denominator, Eval, Fit, Model, RefineOptions, discrete_poles, scoring, unpack};
 use crate::SsiError;
 use crate::linalg::{self, C64, Dense};
 use rayon::prelude::*;
@@ -24,90 +29,187 @@ use rayon::prelude::*;
 /// Frequencies per parallel chunk (each gives l² rows of the Jacobian).
 const CHUNK: usize = 512;
 
-/// The channels' transforms and what the joint model needs of them.
+/// The joint model of a record's channels.
 pub(super) struct Joint<'a> {
-    /// x_c(ω_k) = DFT/√N of channel c.
-    x: &'a [Vec<C64>],
-    /// e^{iω_k}.
-    z: &'a [C64],
-    fs: f64,
+    /// The record: its channels, means, transforms x_c(ω_k) = DFT/√N and e^{iω_k}.
+    rec: &'a Model<'a>,
+    /// For each mode, the component of k_r held at 1.
+    refs: Vec<usize>,
 }
 
-/// Number of parameters for l channels and m modes.
+/// Number of parameters for l channels and m modes: per mode ln ω, logit ζ, c (2l reals) and
+/// k (2l − 2 reals), then Λ.
 pub(super) fn parameters(l: usize, m: usize) -> usize {
-    2 * m + 2 * m * l * l + l * (l + 1) / 2
+    4 * l * m + l * (l + 1) / 2
 }
+
+const ZERO: C64 = C64 { re: 0.0, im: 0.0 };
 
 impl<'a> Joint<'a> {
-    pub(super) fn new(x: &'a [Vec<C64>], z: &'a [C64], fs: f64) -> Self {
-        Joint { x, z, fs }
-    }
-
-    fn l(&self) -> usize {
-        self.x.len()
-    }
-
-    /// θ to start from, given a per-channel fit with `m` modes (its θ: 2m pole parameters,
-    /// then per channel ln σ² and the 2m numerator coefficients): the same poles, B
-    /// diagonal with each channel's numerator, and Σ the concentrated estimate
-    /// Re Σ_k |A|² u_k u_kᴴ / K for u = B⁻¹x. `None` if that Σ is not positive definite.
-    pub(super) fn start(&self, per_channel: &[f64], m: usize) -> Option<Vec<f64>> {
-        let l = self.l();
-        let q = 2 * m;
-        let den = Denominator::new(per_channel, m, self.fs)?;
-        let num = |c: usize| &per_channel[2 * m + c * (q + 1) + 1..2 * m + (c + 1) * (q + 1)];
-        let mut sigma = vec![0.0; l * l];
-        let mut u = vec![C64::new(0.0, 0.0); l];
-        for (k, &z) in self.z.iter().enumerate() {
-            let a2 = den.at(z, false, &mut []).exp();
-            let zc = z.conj();
-            for (c, uc) in u.iter_mut().enumerate() {
-                let mut b = C64::new(1.0, 0.0);
-                let mut p = C64::new(1.0, 0.0);
-                for bj in num(c) {
-                    p *= zc;
-                    b += p * bj;
+    /// The model and θ to start from, given a per-channel fit with `m` modes (θ: 2m pole
+    /// parameters first): its poles μ_r, and c_r, k_r, Σ by regressions on the record. A long
+    /// autoregression of y gives the innovations ε̂; then y_t − ε̂_t = Σ_r 2 Re(R_r φ_{r,t}),
+    /// φ_{r,t} = Σ_{j≥1} μ_r^{j−1} ε̂_{t−j}, is linear in the residues R_r = c_r k_rᵀ, whose
+    /// best rank-one parts give c_r and k_r; Σ is the covariance of ε̂. `None` if a
+    /// regression is singular or Σ is not positive definite (a channel that the others predict
+    /// exactly, e.g. a copy).
+    pub(super) fn start(
+        rec: &'a Model<'a>,
+        per_channel: &[f64],
+        m: usize,
+    ) -> Option<(Self, Vec<f64>)> {
+        let l = rec.x.len();
+        let mu = discrete_poles(&unpack(per_channel, m), rec.fs)?;
+        let n = rec.y[0].len();
+        let y: Vec<Vec<f64>> = rec
+            .y
+            .iter()
+            .zip(rec.means)
+            .map(|(c, mean)| c.iter().map(|v| v - mean).collect())
+            .collect();
+        // Long autoregression: order 6m (at least 4), at most a tenth of the samples.
+        let p = (6 * m).max(4).min(n / 10);
+        let fill_lags = |t: usize, x: &mut [f64]| {
+            for lag in 1..=p {
+                for c in 0..l {
+                    x[(lag - 1) * l + c] = y[c][t - lag];
                 }
-                *uc = self.x[c][k] / b;
             }
-            for a in 0..l {
-                for b in 0..=a {
-                    sigma[a * l + b] += a2 * (u[a] * u[b].conj()).re;
+        };
+        let ar = regress(n - p, l * p, l, |r, x, yv| {
+            fill_lags(r + p, x);
+            for c in 0..l {
+                yv[c] = y[c][r + p];
+            }
+        })?;
+        // Innovations ε̂_t for t ≥ p (index t − p).
+        let mut eps = vec![vec![0.0; n - p]; l];
+        let mut x = vec![0.0; l * p];
+        for t in p..n {
+            fill_lags(t, &mut x);
+            for (c, ec) in eps.iter_mut().enumerate() {
+                ec[t - p] = y[c][t] - (0..l * p).map(|i| x[i] * ar.at(i, c)).sum::<f64>();
+            }
+        }
+        let len = n - p;
+        // φ_{r,t} for every mode, by the recursion φ_{t+1} = μ φ_t + ε̂_t from φ = 0.
+        let mut phi = vec![vec![ZERO; len * l]; m];
+        for (r, ph) in phi.iter_mut().enumerate() {
+            let u = mu[2 * r];
+            for t in 1..len {
+                for c in 0..l {
+                    ph[t * l + c] = u * ph[(t - 1) * l + c] + eps[c][t - 1];
                 }
             }
         }
-        let k = self.z.len() as f64;
-        sigma.iter_mut().for_each(|v| *v /= k);
-        let chol = cholesky(&sigma, l)?;
+        let res = regress(len, 2 * l * m, l, |t, xr, yv| {
+            for (r, ph) in phi.iter().enumerate() {
+                for c in 0..l {
+                    xr[2 * l * r + c] = ph[t * l + c].re;
+                    xr[2 * l * r + l + c] = ph[t * l + c].im;
+                }
+            }
+            for c in 0..l {
+                yv[c] = y[c][t + p] - eps[c][t];
+            }
+        })?;
         let mut th = per_channel[..2 * m].to_vec();
-        for j in 0..q {
-            for a in 0..l {
-                for b in 0..l {
-                    th.push(if a == b { num(a)[j] } else { 0.0 });
+        let mut refs = Vec::with_capacity(m);
+        for r in 0..m {
+            // 2 Re(R φ) = 2 Re R · Re φ − 2 Im R · Im φ.
+            let big_r: Vec<C64> = (0..l * l)
+                .map(|i| {
+                    let (a, b) = (i / l, i % l);
+                    C64::new(res.at(2 * l * r + b, a), -res.at(2 * l * r + l + b, a)) * 0.5
+                })
+                .collect();
+            let (c, k, at) = rank_one(&big_r, l)?;
+            refs.push(at);
+            th.extend(c.iter().map(|v| v.re));
+            th.extend(c.iter().map(|v| v.im));
+            for (b, kb) in k.iter().enumerate() {
+                if b != at {
+                    th.push(kb.re);
+                    th.push(kb.im);
                 }
             }
         }
+        let count = len as f64;
+        let mut sigma = vec![0.0; l * l];
+        for a in 0..l {
+            for b in 0..=a {
+                sigma[a * l + b] =
+                    eps[a].iter().zip(&eps[b]).map(|(u, v)| u * v).sum::<f64>() / count;
+            }
+        }
+        let chol = cholesky(&sigma, l)?;
         th.extend((0..l).map(|a| chol[a * l + a].ln()));
         for a in 1..l {
             th.extend((0..a).map(|b| chol[a * l + b]));
         }
-        Some(th)
+        th.iter()
+            .all(|v| v.is_finite())
+            .then_some((Joint { rec, refs }, th))
     }
 
-    /// Fisher scoring of the joint likelihood from θ.
-    pub(super) fn fit(
-        &self,
-        th: Vec<f64>,
-        m: usize,
-        opts: &RefineOptions,
-    ) -> Result<Fit, SsiError> {
-        let eval = |t: &[f64], derivs: bool| self.eval(t, m, derivs, false);
-        scoring(eval, th, m, opts, opts.tolerance, false, f64::NEG_INFINITY)
+    fn l(&self) -> usize {
+        self.rec.x.len()
+    }
+
+    /// Fisher scoring of the joint likelihood from θ: first with the poles held, so that the
+    /// shapes and gains (from regressions) settle where the poles are, then everything free.
+    pub(super) fn fit(&self, th: Vec<f64>, opts: &RefineOptions) -> Result<Fit, SsiError> {
+        let m = self.refs.len();
+        let eval = |t: &[f64], derivs: bool| self.eval(t, derivs, false);
+        let held = scoring(eval, th, m, opts, opts.tolerance, true, f64::NEG_INFINITY)?;
+        let free = scoring(
+            eval,
+            held.theta,
+            m,
+            opts,
+            opts.tolerance,
+            false,
+            f64::NEG_INFINITY,
+        )?;
+        Ok(Fit {
+            iterations: held.iterations + free.iterations,
+            ..free
+        })
     }
 
     /// The whitened periodogram ordinates |ε_c(ω_k)|² (unit exponential under the model).
-    pub(super) fn ratios(&self, th: &[f64], m: usize) -> Option<Vec<f64>> {
-        self.eval(th, m, false, true).map(|e| e.ratios)
+    pub(super) fn ratios(&self, th: &[f64]) -> Option<Vec<f64>> {
+        self.eval(th, false, true).map(|e| e.ratios)
+    }
+
+    /// c_r and k_r of θ (k_r with its reference component 1).
+    fn shapes(&self, th: &[f64]) -> (Vec<Vec<C64>>, Vec<Vec<C64>>) {
+        let l = self.l();
+        let m = self.refs.len();
+        let mut cs = Vec::with_capacity(m);
+        let mut ks = Vec::with_capacity(m);
+        for (r, &at) in self.refs.iter().enumerate() {
+            let off = 2 * m + r * (4 * l - 2);
+            cs.push(
+                (0..l)
+                    .map(|a| C64::new(th[off + a], th[off + l + a]))
+                    .collect(),
+            );
+            let mut t = off + 2 * l;
+            ks.push(
+                (0..l)
+                    .map(|b| {
+                        if b == at {
+                            C64::new(1.0, 0.0)
+                        } else {
+                            t += 2;
+                            C64::new(th[t - 2], th[t - 1])
+                        }
+                    })
+                    .collect(),
+            );
+        }
+        (cs, ks)
     }
 
     /// Λ (row-major, lower triangular) and its inverse from θ's last l(l+1)/2 entries.
@@ -140,43 +242,56 @@ impl<'a> Joint<'a> {
     }
 
     /// L at θ; with `derivs` the score U = −∇L and the Fisher information; with `ratios`
-    /// the whitened ordinates. `None` outside the model (a pole at Nyquist, B(z) singular
-    /// on the unit circle, overflow).
-    pub(super) fn eval(&self, th: &[f64], m: usize, derivs: bool, ratios: bool) -> Option<Eval> {
+    /// the whitened ordinates. `None` outside the model (a pole at Nyquist, H(z) singular on
+    /// the unit circle, overflow).
+    pub(super) fn eval(&self, th: &[f64], derivs: bool, ratios: bool) -> Option<Eval> {
         let l = self.l();
-        let q = 2 * m;
+        let m = self.refs.len();
         let np = parameters(l, m);
         debug_assert_eq!(th.len(), np);
-        let den = Denominator::new(th, m, self.fs)?;
+        let den = Denominator::new(th, m, self.rec.fs)?;
+        let (cs, ks) = self.shapes(th);
         let (lam, lam_inv) = self.lambda(th);
         let log_det_sigma: f64 = 2.0 * (0..l).map(|a| lam[a * l + a].ln()).sum::<f64>();
         let ll = l * l;
-        let b_off = 2 * m;
-        let s_off = b_off + q * ll;
+        let s_off = np - l * (l + 1) / 2;
         // Coordinates of a Hermitian l×l matrix: the l diagonal entries, then √2 Re and √2 Im
         // of each entry above it, so that tr(XY) is their dot product.
         let upper: Vec<(usize, usize)> = (0..l)
             .flat_map(|c| (c + 1..l).map(move |d| (c, d)))
             .collect();
         let sq2 = std::f64::consts::SQRT_2;
-        // The Σ columns do not depend on the frequency: X = Y + Yᵀ with Y = Λ⁻¹ ∂Λ.
+        // The coordinates of X = Y + Yᴴ for a row-major Y.
+        let coords = |y: &[C64], out: &mut [f64]| {
+            for c in 0..l {
+                out[c] = 2.0 * y[c * l + c].re;
+            }
+            for (t, &(c, d)) in upper.iter().enumerate() {
+                let v = y[c * l + d] + y[d * l + c].conj();
+                out[l + 2 * t] = sq2 * v.re;
+                out[l + 2 * t + 1] = sq2 * v.im;
+            }
+        };
+        // The Σ columns do not depend on the frequency: Y = Λ⁻¹ ∂Λ.
         let sigma_cols: Vec<Vec<f64>> = {
             let mut cols = Vec::new();
             let mut push = |a: usize, b: usize, scale: f64| {
                 // ∂Λ = scale·E_ab, so Y_cd = scale · Λ⁻¹[c, a] δ_{d b}.
-                let y = |c: usize, d: usize| {
-                    if d == b {
-                        scale * lam_inv[c * l + a]
-                    } else {
-                        0.0
-                    }
-                };
-                let mut v = Vec::with_capacity(ll);
-                v.extend((0..l).map(|c| 2.0 * y(c, c)));
-                for &(c, d) in &upper {
-                    v.push(sq2 * (y(c, d) + y(d, c)));
-                    v.push(0.0);
-                }
+                let y: Vec<C64> = (0..ll)
+                    .map(|i| {
+                        let (c, d) = (i / l, i % l);
+                        C64::new(
+                            if d == b {
+                                scale * lam_inv[c * l + a]
+                            } else {
+                                0.0
+                            },
+                            0.0,
+                        )
+                    })
+                    .collect();
+                let mut v = vec![0.0; ll];
+                coords(&y, &mut v);
                 cols.push(v);
             };
             for a in 0..l {
@@ -189,60 +304,60 @@ impl<'a> Joint<'a> {
             }
             cols
         };
-        let nchunks = self.z.len().div_ceil(CHUNK);
+        let nchunks = self.rec.z.len().div_ceil(CHUNK);
         let zero = || Eval::zero(if derivs { np } else { 0 });
         let total = (0..nchunks)
             .into_par_iter()
             .map(|ci| {
                 let lo = ci * CHUNK;
-                let hi = (lo + CHUNK).min(self.z.len());
+                let hi = (lo + CHUNK).min(self.rec.z.len());
                 let mut acc = zero();
                 let mut jac = if derivs {
                     Dense::zeros((hi - lo) * ll, np)
                 } else {
                     Dense::zeros(0, 0)
                 };
-                let mut da = vec![0.0; 2 * m];
-                let mut pw = vec![C64::new(0.0, 0.0); q + 1];
-                let mut bz = vec![C64::new(0.0, 0.0); ll];
-                let mut xk = vec![C64::new(0.0, 0.0); l];
+                let mut hz = vec![ZERO; ll];
+                let mut y = vec![ZERO; ll];
+                let mut v = vec![0.0; ll];
                 let mut r = vec![0.0; ll];
+                let mut d1 = vec![ZERO; m];
+                let mut d2 = vec![ZERO; m];
                 for (row, kk) in (lo..hi).enumerate() {
-                    let z = self.z[kk];
-                    let log_a2 = den.at(z, derivs, &mut da);
-                    let zc = z.conj();
-                    pw[0] = C64::new(1.0, 0.0);
-                    for j in 1..=q {
-                        pw[j] = pw[j - 1] * zc;
+                    let z = self.rec.z[kk];
+                    // H(z) = I + Σ_r (c k ᵀ d1 + c̄ k̄ᵀ d2), d1 = 1/(z − μ), d2 = 1/(z − μ̄).
+                    for (i, h) in hz.iter_mut().enumerate() {
+                        *h = C64::new(if i / l == i % l { 1.0 } else { 0.0 }, 0.0);
                     }
-                    // B(z) = I + Σ_j B_j z^{-j}.
-                    for a in 0..l {
-                        for b in 0..l {
-                            let mut v = C64::new(if a == b { 1.0 } else { 0.0 }, 0.0);
-                            for j in 1..=q {
-                                v += pw[j] * th[b_off + (j - 1) * ll + a * l + b];
+                    for rr in 0..m {
+                        d1[rr] = (z - den.mu[2 * rr]).inv();
+                        d2[rr] = (z - den.mu[2 * rr + 1]).inv();
+                        let (c, k) = (&cs[rr], &ks[rr]);
+                        for a in 0..l {
+                            for b in 0..l {
+                                let t = c[a] * k[b];
+                                hz[a * l + b] += t * d1[rr] + t.conj() * d2[rr];
                             }
-                            bz[a * l + b] = v;
                         }
                     }
-                    let (g, log_abs_det) = invert(&bz, l)?;
-                    // M = Λ⁻¹ B⁻¹, ε = |A| M x.
-                    let mut mm = vec![C64::new(0.0, 0.0); ll];
+                    let (g, log_abs_det) = invert(&hz, l)?;
+                    // M = Λ⁻¹ H⁻¹, ε = M x.
+                    let mut mm = vec![ZERO; ll];
                     for a in 0..l {
                         for b in 0..l {
                             mm[a * l + b] =
                                 (0..=a).map(|t| g[t * l + b] * lam_inv[a * l + t]).sum();
                         }
                     }
-                    for (c, xc) in xk.iter_mut().enumerate() {
-                        *xc = self.x[c][kk];
-                    }
-                    let abs_a = (0.5 * log_a2).exp();
                     let eps: Vec<C64> = (0..l)
-                        .map(|a| abs_a * (0..l).map(|b| mm[a * l + b] * xk[b]).sum::<C64>())
+                        .map(|a| {
+                            (0..l)
+                                .map(|b| mm[a * l + b] * self.rec.x[b][kk])
+                                .sum::<C64>()
+                        })
                         .collect();
                     let quad: f64 = eps.iter().map(|e| e.norm_sqr()).sum();
-                    acc.l += log_det_sigma + 2.0 * log_abs_det - l as f64 * log_a2 + quad;
+                    acc.l += log_det_sigma + 2.0 * log_abs_det + quad;
                     if ratios {
                         acc.ratios.extend(eps.iter().map(|e| e.norm_sqr()));
                     }
@@ -254,41 +369,105 @@ impl<'a> Joint<'a> {
                         r[c] = eps[c].norm_sqr() - 1.0;
                     }
                     for (t, &(c, d)) in upper.iter().enumerate() {
-                        let v = eps[c] * eps[d].conj();
-                        r[l + 2 * t] = sq2 * v.re;
-                        r[l + 2 * t + 1] = sq2 * v.im;
+                        let w = eps[c] * eps[d].conj();
+                        r[l + 2 * t] = sq2 * w.re;
+                        r[l + 2 * t + 1] = sq2 * w.im;
                     }
                     let base = row * ll;
-                    let mut set = |e: usize, col: usize, v: f64| jac.set(base + e, col, v);
-                    // Poles: ∂S = −(∂ ln|A|²) S, so X = −(∂ ln|A|²) I.
-                    for (t, dat) in da.iter().enumerate() {
-                        for c in 0..l {
-                            set(c, t, -dat);
+                    let mv = |u: &[C64]| -> Vec<C64> {
+                        (0..l)
+                            .map(|a| (0..l).map(|b| mm[a * l + b] * u[b]).sum())
+                            .collect()
+                    };
+                    // Row vector uᵀΛ.
+                    let vl = |u: &[C64]| -> Vec<C64> {
+                        (0..l)
+                            .map(|d| (d..l).map(|b| u[b] * lam[b * l + d]).sum())
+                            .collect()
+                    };
+                    let mut put = |col: usize, y: &[C64], v: &mut [f64]| {
+                        coords(y, v);
+                        for (e, ve) in v.iter().enumerate() {
+                            jac.set(base + e, col, *ve);
                         }
-                    }
-                    // B_j[a, b]: X = Y + Yᴴ, Y = z^{-j} M[:, a] Λ[b, :].
-                    for (j, pj) in pw.iter().enumerate().skip(1) {
+                    };
+                    let outer = |y: &mut [C64], u: &[C64], w: &[C64], add: bool| {
                         for a in 0..l {
                             for b in 0..l {
-                                let col = b_off + (j - 1) * ll + a * l + b;
-                                let y = |c: usize, d: usize| pj * mm[c * l + a] * lam[b * l + d];
-                                for c in 0..l {
-                                    set(c, col, 2.0 * y(c, c).re);
-                                }
-                                for (t, &(c, d)) in upper.iter().enumerate() {
-                                    let v = y(c, d) + y(d, c).conj();
-                                    set(l + 2 * t, col, sq2 * v.re);
-                                    set(l + 2 * t + 1, col, sq2 * v.im);
-                                }
+                                let t = u[a] * w[b];
+                                y[a * l + b] = if add { y[a * l + b] + t } else { t };
                             }
                         }
-                    }
-                    for (t, v) in sigma_cols.iter().enumerate() {
-                        for (e, ve) in v.iter().enumerate() {
-                            set(e, s_off + t, *ve);
+                    };
+                    let i1 = C64::new(0.0, 1.0);
+                    for rr in 0..m {
+                        let (c, k) = (&cs[rr], &ks[rr]);
+                        let cc: Vec<C64> = c.iter().map(|v| v.conj()).collect();
+                        let kc: Vec<C64> = k.iter().map(|v| v.conj()).collect();
+                        let mc = mv(c);
+                        let mcc = mv(&cc);
+                        let kl = vl(k);
+                        let kcl = vl(&kc);
+                        // Poles: ∂H = d1² (∂μ) c kᵀ + d2² (∂μ̄) c̄ k̄ᵀ.
+                        for (t, dm) in den.dmu[rr].iter().enumerate() {
+                            let f1 = d1[rr] * d1[rr] * dm;
+                            let f2 = d2[rr] * d2[rr] * dm.conj();
+                            let u1: Vec<C64> = mc.iter().map(|v| v * f1).collect();
+                            let u2: Vec<C64> = mcc.iter().map(|v| v * f2).collect();
+                            outer(&mut y, &u1, &kl, false);
+                            outer(&mut y, &u2, &kcl, true);
+                            put(t * m + rr, &y, &mut v);
+                        }
+                        let off = 2 * m + rr * (4 * l - 2);
+                        // c: ∂H = e_a (kᵀ d1 + k̄ᵀ d2) for Re c_a, i e_a (kᵀ d1 − k̄ᵀ d2) for Im.
+                        let w_re: Vec<C64> = kl
+                            .iter()
+                            .zip(&kcl)
+                            .map(|(a, b)| a * d1[rr] + b * d2[rr])
+                            .collect();
+                        let w_im: Vec<C64> = kl
+                            .iter()
+                            .zip(&kcl)
+                            .map(|(a, b)| i1 * (a * d1[rr] - b * d2[rr]))
+                            .collect();
+                        for a in 0..l {
+                            let col: Vec<C64> = (0..l).map(|i| mm[i * l + a]).collect();
+                            outer(&mut y, &col, &w_re, false);
+                            put(off + a, &y, &mut v);
+                            outer(&mut y, &col, &w_im, false);
+                            put(off + l + a, &y, &mut v);
+                        }
+                        // k_b: ∂H = (c d1 + c̄ d2) e_bᵀ for Re, i (c d1 − c̄ d2) e_bᵀ for Im.
+                        let u_re: Vec<C64> = mc
+                            .iter()
+                            .zip(&mcc)
+                            .map(|(a, b)| a * d1[rr] + b * d2[rr])
+                            .collect();
+                        let u_im: Vec<C64> = mc
+                            .iter()
+                            .zip(&mcc)
+                            .map(|(a, b)| i1 * (a * d1[rr] - b * d2[rr]))
+                            .collect();
+                        let mut t = off + 2 * l;
+                        for b in 0..l {
+                            if b == self.refs[rr] {
+                                continue;
+                            }
+                            let row_b: Vec<C64> =
+                                (0..l).map(|d| C64::new(lam[b * l + d], 0.0)).collect();
+                            outer(&mut y, &u_re, &row_b, false);
+                            put(t, &y, &mut v);
+                            outer(&mut y, &u_im, &row_b, false);
+                            put(t + 1, &y, &mut v);
+                            t += 2;
                         }
                     }
-                    // U = −∇L = −Σ_k J_kᵀ vec(I − εεᴴ).
+                    for (t, col) in sigma_cols.iter().enumerate() {
+                        for (e, ve) in col.iter().enumerate() {
+                            jac.set(base + e, s_off + t, *ve);
+                        }
+                    }
+                    // U = −∇L = Σ_k J_kᵀ vec(εεᴴ − I).
                     for col in 0..np {
                         acc.u[col] += (0..ll).map(|e| jac.at(base + e, col) * r[e]).sum::<f64>();
                     }
@@ -301,6 +480,84 @@ impl<'a> Joint<'a> {
             .try_reduce(zero, |a, b| Some(a.merge(b)))?;
         total.l.is_finite().then_some(total)
     }
+}
+
+/// The best rank-one part c kᵀ of the complex l×l matrix `r` (row-major), by power iteration
+/// on rᴴr, with k scaled to 1 in its largest component, whose index is returned too. `None`
+/// if `r` is zero.
+fn rank_one(r: &[C64], l: usize) -> Option<(Vec<C64>, Vec<C64>, usize)> {
+    let col_norm = |b: usize| (0..l).map(|a| r[a * l + b].norm_sqr()).sum::<f64>();
+    let start = (0..l).max_by(|&a, &b| col_norm(a).total_cmp(&col_norm(b)))?;
+    let mut v: Vec<C64> = (0..l)
+        .map(|b| C64::new(if b == start { 1.0 } else { 0.0 }, 0.0))
+        .collect();
+    for _ in 0..50 {
+        let rv: Vec<C64> = (0..l)
+            .map(|a| (0..l).map(|b| r[a * l + b] * v[b]).sum())
+            .collect();
+        let w: Vec<C64> = (0..l)
+            .map(|b| (0..l).map(|a| r[a * l + b].conj() * rv[a]).sum())
+            .collect();
+        let norm = w.iter().map(|x| x.norm_sqr()).sum::<f64>().sqrt();
+        if !(norm > 0.0 && norm.is_finite()) {
+            return None;
+        }
+        v = w.iter().map(|x| x / norm).collect();
+    }
+    // r ≈ (r v) vᴴ: c = r v, kᵀ = vᴴ, then scaled.
+    let c: Vec<C64> = (0..l)
+        .map(|a| (0..l).map(|b| r[a * l + b] * v[b]).sum())
+        .collect();
+    let k: Vec<C64> = v.iter().map(|x| x.conj()).collect();
+    let at = (0..l).max_by(|&a, &b| k[a].norm().total_cmp(&k[b].norm()))?;
+    let s = k[at];
+    Some((
+        c.iter().map(|x| x * s).collect(),
+        k.iter().map(|x| x / s).collect(),
+        at,
+    ))
+}
+
+/// Least squares of `outputs` targets on `cols` regressors over `rows` rows, `fill(r, x, y)`
+/// writing row r; the coefficients (cols × outputs), or `None` if the normal equations are
+/// singular. The normal equations are summed over chunks of rows, so memory does not grow
+/// with the record.
+fn regress(
+    rows: usize,
+    cols: usize,
+    outputs: usize,
+    fill: impl Fn(usize, &mut [f64], &mut [f64]),
+) -> Option<Dense> {
+    const ROWS: usize = 4096;
+    let mut g = Dense::zeros(cols, cols);
+    let mut h = Dense::zeros(cols, outputs);
+    let mut x = vec![0.0; cols];
+    let mut y = vec![0.0; outputs];
+    for lo in (0..rows).step_by(ROWS) {
+        let hi = (lo + ROWS).min(rows);
+        let mut xc = Dense::zeros(hi - lo, cols);
+        let mut yc = Dense::zeros(hi - lo, outputs);
+        for r in lo..hi {
+            fill(r, &mut x, &mut y);
+            for (c, v) in x.iter().enumerate() {
+                xc.set(r - lo, c, *v);
+            }
+            for (c, v) in y.iter().enumerate() {
+                yc.set(r - lo, c, *v);
+            }
+        }
+        linalg::gram_add(&xc, &mut g);
+        linalg::tn_add(&xc, &yc, &mut h);
+    }
+    let mut coef = Dense::zeros(cols, outputs);
+    for o in 0..outputs {
+        let rhs: Vec<f64> = (0..cols).map(|c| h.at(c, o)).collect();
+        let sol = linalg::spd_solve(&g, &rhs)?;
+        for (c, v) in sol.iter().enumerate() {
+            coef.set(c, o, *v);
+        }
+    }
+    Some(coef)
 }
 
 /// Inverse of the complex l×l matrix `a` (row-major) by Gauss–Jordan elimination with partial
@@ -383,19 +640,8 @@ mod tests {
         )
     }
 
-    /// θ for l channels and two modes with every coefficient away from zero.
-    fn theta(l: usize) -> Vec<f64> {
-        let (w1, z1) = pole_theta(1.52, 0.03);
-        let (w2, z2) = pole_theta(2.9, 0.05);
-        let mut th = vec![w1, w2, z1, z2];
-        let q = 4;
-        for j in 0..q * l * l {
-            th.push(0.3 * ((j as f64 * 1.7).sin()) / (1.0 + (j / (l * l)) as f64));
-        }
-        for a in 0..l * (l + 1) / 2 {
-            th.push(0.1 * a as f64 - 0.2);
-        }
-        th
+    fn channels(y: &[Vec<f64>]) -> Vec<&[f64]> {
+        y.iter().map(|c| c.as_slice()).collect()
     }
 
     #[test]
@@ -407,19 +653,31 @@ mod tests {
             0.1,
             11,
         );
-        let v: Vec<&[f64]> = y.iter().map(|c| c.as_slice()).collect();
+        let v = channels(&y);
         let means = vec![0.0; 3];
         let model = Model::new(&v, &means, FS);
-        let joint = Joint::new(&model.x, &model.z, FS);
-        let th = theta(3);
-        let e = joint.eval(&th, 2, true, false).unwrap();
+        // Reference components 0 and 2: k_0 = (1, ·, ·), k_1 = (·, ·, 1).
+        let joint = Joint {
+            rec: &model,
+            refs: vec![0, 2],
+        };
+        let (w1, z1) = pole_theta(1.52, 0.03);
+        let (w2, z2) = pole_theta(2.9, 0.05);
+        let mut th = vec![w1, w2, z1, z2];
+        // c (Re, Im), then the four free k entries, per mode; then Λ.
+        for j in 0..2 * 10 {
+            th.push(0.3 * (j as f64 * 1.7).sin());
+        }
+        th.extend([-0.2, -0.1, 0.0, 0.1, 0.2, 0.3]);
+        assert_eq!(th.len(), parameters(3, 2));
+        let e = joint.eval(&th, true, false).unwrap();
         for t in 0..th.len() {
             let h = 1e-6;
             let (mut a, mut b) = (th.clone(), th.clone());
             a[t] += h;
             b[t] -= h;
-            let num = (joint.eval(&a, 2, false, false).unwrap().l
-                - joint.eval(&b, 2, false, false).unwrap().l)
+            let num = (joint.eval(&a, false, false).unwrap().l
+                - joint.eval(&b, false, false).unwrap().l)
                 / (2.0 * h);
             // Central differences of a sum of ~2000 terms: agreement to 1e-6 relative.
             assert!(
@@ -428,8 +686,6 @@ mod tests {
                 -e.u[t]
             );
         }
-        // The Fisher information is the expected outer product of the score; here only its
-        // symmetry and positive diagonal are cheap to check.
         for s in 0..th.len() {
             assert!(e.f.at(s, s) > 0.0);
             for t in 0..s {
@@ -438,8 +694,9 @@ mod tests {
         }
     }
 
-    /// For one channel the joint likelihood is the per-channel one: θ maps across with
-    /// ln σ² = 2 ln Λ₁₁.
+    /// For one channel the joint likelihood is the per-channel one: H = B/A in partial
+    /// fractions, 1 + Σ_r ρ_r/(z − μ_r) + conj with ρ_r = B(μ_r)/A'(μ_r) (B, A as monic
+    /// polynomials in z), and Λ² = σ².
     #[test]
     fn one_channel_is_the_per_channel_likelihood() {
         let y = record(
@@ -449,18 +706,38 @@ mod tests {
             0.1,
             12,
         );
-        let v: Vec<&[f64]> = y.iter().map(|c| c.as_slice()).collect();
+        let v = channels(&y);
         let means = vec![0.0];
         let model = Model::new(&v, &means, FS);
-        let joint = Joint::new(&model.x, &model.z, FS);
-        let th = theta(1);
-        let mut per = th[..4].to_vec();
-        per.push(2.0 * th[th.len() - 1]);
-        per.extend_from_slice(&th[4..8]);
-        let a = joint.eval(&th, 2, false, false).unwrap().l;
-        let b = model.eval(&per, 2, What::Value).unwrap().l;
-        // Two orders of summing the same ~2000 terms.
-        assert!((a - b).abs() <= 1e-9 * a.abs(), "{a} vs {b}");
+        let (w1, z1) = pole_theta(1.52, 0.03);
+        let (w2, z2) = pole_theta(2.9, 0.05);
+        let b = [0.2, -0.4, 0.3, 0.1];
+        let ln_s2 = -0.05;
+        let per = [w1, w2, z1, z2, ln_s2, b[0], b[1], b[2], b[3]];
+        let mu = discrete_poles(&unpack(&per, 2), FS).unwrap();
+        let at = |coef: &[f64], z: C64| coef.iter().fold(ZERO, |acc, c| acc * z + c);
+        let pb = [1.0, b[0], b[1], b[2], b[3]];
+        let mut th = per[..4].to_vec();
+        for r in 0..2 {
+            let u = mu[2 * r];
+            let da: C64 = mu
+                .iter()
+                .enumerate()
+                .filter(|&(i, _)| i != 2 * r)
+                .map(|(_, m)| u - m)
+                .product();
+            let rho = at(&pb, u) / da;
+            th.extend([rho.re, rho.im]);
+        }
+        th.push(0.5 * ln_s2);
+        let joint = Joint {
+            rec: &model,
+            refs: vec![0, 0],
+        };
+        let a = joint.eval(&th, false, false).unwrap().l;
+        let p = model.eval(&per, 2, What::Value).unwrap().l;
+        // Two computations of the same ~2000 terms.
+        assert!((a - p).abs() <= 1e-9 * a.abs(), "{a} vs {p}");
     }
 
     /// Two modes seen by three channels, the second weak in each (gains 0.15 against 5 %

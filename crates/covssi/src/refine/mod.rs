@@ -37,10 +37,10 @@
 //!
 //! 3. For 2 to [`JOINT_MAX_CHANNELS`] channels the chosen modes are then fitted once more by
 //!    the *joint* likelihood of all channels, cross-spectra included (the `joint` module:
-//!    $S(\omega) = B\,\Sigma\,B^H/|A|^2$ with a monic matrix numerator), whose $F^{-1}$ is the
+//!    $S = H\Sigma H^H$, $H$ the innovation form in modal coordinates), whose $F^{-1}$ is the
 //!    exact asymptotic covariance. A mode every channel sees weakly is then seen through all
 //!    of them at once (on the shared 3-DOF record, the 4 Hz mode's damping standard error goes
-//!    from 3.1 % to 2.2 %, the Cramér–Rao bound).
+//!    from 3.1 % to 2.1 %, the Cramér–Rao bound).
 //!
 //! Real poles are not part of this model; records whose spectrum needs one are better read from
 //! the SSI result.
@@ -53,8 +53,8 @@ use realfft::RealFftPlanner;
 
 mod joint;
 
-/// Most channels fitted by the joint likelihood; its cost grows as l⁶ (l² parameters per
-/// numerator coefficient, l² observations per frequency).
+/// Most channels fitted by the joint likelihood; its cost grows as l⁴ (4lm parameters, l²
+/// observations per frequency).
 pub const JOINT_MAX_CHANNELS: usize = 4;
 
 /// Above this [`Refinement::misfit`] the record does not follow the model.
@@ -276,10 +276,9 @@ pub fn refine(
         && mk > 0
         && model.k() * l * l >= 10 * joint::parameters(l, mk))
     .then(|| {
-        let jm = joint::Joint::new(&model.x, &model.z, fs);
-        let start = jm.start(&fit.theta, mk)?;
-        let jf = jm.fit(start, mk, opts).ok()?;
-        let ratios = jm.ratios(&jf.theta, mk)?;
+        let (jm, start) = joint::Joint::start(&model, &fit.theta, mk)?;
+        let jf = jm.fit(start, opts).ok()?;
+        let ratios = jm.ratios(&jf.theta)?;
         // Its asymptotic covariance is F⁻¹ (an exact likelihood); a singular F means the
         // channels are degenerate for it (e.g. one a copy of another).
         let cov = linalg::spd_inverse(&jf.fisher)?;
