@@ -84,7 +84,8 @@ pub struct RefineOptions {
     pub select: bool,
     /// For 2 to [`JOINT_MAX_CHANNELS`] channels, fit the chosen modes once more by the joint
     /// likelihood of all channels (cross-spectra included) and report its estimates and
-    /// standard errors. Default: true.
+    /// standard errors; skipped when the record does not follow the per-channel model
+    /// (misfit above [`MISFIT_LIMIT`]). Default: true.
     pub joint: bool,
 }
 
@@ -267,13 +268,19 @@ pub fn refine(
             _ => break without.iter().map(|(held, _)| *held).collect::<Vec<f64>>(),
         }
     };
-    // 3. The chosen modes fitted once more by the joint likelihood, when asked and when the
-    //    record has enough frequencies for its parameters (ten observations each, a frequency
-    //    giving l² of them). If that fails the per-channel fit stands.
+    // 3. The chosen modes fitted once more by the joint likelihood, when asked, when the
+    //    record follows the per-channel model (a record that does not, e.g. under a
+    //    multisine, will not follow the joint one either) and when it has enough frequencies
+    //    for the joint parameters (ten observations each, a frequency giving l² of them). If
+    //    that fails the per-channel fit stands.
     let mk = fit.lambdas.len();
+    let per_channel_misfit = model
+        .eval(&fit.theta, mk, What::Ratios)
+        .map_or(1.0, |e| ks_exponential(e.ratios));
     let joint_fit = (opts.joint
         && (2..=JOINT_MAX_CHANNELS).contains(&l)
         && mk > 0
+        && per_channel_misfit <= MISFIT_LIMIT
         && model.k() * l * l >= 10 * joint::parameters(l, mk))
     .then(|| {
         let (jm, start) = joint::Joint::start(&model, &fit.theta, mk)?;
@@ -282,7 +289,7 @@ pub fn refine(
         // Its asymptotic covariance is F⁻¹ (an exact likelihood); a singular F means the
         // channels are degenerate for it (e.g. one a copy of another).
         let cov = linalg::spd_inverse(&jf.fisher)?;
-        Some((jf, ratios, cov))
+        Some((jf, ks_exponential(ratios), cov))
     })
     .flatten();
     let joint = joint_fit.is_some();
@@ -290,14 +297,12 @@ pub fn refine(
     // Asymptotic covariance: F⁻¹ for the joint likelihood and for one channel; for the
     // per-channel likelihood of several, the composite likelihood's sandwich F⁻¹ J F⁻¹, J the
     // covariance of the score given the channels' coherence.
-    let cov = if let Some((jf, ratios, cov)) = joint_fit {
-        misfit = ks_exponential(ratios);
+    let cov = if let Some((jf, joint_misfit, cov)) = joint_fit {
+        misfit = joint_misfit;
         fit = jf;
         Some(cov)
     } else {
-        misfit = model
-            .eval(&fit.theta, mk, What::Ratios)
-            .map_or(1.0, |e| ks_exponential(e.ratios));
+        misfit = per_channel_misfit;
         linalg::spd_inverse(&fit.fisher).and_then(|fi| {
             if l == 1 {
                 return Some(fi);
