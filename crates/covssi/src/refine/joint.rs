@@ -92,21 +92,21 @@ impl<'a> Joint<'a> {
             }
         }
         let len = n - p;
-        // φ_{r,t} for every mode, by the recursion φ_{t+1} = μ φ_t + ε̂_t from φ = 0.
-        let mut phi = vec![vec![ZERO; len * l]; m];
-        for (r, ph) in phi.iter_mut().enumerate() {
-            let u = mu[2 * r];
-            for t in 1..len {
-                for c in 0..l {
-                    ph[t * l + c] = u * ph[(t - 1) * l + c] + eps[c][t - 1];
+        // φ_{r,t} for every mode, by the recursion φ_{t+1} = μ φ_t + ε̂_t from φ = 0, carried
+        // along as the rows are filled in order (so it is never stored for every t).
+        let mut phi = vec![ZERO; m * l];
+        let res = regress(len, 2 * l * m, l, |t, xr, yv| {
+            if t > 0 {
+                for r in 0..m {
+                    for c in 0..l {
+                        phi[r * l + c] = mu[2 * r] * phi[r * l + c] + eps[c][t - 1];
+                    }
                 }
             }
-        }
-        let res = regress(len, 2 * l * m, l, |t, xr, yv| {
-            for (r, ph) in phi.iter().enumerate() {
+            for r in 0..m {
                 for c in 0..l {
-                    xr[2 * l * r + c] = ph[t * l + c].re;
-                    xr[2 * l * r + l + c] = ph[t * l + c].im;
+                    xr[2 * l * r + c] = phi[r * l + c].re;
+                    xr[2 * l * r + l + c] = phi[r * l + c].im;
                 }
             }
             for c in 0..l {
@@ -519,14 +519,14 @@ fn rank_one(r: &[C64], l: usize) -> Option<(Vec<C64>, Vec<C64>, usize)> {
 }
 
 /// Least squares of `outputs` targets on `cols` regressors over `rows` rows, `fill(r, x, y)`
-/// writing row r; the coefficients (cols × outputs), or `None` if the normal equations are
-/// singular. The normal equations are summed over chunks of rows, so memory does not grow
-/// with the record.
+/// writing row r, called for r = 0, 1, … in order; the coefficients (cols × outputs), or
+/// `None` if the normal equations are singular. The normal equations are summed over chunks
+/// of rows, so memory does not grow with the record.
 fn regress(
     rows: usize,
     cols: usize,
     outputs: usize,
-    fill: impl Fn(usize, &mut [f64], &mut [f64]),
+    mut fill: impl FnMut(usize, &mut [f64], &mut [f64]),
 ) -> Option<Dense> {
     const ROWS: usize = 4096;
     let mut g = Dense::zeros(cols, cols);
