@@ -304,6 +304,26 @@ impl<'a> Joint<'a> {
             }
             cols
         };
+        // Row vector uᵀΛ.
+        let vl = |u: &[C64]| -> Vec<C64> {
+            (0..l)
+                .map(|d| (d..l).map(|b| u[b] * lam[b * l + d]).sum())
+                .collect()
+        };
+        // What the derivatives need of each mode that does not depend on the frequency: c̄,
+        // kᵀΛ and k̄ᵀΛ; and the rows of Λ.
+        let cs_conj: Vec<Vec<C64>> = cs
+            .iter()
+            .map(|c| c.iter().map(|v| v.conj()).collect())
+            .collect();
+        let k_lam: Vec<Vec<C64>> = ks.iter().map(|k| vl(k)).collect();
+        let kc_lam: Vec<Vec<C64>> = ks
+            .iter()
+            .map(|k| vl(&k.iter().map(|v| v.conj()).collect::<Vec<_>>()))
+            .collect();
+        let lam_rows: Vec<Vec<C64>> = (0..l)
+            .map(|b| (0..l).map(|d| C64::new(lam[b * l + d], 0.0)).collect())
+            .collect();
         let nchunks = self.rec.z.len().div_ceil(CHUNK);
         let zero = || Eval::zero(if derivs { np } else { 0 });
         let total = (0..nchunks)
@@ -379,12 +399,6 @@ impl<'a> Joint<'a> {
                             .map(|a| (0..l).map(|b| mm[a * l + b] * u[b]).sum())
                             .collect()
                     };
-                    // Row vector uᵀΛ.
-                    let vl = |u: &[C64]| -> Vec<C64> {
-                        (0..l)
-                            .map(|d| (d..l).map(|b| u[b] * lam[b * l + d]).sum())
-                            .collect()
-                    };
                     let mut put = |col: usize, y: &[C64], v: &mut [f64]| {
                         coords(y, v);
                         for (e, ve) in v.iter().enumerate() {
@@ -399,37 +413,32 @@ impl<'a> Joint<'a> {
                             }
                         }
                     };
+                    // (p d1 + q d2, i (p d1 − q d2)): what the real and the imaginary part of
+                    // a parameter entering beside the pole pair contribute.
                     let i1 = C64::new(0.0, 1.0);
+                    let re_im = |p: &[C64], q: &[C64], d1: C64, d2: C64| -> (Vec<C64>, Vec<C64>) {
+                        p.iter()
+                            .zip(q)
+                            .map(|(a, b)| (a * d1 + b * d2, i1 * (a * d1 - b * d2)))
+                            .unzip()
+                    };
                     for rr in 0..m {
-                        let (c, k) = (&cs[rr], &ks[rr]);
-                        let cc: Vec<C64> = c.iter().map(|v| v.conj()).collect();
-                        let kc: Vec<C64> = k.iter().map(|v| v.conj()).collect();
-                        let mc = mv(c);
-                        let mcc = mv(&cc);
-                        let kl = vl(k);
-                        let kcl = vl(&kc);
+                        let mc = mv(&cs[rr]);
+                        let mcc = mv(&cs_conj[rr]);
+                        let (kl, kcl) = (&k_lam[rr], &kc_lam[rr]);
                         // Poles: ∂H = d1² (∂μ) c kᵀ + d2² (∂μ̄) c̄ k̄ᵀ.
                         for (t, dm) in den.dmu[rr].iter().enumerate() {
                             let f1 = d1[rr] * d1[rr] * dm;
                             let f2 = d2[rr] * d2[rr] * dm.conj();
                             let u1: Vec<C64> = mc.iter().map(|v| v * f1).collect();
                             let u2: Vec<C64> = mcc.iter().map(|v| v * f2).collect();
-                            outer(&mut y, &u1, &kl, false);
-                            outer(&mut y, &u2, &kcl, true);
+                            outer(&mut y, &u1, kl, false);
+                            outer(&mut y, &u2, kcl, true);
                             put(t * m + rr, &y, &mut v);
                         }
                         let off = 2 * m + rr * (4 * l - 2);
                         // c: ∂H = e_a (kᵀ d1 + k̄ᵀ d2) for Re c_a, i e_a (kᵀ d1 − k̄ᵀ d2) for Im.
-                        let w_re: Vec<C64> = kl
-                            .iter()
-                            .zip(&kcl)
-                            .map(|(a, b)| a * d1[rr] + b * d2[rr])
-                            .collect();
-                        let w_im: Vec<C64> = kl
-                            .iter()
-                            .zip(&kcl)
-                            .map(|(a, b)| i1 * (a * d1[rr] - b * d2[rr]))
-                            .collect();
+                        let (w_re, w_im) = re_im(kl, kcl, d1[rr], d2[rr]);
                         for a in 0..l {
                             let col: Vec<C64> = (0..l).map(|i| mm[i * l + a]).collect();
                             outer(&mut y, &col, &w_re, false);
@@ -438,26 +447,15 @@ impl<'a> Joint<'a> {
                             put(off + l + a, &y, &mut v);
                         }
                         // k_b: ∂H = (c d1 + c̄ d2) e_bᵀ for Re, i (c d1 − c̄ d2) e_bᵀ for Im.
-                        let u_re: Vec<C64> = mc
-                            .iter()
-                            .zip(&mcc)
-                            .map(|(a, b)| a * d1[rr] + b * d2[rr])
-                            .collect();
-                        let u_im: Vec<C64> = mc
-                            .iter()
-                            .zip(&mcc)
-                            .map(|(a, b)| i1 * (a * d1[rr] - b * d2[rr]))
-                            .collect();
+                        let (u_re, u_im) = re_im(&mc, &mcc, d1[rr], d2[rr]);
                         let mut t = off + 2 * l;
-                        for b in 0..l {
+                        for (b, row_b) in lam_rows.iter().enumerate() {
                             if b == self.refs[rr] {
                                 continue;
                             }
-                            let row_b: Vec<C64> =
-                                (0..l).map(|d| C64::new(lam[b * l + d], 0.0)).collect();
-                            outer(&mut y, &u_re, &row_b, false);
+                            outer(&mut y, &u_re, row_b, false);
                             put(t, &y, &mut v);
-                            outer(&mut y, &u_im, &row_b, false);
+                            outer(&mut y, &u_im, row_b, false);
                             put(t + 1, &y, &mut v);
                             t += 2;
                         }
@@ -628,20 +626,15 @@ fn cholesky(a: &[f64], l: usize) -> Option<Vec<f64>> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::{Model, What, tests::record};
+    use super::super::tests::{pole, record, views};
+    use super::super::{Model, What, pole_params};
     use super::*;
 
     const FS: f64 = 20.0;
 
+    /// ln ω and logit ζ of a mode (f Hz, ζ).
     fn pole_theta(f: f64, zeta: f64) -> (f64, f64) {
-        (
-            (2.0 * std::f64::consts::PI * f).ln(),
-            (zeta / (1.0 - zeta)).ln(),
-        )
-    }
-
-    fn channels(y: &[Vec<f64>]) -> Vec<&[f64]> {
-        y.iter().map(|c| c.as_slice()).collect()
+        pole_params(pole(f, zeta))
     }
 
     #[test]
@@ -653,7 +646,7 @@ mod tests {
             0.1,
             11,
         );
-        let v = channels(&y);
+        let v = views(&y);
         let means = vec![0.0; 3];
         let model = Model::new(&v, &means, FS);
         // Reference components 0 and 2: k_0 = (1, ·, ·), k_1 = (·, ·, 1).
@@ -706,7 +699,7 @@ mod tests {
             0.1,
             12,
         );
-        let v = channels(&y);
+        let v = views(&y);
         let means = vec![0.0];
         let model = Model::new(&v, &means, FS);
         let (w1, z1) = pole_theta(1.52, 0.03);
@@ -754,7 +747,7 @@ mod tests {
         let (mut joint_err, mut per_err, mut z) = (Vec::new(), Vec::new(), Vec::new());
         for seed in 0..records {
             let y = record(16384, &truth, &gains, 0.05, 300 + seed);
-            let v: Vec<&[f64]> = y.iter().map(|c| c.as_slice()).collect();
+            let v = views(&y);
             let start: Vec<_> = truth
                 .iter()
                 .map(|&(f, zeta)| mode(f * 1.003, zeta * 1.1, 30))

@@ -356,9 +356,8 @@ struct Model<'a> {
     fs: f64,
     /// e^{iω_k}, 0 < ω_k < π.
     z: Vec<C64>,
-    /// Periodogram of each channel at ω_k.
-    i: Vec<Vec<f64>>,
-    /// Discrete Fourier transform of each channel at ω_k over √N (so that I_c = |x_c|²).
+    /// Discrete Fourier transform of each channel at ω_k over √N: its periodogram is
+    /// I_c = |x_c|².
     x: Vec<Vec<C64>>,
     /// Squared coherence γ²_ab(ω_k) of each channel pair a < b at index `pair(a, b, l)`
     /// (empty otherwise), from periodograms smoothed over 2·COHERENCE_HALF_WIDTH + 1 bins.
@@ -540,10 +539,6 @@ impl<'a> Model<'a> {
                 spec[1..=k_max].to_vec()
             })
             .collect();
-        let i: Vec<Vec<f64>> = spectra
-            .iter()
-            .map(|s| s.iter().map(|c| c.norm_sqr() / n as f64).collect())
-            .collect();
         let scale = 1.0 / (n as f64).sqrt();
         let x = spectra
             .iter()
@@ -564,7 +559,6 @@ impl<'a> Model<'a> {
             means,
             fs,
             z,
-            i,
             x,
             coherence,
         }
@@ -663,7 +657,7 @@ impl<'a> Model<'a> {
         let derivs = matches!(what, What::Fisher | What::Sandwich);
         let sandwich = what == What::Sandwich;
         let ratios = what == What::Ratios;
-        let l = self.i.len();
+        let l = self.x.len();
         let q = 2 * m;
         let per = 2 * m + q + 1;
         let np = 2 * m + l * (q + 1);
@@ -691,7 +685,7 @@ impl<'a> Model<'a> {
                     for k in 1..=q {
                         pw[k] = pw[k - 1] * zc;
                     }
-                    for (c, ic_all) in self.i.iter().enumerate() {
+                    for (c, xc) in self.x.iter().enumerate() {
                         let off = 2 * m + c * (q + 1);
                         let b = pw[0]
                             + pw[1..]
@@ -702,7 +696,7 @@ impl<'a> Model<'a> {
                         let b2 = b.norm_sqr();
                         let log_s = th[off] + b2.ln() - log_a2;
                         let s = log_s.exp();
-                        let ic = ic_all[kk];
+                        let ic = xc[kk].norm_sqr();
                         acc.l += log_s + ic / s;
                         if ratios {
                             acc.ratios.push(ic / s);
@@ -773,7 +767,7 @@ impl<'a> Model<'a> {
         hold_poles: bool,
     ) -> Result<Fit, SsiError> {
         let m = start.len();
-        let l = self.i.len();
+        let l = self.x.len();
         let (mut th, logits): (Vec<f64>, Vec<f64>) = start.iter().map(|&s| pole_params(s)).unzip();
         th.extend(logits);
         let mu = discrete_poles(start, self.fs).ok_or(SsiError::Refinement {
@@ -798,7 +792,7 @@ impl<'a> Model<'a> {
         th.push(ln_w);
         th.extend_from_slice(&prev.theta[m..2 * m]);
         th.push(logit_zeta);
-        for c in 0..self.i.len() {
+        for c in 0..self.x.len() {
             let off = 2 * m + c * (q + 1);
             th.push(prev.theta[off]);
             let mut b = vec![1.0];
@@ -1007,7 +1001,7 @@ pub(super) mod tests {
 
     const FS: f64 = 20.0;
 
-    fn pole(f: f64, zeta: f64) -> C64 {
+    pub(super) fn pole(f: f64, zeta: f64) -> C64 {
         2.0 * PI * f * C64::new(-zeta, (1.0 - zeta * zeta).sqrt())
     }
 
@@ -1062,7 +1056,7 @@ pub(super) mod tests {
         }
     }
 
-    fn views(y: &[Vec<f64>]) -> Vec<&[f64]> {
+    pub(super) fn views(y: &[Vec<f64>]) -> Vec<&[f64]> {
         y.iter().map(|c| c.as_slice()).collect()
     }
 
