@@ -72,14 +72,21 @@ def truth(M, C, K):
     return [(abs(l) / (2 * math.pi), -l.real / abs(l)) for l in lam]
 
 
-def simulate(M, C, K, seed, n=N, fs=FS, noise=0.05):
-    """Displacements of M q'' + C q' + K q = f, f white and held over each step (exact ZOH)."""
+def discrete(M, C, K, fs=FS):
+    """Ad, Bd of the exact zero-order-hold discretisation of M q'' + C q' + K q = f, state
+    (q, q')."""
     d = M.shape[0]
     Minv = linalg.inv(M)
     A = np.block([[np.zeros((d, d)), np.eye(d)], [-Minv @ K, -Minv @ C]])
     B = np.vstack([np.zeros((d, d)), Minv])
     big = linalg.expm(np.block([[A, B], [np.zeros((d, 2 * d + d))]]) / fs)
-    Ad, Bd = big[: 2 * d, : 2 * d], big[: 2 * d, 2 * d :]
+    return big[: 2 * d, : 2 * d], big[: 2 * d, 2 * d :]
+
+
+def simulate(M, C, K, seed, n=N, fs=FS, noise=0.05):
+    """Displacements of M q'' + C q' + K q = f, f white and held over each step (exact ZOH)."""
+    d = M.shape[0]
+    Ad, Bd = discrete(M, C, K, fs)
     rng = np.random.default_rng(seed)
     f = rng.standard_normal((n + 2000, d))
     x = np.zeros(2 * d)
@@ -526,16 +533,6 @@ def timing(hyst_unused, repeats=7):
 
 
 # ---------------------------------------------------------------------------- Cramer-Rao bound
-def discrete(M, C, K):
-    """Ad, Bd of the exact zero-order-hold discretisation used by `simulate`."""
-    d = M.shape[0]
-    Minv = linalg.inv(M)
-    A = np.block([[np.zeros((d, d)), np.eye(d)], [-Minv @ K, -Minv @ C]])
-    B = np.vstack([np.zeros((d, d)), Minv])
-    big = linalg.expm(np.block([[A, B], [np.zeros((d, 2 * d + d))]]) / FS)
-    return big[: 2 * d, : 2 * d], big[: 2 * d, 2 * d :]
-
-
 def covariance_model(M, C, K, chans, noise=0.05):
     """The records' exact second-order model in covariance form: the output covariances
     R_j = sum_r (c_r g_r^T mu_r^(j-1) + conj) for j >= 1, and R_0 with the measurement noise.
