@@ -231,10 +231,11 @@ fn bench_covssi() {
         });
         let r = hyst::covssi::refine(&views, 50.0, &res.modes, &ro).expect("refines");
         println!(
-            "{name} {:.0} ms ({} SSI modes in, {} kept)",
+            "{name} {:.0} ms ({} SSI modes in, {} kept{})",
             t * 1e3,
             res.modes.len(),
-            r.modes.len()
+            r.modes.len(),
+            if r.joint { ", channels jointly" } else { "" }
         );
     }
 }
