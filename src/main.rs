@@ -207,7 +207,8 @@ struct SsiArgs {
     #[arg(long)]
     no_refine: bool,
     /// Refine with each channel's likelihood alone, not the joint likelihood of all channels
-    /// (which uses their cross-spectra; on by default for 2 to 4 channels).
+    /// (which uses their cross-spectra; on by default for 2 to 4 channels, and above 4 through 4
+    /// combinations of them when there are at most 4 modes).
     #[arg(long)]
     no_joint: bool,
 }
@@ -588,6 +589,7 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
             "frequencies": r.frequencies,
             "iterations": r.iterations,
             "joint": r.joint,
+            "combinations": r.combinations,
         })
     });
     let doc = json!({
@@ -641,10 +643,10 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
         println!(
             "refined by maximum likelihood ({} frequencies, {}; a mode needs evidence above {:.1}):",
             r.frequencies,
-            if r.joint {
-                "channels jointly"
-            } else {
-                "each channel's spectrum"
+            match (r.joint, r.combinations) {
+                (true, Some(p)) => format!("channels jointly, through {p} combinations"),
+                (true, None) => "channels jointly".to_string(),
+                (false, _) => "each channel's spectrum".to_string(),
             },
             r.penalty
         );

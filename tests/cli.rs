@@ -342,7 +342,88 @@ fn ssi_joint_and_per_channel_refinement() {
             serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
         let r = &v["refined"];
         assert_eq!(r["joint"], joint, "{r}");
+        assert!(r["combinations"].is_null(), "{r}");
         assert_eq!(r["modes"].as_array().unwrap().len(), 3, "{r}");
+    }
+}
+
+/// Six channels (the 3-DOF record's three and three sums of them, each with its own 5 %
+/// measurement noise): the joint likelihood is fitted through four combinations of the
+/// channels, and the JSON and the header say so.
+#[test]
+fn ssi_many_channels_refined_through_combinations() {
+    use rand::SeedableRng;
+    use rand::rngs::Xoshiro256PlusPlus;
+    use rand_distr::{Distribution, StandardNormal};
+    let Some(path) = common::data_file("oma/data_3dof.csv") else {
+        return;
+    };
+    let text = std::fs::read_to_string(&path).unwrap();
+    let rows: Vec<[f64; 3]> = text
+        .lines()
+        .skip(1)
+        .map(|line| {
+            let v: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
+            [v[1], v[2], v[3]]
+        })
+        .collect();
+    let sums = [(0, 1), (1, 2), (0, 2)];
+    let sd: Vec<f64> = sums
+        .iter()
+        .map(|&(a, b)| {
+            let ss: f64 = rows.iter().map(|r| (r[a] + r[b]).powi(2)).sum();
+            (ss / rows.len() as f64).sqrt()
+        })
+        .collect();
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(7);
+    let mut csv = String::from("y1,y2,y3,s12,s23,s13\n");
+    for r in &rows {
+        let extra: Vec<String> = sums
+            .iter()
+            .zip(&sd)
+            .map(|(&(a, b), sd)| {
+                let e: f64 = StandardNormal.sample(&mut rng);
+                (r[a] + r[b] + 0.05 * sd * e).to_string()
+            })
+            .collect();
+        csv.push_str(&format!("{},{},{},{}\n", r[0], r[1], r[2], extra.join(",")));
+    }
+    let input = write("six_channels.csv", &csv);
+    let json = tmp("six_channels.json");
+    let (ok, out, err) = hyst(&[
+        "ssi",
+        "--input",
+        s(&input),
+        "--fs",
+        "20",
+        "--block-rows",
+        "20",
+        "--json",
+        s(&json),
+    ]);
+    assert!(ok, "{err}");
+    assert!(
+        out.contains("channels jointly, through 4 combinations"),
+        "{out}"
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let r = &v["refined"];
+    assert_eq!(
+        (&r["joint"], &r["combinations"]),
+        (&true.into(), &4.into()),
+        "{r}"
+    );
+    let truth = [1.0017, 2.8067, 4.0558];
+    let modes = r["modes"].as_array().unwrap();
+    assert_eq!(modes.len(), 3, "{r}");
+    for (m, f) in modes.iter().zip(truth) {
+        let (est, se) = (
+            m["frequency_hz"].as_f64().unwrap(),
+            m["frequency_se_hz"].as_f64().unwrap(),
+        );
+        // Within four standard errors of the README's truth.
+        assert!((est - f).abs() < 4.0 * se, "{m}");
     }
 }
 

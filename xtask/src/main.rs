@@ -216,6 +216,7 @@ fn bench_covssi() {
     for (name, len, ch) in [
         ("covssi_refine_ms_65536_1ch", 65536usize, 1usize),
         ("covssi_refine_ms_65536_3ch", 65536, 3),
+        ("covssi_refine_ms_65536_10ch", 65536, 10),
         ("covssi_refine_ms_1e6_1ch", n, 1),
     ] {
         let views: Vec<&[f64]> = all[..ch].iter().map(|c| &c[..len]).collect();
@@ -235,7 +236,11 @@ fn bench_covssi() {
             t * 1e3,
             res.modes.len(),
             r.modes.len(),
-            if r.joint { ", channels jointly" } else { "" }
+            match (r.joint, r.combinations) {
+                (true, Some(p)) => format!(", channels jointly through {p} combinations"),
+                (true, None) => ", channels jointly".to_string(),
+                (false, _) => String::new(),
+            }
         );
     }
 }

@@ -22,7 +22,8 @@
 //!    poles of one frequency but different damping stay apart; stable real poles into
 //!    [`RealPoleCluster`]s.
 //! 6. Optionally, [`refine()`]: the modes fitted to the whole record by maximum likelihood
-//!    (Whittle; for 2–4 channels jointly, cross-spectra included), with standard errors, the
+//!    (Whittle; several channels jointly, cross-spectra included, above 4 channels through 4
+//!    combinations of them), with standard errors, the
 //!    modes the record does not support dropped, and a check that the record follows the model
 //!    ([`refine`](mod@refine) module).
 //!

@@ -40,7 +40,12 @@
 //!    $S = H\Sigma H^H$, $H$ the innovation form in modal coordinates), whose $F^{-1}$ is the
 //!    exact asymptotic covariance. A mode every channel sees weakly is then seen through all
 //!    of them at once (on the shared 3-DOF record, the 4 Hz mode's damping standard error goes
-//!    from 3.1 % to 2.1 %, the Cramér–Rao bound).
+//!    from 3.1 % to 2.1 %, the Cramér–Rao bound). With more channels it is the joint
+//!    likelihood of [`JOINT_MAX_CHANNELS`] combinations of them that span the modes' shapes
+//!    (the leading eigenvectors of the standardised cross-spectral matrices over the modes'
+//!    bands, each normalised to unit trace), when there are at most as many modes; what the
+//!    combinations leave out is then measurement noise, so little is lost
+//!    ([`Refinement::combinations`]).
 //!
 //! Real poles are not part of this model; records whose spectrum needs one are better read from
 //! the SSI result.
@@ -54,7 +59,8 @@ use realfft::RealFftPlanner;
 mod joint;
 
 /// Most channels fitted by the joint likelihood; its cost grows as l⁴ (4lm parameters, l²
-/// observations per frequency).
+/// observations per frequency). More channels are fitted through this many combinations of
+/// them.
 pub const JOINT_MAX_CHANNELS: usize = 4;
 
 /// Above this [`Refinement::misfit`] the record does not follow the model.
@@ -82,10 +88,11 @@ pub struct RefineOptions {
     pub tolerance: f64,
     /// Drop modes whose evidence is below the BIC penalty. Default: true.
     pub select: bool,
-    /// For 2 to [`JOINT_MAX_CHANNELS`] channels, fit the chosen modes once more by the joint
-    /// likelihood of all channels (cross-spectra included) and report its estimates and
-    /// standard errors; skipped when the record does not follow the per-channel model
-    /// (misfit above [`MISFIT_LIMIT`]). Default: true.
+    /// Fit the chosen modes once more by the joint likelihood of all channels (cross-spectra
+    /// included), or above [`JOINT_MAX_CHANNELS`] channels of that many combinations of them
+    /// (for at most that many modes), and report its estimates and standard errors; skipped
+    /// when the record does not follow the per-channel model (misfit above
+    /// [`MISFIT_LIMIT`]). Default: true.
     pub joint: bool,
 }
 
@@ -160,6 +167,10 @@ pub struct Refinement {
     /// joint likelihood's (see [`RefineOptions::joint`]); the evidence is always the
     /// per-channel likelihood's, by which the modes were chosen.
     pub joint: bool,
+    /// For a joint fit of more than [`JOINT_MAX_CHANNELS`] channels: the number of
+    /// combinations of the channels it was fitted to (`neg_log_likelihood` and `misfit` are
+    /// then theirs); `None` when the channels themselves were fitted.
+    pub combinations: Option<usize>,
 }
 
 /// Refine `modes` (e.g. [`crate::SsiResult::modes`]) on the channels `y` sampled at `fs` Hz.
@@ -168,6 +179,18 @@ pub fn refine(
     fs: f64,
     modes: &[Mode],
     opts: &RefineOptions,
+) -> Result<Refinement, SsiError> {
+    refine_up_to(y, fs, modes, opts, JOINT_MAX_CHANNELS)
+}
+
+/// [`refine`], fitting up to `joint_max` channels themselves by the joint likelihood and
+/// more through `joint_max` combinations of them.
+fn refine_up_to(
+    y: &[&[f64]],
+    fs: f64,
+    modes: &[Mode],
+    opts: &RefineOptions,
+    joint_max: usize,
 ) -> Result<Refinement, SsiError> {
     crate::check_fs(fs)?;
     let (n, means) = crate::check_channels(y)?;
@@ -277,13 +300,24 @@ pub fn refine(
     let per_channel_misfit = model
         .eval(&fit.theta, mk, What::Ratios)
         .map_or(1.0, |e| ks_exponential(e.ratios));
-    let joint_fit = (opts.joint
-        && (2..=JOINT_MAX_CHANNELS).contains(&l)
-        && mk > 0
-        && per_channel_misfit <= MISFIT_LIMIT
-        && model.k() * l * l >= 10 * joint::parameters(l, mk))
+    //    Above `joint_max` channels (the joint cost grows as l⁴) the joint likelihood is that
+    //    of `joint_max` combinations of them carrying the modes, when there are no more modes
+    //    than combinations.
+    let wanted = opts.joint && mk > 0 && per_channel_misfit <= MISFIT_LIMIT;
+    let combined = (wanted && l > joint_max && mk <= joint_max)
+        .then(|| model.project(&fit.lambdas, joint_max))
+        .flatten();
+    let combined_views: Vec<&[f64]> = combined.iter().flatten().map(Vec::as_slice).collect();
+    let zeros = vec![0.0; combined_views.len()];
+    let combined_model =
+        (!combined_views.is_empty()).then(|| Model::new(&combined_views, &zeros, fs));
+    let rec = combined_model.as_ref().unwrap_or(&model);
+    let lj = rec.x.len();
+    let joint_fit = (wanted
+        && (2..=joint_max).contains(&lj)
+        && rec.k() * lj * lj >= 10 * joint::parameters(lj, mk))
     .then(|| {
-        let (jm, start) = joint::Joint::start(&model, &fit.theta, mk)?;
+        let (jm, start) = joint::Joint::start(rec, &fit.theta, mk)?;
         let jf = jm.fit(start, opts).ok()?;
         let ratios = jm.ratios(&jf.theta)?;
         // Its asymptotic covariance is F⁻¹ (an exact likelihood); a singular F means the
@@ -293,6 +327,7 @@ pub fn refine(
     })
     .flatten();
     let joint = joint_fit.is_some();
+    let combinations = (joint && combined_model.is_some()).then_some(lj);
     let misfit;
     // Asymptotic covariance: F⁻¹ for the joint likelihood and for one channel; for the
     // per-channel likelihood of several, the composite likelihood's sandwich F⁻¹ J F⁻¹, J the
@@ -346,6 +381,7 @@ pub fn refine(
         frequencies: model.k(),
         iterations: fit.iterations,
         joint,
+        combinations,
     })
 }
 
@@ -566,6 +602,66 @@ impl<'a> Model<'a> {
 
     fn k(&self) -> usize {
         self.z.len()
+    }
+
+    /// `p` combinations of the standardised channels that carry the modes `lambdas`, as
+    /// records of their own. For each mode the cross-spectral matrix of the standardised
+    /// channels over its half-power band (at least ±3 bins) is normalised to unit trace, so a
+    /// weak mode weighs as much as a strong one; the combinations are the leading `p`
+    /// eigenvectors of the real part of their sum, which spans the modes' shapes (real and
+    /// imaginary parts). Scaling a channel changes nothing (the channels are standardised);
+    /// permuting them changes the combinations' signs at most. `None` if a band holds no
+    /// power or the eigenvectors cannot be computed.
+    fn project(&self, lambdas: &[C64], p: usize) -> Option<Vec<Vec<f64>>> {
+        let l = self.x.len();
+        let n = self.y[0].len();
+        let sd: Vec<f64> = self
+            .y
+            .iter()
+            .zip(self.means)
+            .map(|(ch, mean)| {
+                (ch.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n as f64).sqrt()
+            })
+            .collect();
+        let bin = 2.0 * std::f64::consts::PI / n as f64;
+        let mut g = Dense::zeros(l, l);
+        for lam in lambdas {
+            let centre = lam.im / self.fs;
+            let half = (-lam.re / self.fs).max(3.0 * bin);
+            let lo = ((centre - half) / bin).ceil().max(1.0) as usize;
+            let hi = (((centre + half) / bin).floor() as usize).min(self.k());
+            let mut s = Dense::zeros(l, l);
+            for kk in lo.saturating_sub(1)..hi {
+                for a in 0..l {
+                    for b in 0..l {
+                        let v = (self.x[a][kk] * self.x[b][kk].conj()).re / (sd[a] * sd[b]);
+                        s.set(a, b, s.at(a, b) + v);
+                    }
+                }
+            }
+            let trace: f64 = (0..l).map(|a| s.at(a, a)).sum();
+            if !(trace > 0.0 && trace.is_finite()) {
+                return None;
+            }
+            g.data
+                .iter_mut()
+                .zip(&s.data)
+                .for_each(|(gv, sv)| *gv += sv / trace);
+        }
+        let (u, _) = linalg::thin_svd_u(&g).ok()?;
+        Some(
+            (0..p.min(l))
+                .map(|j| {
+                    (0..n)
+                        .map(|t| {
+                            (0..l)
+                                .map(|c| u.at(c, j) * (self.y[c][t] - self.means[c]) / sd[c])
+                                .sum()
+                        })
+                        .collect()
+                })
+                .collect(),
+        )
     }
 
     /// Starting numerator of channel c: σ² and B from the autocovariances of the record
