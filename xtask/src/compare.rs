@@ -5,7 +5,7 @@
 //! this machine, and (`--clusters`) covssi's mode values and spurious clusters over the same
 //! seeds (with `--covssi-only`, without running the tools). `--crb` prints the Cramér–Rao
 //! bound of the estimates on these systems' records instead, computed from their exact
-//! spectral matrix.
+//! spectral matrix, and on the records of covssi's unit tests of the joint likelihood.
 //!
 //! The tools run in a virtual environment made on first use under `target/compare-venv`
 //! (`python3 -m venv`, then pip installs the pinned versions from PyPI); the comparison itself

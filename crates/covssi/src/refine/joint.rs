@@ -739,14 +739,15 @@ mod tests {
     /// the weak one), started near the truth. On every record both keep every mode and the
     /// weak mode's joint standard errors are below `se_ratio` times the per-channel fit's;
     /// over the records the joint standard errors are calibrated and the weak mode's RMS
-    /// errors are below `rms_ratio` times the per-channel fit's. Returns how many
-    /// combinations each joint fit used.
+    /// errors are below `rms_ratio` times the per-channel fit's and near `bound`, the weak
+    /// mode's Cramér–Rao bound (relative; frequency, damping), as an efficient estimator's
+    /// are. Returns how many combinations each joint fit used.
     fn joint_against_per_channel(
         truth: &[(f64, f64)],
         gains: &[Vec<f64>],
         seeds: std::ops::Range<u64>,
-        se_ratio: f64,
-        rms_ratio: f64,
+        [se_ratio, rms_ratio]: [f64; 2],
+        bound: [f64; 2],
     ) -> Vec<Option<usize>> {
         use super::super::refine;
         use super::super::tests::mode;
@@ -793,8 +794,16 @@ mod tests {
         for i in 0..2 {
             let [joint, per] = [weak_rms[0][i], weak_rms[1][i]];
             eprintln!(
-                "z-score RMS ({i}): {:.3}; weak mode RMS error: joint {joint:.5}, per channel {per:.5}",
-                z_rms[i]
+                "z-score RMS ({i}): {:.3}; weak mode RMS error: joint {joint:.5}, per channel \
+                 {per:.5}, Cramér–Rao bound {:.5}",
+                z_rms[i], bound[i]
+            );
+            // An RMS over n records is uncertain by about 1/√(2n), 18 % for the 16 records
+            // of the smaller test: 0.5–1.55 of the bound is a band of 3 of those.
+            assert!(
+                (0.5..1.55).contains(&(joint / bound[i])),
+                "weak mode RMS error {joint} against the bound {} ({i})",
+                bound[i]
             );
             // The RMS of z over at least 48 values is 1 ± 0.1 when the standard errors are
             // right: 0.7–1.3 is a 3σ band.
@@ -821,7 +830,10 @@ mod tests {
         let gains = vec![vec![1.0, 0.15], vec![0.6, -0.15], vec![-0.4, 0.15]];
         // RMS error ratios measured 0.64 (frequency) and 0.45 (damping); an RMS over 30
         // records is uncertain by about 13 %, so 0.85 leaves that margin above the larger.
-        let combinations = joint_against_per_channel(&truth, &gains, 300..330, 1.0, 0.85);
+        // The bound: `cargo xtask compare-tools --crb` (computed in Python from the exact
+        // spectral matrix), 0.216 % and 4.37 %.
+        let combinations =
+            joint_against_per_channel(&truth, &gains, 300..330, [1.0, 0.85], [2.16e-3, 4.37e-2]);
         assert!(combinations.iter().all(Option::is_none));
     }
 
@@ -853,7 +865,10 @@ mod tests {
         // (frequency) and 0.44 (damping), as the standard errors predict. An RMS over 16
         // records is uncertain by about 18 %, the ratio of two by about 25 %, so 0.75 is
         // above what chance would give.
-        let combinations = joint_against_per_channel(&truth, &gains, 900..916, 0.6, 0.75);
+        // The bound of all ten channels: `cargo xtask compare-tools --crb`, 0.214 % and
+        // 4.31 %.
+        let combinations =
+            joint_against_per_channel(&truth, &gains, 900..916, [0.6, 0.75], [2.14e-3, 4.31e-2]);
         assert!(combinations.iter().all(|&c| c == Some(JOINT_MAX_CHANNELS)));
     }
 
