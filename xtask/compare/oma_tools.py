@@ -8,6 +8,8 @@ through the `hyst ssi` command):
   1. the records in ../shared/data/oma (the files the README's table was made from);
   2. `--seeds` fresh records of the same two systems (3-DOF chain, SDOF), made here by exact
      zero-order-hold discretisation, white force at every DOF, 5 % white measurement noise;
+     and of the 3-DOF chain seen by ten sensors (`ten_sensors`; no shared record), where
+     covssi fits the joint likelihood through four combinations of the channels;
   3. `--timing`: the identification step at N = 1e6 (one BLAS thread) for the same four cases
      as `cargo xtask bench covssi`;
   4. `--clusters`: covssi alone over the same seeds: three ways to take a mode's value from its
@@ -65,6 +67,20 @@ def sdof():
     return np.eye(1), np.array([[2.0 * 0.02 * w]]), np.array([[w * w]])
 
 
+def ten_sensors():
+    """Ten displacement sensors on the 3-DOF chain, evenly spaced from its fixed base (0) to the
+    top mass (3), each reading the linear interpolation between its neighbouring masses."""
+    W = np.zeros((10, 3))
+    for s in range(10):
+        x = 0.3 * (s + 1)
+        i = min(int(x), 2)  # between mass i (0: the base) and mass i + 1
+        t = x - i
+        if i > 0:
+            W[s, i - 1] = 1 - t
+        W[s, i] = t
+    return W
+
+
 def truth(M, C, K):
     """Natural frequencies |lambda|/2pi and damping -Re(lambda)/|lambda| of the continuous model."""
     n = M.shape[0]
@@ -99,6 +115,18 @@ def simulate(M, C, K, seed, n=N, fs=FS, noise=0.05):
     y = y[2000:]  # drop the start from rest
     y = y + noise * y.std(axis=0) * rng.standard_normal(y.shape)
     return y
+
+
+def record(system, chans, seed):
+    """A fresh record of a case: the displacements at `chans` (a list of DOFs), each with 5 %
+    measurement noise; or, for a sensor matrix, the sensors' readings of the noise-free
+    displacements with 5 % noise of their own."""
+    M, C, K = system()
+    if isinstance(chans, list):
+        return simulate(M, C, K, seed=seed)[:, chans]
+    y = simulate(M, C, K, seed=seed, noise=0.0) @ chans.T
+    rng = np.random.default_rng([seed, 1])
+    return y + 0.05 * y.std(axis=0) * rng.standard_normal(y.shape)
 
 
 # ---------------------------------------------------------------------------- statistic
@@ -228,6 +256,7 @@ CASES = [
     ("3 channels", chain_3dof, [0, 1, 2], 20, "data_3dof.csv", ["y1", "y2", "y3"]),
     ("channel y1", chain_3dof, [0], 60, "data_3dof.csv", ["y1"]),
     ("SDOF", sdof, [0], 60, "data_sdof.csv", ["y"]),
+    ("10 sensors", chain_3dof, ten_sensors(), 20, None, None),
 ]
 TOOLS = ["pyOMA2", "koma", "covssi", "covssi mode", "covssi ML", "covssi ML per channel"]
 
@@ -274,6 +303,8 @@ def files(hyst, data_dir, tmp):
     print("| case | mode | " + " | ".join(TOOLS) + " |")
     print("|---|---|" + "---|" * len(TOOLS))
     for name, system, _, br, fname, cols in CASES:
+        if fname is None:  # no shared record of this case
+            continue
         y = read_csv_columns(os.path.join(data_dir, fname), cols)
         tr = truth(*system())
         res = run_all(hyst, y, br, tr, tmp)
@@ -294,7 +325,7 @@ def seeds(hyst, count, first, tmp):
         tr = truth(M, C, K)
         errs = {t: [] for t in TOOLS + ["z"]}
         for s in range(first, first + count):
-            y = simulate(M, C, K, seed=s)[:, chans]
+            y = record(system, chans, s)
             res = run_all(hyst, y, br, tr, tmp)
             for t in TOOLS + ["z"]:
                 errs[t].append(res[t])
@@ -450,7 +481,7 @@ def clusters(hyst, count, first, tmp):
         acc = {k: [[] for _ in tr] for k in ("mean", "median", "level 2")}
         spur, phys = [], []
         for s in range(first, first + count):
-            y = simulate(M, C, K, seed=s)[:, chans]
+            y = record(system, chans, s)
             doc = run_covssi(hyst, y, br, tmp)[2]
             refined_counts[name].append(refined_census(doc, tr))
             values, sp, ph = cluster_statistics(doc, tr, y.shape[1])
@@ -540,7 +571,9 @@ def physical(system, chans):
     M, C, K = system()
     Ad, Bd = discrete(M, C, K)
     d = M.shape[0]
-    return Ad, Bd, np.eye(2 * d)[:d][chans]
+    if isinstance(chans, list):
+        return Ad, Bd, np.eye(2 * d)[:d][chans]
+    return Ad, Bd, chans @ np.eye(2 * d)[:d]
 
 
 def modal(modes, gains):
@@ -611,29 +644,38 @@ def cramer_rao(Ad, Bd, Cy, n=N, grid=8192):
     """Standard deviation bound (in % of the truth) of each mode's frequency and damping ratio
     from n samples: the inverse of the Whittle Fisher information
     F_ij = sum_k tr(S^-1 dS_i S^-1 dS_j) over the n/2 frequencies in (0, pi), the derivatives
-    by central differences. The parametrisation has redundant directions (c_r alpha, g_r /
-    alpha), so F is inverted on its range (pseudo-inverse); the frequencies and damping ratios
-    are identifiable, so their bound is unaffected."""
+    by central differences. Each residue c_r g_r^T is unchanged by (c_r alpha, g_r / alpha), so
+    g_r is normalised to 1 at its largest component and that component is held: F is then
+    regular, and it is inverted after scaling to a unit diagonal. (A pseudo-inverse of the
+    redundant F, used before, needs a cut-off between the redundant directions and the weakly
+    informed ones; with ten sensors on three modes no cut-off separates them.)"""
     modes, R0 = covariance_model(Ad, Bd, Cy)
     l, m = Cy.shape[0], len(modes)
-    p = []
+    p, held = [], []
     for f, zeta, c, g in modes:
+        ref = int(np.argmax(np.abs(g)))
+        c, g = c * g[ref], g / g[ref]
+        base = len(p)
+        held += [base + 2 + 2 * l + ref, base + 2 + 3 * l + ref]
         p += [f, zeta, *c.real, *c.imag, *g.real, *g.imag]
     p = np.array(p + list(R0[np.triu_indices(l)]))
+    free = [i for i in range(len(p)) if i not in held]
     om = (np.arange(grid) + 0.5) * math.pi / grid
     Si = np.linalg.inv(spectral_matrix(p, l, m, om))
     D = []
-    for i in range(len(p)):
+    for i in free:
         h = 1e-6 * max(abs(p[i]), 1e-3)
         a, b = p.copy(), p.copy()
         a[i] += h
         b[i] -= h
         D.append(Si @ ((spectral_matrix(a, l, m, om) - spectral_matrix(b, l, m, om)) / (2 * h)))
     F = np.array([[np.einsum("kab,kba->k", Di, Dj).real.mean() * n / 2 for Dj in D] for Di in D])
-    cov = np.linalg.pinv(F, rcond=1e-12)
+    d = 1 / np.sqrt(np.diag(F))
+    cov = np.linalg.inv(F * d[:, None] * d[None, :]) * d[:, None] * d[None, :]
     out, k = [], 0
     for f, zeta, _, _ in modes:
-        out.append((100 * math.sqrt(cov[k, k]) / f, 100 * math.sqrt(cov[k + 1, k + 1]) / zeta))
+        i, j = free.index(k), free.index(k + 1)
+        out.append((100 * math.sqrt(cov[i, i]) / f, 100 * math.sqrt(cov[j, j]) / zeta))
         k += 2 + 4 * l
     return out
 
@@ -679,7 +721,15 @@ def main():
                          "--clusters, covssi alone")
     ap.add_argument("--crb", action="store_true",
                     help="print the Cramer-Rao bound of the estimates and stop")
+    ap.add_argument("--cases", default=None,
+                    help="comma-separated case names to run (default: all), e.g. '10 sensors'")
     a = ap.parse_args()
+    if a.cases is not None:
+        wanted = [c.strip() for c in a.cases.split(",")]
+        unknown = [w for w in wanted if w not in [c[0] for c in CASES]]
+        if unknown:
+            raise SystemExit(f"unknown case(s) {unknown}; cases: {[c[0] for c in CASES]}")
+        CASES[:] = [c for c in CASES if c[0] in wanted]
     if a.crb:
         crb_table()
         return

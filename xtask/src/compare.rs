@@ -1,4 +1,4 @@
-//! `cargo xtask compare-tools [--seeds N] [--first-seed S] [--timing] [--clusters] [--covssi-only] [--crb]`:
+//! `cargo xtask compare-tools [--seeds N] [--first-seed S] [--timing] [--clusters] [--covssi-only] [--crb] [--cases NAMES]`:
 //! covssi beside the two Python tools of `../shared/data/oma/README.md`, pyOMA2 and koma, with
 //! the same settings and the same statistic, on the shared records, on fresh records of the
 //! same systems over noise seeds, (`--timing`) the tools' identification step at N = 1e6 on
