@@ -137,18 +137,19 @@ fn c_reference() {
 }
 
 /// Response of a 5-mode linear system (1.1–9.3 Hz, 1–4 % damping) at 50 Hz to white noise,
-/// seen through `channels` channels with 5 % measurement noise.
-fn linear_record(n: usize, channels: usize, seed: u64) -> Vec<Vec<f64>> {
+/// seen through `channels` channels with 5 % measurement noise; with `modes` < 5 only the
+/// lowest `modes` modes respond (the same noise otherwise).
+fn linear_record(n: usize, channels: usize, modes: usize, seed: u64) -> Vec<Vec<f64>> {
     let w = white_noise(n * 10 + n * channels, 1.0, seed).expect("valid rms");
     let dt = 0.02;
-    let modes = [
+    let all_modes = [
         (1.1f64, 0.01f64),
         (2.7, 0.02),
         (4.4, 0.02),
         (6.8, 0.03),
         (9.3, 0.04),
     ];
-    let blocks: Vec<[f64; 4]> = modes
+    let blocks: Vec<[f64; 4]> = all_modes[..modes.min(all_modes.len())]
         .iter()
         .map(|&(f, z)| {
             let om = 2.0 * std::f64::consts::PI * f;
@@ -182,7 +183,7 @@ fn linear_record(n: usize, channels: usize, seed: u64) -> Vec<Vec<f64>> {
 fn bench_covssi() {
     use hyst::covssi::{BlockRows, SsiOptions, identify};
     let n = 1_000_000;
-    let all = linear_record(n, 10, 7);
+    let all = linear_record(n, 10, 5, 7);
     for (name, ch, br, order) in [
         ("covssi_ms_1e6_1ch", 1usize, 20usize, 40usize),
         ("covssi_ms_1e6_3ch", 3, 20, 40),
@@ -213,13 +214,16 @@ fn bench_covssi() {
     println!("read_record_ms_1e6_10ch {:.2} ms", t * 1e3);
     // The maximum-likelihood refinement of the SSI modes (not part of the times above): on
     // records of the OMA files' length and on the long one.
-    for (name, len, ch) in [
-        ("covssi_refine_ms_65536_1ch", 65536usize, 1usize),
-        ("covssi_refine_ms_65536_3ch", 65536, 3),
-        ("covssi_refine_ms_65536_10ch", 65536, 10),
-        ("covssi_refine_ms_1e6_1ch", n, 1),
+    // Three modes in ten channels: the joint fit through four combinations of them.
+    let three = linear_record(65536, 10, 3, 7);
+    for (name, rec, len, ch) in [
+        ("covssi_refine_ms_65536_1ch", &all, 65536usize, 1usize),
+        ("covssi_refine_ms_65536_3ch", &all, 65536, 3),
+        ("covssi_refine_ms_65536_10ch", &all, 65536, 10),
+        ("covssi_refine_ms_65536_10ch_3modes", &three, 65536, 10),
+        ("covssi_refine_ms_1e6_1ch", &all, n, 1),
     ] {
-        let views: Vec<&[f64]> = all[..ch].iter().map(|c| &c[..len]).collect();
+        let views: Vec<&[f64]> = rec[..ch].iter().map(|c| &c[..len]).collect();
         let opts = SsiOptions {
             block_rows: BlockRows::Count(20),
             max_order: Some(40.min(20 * ch)),
