@@ -42,10 +42,10 @@
 //!    of them at once (on the shared 3-DOF record, the 4 Hz mode's damping standard error goes
 //!    from 3.1 % to 2.1 %, the Cramér–Rao bound). With more channels it is the joint
 //!    likelihood of [`JOINT_MAX_CHANNELS`] combinations of them that span the modes' shapes
-//!    (the leading eigenvectors of the standardised cross-spectral matrices over the modes'
-//!    bands, each normalised to unit trace), when there are at most as many modes; what the
-//!    combinations leave out is then measurement noise, so little is lost
-//!    ([`Refinement::combinations`]).
+//!    (the channels scaled to equal noise floors, then the leading eigenvectors of their
+//!    cross-spectral matrices over the modes' bands, each normalised to unit trace), when
+//!    there are at most as many modes; what the combinations leave out is then measurement
+//!    noise, so little is lost ([`Refinement::combinations`]).
 //!
 //! Real poles are not part of this model; records whose spectrum needs one are better read from
 //! the SSI result.
@@ -305,7 +305,14 @@ fn refine_up_to(
     //    than combinations.
     let wanted = opts.joint && mk > 0 && per_channel_misfit <= MISFIT_LIMIT;
     let combined = (wanted && l > joint_max && mk <= joint_max)
-        .then(|| model.project(&fit.lambdas, joint_max))
+        .then(|| {
+            let scale: Vec<f64> = model
+                .noise_floor(&fit.theta, mk)?
+                .iter()
+                .map(|v| v.sqrt())
+                .collect();
+            model.project(&fit.lambdas, joint_max, &scale)
+        })
         .flatten();
     let combined_views: Vec<&[f64]> = combined.iter().flatten().map(Vec::as_slice).collect();
     let zeros = vec![0.0; combined_views.len()];
@@ -604,25 +611,48 @@ impl<'a> Model<'a> {
         self.z.len()
     }
 
-    /// `p` combinations of the standardised channels that carry the modes `lambdas`, as
-    /// records of their own. For each mode the cross-spectral matrix of the standardised
-    /// channels over its half-power band (at least ±3 bins) is normalised to unit trace, so a
-    /// weak mode weighs as much as a strong one; the combinations are the leading `p`
-    /// eigenvectors of the real part of their sum, which spans the modes' shapes (real and
-    /// imaginary parts). Scaling a channel changes nothing (the channels are standardised);
-    /// permuting them changes the combinations' signs at most. `None` if a band holds no
-    /// power or the eigenvectors cannot be computed.
-    fn project(&self, lambdas: &[C64], p: usize) -> Option<Vec<Vec<f64>>> {
+    /// The lowest value over frequency of each channel's fitted spectrum S_c (θ of a
+    /// per-channel fit with `m` modes): a bound on its white measurement noise's spectral
+    /// level, and near it where the modes' tails are below the noise.
+    fn noise_floor(&self, th: &[f64], m: usize) -> Option<Vec<f64>> {
+        let q = 2 * m;
+        let den = Denominator::new(th, m, self.fs)?;
+        let floor = (0..self.x.len())
+            .map(|c| {
+                let off = 2 * m + c * (q + 1);
+                self.z
+                    .iter()
+                    .map(|&z| {
+                        let (mut b, mut pw) = (C64::new(1.0, 0.0), C64::new(1.0, 0.0));
+                        for bk in &th[off + 1..=off + q] {
+                            pw *= z.conj();
+                            b += pw * bk;
+                        }
+                        (th[off] + b.norm_sqr().ln() - den.at(z, false, &mut [])).exp()
+                    })
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .collect::<Vec<f64>>();
+        floor
+            .iter()
+            .all(|v| *v > 0.0 && v.is_finite())
+            .then_some(floor)
+    }
+
+    /// `p` combinations of the channels that carry the modes `lambdas`, as records of their
+    /// own, each channel first divided by `scale` (the square root of its noise floor, so
+    /// that the noise is white with equal level in all: then the directions orthogonal to the
+    /// modes' shapes hold noise alone, independent of the rest). For each mode the
+    /// cross-spectral matrix of the scaled channels over its half-power band (at least ±3
+    /// bins) is normalised to unit trace, so a weak mode weighs as much as a strong one; the
+    /// combinations are the leading `p` eigenvectors of the real part of their sum, which
+    /// spans the modes' shapes (real and imaginary parts). Scaling a channel changes nothing
+    /// (its scale scales with it); permuting them changes the combinations' signs at most.
+    /// `None` if a band holds no power or the eigenvectors cannot be computed.
+    fn project(&self, lambdas: &[C64], p: usize, scale: &[f64]) -> Option<Vec<Vec<f64>>> {
         let l = self.x.len();
         let n = self.y[0].len();
-        let sd: Vec<f64> = self
-            .y
-            .iter()
-            .zip(self.means)
-            .map(|(ch, mean)| {
-                (ch.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n as f64).sqrt()
-            })
-            .collect();
+        let sd = scale;
         let bin = 2.0 * std::f64::consts::PI / n as f64;
         let mut g = Dense::zeros(l, l);
         for lam in lambdas {
