@@ -760,6 +760,7 @@ mod tests {
             ..opts.clone()
         };
         let (mut z, mut weak, mut combinations) = (Vec::new(), Vec::new(), Vec::new());
+        let mut se_ratios = Vec::new();
         for seed in seeds {
             let y = record(16384, truth, gains, 0.05, seed);
             let v = views(&y);
@@ -775,6 +776,7 @@ mod tests {
                 z.push([(a.frequency_hz - f) / fse, (a.damping_ratio - zeta) / zse]);
                 if k == 1 {
                     let (bf, bz) = (b.frequency_se_hz.unwrap(), b.damping_se.unwrap());
+                    se_ratios.extend([fse / bf, zse / bz]);
                     assert!(fse < se_ratio * bf, "seed {seed}: {a:?} {b:?}");
                     assert!(zse < se_ratio * bz, "seed {seed}: {a:?} {b:?}");
                     weak.push([
@@ -790,6 +792,11 @@ mod tests {
         };
         let z_rms = [0, 1].map(|i| rms(&mut z.iter().map(|x| x[i])));
         let weak_rms = [0, 1].map(|fit| [0, 1].map(|i| rms(&mut weak.iter().map(|w| w[fit][i]))));
+        eprintln!(
+            "weak mode standard errors over the per-channel fit's: {:.3}–{:.3}",
+            se_ratios.iter().copied().fold(f64::INFINITY, f64::min),
+            se_ratios.iter().copied().fold(0.0, f64::max)
+        );
         for i in 0..2 {
             let [joint, per] = [weak_rms[0][i], weak_rms[1][i]];
             eprintln!(
@@ -860,8 +867,8 @@ mod tests {
     fn many_channels_are_fitted_jointly_through_combinations() {
         let truth = [(1.5, 0.02), (3.0, 0.05), (5.0, 0.03)];
         let gains = chain_gains(10, 3, 0.15);
-        // Standard error ratios measured 0.32–0.48 on every record; RMS error ratios 0.43
-        // (frequency) and 0.44 (damping), as the standard errors predict. An RMS over 16
+        // Standard error ratios measured 0.32–0.49 on every record; RMS error ratios 0.45
+        // (frequency) and 0.43 (damping), as the standard errors predict. An RMS over 16
         // records is uncertain by about 18 %, the ratio of two by about 25 %, so 0.75 is
         // above what chance would give.
         // The bound of all ten channels: `cargo xtask compare-tools --crb`, 0.214 % and
@@ -958,7 +965,7 @@ mod tests {
                     let allowed = 3.0 * (r * r - 1.0).max(0.0).sqrt() + 0.1;
                     assert!(d.abs() < allowed, "seed {seed} mode {k}: {d} SE, {allowed}");
                 }
-                // Rescaled and reordered: the same fits (measured: within 1e-13 SE); the
+                // Rescaled and reordered: the same fits (measured: within 3e-13 SE); the
                 // bound is the fits' convergence tolerance (an L within 1e-6 puts the
                 // estimates within ~1e-3 SE), should rounding steer an iteration elsewhere.
                 assert!(
