@@ -878,22 +878,6 @@ mod tests {
         assert!(combinations.iter().all(|&c| c == Some(JOINT_MAX_CHANNELS)));
     }
 
-    /// `y` with white measurement noise added to each channel, `fractions[c]` of its
-    /// standard deviation.
-    fn with_noise(mut y: Vec<Vec<f64>>, fractions: &[f64], seed: u64) -> Vec<Vec<f64>> {
-        use rand::rngs::Xoshiro256PlusPlus;
-        use rand::{RngExt, SeedableRng};
-        use rand_distr::StandardNormal;
-        let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
-        for (ch, frac) in y.iter_mut().zip(fractions) {
-            let sd = (ch.iter().map(|v| v * v).sum::<f64>() / ch.len() as f64).sqrt();
-            for v in ch.iter_mut() {
-                *v += frac * sd * rng.sample::<f64, _>(StandardNormal);
-            }
-        }
-        y
-    }
-
     /// Six channels, with equal and with very unequal measurement noise (1 % to 100 %): the
     /// joint fit through four combinations lands where the joint fit of all six does (the
     /// combinations span the modes' shapes with each channel weighted by its noise floor, and
@@ -901,8 +885,10 @@ mod tests {
     /// is rescaled and the channels are reordered.
     #[test]
     fn combinations_lose_nothing_and_ignore_scale_and_order() {
-        use super::super::tests::mode;
+        use super::super::tests::{add_noise, mode};
         use super::super::{refine, refine_up_to};
+        use rand::SeedableRng;
+        use rand::rngs::Xoshiro256PlusPlus;
         let truth = [(1.5, 0.02), (3.0, 0.05), (5.0, 0.03)];
         let gains = chain_gains(6, 3, 0.15);
         let start: Vec<_> = truth
@@ -913,10 +899,11 @@ mod tests {
         let equal = [0.05; 6];
         let unequal = [0.01, 0.5, 0.02, 0.3, 0.05, 1.0];
         for (seed, fractions) in [(0, &equal), (1, &equal), (2, &unequal), (3, &unequal)] {
-            let y = with_noise(
-                record(16384, &truth, &gains, 0.0, 950 + seed),
+            let mut y = record(16384, &truth, &gains, 0.0, 950 + seed);
+            add_noise(
+                &mut y,
                 fractions,
-                seed,
+                &mut Xoshiro256PlusPlus::seed_from_u64(seed),
             );
             let v = views(&y);
             let comb = refine(&v, FS, &start, &opts).unwrap();

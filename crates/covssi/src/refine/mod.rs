@@ -504,6 +504,18 @@ fn poly(roots: &[C64]) -> Vec<f64> {
     c.iter().map(|v| v.re).collect()
 }
 
+/// Σ_k coef[k] w^k (coefficients lowest power first, e.g. a polynomial in z⁻¹ at w = z̄ on the
+/// unit circle).
+fn poly_at(coef: &[f64], w: C64) -> C64 {
+    let mut acc = C64::new(0.0, 0.0);
+    let mut p = C64::new(1.0, 0.0);
+    for c in coef {
+        acc += c * p;
+        p *= w;
+    }
+    acc
+}
+
 /// The denominator |A(e^{iω})|² of the spectrum: the discrete poles of θ's modes and their
 /// derivatives by the pole parameters.
 struct Denominator {
@@ -620,15 +632,13 @@ impl<'a> Model<'a> {
         let floor = (0..self.x.len())
             .map(|c| {
                 let off = 2 * m + c * (q + 1);
+                let mut b = vec![1.0];
+                b.extend_from_slice(&th[off + 1..=off + q]);
                 self.z
                     .iter()
                     .map(|&z| {
-                        let (mut b, mut pw) = (C64::new(1.0, 0.0), C64::new(1.0, 0.0));
-                        for bk in &th[off + 1..=off + q] {
-                            pw *= z.conj();
-                            b += pw * bk;
-                        }
-                        (th[off] + b.norm_sqr().ln() - den.at(z, false, &mut [])).exp()
+                        let b2 = poly_at(&b, z.conj()).norm_sqr();
+                        (th[off] + b2.ln() - den.at(z, false, &mut [])).exp()
                     })
                     .fold(f64::INFINITY, f64::min)
             })
@@ -652,7 +662,6 @@ impl<'a> Model<'a> {
     fn project(&self, lambdas: &[C64], p: usize, scale: &[f64]) -> Option<Vec<Vec<f64>>> {
         let l = self.x.len();
         let n = self.y[0].len();
-        let sd = scale;
         let bin = 2.0 * std::f64::consts::PI / n as f64;
         let mut g = Dense::zeros(l, l);
         for lam in lambdas {
@@ -664,7 +673,7 @@ impl<'a> Model<'a> {
             for kk in lo.saturating_sub(1)..hi {
                 for a in 0..l {
                     for b in 0..l {
-                        let v = (self.x[a][kk] * self.x[b][kk].conj()).re / (sd[a] * sd[b]);
+                        let v = (self.x[a][kk] * self.x[b][kk].conj()).re / (scale[a] * scale[b]);
                         s.set(a, b, s.at(a, b) + v);
                     }
                 }
@@ -685,7 +694,7 @@ impl<'a> Model<'a> {
                     (0..n)
                         .map(|t| {
                             (0..l)
-                                .map(|c| u.at(c, j) * (self.y[c][t] - self.means[c]) / sd[c])
+                                .map(|c| u.at(c, j) * (self.y[c][t] - self.means[c]) / scale[c])
                                 .sum()
                         })
                         .collect()
@@ -757,14 +766,7 @@ impl<'a> Model<'a> {
         let mean_b2 = (0..grid)
             .map(|g| {
                 let w = std::f64::consts::PI * (g as f64 + 0.5) / grid as f64;
-                let zc = C64::from_polar(1.0, -w);
-                let mut acc = C64::new(0.0, 0.0);
-                let mut p = C64::new(1.0, 0.0);
-                for bk in &b {
-                    acc += bk * p;
-                    p *= zc;
-                }
-                acc.norm_sqr()
+                poly_at(&b, C64::from_polar(1.0, -w)).norm_sqr()
             })
             .sum::<f64>()
             / grid as f64;
@@ -1159,13 +1161,19 @@ pub(super) mod tests {
                 }
             }
         }
-        for ch in &mut out {
-            let sd = (ch.iter().map(|v| v * v).sum::<f64>() / n as f64).sqrt();
+        add_noise(&mut out, &vec![noise; gains.len()], &mut rng);
+        out
+    }
+
+    /// White measurement noise added to each channel of `y`, `fractions[c]` of its standard
+    /// deviation.
+    pub(super) fn add_noise(y: &mut [Vec<f64>], fractions: &[f64], rng: &mut Xoshiro256PlusPlus) {
+        for (ch, frac) in y.iter_mut().zip(fractions) {
+            let sd = (ch.iter().map(|v| v * v).sum::<f64>() / ch.len() as f64).sqrt();
             for v in ch.iter_mut() {
-                *v += noise * sd * rng.sample::<f64, _>(StandardNormal);
+                *v += frac * sd * rng.sample::<f64, _>(StandardNormal);
             }
         }
-        out
     }
 
     /// An SSI mode with only what `refine` reads (its pole and member count) meaningful.
