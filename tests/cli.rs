@@ -358,37 +358,35 @@ fn ssi_many_channels_refined_through_combinations() {
     let Some(path) = common::data_file("oma/data_3dof.csv") else {
         return;
     };
-    let text = std::fs::read_to_string(&path).unwrap();
-    let rows: Vec<[f64; 3]> = text
-        .lines()
-        .skip(1)
-        .map(|line| {
-            let v: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
-            [v[1], v[2], v[3]]
-        })
+    let table = hyst::io::read_csv(&path).unwrap();
+    let y: Vec<&[f64]> = ["y1", "y2", "y3"]
+        .iter()
+        .map(|c| table.column(c).unwrap())
         .collect();
     let sums = [(0, 1), (1, 2), (0, 2)];
     let sd: Vec<f64> = sums
         .iter()
         .map(|&(a, b)| {
-            let ss: f64 = rows.iter().map(|r| (r[a] + r[b]).powi(2)).sum();
-            (ss / rows.len() as f64).sqrt()
+            let ss: f64 = (0..table.len()).map(|t| (y[a][t] + y[b][t]).powi(2)).sum();
+            (ss / table.len() as f64).sqrt()
         })
         .collect();
+    // Drawn row by row, each row's three sums in turn.
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(7);
-    let mut csv = String::from("y1,y2,y3,s12,s23,s13\n");
-    for r in &rows {
-        let extra: Vec<String> = sums
-            .iter()
-            .zip(&sd)
-            .map(|(&(a, b), sd)| {
-                let e: f64 = StandardNormal.sample(&mut rng);
-                (r[a] + r[b] + 0.05 * sd * e).to_string()
-            })
-            .collect();
-        csv.push_str(&format!("{},{},{},{}\n", r[0], r[1], r[2], extra.join(",")));
+    let mut extra = vec![Vec::with_capacity(table.len()); sums.len()];
+    for row in (0..table.len()).map(|t| [y[0][t], y[1][t], y[2][t]]) {
+        for ((&(a, b), sd), col) in sums.iter().zip(&sd).zip(&mut extra) {
+            let e: f64 = StandardNormal.sample(&mut rng);
+            col.push(row[a] + row[b] + 0.05 * sd * e);
+        }
     }
-    let input = write("six_channels.csv", &csv);
+    let input = tmp("six_channels.csv");
+    let columns: Vec<&[f64]> = y
+        .iter()
+        .copied()
+        .chain(extra.iter().map(Vec::as_slice))
+        .collect();
+    hyst::io::write_csv(&input, &["y1", "y2", "y3", "s12", "s23", "s13"], &columns).unwrap();
     let json = tmp("six_channels.json");
     let (ok, out, err) = hyst(&[
         "ssi",
