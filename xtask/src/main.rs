@@ -3,7 +3,7 @@
 //! - `cargo xtask bench` prints one line per figure, `name value unit`.
 //! - `cargo xtask sweep [--levels 10:90:10] [--samples N] [--seed S] [--out DIR]` runs the
 //!   paper's Section 5 amplitude study (see `sweep.rs`).
-//! - `cargo xtask compare-tools [--seeds N] [--first-seed S] [--timing] [--clusters] [--crb]`
+//! - `cargo xtask compare-tools [--seeds N] [--first-seed S] [--timing] [--clusters] [--crb] [--cases NAMES]`
 //!   runs covssi beside pyOMA2 and koma (see `compare.rs`).
 
 mod compare;
@@ -17,7 +17,7 @@ use hyst_sim::{Input, SimOptions, simulate};
 
 fn usage() -> ! {
     eprintln!(
-        "usage: cargo xtask bench [rk4] [covssi] [ident] [refine]\n       cargo xtask sweep [--levels FROM:TO:STEP] [--samples N] [--seed S] [--out DIR]\n       cargo xtask compare-tools [--seeds N] [--first-seed S] [--timing] [--clusters] [--crb]"
+        "usage: cargo xtask bench [rk4] [covssi] [ident] [refine]\n       cargo xtask sweep [--levels FROM:TO:STEP] [--samples N] [--seed S] [--out DIR]\n       cargo xtask compare-tools [--seeds N] [--first-seed S] [--timing] [--clusters] [--covssi-only] [--crb] [--cases NAMES]"
     );
     std::process::exit(2)
 }
