@@ -208,7 +208,7 @@ struct SsiArgs {
     no_refine: bool,
     /// Refine with each channel's likelihood alone, not the joint likelihood of all channels
     /// (which uses their cross-spectra; on by default for 2 to 4 channels, and above 4 through 4
-    /// combinations of them when there are at most 4 modes).
+    /// combinations of them, band by band when there are more than 4 modes).
     #[arg(long)]
     no_joint: bool,
 }
@@ -590,6 +590,7 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
             "iterations": r.iterations,
             "joint": r.joint,
             "combinations": r.combinations,
+            "bands": r.bands,
         })
     });
     let doc = json!({
@@ -644,6 +645,10 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
             "refined by maximum likelihood ({} frequencies, {}; a mode needs evidence above {:.1}):",
             r.frequencies,
             match (r.joint, r.combinations) {
+                (true, Some(p)) if r.bands > 1 => format!(
+                    "channels jointly, through {p} combinations in each of {} bands",
+                    r.bands
+                ),
                 (true, Some(p)) => format!("channels jointly, through {p} combinations"),
                 (true, None) => "channels jointly".to_string(),
                 (false, _) => "each channel's spectrum".to_string(),

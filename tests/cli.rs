@@ -343,6 +343,7 @@ fn ssi_joint_and_per_channel_refinement() {
         let r = &v["refined"];
         assert_eq!(r["joint"], joint, "{r}");
         assert!(r["combinations"].is_null(), "{r}");
+        assert_eq!(r["bands"], 1, "{r}");
         assert_eq!(r["modes"].as_array().unwrap().len(), 3, "{r}");
     }
 }
@@ -408,8 +409,8 @@ fn ssi_many_channels_refined_through_combinations() {
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let r = &v["refined"];
     assert_eq!(
-        (&r["joint"], &r["combinations"]),
-        (&true.into(), &4.into()),
+        (&r["joint"], &r["combinations"], &r["bands"]),
+        (&true.into(), &4.into(), &1.into()),
         "{r}"
     );
     let truth = [1.0017, 2.8067, 4.0558];

@@ -67,18 +67,37 @@ def sdof():
     return np.eye(1), np.array([[2.0 * 0.02 * w]]), np.array([[w * w]])
 
 
-def ten_sensors():
-    """Ten displacement sensors on the 3-DOF chain, evenly spaced from its fixed base (0) to the
-    top mass (3), each reading the linear interpolation between its neighbouring masses."""
-    W = np.zeros((10, 3))
-    for s in range(10):
-        x = 0.3 * (s + 1)
-        i = min(int(x), 2)  # between mass i (0: the base) and mass i + 1
+def chain_5dof():
+    """A fixed-free 5-mass chain, m = 1, k = 200 each, modal damping 1 to 5 %: five modes
+    between 0.6 and 4.4 Hz."""
+    k = 200.0
+    K = k * (2.0 * np.eye(5) - np.eye(5, k=1) - np.eye(5, k=-1))
+    K[4, 4] = k
+    w2, phi = linalg.eigh(K)
+    w = np.sqrt(w2)
+    zeta = np.array([0.01, 0.02, 0.03, 0.04, 0.05])
+    C = phi @ np.diag(2.0 * zeta * w) @ phi.T
+    return np.eye(5), C, K
+
+
+def sensors(d, count=10):
+    """`count` displacement sensors on a chain of d masses, evenly spaced from its fixed base
+    (0) to the top mass (d), each reading the linear interpolation between its neighbouring
+    masses."""
+    W = np.zeros((count, d))
+    for s in range(count):
+        x = d * (s + 1) / count
+        i = min(int(x), d - 1)  # between mass i (0: the base) and mass i + 1
         t = x - i
         if i > 0:
             W[s, i - 1] = 1 - t
         W[s, i] = t
     return W
+
+
+def ten_sensors():
+    """Ten sensors on the 3-DOF chain."""
+    return sensors(3)
 
 
 def truth(M, C, K):
@@ -257,6 +276,7 @@ CASES = [
     ("channel y1", chain_3dof, [0], 60, "data_3dof.csv", ["y1"]),
     ("SDOF", sdof, [0], 60, "data_sdof.csv", ["y"]),
     ("10 sensors", chain_3dof, ten_sensors(), 20, None, None),
+    ("10 sensors on 5-DOF", chain_5dof, sensors(5), 20, None, None),
 ]
 TOOLS = ["pyOMA2", "koma", "covssi", "covssi mode", "covssi ML", "covssi ML per channel"]
 
@@ -692,11 +712,14 @@ def crb_table():
     # the RMS errors to hold against these).
     two = [(1.5, 0.02), (3.0, 0.05)]
     three = [(1.5, 0.02), (3.0, 0.05), (5.0, 0.03)]
+    five = three + [(6.5, 0.02), (8.0, 0.03)]
     tests = [
         ("3 channels, weak mode 2 (the_channels_together_see_a_weak_mode_better)", two,
          [[1.0, 0.15], [0.6, -0.15], [-0.4, 0.15]]),
         ("10 channels, weak mode 2 (many_channels_are_fitted_jointly_through_combinations)",
          three, chain_gains(10, 3, 0.15)),
+        ("10 channels, 5 modes, weak mode 2 (more_modes_than_combinations_are_fitted_by_bands)",
+         five, chain_gains(10, 5, 0.15)),
     ]
     print("## Cramer-Rao bound of covssi's unit-test records, N = 16384\n")
     print("| case | mode | bound |")

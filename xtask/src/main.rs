@@ -214,7 +214,8 @@ fn bench_covssi() {
     println!("read_record_ms_1e6_10ch {:.2} ms", t * 1e3);
     // The maximum-likelihood refinement of the SSI modes (not part of the times above): on
     // records of the OMA files' length and on the long one.
-    // Three modes in ten channels: the joint fit through four combinations of them.
+    // Three modes in ten channels: the joint fit through four combinations of them (the
+    // five-mode record's ten channels are fitted band by band).
     let three = linear_record(65536, 10, 3, 7);
     for (name, rec, len, ch) in [
         ("covssi_refine_ms_65536_1ch", &all, 65536usize, 1usize),
@@ -241,6 +242,10 @@ fn bench_covssi() {
             res.modes.len(),
             r.modes.len(),
             match (r.joint, r.combinations) {
+                (true, Some(p)) if r.bands > 1 => format!(
+                    ", channels jointly through {p} combinations in each of {} bands",
+                    r.bands
+                ),
                 (true, Some(p)) => format!(", channels jointly through {p} combinations"),
                 (true, None) => ", channels jointly".to_string(),
                 (false, _) => String::new(),

@@ -23,7 +23,7 @@
 //!    [`RealPoleCluster`]s.
 //! 6. Optionally, [`refine()`]: the modes fitted to the whole record by maximum likelihood
 //!    (Whittle; several channels jointly, cross-spectra included, above 4 channels through 4
-//!    combinations of them), with standard errors, the
+//!    combinations of them, band by band for more than 4 modes), with standard errors, the
 //!    modes the record does not support dropped, and a check that the record follows the model
 //!    ([`refine`](mod@refine) module).
 //!

@@ -25,16 +25,25 @@ use super::{Denominator, Eval, Fit, Model, RefineOptions, discrete_poles, scorin
 use crate::SsiError;
 use crate::linalg::{self, C64, Dense};
 use rayon::prelude::*;
+use std::ops::Range;
 
 /// Frequencies per parallel chunk (each gives l² rows of the Jacobian).
 const CHUNK: usize = 512;
 
-/// The joint model of a record's channels.
+/// The joint model of a record's channels, over a band of its frequencies, with its first
+/// `free` modes fitted and the others held.
 pub(super) struct Joint<'a> {
     /// The record: its channels, means, transforms x_c(ω_k) = DFT/√N and e^{iω_k}.
     rec: &'a Model<'a>,
     /// For each mode, the component of k_r held at 1.
     refs: Vec<usize>,
+    /// Modes 0..free are fitted; θ (in [`Self::eval`] and [`Self::fit`]) holds theirs and Λ,
+    /// laid out as for a model of `free` modes.
+    free: usize,
+    /// The held modes' parameters: their ln ω, their logit ζ, then their c and k.
+    held: Vec<f64>,
+    /// Indices into the record's frequencies that L sums over.
+    band: Range<usize>,
 }
 
 /// Number of parameters for l channels and m modes: per mode ln ω, logit ζ, c (2l reals) and
@@ -46,8 +55,10 @@ pub(super) fn parameters(l: usize, m: usize) -> usize {
 const ZERO: C64 = C64 { re: 0.0, im: 0.0 };
 
 impl<'a> Joint<'a> {
-    /// The model and θ to start from, given a per-channel fit with `m` modes (θ: 2m pole
-    /// parameters first): its poles μ_r, and c_r, k_r, Σ by regressions on the record. A long
+    /// The model over the frequencies `band` and θ to start from, given the poles of a
+    /// per-channel fit (`poles`: the modes' ln ω, then their logit ζ), of which the first
+    /// `free` are fitted and the others held: the poles μ_r, and c_r, k_r, Σ by regressions on
+    /// the record (every mode's, over the whole record). A long
     /// autoregression of y gives the innovations ε̂; then y_t − ε̂_t = Σ_r 2 Re(R_r φ_{r,t}),
     /// φ_{r,t} = Σ_{j≥1} μ_r^{j−1} ε̂_{t−j}, is linear in the residues R_r = c_r k_rᵀ, whose
     /// best rank-one parts give c_r and k_r; Σ is the covariance of ε̂. `None` if a
@@ -55,11 +66,13 @@ impl<'a> Joint<'a> {
     /// exactly, e.g. a copy).
     pub(super) fn start(
         rec: &'a Model<'a>,
-        per_channel: &[f64],
-        m: usize,
+        poles: &[f64],
+        free: usize,
+        band: Range<usize>,
     ) -> Option<(Self, Vec<f64>)> {
         let l = rec.x.len();
-        let mu = discrete_poles(&unpack(per_channel, m), rec.fs)?;
+        let m = poles.len() / 2;
+        let mu = discrete_poles(&unpack(poles, m), rec.fs)?;
         let n = rec.y[0].len();
         let y: Vec<Vec<f64>> = rec
             .y
@@ -113,7 +126,7 @@ impl<'a> Joint<'a> {
                 yv[c] = y[c][t + p] - eps[c][t];
             }
         })?;
-        let mut th = per_channel[..2 * m].to_vec();
+        let mut th = poles.to_vec();
         let mut refs = Vec::with_capacity(m);
         for r in 0..m {
             // 2 Re(R φ) = 2 Re R · Re φ − 2 Im R · Im φ.
@@ -147,9 +160,44 @@ impl<'a> Joint<'a> {
         for a in 1..l {
             th.extend((0..a).map(|b| chol[a * l + b]));
         }
-        th.iter()
-            .all(|v| v.is_finite())
-            .then_some((Joint { rec, refs }, th))
+        if !th.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        // θ of all modes, split into the free modes' (and Λ) and the held ones'.
+        let (mf, bl) = (free, 4 * l - 2);
+        let blocks = 2 * m;
+        let take = |r: Range<usize>| th[r].to_vec();
+        let mut fth = take(0..mf);
+        fth.extend(take(m..m + mf));
+        fth.extend(take(blocks..blocks + mf * bl));
+        fth.extend(take(blocks + m * bl..th.len()));
+        let mut held = take(mf..m);
+        held.extend(take(m + mf..2 * m));
+        held.extend(take(blocks + mf * bl..blocks + m * bl));
+        let joint = Joint {
+            rec,
+            refs,
+            free,
+            held,
+            band,
+        };
+        Some((joint, fth))
+    }
+
+    /// θ of all modes from the free modes' θ and the held parameters.
+    fn full(&self, th: &[f64]) -> Vec<f64> {
+        let (mf, mh) = (self.free, self.refs.len() - self.free);
+        let bl = 4 * self.l() - 2;
+        let h = &self.held;
+        let mut v = Vec::with_capacity(th.len() + h.len());
+        v.extend_from_slice(&th[..mf]);
+        v.extend_from_slice(&h[..mh]);
+        v.extend_from_slice(&th[mf..2 * mf]);
+        v.extend_from_slice(&h[mh..2 * mh]);
+        v.extend_from_slice(&th[2 * mf..2 * mf + mf * bl]);
+        v.extend_from_slice(&h[2 * mh..]);
+        v.extend_from_slice(&th[2 * mf + mf * bl..]);
+        v
     }
 
     fn l(&self) -> usize {
@@ -159,7 +207,7 @@ impl<'a> Joint<'a> {
     /// Fisher scoring of the joint likelihood from θ: first with the poles held, so that the
     /// shapes and gains (from regressions) settle where the poles are, then everything free.
     pub(super) fn fit(&self, th: Vec<f64>, opts: &RefineOptions) -> Result<Fit, SsiError> {
-        let m = self.refs.len();
+        let m = self.free;
         let eval = |t: &[f64], derivs: bool| self.eval(t, derivs, false);
         let held = scoring(eval, th, m, opts, opts.tolerance, true, f64::NEG_INFINITY)?;
         let free = scoring(
@@ -241,14 +289,17 @@ impl<'a> Joint<'a> {
         (lam, inv)
     }
 
-    /// L at θ; with `derivs` the score U = −∇L and the Fisher information; with `ratios`
-    /// the whitened ordinates. `None` outside the model (a pole at Nyquist, H(z) singular on
-    /// the unit circle, overflow).
+    /// L over the band at θ (the free modes' and Λ); with `derivs` the score U = −∇L and
+    /// the Fisher information, with respect to θ; with `ratios` the whitened ordinates.
+    /// `None` outside the model (a pole at Nyquist, H(z) singular on the unit circle,
+    /// overflow).
     pub(super) fn eval(&self, th: &[f64], derivs: bool, ratios: bool) -> Option<Eval> {
         let l = self.l();
         let m = self.refs.len();
-        let np = parameters(l, m);
+        let mf = self.free;
+        let np = parameters(l, mf);
         debug_assert_eq!(th.len(), np);
+        let th = &self.full(th)[..];
         let den = Denominator::new(th, m, self.rec.fs)?;
         let (cs, ks) = self.shapes(th);
         let (lam, lam_inv) = self.lambda(th);
@@ -324,13 +375,13 @@ impl<'a> Joint<'a> {
         let lam_rows: Vec<Vec<C64>> = (0..l)
             .map(|b| (0..l).map(|d| C64::new(lam[b * l + d], 0.0)).collect())
             .collect();
-        let nchunks = self.rec.z.len().div_ceil(CHUNK);
+        let nchunks = self.band.len().div_ceil(CHUNK);
         let zero = || Eval::zero(if derivs { np } else { 0 });
         let total = (0..nchunks)
             .into_par_iter()
             .map(|ci| {
-                let lo = ci * CHUNK;
-                let hi = (lo + CHUNK).min(self.rec.z.len());
+                let lo = self.band.start + ci * CHUNK;
+                let hi = (lo + CHUNK).min(self.band.end);
                 let mut acc = zero();
                 let mut jac = if derivs {
                     Dense::zeros((hi - lo) * ll, np)
@@ -422,7 +473,8 @@ impl<'a> Joint<'a> {
                             .map(|(a, b)| (a * d1 + b * d2, i1 * (a * d1 - b * d2)))
                             .unzip()
                     };
-                    for rr in 0..m {
+                    // Columns for the free modes only (held ones have none).
+                    for rr in 0..mf {
                         let mc = mv(&cs[rr]);
                         let mcc = mv(&cs_conj[rr]);
                         let (kl, kcl) = (&k_lam[rr], &kc_lam[rr]);
@@ -434,9 +486,9 @@ impl<'a> Joint<'a> {
                             let u2: Vec<C64> = mcc.iter().map(|v| v * f2).collect();
                             outer(&mut y, &u1, kl, false);
                             outer(&mut y, &u2, kcl, true);
-                            put(t * m + rr, &y, &mut v);
+                            put(t * mf + rr, &y, &mut v);
                         }
-                        let off = 2 * m + rr * (4 * l - 2);
+                        let off = 2 * mf + rr * (4 * l - 2);
                         // c: ∂H = e_a (kᵀ d1 + k̄ᵀ d2) for Re c_a, i e_a (kᵀ d1 − k̄ᵀ d2) for Im.
                         let (w_re, w_im) = re_im(kl, kcl, d1[rr], d2[rr]);
                         for a in 0..l {
@@ -638,6 +690,28 @@ mod tests {
         pole_params(pole(f, zeta))
     }
 
+    /// `joint`'s evaluation at θ with derivatives, after checking that its score is minus
+    /// the central differences of L.
+    fn score_matches_differences(joint: &Joint, th: &[f64]) -> Eval {
+        let e = joint.eval(th, true, false).unwrap();
+        for t in 0..th.len() {
+            let h = 1e-6;
+            let (mut a, mut b) = (th.to_vec(), th.to_vec());
+            a[t] += h;
+            b[t] -= h;
+            let num = (joint.eval(&a, false, false).unwrap().l
+                - joint.eval(&b, false, false).unwrap().l)
+                / (2.0 * h);
+            // Central differences of a sum of ~2000 terms: agreement to 1e-6 relative.
+            assert!(
+                (num + e.u[t]).abs() <= 1e-6 * num.abs().max(1.0),
+                "parameter {t}: {num} vs {}",
+                -e.u[t]
+            );
+        }
+        e
+    }
+
     #[test]
     fn score_is_minus_the_gradient_of_l() {
         let y = record(
@@ -654,6 +728,9 @@ mod tests {
         let joint = Joint {
             rec: &model,
             refs: vec![0, 2],
+            free: 2,
+            held: Vec::new(),
+            band: 0..model.k(),
         };
         let (w1, z1) = pole_theta(1.52, 0.03);
         let (w2, z2) = pole_theta(2.9, 0.05);
@@ -664,28 +741,60 @@ mod tests {
         }
         th.extend([-0.2, -0.1, 0.0, 0.1, 0.2, 0.3]);
         assert_eq!(th.len(), parameters(3, 2));
-        let e = joint.eval(&th, true, false).unwrap();
-        for t in 0..th.len() {
-            let h = 1e-6;
-            let (mut a, mut b) = (th.clone(), th.clone());
-            a[t] += h;
-            b[t] -= h;
-            let num = (joint.eval(&a, false, false).unwrap().l
-                - joint.eval(&b, false, false).unwrap().l)
-                / (2.0 * h);
-            // Central differences of a sum of ~2000 terms: agreement to 1e-6 relative.
-            assert!(
-                (num + e.u[t]).abs() <= 1e-6 * num.abs().max(1.0),
-                "parameter {t}: {num} vs {}",
-                -e.u[t]
-            );
-        }
+        let e = score_matches_differences(&joint, &th);
         for s in 0..th.len() {
             assert!(e.f.at(s, s) > 0.0);
             for t in 0..s {
                 assert!((e.f.at(s, t) - e.f.at(t, s)).abs() <= 1e-9 * e.f.at(s, s).abs());
             }
         }
+    }
+
+    /// With a mode held and L summed over a band of frequencies, the score and the Fisher
+    /// information are those of the free parameters alone, and L is the sum of the band's
+    /// terms of the full model's.
+    #[test]
+    fn a_held_mode_and_a_band_keep_the_score_exact() {
+        let y = record(
+            4096,
+            &[(1.5, 0.02), (3.0, 0.04)],
+            &[vec![1.0, 0.5], vec![-0.3, 1.0], vec![0.2, 0.4]],
+            0.1,
+            13,
+        );
+        let v = views(&y);
+        let means = vec![0.0; 3];
+        let model = Model::new(&v, &means, FS);
+        let (w1, z1) = pole_theta(1.52, 0.03);
+        let (w2, z2) = pole_theta(2.9, 0.05);
+        // Mode 2 free, mode 1 held, over the frequencies from about 2.2 Hz up.
+        let band = 450..model.k();
+        let (held, th) = Joint::start(&model, &[w2, w1, z2, z1], 1, band.clone()).unwrap();
+        let (all, th_all) = Joint::start(&model, &[w2, w1, z2, z1], 2, band).unwrap();
+        assert_eq!(th.len(), parameters(3, 1));
+        // The same model: the held parameters are the start's.
+        let (a, b) = (
+            held.eval(&th, false, false).unwrap().l,
+            all.eval(&th_all, false, false).unwrap().l,
+        );
+        assert!((a - b).abs() <= 1e-12 * a.abs(), "{a} vs {b}");
+        // The band's terms and the rest's add up to L over all frequencies.
+        let over = |band: Range<usize>| {
+            let j = Joint {
+                rec: all.rec,
+                refs: all.refs.clone(),
+                free: 2,
+                held: Vec::new(),
+                band,
+            };
+            j.eval(&th_all, false, false).unwrap().l
+        };
+        let (whole, rest) = (over(0..model.k()), over(0..450));
+        assert!(
+            (whole - (b + rest)).abs() <= 1e-12 * whole.abs(),
+            "{whole} vs {b} + {rest}"
+        );
+        score_matches_differences(&held, &th);
     }
 
     /// For one channel the joint likelihood is the per-channel one: H = B/A in partial
@@ -727,6 +836,9 @@ mod tests {
         let joint = Joint {
             rec: &model,
             refs: vec![0, 0],
+            free: 2,
+            held: Vec::new(),
+            band: 0..model.k(),
         };
         let a = joint.eval(&th, false, false).unwrap().l;
         let p = model.eval(&per, 2, What::Value).unwrap().l;
@@ -740,14 +852,14 @@ mod tests {
     /// over the records the joint standard errors are calibrated and the weak mode's RMS
     /// errors are below `rms_ratio` times the per-channel fit's and near `bound`, the weak
     /// mode's Cramér–Rao bound (relative; frequency, damping), as an efficient estimator's
-    /// are. Returns how many combinations each joint fit used.
+    /// are. Returns how many combinations and bands each joint fit used.
     fn joint_against_per_channel(
         truth: &[(f64, f64)],
         gains: &[Vec<f64>],
         seeds: std::ops::Range<u64>,
         [se_ratio, rms_ratio]: [f64; 2],
         bound: [f64; 2],
-    ) -> Vec<Option<usize>> {
+    ) -> Vec<(Option<usize>, usize)> {
         use super::super::refine;
         use super::super::tests::mode;
         let start: Vec<_> = truth
@@ -760,7 +872,7 @@ mod tests {
             ..opts.clone()
         };
         let (mut z, mut weak, mut combinations) = (Vec::new(), Vec::new(), Vec::new());
-        let mut se_ratios = Vec::new();
+        let (mut se_ratios, mut weak_se) = (Vec::new(), Vec::new());
         for seed in seeds {
             let y = record(16384, truth, gains, 0.05, seed);
             let v = views(&y);
@@ -769,7 +881,7 @@ mod tests {
             assert!(j.joint && !p.joint, "seed {seed}");
             assert_eq!(j.modes.len(), truth.len(), "seed {seed}: {j:?}");
             assert_eq!(p.modes.len(), truth.len(), "seed {seed}: {p:?}");
-            combinations.push(j.combinations);
+            combinations.push((j.combinations, j.bands));
             for (k, &(f, zeta)) in truth.iter().enumerate() {
                 let (a, b) = (&j.modes[k], &p.modes[k]);
                 let (fse, zse) = (a.frequency_se_hz.unwrap(), a.damping_se.unwrap());
@@ -777,6 +889,7 @@ mod tests {
                 if k == 1 {
                     let (bf, bz) = (b.frequency_se_hz.unwrap(), b.damping_se.unwrap());
                     se_ratios.extend([fse / bf, zse / bz]);
+                    weak_se.push([fse / f, zse / zeta]);
                     assert!(fse < se_ratio * bf, "seed {seed}: {a:?} {b:?}");
                     assert!(zse < se_ratio * bz, "seed {seed}: {a:?} {b:?}");
                     weak.push([
@@ -797,6 +910,25 @@ mod tests {
             se_ratios.iter().copied().fold(f64::INFINITY, f64::min),
             se_ratios.iter().copied().fold(0.0, f64::max)
         );
+        // The standard error an efficient estimator reports is the bound.
+        let weak_se_rms = [0, 1].map(|i| rms(&mut weak_se.iter().map(|w: &[f64; 2]| w[i])));
+        eprintln!(
+            "weak mode standard error (RMS over the records, relative) over the bound: {:.3}, \
+             {:.3}",
+            weak_se_rms[0] / bound[0],
+            weak_se_rms[1] / bound[1]
+        );
+        // Measured 1.01 and 1.01 fitting the channels or four combinations of them; 1.18 and
+        // 1.09 fitting by bands, which leave out what a mode's tails tell outside its band.
+        // The standard errors vary little from record to record, so this band is narrow; below
+        // it they would claim more than the record holds.
+        for i in 0..2 {
+            let r = weak_se_rms[i] / bound[i];
+            assert!(
+                (0.95..1.25).contains(&r),
+                "standard error over the bound {r} ({i})"
+            );
+        }
         for i in 0..2 {
             let [joint, per] = [weak_rms[0][i], weak_rms[1][i]];
             eprintln!(
@@ -840,7 +972,7 @@ mod tests {
         // spectral matrix), 0.216 % and 4.37 %.
         let combinations =
             joint_against_per_channel(&truth, &gains, 300..330, [1.0, 0.85], [2.16e-3, 4.37e-2]);
-        assert!(combinations.iter().all(Option::is_none));
+        assert!(combinations.iter().all(|&c| c == (None, 1)));
     }
 
     /// Shapes of a fixed-free chain sampled at `l` points, mode 2 scaled to `weak` (against
@@ -875,7 +1007,44 @@ mod tests {
         // 4.31 %.
         let combinations =
             joint_against_per_channel(&truth, &gains, 900..916, [0.6, 0.75], [2.14e-3, 4.31e-2]);
-        assert!(combinations.iter().all(|&c| c == Some(JOINT_MAX_CHANNELS)));
+        assert!(
+            combinations
+                .iter()
+                .all(|&c| c == (Some(JOINT_MAX_CHANNELS), 1))
+        );
+    }
+
+    /// Ten channels, five modes, the second weak in every channel: more modes than
+    /// combinations, so the modes are fitted in groups, each over its own band through
+    /// combinations of its own, the other modes held; the weak mode's standard error (on
+    /// every record) and RMS error are well below the per-channel fit's, and at the bound.
+    #[test]
+    fn more_modes_than_combinations_are_fitted_by_bands() {
+        let truth = [
+            (1.5, 0.02),
+            (3.0, 0.05),
+            (5.0, 0.03),
+            (6.5, 0.02),
+            (8.0, 0.03),
+        ];
+        let gains = chain_gains(10, 5, 0.15);
+        // Standard error ratios measured 0.28–0.60 on every record; RMS error ratios 0.33
+        // (frequency) and 0.28 (damping); the standard errors 1.18 and 1.09 times the bound
+        // (the weak mode's band, above 2.1 Hz, leaves out what its tail holds below; fitting
+        // each group over all frequencies instead, the other modes held, gave 1.07 and 1.05
+        // but RMS errors 1.39 and 1.23 times the bound, against 1.23 and 1.29 here, and puts
+        // the held modes' peaks, with their start values, into each fit). An RMS over 16 records is uncertain by about 18 %,
+        // the ratio of two by about 25 %, so 0.5 is above what chance would give. (The
+        // standard-error bound is looser than the three-mode test's 0.6, which a record here
+        // reaches.)
+        // The bound of all ten channels: `cargo xtask compare-tools --crb`, 0.216 % and
+        // 4.37 %.
+        let fits =
+            joint_against_per_channel(&truth, &gains, 920..936, [0.7, 0.5], [2.16e-3, 4.37e-2]);
+        assert!(
+            fits.iter().all(|&c| c == (Some(JOINT_MAX_CHANNELS), 2)),
+            "{fits:?}"
+        );
     }
 
     /// Six channels, with equal and with very unequal measurement noise (1 % to 100 %): the

@@ -43,9 +43,13 @@
 //!    from 3.1 % to 2.1 %, the Cramér–Rao bound). With more channels it is the joint
 //!    likelihood of [`JOINT_MAX_CHANNELS`] combinations of them that span the modes' shapes
 //!    (the channels scaled to equal noise floors, then the leading eigenvectors of their
-//!    cross-spectral matrices over the modes' bands, each normalised to unit trace), when
-//!    there are at most as many modes; what the combinations leave out is then measurement
-//!    noise, so little is lost ([`Refinement::combinations`]).
+//!    cross-spectral matrices over the modes' bands, each normalised to unit trace); what
+//!    the combinations leave out is then measurement noise, so little is lost
+//!    ([`Refinement::combinations`]). With more modes than combinations, the modes are
+//!    split into groups of at most that many at the widest frequency gaps, and each group is
+//!    fitted over its own band of frequencies through combinations carrying its modes, the
+//!    other modes in the model but held ([`Refinement::bands`]); the likelihood of a band is
+//!    that of its own frequencies, which are independent of the others'.
 //!
 //! Real poles are not part of this model; records whose spectrum needs one are better read from
 //! the SSI result.
@@ -55,6 +59,7 @@ use crate::stabilize::pole_distance;
 use crate::{Mode, SsiError};
 use rayon::prelude::*;
 use realfft::RealFftPlanner;
+use std::ops::Range;
 
 mod joint;
 
@@ -90,7 +95,8 @@ pub struct RefineOptions {
     pub select: bool,
     /// Fit the chosen modes once more by the joint likelihood of all channels (cross-spectra
     /// included), or above [`JOINT_MAX_CHANNELS`] channels of that many combinations of them
-    /// (for at most that many modes), and report its estimates and standard errors; skipped
+    /// (with more modes than that, band by band), and report its estimates and standard
+    /// errors; skipped
     /// when the record does not follow the per-channel model (misfit above
     /// [`MISFIT_LIMIT`]). Default: true.
     pub joint: bool,
@@ -171,6 +177,11 @@ pub struct Refinement {
     /// combinations of the channels it was fitted to (`neg_log_likelihood` and `misfit` are
     /// then theirs); `None` when the channels themselves were fitted.
     pub combinations: Option<usize>,
+    /// Bands of frequencies the joint fit was split into: 1, or with more modes than
+    /// combinations one per group of at most that many modes, each fitted over its own band
+    /// through combinations of its own (`neg_log_likelihood` is then the sum of theirs,
+    /// `misfit` over all of them).
+    pub bands: usize,
 }
 
 /// Refine `modes` (e.g. [`crate::SsiResult::modes`]) on the channels `y` sampled at `fs` Hz.
@@ -301,78 +312,52 @@ fn refine_up_to(
         .eval(&fit.theta, mk, What::Ratios)
         .map_or(1.0, |e| ks_exponential(e.ratios));
     //    Above `joint_max` channels (the joint cost grows as l⁴) the joint likelihood is that
-    //    of `joint_max` combinations of them carrying the modes, when there are no more modes
-    //    than combinations.
+    //    of `joint_max` combinations of them carrying the modes; with more modes than
+    //    combinations, band by band (see [`joint_by_bands`]).
     let wanted = opts.joint && mk > 0 && per_channel_misfit <= MISFIT_LIMIT;
-    let combined = (wanted && l > joint_max && mk <= joint_max)
-        .then(|| {
-            let scale: Vec<f64> = model
-                .noise_floor(&fit.theta, mk)?
-                .iter()
-                .map(|v| v.sqrt())
-                .collect();
-            model.project(&fit.lambdas, joint_max, &scale)
-        })
+    let joint_fit = wanted
+        .then(|| joint_by_bands(&model, &fit, joint_max, opts))
         .flatten();
-    let combined_views: Vec<&[f64]> = combined.iter().flatten().map(Vec::as_slice).collect();
-    let zeros = vec![0.0; combined_views.len()];
-    let combined_model =
-        (!combined_views.is_empty()).then(|| Model::new(&combined_views, &zeros, fs));
-    let rec = combined_model.as_ref().unwrap_or(&model);
-    let lj = rec.x.len();
-    let joint_fit = (wanted
-        && (2..=joint_max).contains(&lj)
-        && rec.k() * lj * lj >= 10 * joint::parameters(lj, mk))
-    .then(|| {
-        let (jm, start) = joint::Joint::start(rec, &fit.theta, mk)?;
-        let jf = jm.fit(start, opts).ok()?;
-        let ratios = jm.ratios(&jf.theta)?;
-        // Its asymptotic covariance is F⁻¹ (an exact likelihood); a singular F means the
-        // channels are degenerate for it (e.g. one a copy of another).
-        let cov = linalg::spd_inverse(&jf.fisher)?;
-        Some((jf, ks_exponential(ratios), cov))
-    })
-    .flatten();
     let joint = joint_fit.is_some();
-    let combinations = (joint && combined_model.is_some()).then_some(lj);
-    let misfit;
-    // Asymptotic covariance: F⁻¹ for the joint likelihood and for one channel; for the
-    // per-channel likelihood of several, the composite likelihood's sandwich F⁻¹ J F⁻¹, J the
-    // covariance of the score given the channels' coherence.
-    let cov = if let Some((jf, joint_misfit, cov)) = joint_fit {
-        misfit = joint_misfit;
-        fit = jf;
-        Some(cov)
-    } else {
-        misfit = per_channel_misfit;
-        linalg::spd_inverse(&fit.fisher).and_then(|fi| {
-            if l == 1 {
-                return Some(fi);
+    let est = match joint_fit {
+        Some(est) => est,
+        None => {
+            // Asymptotic covariance: F⁻¹ for one channel; for the per-channel likelihood of
+            // several, the composite likelihood's sandwich F⁻¹ J F⁻¹, J the covariance of the
+            // score given the channels' coherence.
+            let cov = linalg::spd_inverse(&fit.fisher).and_then(|fi| {
+                if l == 1 {
+                    return Some(fi);
+                }
+                let j = model.eval(&fit.theta, mk, What::Sandwich)?.f;
+                Some(linalg::sandwich(&fi, &j))
+            });
+            Estimates {
+                se: (0..mk)
+                    .map(|j| cov.as_ref().map(|c| pole_se(c, j, mk, fit.lambdas[j])))
+                    .collect(),
+                lambdas: fit.lambdas,
+                l: fit.l,
+                misfit: per_channel_misfit,
+                iterations: fit.iterations,
+                combinations: None,
+                bands: 1,
             }
-            let j = model.eval(&fit.theta, mk, What::Sandwich)?.f;
-            Some(linalg::sandwich(&fi, &j))
-        })
+        }
     };
-    let mut kept: Vec<RefinedMode> = fit
+    let mut kept: Vec<RefinedMode> = est
         .lambdas
         .iter()
+        .zip(&est.se)
         .enumerate()
-        .map(|(j, &lam)| {
+        .map(|(j, (&lam, se))| {
             let w = lam.norm();
-            let zeta = -lam.re / w;
-            let (fse, zse) = match &cov {
-                Some(c) => (
-                    Some(c.at(j, j).max(0.0).sqrt() * w / (2.0 * std::f64::consts::PI)),
-                    Some(c.at(mk + j, mk + j).max(0.0).sqrt() * zeta * (1.0 - zeta)),
-                ),
-                None => (None, None),
-            };
             RefinedMode {
                 source: nearest_mode(modes, lam),
                 frequency_hz: w / (2.0 * std::f64::consts::PI),
-                damping_ratio: zeta,
-                frequency_se_hz: fse,
-                damping_se: zse,
+                damping_ratio: -lam.re / w,
+                frequency_se_hz: se.map(|s| s.0),
+                damping_se: se.map(|s| s.1),
                 lambda: lam,
                 evidence: evidence[j],
             }
@@ -383,13 +368,194 @@ fn refine_up_to(
         modes: kept,
         dropped,
         penalty,
-        neg_log_likelihood: fit.l,
-        misfit,
+        neg_log_likelihood: est.l,
+        misfit: est.misfit,
         frequencies: model.k(),
-        iterations: fit.iterations,
+        iterations: est.iterations,
         joint,
-        combinations,
+        combinations: est.combinations,
+        bands: est.bands,
     })
+}
+
+/// The modes' estimates and standard errors (frequency Hz, damping ratio), in the order of
+/// the per-channel fit, with what [`Refinement`] reports of the fit that gave them.
+struct Estimates {
+    lambdas: Vec<C64>,
+    se: Vec<Option<(f64, f64)>>,
+    l: f64,
+    misfit: f64,
+    iterations: usize,
+    combinations: Option<usize>,
+    bands: usize,
+}
+
+/// Standard errors of mode j's frequency (Hz) and damping ratio from the covariance `cov` of
+/// θ (ln ω of the m modes, then their logit ζ, first), its pole being `lam`.
+fn pole_se(cov: &Dense, j: usize, m: usize, lam: C64) -> (f64, f64) {
+    let w = lam.norm();
+    let zeta = -lam.re / w;
+    (
+        cov.at(j, j).max(0.0).sqrt() * w / (2.0 * std::f64::consts::PI),
+        cov.at(m + j, m + j).max(0.0).sqrt() * zeta * (1.0 - zeta),
+    )
+}
+
+/// The modes of a per-channel fit split into groups of at most `p`, by increasing frequency,
+/// cutting at the widest gaps (ratio of neighbouring frequencies) first; with the frequency
+/// indices each group's band spans: from 0 and up to the last, cut at the geometric mean of
+/// the neighbouring groups' frequencies.
+fn split_into_bands(
+    lambdas: &[C64],
+    p: usize,
+    fs: f64,
+    n: usize,
+    k: usize,
+) -> Vec<(Vec<usize>, Range<usize>)> {
+    let mut order: Vec<usize> = (0..lambdas.len()).collect();
+    order.sort_by(|&a, &b| lambdas[a].norm().total_cmp(&lambdas[b].norm()));
+    let mut groups = vec![order];
+    while let Some(g) = groups.iter().position(|g| g.len() > p) {
+        let g = groups.remove(g);
+        let cut = (1..g.len())
+            .max_by(|&a, &b| {
+                let gap = |i: usize| lambdas[g[i]].norm() / lambdas[g[i - 1]].norm();
+                gap(a).total_cmp(&gap(b))
+            })
+            .expect("a group of more than p ≥ 1 modes");
+        let (lo, hi) = g.split_at(cut);
+        groups.push(lo.to_vec());
+        groups.push(hi.to_vec());
+        groups.sort_by(|a, b| lambdas[a[0]].norm().total_cmp(&lambdas[b[0]].norm()));
+    }
+    // ω_k = 2π(k + 1)/N at index k.
+    let index = |w: f64| {
+        ((w / fs * n as f64 / (2.0 * std::f64::consts::PI)).round() as usize).clamp(1, k) - 1
+    };
+    let edges: Vec<usize> = groups
+        .windows(2)
+        .map(|w| {
+            let below = lambdas[*w[0].last().expect("groups are not empty")].norm();
+            let above = lambdas[w[1][0]].norm();
+            index((below * above).sqrt())
+        })
+        .collect();
+    groups
+        .into_iter()
+        .enumerate()
+        .map(|(i, g)| {
+            let lo = if i == 0 { 0 } else { edges[i - 1] };
+            let hi = edges.get(i).copied().unwrap_or(k);
+            (g, lo..hi)
+        })
+        .collect()
+}
+
+/// The chosen modes fitted by the joint likelihood, or `None` when it cannot be fitted (then
+/// the per-channel fit stands). Up to `joint_max` channels, the channels themselves over all
+/// frequencies. More are fitted through `joint_max` combinations of them carrying the modes
+/// ([`Model::project`]); with more modes than combinations, the modes are split into groups
+/// of at most `joint_max` ([`split_into_bands`]) and each group is fitted over its own band of
+/// frequencies, through combinations carrying its own modes, with the other modes in the
+/// model (their poles at the per-channel fit's, their shapes and gains from the start's
+/// regressions) but held: their tails reach into the band.
+fn joint_by_bands(
+    model: &Model,
+    fit: &Fit,
+    joint_max: usize,
+    opts: &RefineOptions,
+) -> Option<Estimates> {
+    let l = model.x.len();
+    let mk = fit.lambdas.len();
+    let combine = l > joint_max;
+    let groups = if combine && mk > joint_max {
+        split_into_bands(
+            &fit.lambdas,
+            joint_max,
+            model.fs,
+            model.y[0].len(),
+            model.k(),
+        )
+    } else {
+        vec![((0..mk).collect(), 0..model.k())]
+    };
+    let scale: Option<Vec<f64>> = if combine {
+        Some(
+            model
+                .noise_floor(&fit.theta, mk)?
+                .iter()
+                .map(|v| v.sqrt())
+                .collect(),
+        )
+    } else {
+        None
+    };
+    let mut est = Estimates {
+        lambdas: fit.lambdas.clone(),
+        se: vec![None; mk],
+        l: 0.0,
+        misfit: 0.0,
+        iterations: 0,
+        combinations: None,
+        bands: groups.len(),
+    };
+    let mut ratios = Vec::new();
+    for (group, band) in &groups {
+        let combined = match &scale {
+            Some(scale) => {
+                let lams: Vec<C64> = group.iter().map(|&j| fit.lambdas[j]).collect();
+                Some(model.project(&lams, joint_max, scale)?)
+            }
+            None => None,
+        };
+        let views: Vec<&[f64]> = combined.iter().flatten().map(Vec::as_slice).collect();
+        let zeros = vec![0.0; views.len()];
+        let combined_model = combined
+            .is_some()
+            .then(|| Model::new(&views, &zeros, model.fs));
+        let rec = combined_model.as_ref().unwrap_or(model);
+        let lj = rec.x.len();
+        let mf = group.len();
+        // Ten observations per parameter, a frequency giving l² of them.
+        if !(2..=joint_max).contains(&lj) || band.len() * lj * lj < 10 * joint::parameters(lj, mf) {
+            return None;
+        }
+        // The group's modes first, then the others (held).
+        let order: Vec<usize> = group
+            .iter()
+            .copied()
+            .chain((0..mk).filter(|j| !group.contains(j)))
+            .collect();
+        let poles: Vec<f64> = [0, mk]
+            .iter()
+            .flat_map(|&off| order.iter().map(move |&j| fit.theta[off + j]))
+            .collect();
+        let (jm, start) = joint::Joint::start(rec, &poles, mf, band.clone())?;
+        let jf = jm.fit(start, opts).ok()?;
+        ratios.extend(jm.ratios(&jf.theta)?);
+        // Its asymptotic covariance is F⁻¹ (an exact likelihood); a singular F means the
+        // channels are degenerate for it (e.g. one a copy of another).
+        let cov = linalg::spd_inverse(&jf.fisher)?;
+        // A pole that left its band (to a neighbour's peak) is not that band's mode.
+        let (lo, hi) = (rec.z[band.start].arg(), rec.z[band.end - 1].arg());
+        if band.len() < rec.k()
+            && jf
+                .lambdas
+                .iter()
+                .any(|lam| !(lo..=hi).contains(&(lam.im / model.fs)))
+        {
+            return None;
+        }
+        for (i, &j) in group.iter().enumerate() {
+            est.lambdas[j] = jf.lambdas[i];
+            est.se[j] = Some(pole_se(&cov, i, mf, jf.lambdas[i]));
+        }
+        est.l += jf.l;
+        est.iterations += jf.iterations;
+        est.combinations = combine.then_some(lj);
+    }
+    est.misfit = ks_exponential(ratios);
+    Some(est)
 }
 
 /// The periodograms and what the model needs of the record.
@@ -1192,6 +1358,35 @@ pub(super) mod tests {
 
     pub(super) fn views(y: &[Vec<f64>]) -> Vec<&[f64]> {
         y.iter().map(|c| c.as_slice()).collect()
+    }
+
+    /// Groups of at most p modes, cut at the widest frequency gaps first, over bands that
+    /// tile the frequencies and meet between the groups.
+    #[test]
+    fn modes_are_split_into_bands_at_the_widest_gaps() {
+        // Out of order, as a fit may leave them.
+        let f = [5.0, 1.5, 8.0, 3.0, 6.5];
+        let lambdas: Vec<C64> = f.iter().map(|&f| pole(f, 0.02)).collect();
+        let (n, k) = (16384, 8191);
+        // ω_k = 2π(k + 1)/N: the index of f Hz at FS.
+        let index = |f: f64| (f / FS * n as f64).round() as usize - 1;
+        let split = |p| split_into_bands(&lambdas, p, FS, n, k);
+        let four = split(4);
+        assert_eq!(four.len(), 2);
+        assert_eq!(four[0], (vec![1], 0..index((1.5f64 * 3.0).sqrt())));
+        assert_eq!(four[1], (vec![3, 0, 4, 2], index((1.5f64 * 3.0).sqrt())..k));
+        // Gaps 2.0, 1.67, 1.3, 1.23: cut in that order until no group has more than two.
+        let two = split(2);
+        let groups: Vec<Vec<usize>> = two.iter().map(|g| g.0.clone()).collect();
+        assert_eq!(groups, vec![vec![1], vec![3], vec![0], vec![4, 2]]);
+        assert_eq!(two[0].1.start, 0);
+        assert_eq!(two[3].1.end, k);
+        for w in two.windows(2) {
+            assert_eq!(w[0].1.end, w[1].1.start);
+        }
+        assert_eq!(two[2].1.end, index((5.0f64 * 6.5).sqrt()));
+        // No more modes than p: one band over everything.
+        assert_eq!(split(5), vec![(vec![1, 3, 0, 4, 2], 0..k)]);
     }
 
     #[test]
