@@ -9,7 +9,9 @@ through the `hyst ssi` command):
   2. `--seeds` fresh records of the same two systems (3-DOF chain, SDOF), made here by exact
      zero-order-hold discretisation, white force at every DOF, 5 % white measurement noise;
      and of the 3-DOF chain seen by ten sensors (`ten_sensors`; no shared record), where
-     covssi fits the joint likelihood through four combinations of the channels;
+     covssi fits the joint likelihood through four combinations of the channels, and of a
+     5-DOF chain seen by ten sensors (`chain_5dof`, `sensors`), where with five modes it fits
+     them band by band;
   3. `--timing`: the identification step at N = 1e6 (one BLAS thread) for the same four cases
      as `cargo xtask bench covssi`;
   4. `--clusters`: covssi alone over the same seeds: three ways to take a mode's value from its
@@ -18,8 +20,8 @@ through the `hyst ssi` command):
   5. `--crb`: the Cramer-Rao bound of the frequencies and damping ratios on records of these
      systems (the smallest standard deviation any unbiased estimator can have), computed
      here from the exact spectral matrix, independently of covssi; and on the records of
-     covssi's unit tests of the joint likelihood (3 and 10 channels), whose RMS errors those
-     tests hold against it.
+     covssi's unit tests of the joint likelihood (3 and 10 channels, 10 with five modes),
+     whose RMS errors those tests hold against it.
 Settings as the README: max order 40, dF 1 %, dzeta 5 %, MAC 0.97; 20 block rows for three
 channels, 60 for one. The statistic as the README: the median frequency and the median damping
 of the poles each tool flags stable within +-5 % of the true frequency. Errors in % of the truth.
