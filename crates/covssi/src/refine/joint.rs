@@ -712,15 +712,20 @@ mod tests {
         e
     }
 
-    #[test]
-    fn score_is_minus_the_gradient_of_l() {
-        let y = record(
+    /// A short record of two modes in three channels, 10 % noise.
+    fn two_modes_three_channels(seed: u64) -> Vec<Vec<f64>> {
+        record(
             4096,
             &[(1.5, 0.02), (3.0, 0.04)],
             &[vec![1.0, 0.5], vec![-0.3, 1.0], vec![0.2, 0.4]],
             0.1,
-            11,
-        );
+            seed,
+        )
+    }
+
+    #[test]
+    fn score_is_minus_the_gradient_of_l() {
+        let y = two_modes_three_channels(11);
         let v = views(&y);
         let means = vec![0.0; 3];
         let model = Model::new(&v, &means, FS);
@@ -755,13 +760,7 @@ mod tests {
     /// terms of the full model's.
     #[test]
     fn a_held_mode_and_a_band_keep_the_score_exact() {
-        let y = record(
-            4096,
-            &[(1.5, 0.02), (3.0, 0.04)],
-            &[vec![1.0, 0.5], vec![-0.3, 1.0], vec![0.2, 0.4]],
-            0.1,
-            13,
-        );
+        let y = two_modes_three_channels(13);
         let v = views(&y);
         let means = vec![0.0; 3];
         let model = Model::new(&v, &means, FS);
