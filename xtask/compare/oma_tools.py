@@ -474,10 +474,21 @@ def cluster_statistics(doc, tr, nchan):
     return values, spurious, physical
 
 
+def fit_kind(r):
+    """Which likelihood the refinement `r` reported: each channel's, the channels' jointly, or
+    the joint likelihood of combinations of them (in bands)."""
+    if not r.get("joint"):
+        return "per channel"
+    c, b = r.get("combinations"), r.get("bands", 1)
+    if c is None:
+        return "joint"
+    return f"{c} combinations" + (f" in {b} bands" if b > 1 else "")
+
+
 def refined_census(doc, tr):
     """(extra refined modes: far from every true mode or a second one near a true mode, true
-    modes with no refined mode near, 1 if the misfit warning is raised), or None without a
-    refinement."""
+    modes with no refined mode near, 1 if the misfit warning is raised, the fit's kind), or
+    None without a refinement."""
     r = doc.get("refined")
     if r is None:
         return None
@@ -485,7 +496,7 @@ def refined_census(doc, tr):
     far = sum(1 for m in ms if not any(near(m["frequency_hz"], f) for f, _ in tr))
     dup = sum(max(0, sum(near(m["frequency_hz"], f) for m in ms) - 1) for f, _ in tr)
     missed = sum(1 for f, _ in tr if not any(near(m["frequency_hz"], f) for m in ms))
-    return (far + dup, missed, int(r["misfit"] > r["misfit_limit"]))
+    return (far + dup, missed, int(r["misfit"] > r["misfit_limit"]), fit_kind(r))
 
 
 def clusters(hyst, count, first, tmp):
@@ -537,13 +548,18 @@ def clusters(hyst, count, first, tmp):
     print()
     print("The maximum-likelihood refinement's modes over the same records (absent from the "
           "table when the hyst given has no refinement):\n")
-    print("| case | records | with an extra refined mode | true modes missed | misfit warnings |")
-    print("|---|---|---|---|---|")
+    print("| case | records | with an extra refined mode | true modes missed | misfit warnings "
+          "| fitted by (records) |")
+    print("|---|---|---|---|---|---|")
     for name, rows in refined_counts.items():
         rows = [r for r in rows if r is not None]
         if rows:
+            kinds = {}
+            for r in rows:
+                kinds[r[3]] = kinds.get(r[3], 0) + 1
+            fitted = ", ".join(f"{k} ({n})" for k, n in sorted(kinds.items()))
             print(f"| {name} | {len(rows)} | {sum(r[0] > 0 for r in rows)} | "
-                  f"{sum(r[1] for r in rows)} | {sum(r[2] for r in rows)} |")
+                  f"{sum(r[1] for r in rows)} | {sum(r[2] for r in rows)} | {fitted} |")
     print()
 
 
