@@ -644,15 +644,7 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
         println!(
             "refined by maximum likelihood ({} frequencies, {}; a mode needs evidence above {:.1}):",
             r.frequencies,
-            match (r.joint, r.combinations) {
-                (true, Some(p)) if r.bands > 1 => format!(
-                    "channels jointly, through {p} combinations in each of {} bands",
-                    r.bands
-                ),
-                (true, Some(p)) => format!("channels jointly, through {p} combinations"),
-                (true, None) => "channels jointly".to_string(),
-                (false, _) => "each channel's spectrum".to_string(),
-            },
+            r.fitted_by(),
             r.penalty
         );
         let se = |v: Option<f64>| v.map_or("?".to_string(), |v| format!("{v:.4}"));

@@ -241,14 +241,10 @@ fn bench_covssi() {
             t * 1e3,
             res.modes.len(),
             r.modes.len(),
-            match (r.joint, r.combinations) {
-                (true, Some(p)) if r.bands > 1 => format!(
-                    ", channels jointly through {p} combinations in each of {} bands",
-                    r.bands
-                ),
-                (true, Some(p)) => format!(", channels jointly through {p} combinations"),
-                (true, None) => ", channels jointly".to_string(),
-                (false, _) => String::new(),
+            if r.joint {
+                format!(", {}", r.fitted_by())
+            } else {
+                String::new()
             }
         );
     }

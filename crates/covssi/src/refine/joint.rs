@@ -1032,10 +1032,10 @@ mod tests {
         // (the weak mode's band, above 2.1 Hz, leaves out what its tail holds below; fitting
         // each group over all frequencies instead, the other modes held, gave 1.07 and 1.05
         // but RMS errors 1.39 and 1.23 times the bound, against 1.23 and 1.29 here, and puts
-        // the held modes' peaks, with their start values, into each fit). An RMS over 16 records is uncertain by about 18 %,
-        // the ratio of two by about 25 %, so 0.5 is above what chance would give. (The
-        // standard-error bound is looser than the three-mode test's 0.6, which a record here
-        // reaches.)
+        // the held modes' peaks, with their start values, into each fit). An RMS over 16
+        // records is uncertain by about 18 %, the ratio of two by about 25 %, so 0.5 is above
+        // what chance would give. (The standard-error bound is looser than the three-mode
+        // test's 0.6, which a record here reaches.)
         // The bound of all ten channels: `cargo xtask compare-tools --crb`, 0.216 % and
         // 4.37 %.
         let fits =

@@ -184,6 +184,23 @@ pub struct Refinement {
     pub bands: usize,
 }
 
+impl Refinement {
+    /// Which likelihood gave the estimates, in words: "each channel's spectrum", "channels
+    /// jointly", "channels jointly, through 4 combinations" or "channels jointly, through 4
+    /// combinations in each of 2 bands".
+    pub fn fitted_by(&self) -> String {
+        match (self.joint, self.combinations) {
+            (true, Some(p)) if self.bands > 1 => format!(
+                "channels jointly, through {p} combinations in each of {} bands",
+                self.bands
+            ),
+            (true, Some(p)) => format!("channels jointly, through {p} combinations"),
+            (true, None) => "channels jointly".to_string(),
+            (false, _) => "each channel's spectrum".to_string(),
+        }
+    }
+}
+
 /// Refine `modes` (e.g. [`crate::SsiResult::modes`]) on the channels `y` sampled at `fs` Hz.
 pub fn refine(
     y: &[&[f64]],
@@ -1358,6 +1375,33 @@ pub(super) mod tests {
 
     pub(super) fn views(y: &[Vec<f64>]) -> Vec<&[f64]> {
         y.iter().map(|c| c.as_slice()).collect()
+    }
+
+    /// The words for each kind of fit.
+    #[test]
+    fn fitted_by_names_the_likelihood() {
+        let r = |joint, combinations, bands| Refinement {
+            modes: Vec::new(),
+            dropped: Vec::new(),
+            penalty: 0.0,
+            neg_log_likelihood: 0.0,
+            misfit: 0.0,
+            frequencies: 0,
+            iterations: 0,
+            joint,
+            combinations,
+            bands,
+        };
+        assert_eq!(r(false, None, 1).fitted_by(), "each channel's spectrum");
+        assert_eq!(r(true, None, 1).fitted_by(), "channels jointly");
+        assert_eq!(
+            r(true, Some(4), 1).fitted_by(),
+            "channels jointly, through 4 combinations"
+        );
+        assert_eq!(
+            r(true, Some(4), 2).fitted_by(),
+            "channels jointly, through 4 combinations in each of 2 bands"
+        );
     }
 
     /// Groups of at most p modes, cut at the widest frequency gaps first, over bands that
