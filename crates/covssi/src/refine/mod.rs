@@ -1013,18 +1013,22 @@ impl<'a> Model<'a> {
                             acc.ratios.push(ic / s);
                         }
                         if derivs {
+                            // The row of D_c (∂ log S_c), and U += its entries times r. The
+                            // score is summed as the row is written: reading the row back
+                            // would stride across D_c's columns.
+                            let r = ic / s - 1.0;
                             let dc = &mut d[c];
                             for (t, dat) in da.iter().enumerate() {
                                 dc.set(row, t, -dat);
+                                acc.u[t] -= dat * r;
                             }
                             dc.set(row, 2 * m, 1.0);
+                            acc.u[off] += r;
                             let bc = b.conj();
                             for (k, pk) in pw.iter().enumerate().skip(1) {
-                                dc.set(row, 2 * m + k, 2.0 * (pk * bc).re / b2);
-                            }
-                            let r = ic / s - 1.0;
-                            for t in 0..per {
-                                acc.u[global(t, m, off)] += dc.at(row, t) * r;
+                                let v = 2.0 * (pk * bc).re / b2;
+                                dc.set(row, 2 * m + k, v);
+                                acc.u[off + k] += v * r;
                             }
                         }
                     }
