@@ -209,16 +209,8 @@ impl<'a> Joint<'a> {
     pub(super) fn fit(&self, th: Vec<f64>, opts: &RefineOptions) -> Result<Fit, SsiError> {
         let m = self.free;
         let eval = |t: &[f64], derivs: bool| self.eval(t, derivs, false);
-        let held = scoring(eval, th, m, opts, opts.tolerance, true, f64::NEG_INFINITY)?;
-        let free = scoring(
-            eval,
-            held.theta,
-            m,
-            opts,
-            opts.tolerance,
-            false,
-            f64::NEG_INFINITY,
-        )?;
+        let held = scoring(eval, th, m, opts, opts.tolerance, true, None)?;
+        let free = scoring(eval, held.theta, m, opts, opts.tolerance, false, None)?;
         Ok(Fit {
             iterations: held.iterations + free.iterations,
             ..free
