@@ -1441,18 +1441,19 @@ pub(super) mod tests {
         );
     }
 
+    /// `n` samples of two channels reading modes at 1.5 Hz (2 %) and 3 Hz (4 %), with 10 %
+    /// measurement noise.
+    fn two_modes_two_channels(n: usize, seed: u64) -> Vec<Vec<f64>> {
+        let gains = [vec![1.0, 0.5], vec![-0.3, 1.0]];
+        record(n, &[(1.5, 0.02), (3.0, 0.04)], &gains, 0.1, seed)
+    }
+
     /// An evidence fit (a real mode removed) stops well before the iteration cap once the
     /// penalty is out of reach, deciding as the fit without early stops does, and the rise it
     /// reports is the converged fit's to within 10⁻⁴ of itself.
     #[test]
     fn evidence_fits_stop_once_the_decision_is_settled() {
-        let y = record(
-            16384,
-            &[(1.5, 0.02), (3.0, 0.04)],
-            &[vec![1.0, 0.5], vec![-0.3, 1.0]],
-            0.1,
-            5,
-        );
+        let y = two_modes_two_channels(16384, 5);
         let v = views(&y);
         let means = vec![0.0; 2];
         let model = Model::new(&v, &means, FS);
@@ -1540,13 +1541,7 @@ pub(super) mod tests {
 
     #[test]
     fn score_is_minus_the_gradient_of_l() {
-        let y = record(
-            4096,
-            &[(1.5, 0.02), (3.0, 0.04)],
-            &[vec![1.0, 0.5], vec![-0.3, 1.0]],
-            0.1,
-            1,
-        );
+        let y = two_modes_two_channels(4096, 1);
         let v = views(&y);
         let means = vec![0.0; 2];
         let model = Model::new(&v, &means, FS);
