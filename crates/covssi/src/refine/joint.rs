@@ -382,8 +382,9 @@ impl<'a> Joint<'a> {
                 };
                 let mut hz = vec![ZERO; ll];
                 let mut y = vec![ZERO; ll];
-                let mut v = vec![0.0; ll];
                 let mut r = vec![0.0; ll];
+                // Work space of the derivative columns, each of l entries.
+                let mut bufs: [Vec<C64>; 7] = std::array::from_fn(|_| vec![ZERO; l]);
                 let mut d1 = vec![ZERO; m];
                 let mut d2 = vec![ZERO; m];
                 for (row, kk) in (lo..hi).enumerate() {
@@ -437,15 +438,15 @@ impl<'a> Joint<'a> {
                         r[l + 2 * t + 1] = sq2 * w.im;
                     }
                     let base = row * ll;
-                    let mv = |u: &[C64]| -> Vec<C64> {
-                        (0..l)
-                            .map(|a| (0..l).map(|b| mm[a * l + b] * u[b]).sum())
-                            .collect()
+                    let rows = jac.rows;
+                    // The coordinates of Y + Yᴴ into this frequency's rows of column `col`.
+                    let mut put = |col: usize, y: &[C64]| {
+                        let at = col * rows + base;
+                        coords(y, &mut jac.data[at..at + ll]);
                     };
-                    let mut put = |col: usize, y: &[C64], v: &mut [f64]| {
-                        coords(y, v);
-                        for (e, ve) in v.iter().enumerate() {
-                            jac.set(base + e, col, *ve);
+                    let mv = |u: &[C64], out: &mut [C64]| {
+                        for (a, o) in out.iter_mut().enumerate() {
+                            *o = (0..l).map(|b| mm[a * l + b] * u[b]).sum();
                         }
                     };
                     let outer = |y: &mut [C64], u: &[C64], w: &[C64], add: bool| {
@@ -459,55 +460,64 @@ impl<'a> Joint<'a> {
                     // (p d1 + q d2, i (p d1 − q d2)): what the real and the imaginary part of
                     // a parameter entering beside the pole pair contribute.
                     let i1 = C64::new(0.0, 1.0);
-                    let re_im = |p: &[C64], q: &[C64], d1: C64, d2: C64| -> (Vec<C64>, Vec<C64>) {
-                        p.iter()
-                            .zip(q)
-                            .map(|(a, b)| (a * d1 + b * d2, i1 * (a * d1 - b * d2)))
-                            .unzip()
-                    };
+                    let re_im =
+                        |p: &[C64], q: &[C64], d1: C64, d2: C64, re: &mut [C64], im: &mut [C64]| {
+                            for (((a, b), re), im) in p.iter().zip(q).zip(re).zip(im) {
+                                *re = a * d1 + b * d2;
+                                *im = i1 * (a * d1 - b * d2);
+                            }
+                        };
+                    let [mc, mcc, u1, u2, w_re, w_im, col] = &mut bufs;
                     // Columns for the free modes only (held ones have none).
                     for rr in 0..mf {
-                        let mc = mv(&cs[rr]);
-                        let mcc = mv(&cs_conj[rr]);
+                        mv(&cs[rr], mc);
+                        mv(&cs_conj[rr], mcc);
                         let (kl, kcl) = (&k_lam[rr], &kc_lam[rr]);
                         // Poles: ∂H = d1² (∂μ) c kᵀ + d2² (∂μ̄) c̄ k̄ᵀ.
                         for (t, dm) in den.dmu[rr].iter().enumerate() {
                             let f1 = d1[rr] * d1[rr] * dm;
                             let f2 = d2[rr] * d2[rr] * dm.conj();
-                            let u1: Vec<C64> = mc.iter().map(|v| v * f1).collect();
-                            let u2: Vec<C64> = mcc.iter().map(|v| v * f2).collect();
-                            outer(&mut y, &u1, kl, false);
-                            outer(&mut y, &u2, kcl, true);
-                            put(t * mf + rr, &y, &mut v);
+                            for (u, v) in u1.iter_mut().zip(mc.iter()) {
+                                *u = v * f1;
+                            }
+                            for (u, v) in u2.iter_mut().zip(mcc.iter()) {
+                                *u = v * f2;
+                            }
+                            outer(&mut y, u1, kl, false);
+                            outer(&mut y, u2, kcl, true);
+                            put(t * mf + rr, &y);
                         }
                         let off = 2 * mf + rr * (4 * l - 2);
                         // c: ∂H = e_a (kᵀ d1 + k̄ᵀ d2) for Re c_a, i e_a (kᵀ d1 − k̄ᵀ d2) for Im.
-                        let (w_re, w_im) = re_im(kl, kcl, d1[rr], d2[rr]);
+                        re_im(kl, kcl, d1[rr], d2[rr], w_re, w_im);
                         for a in 0..l {
-                            let col: Vec<C64> = (0..l).map(|i| mm[i * l + a]).collect();
-                            outer(&mut y, &col, &w_re, false);
-                            put(off + a, &y, &mut v);
-                            outer(&mut y, &col, &w_im, false);
-                            put(off + l + a, &y, &mut v);
+                            for (i, c) in col.iter_mut().enumerate() {
+                                *c = mm[i * l + a];
+                            }
+                            outer(&mut y, col, w_re, false);
+                            put(off + a, &y);
+                            outer(&mut y, col, w_im, false);
+                            put(off + l + a, &y);
                         }
                         // k_b: ∂H = (c d1 + c̄ d2) e_bᵀ for Re, i (c d1 − c̄ d2) e_bᵀ for Im.
-                        let (u_re, u_im) = re_im(&mc, &mcc, d1[rr], d2[rr]);
+                        // (In u1 and u2, which the pole columns are done with.)
+                        let (u_re, u_im) = (&mut *u1, &mut *u2);
+                        re_im(mc, mcc, d1[rr], d2[rr], u_re, u_im);
                         let mut t = off + 2 * l;
                         for (b, row_b) in lam_rows.iter().enumerate() {
                             if b == self.refs[rr] {
                                 continue;
                             }
-                            outer(&mut y, &u_re, row_b, false);
-                            put(t, &y, &mut v);
-                            outer(&mut y, &u_im, row_b, false);
-                            put(t + 1, &y, &mut v);
+                            outer(&mut y, u_re, row_b, false);
+                            put(t, &y);
+                            outer(&mut y, u_im, row_b, false);
+                            put(t + 1, &y);
                             t += 2;
                         }
                     }
                     for (t, col) in sigma_cols.iter().enumerate() {
-                        for (e, ve) in col.iter().enumerate() {
-                            jac.set(base + e, s_off + t, *ve);
-                        }
+                        let at = (s_off + t) * rows + base;
+                        jac.data[at..at + ll].copy_from_slice(col);
                     }
                     // U = −∇L = Σ_k J_kᵀ vec(εεᴴ − I).
                     for col in 0..np {
