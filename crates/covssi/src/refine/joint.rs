@@ -54,6 +54,22 @@ pub(super) fn parameters(l: usize, m: usize) -> usize {
 
 const ZERO: C64 = C64 { re: 0.0, im: 0.0 };
 
+/// The stretches of θ of all `m` modes (`len` entries, for `l` channels), in order, each
+/// marked free (the first `free` modes' and Λ) or held: the ln ω, the logit ζ, the modes'
+/// blocks of c and k, then Λ.
+fn layout(m: usize, free: usize, l: usize, len: usize) -> [(Range<usize>, bool); 7] {
+    let (b, bl) = (2 * m, 4 * l - 2);
+    [
+        (0..free, true),
+        (free..m, false),
+        (m..m + free, true),
+        (m + free..b, false),
+        (b..b + free * bl, true),
+        (b + free * bl..b + m * bl, false),
+        (b + m * bl..len, true),
+    ]
+}
+
 impl<'a> Joint<'a> {
     /// The model over the frequencies `band` and θ to start from, given the poles of a
     /// per-channel fit (`poles`: the modes' ln ω, then their logit ζ), of which the first
@@ -164,16 +180,10 @@ impl<'a> Joint<'a> {
             return None;
         }
         // θ of all modes, split into the free modes' (and Λ) and the held ones'.
-        let (mf, bl) = (free, 4 * l - 2);
-        let blocks = 2 * m;
-        let take = |r: Range<usize>| th[r].to_vec();
-        let mut fth = take(0..mf);
-        fth.extend(take(m..m + mf));
-        fth.extend(take(blocks..blocks + mf * bl));
-        fth.extend(take(blocks + m * bl..th.len()));
-        let mut held = take(mf..m);
-        held.extend(take(m + mf..2 * m));
-        held.extend(take(blocks + mf * bl..blocks + m * bl));
+        let (mut fth, mut held) = (Vec::new(), Vec::new());
+        for (r, is_free) in layout(m, free, l, th.len()) {
+            if is_free { &mut fth } else { &mut held }.extend_from_slice(&th[r]);
+        }
         let joint = Joint {
             rec,
             refs,
@@ -186,17 +196,15 @@ impl<'a> Joint<'a> {
 
     /// θ of all modes from the free modes' θ and the held parameters.
     fn full(&self, th: &[f64]) -> Vec<f64> {
-        let (mf, mh) = (self.free, self.refs.len() - self.free);
-        let bl = 4 * self.l() - 2;
-        let h = &self.held;
-        let mut v = Vec::with_capacity(th.len() + h.len());
-        v.extend_from_slice(&th[..mf]);
-        v.extend_from_slice(&h[..mh]);
-        v.extend_from_slice(&th[mf..2 * mf]);
-        v.extend_from_slice(&h[mh..2 * mh]);
-        v.extend_from_slice(&th[2 * mf..2 * mf + mf * bl]);
-        v.extend_from_slice(&h[2 * mh..]);
-        v.extend_from_slice(&th[2 * mf + mf * bl..]);
+        let len = th.len() + self.held.len();
+        let (mut free, mut held) = (th, &self.held[..]);
+        let mut v = Vec::with_capacity(len);
+        for (r, is_free) in layout(self.refs.len(), self.free, self.l(), len) {
+            let from = if is_free { &mut free } else { &mut held };
+            let (now, rest) = from.split_at(r.len());
+            v.extend_from_slice(now);
+            *from = rest;
+        }
         v
     }
 
@@ -714,6 +722,18 @@ mod tests {
         e
     }
 
+    /// The joint model of `rec` over `band` with every mode fitted, k_r's component
+    /// `refs[r]` held at 1.
+    fn all_free<'a>(rec: &'a Model<'a>, refs: Vec<usize>, band: Range<usize>) -> Joint<'a> {
+        Joint {
+            rec,
+            free: refs.len(),
+            refs,
+            held: Vec::new(),
+            band,
+        }
+    }
+
     /// A short record of two modes in three channels, 10 % noise.
     fn two_modes_three_channels(seed: u64) -> Vec<Vec<f64>> {
         record(
@@ -732,13 +752,7 @@ mod tests {
         let means = vec![0.0; 3];
         let model = Model::new(&v, &means, FS);
         // Reference components 0 and 2: k_0 = (1, ·, ·), k_1 = (·, ·, 1).
-        let joint = Joint {
-            rec: &model,
-            refs: vec![0, 2],
-            free: 2,
-            held: Vec::new(),
-            band: 0..model.k(),
-        };
+        let joint = all_free(&model, vec![0, 2], 0..model.k());
         let (w1, z1) = pole_theta(1.52, 0.03);
         let (w2, z2) = pole_theta(2.9, 0.05);
         let mut th = vec![w1, w2, z1, z2];
@@ -781,13 +795,7 @@ mod tests {
         assert!((a - b).abs() <= 1e-12 * a.abs(), "{a} vs {b}");
         // The band's terms and the rest's add up to L over all frequencies.
         let over = |band: Range<usize>| {
-            let j = Joint {
-                rec: all.rec,
-                refs: all.refs.clone(),
-                free: 2,
-                held: Vec::new(),
-                band,
-            };
+            let j = all_free(all.rec, all.refs.clone(), band);
             j.eval(&th_all, false, false).unwrap().l
         };
         let (whole, rest) = (over(0..model.k()), over(0..450));
@@ -834,13 +842,7 @@ mod tests {
             th.extend([rho.re, rho.im]);
         }
         th.push(0.5 * ln_s2);
-        let joint = Joint {
-            rec: &model,
-            refs: vec![0, 0],
-            free: 2,
-            held: Vec::new(),
-            band: 0..model.k(),
-        };
+        let joint = all_free(&model, vec![0, 0], 0..model.k());
         let a = joint.eval(&th, false, false).unwrap().l;
         let p = model.eval(&per, 2, What::Value).unwrap().l;
         // Two computations of the same ~2000 terms.

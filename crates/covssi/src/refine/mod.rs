@@ -235,7 +235,7 @@ fn refine_up_to(
         });
     }
     let model = Model::new(y, &means, fs);
-    let penalty = 0.5 * (2.0 + 2.0 * l as f64) * (model.k() as f64).ln();
+    let penalty = bic_penalty(l, model.k());
     // 1. The strong SSI modes (at least half the largest member count) are fitted together:
     //    each then has a pole at its place from the start, and no pole has to travel to a
     //    peak left without one. The others are added one at a time, most members first, and
@@ -405,6 +405,12 @@ fn refine_up_to(
         combinations: est.combinations,
         bands: est.bands,
     })
+}
+
+/// The BIC penalty of one mode for `l` channels and `k` frequencies: ½(2 + 2l) ln k, its
+/// pole's two parameters and each channel's two numerator coefficients.
+fn bic_penalty(l: usize, k: usize) -> f64 {
+    0.5 * (2.0 + 2.0 * l as f64) * (k as f64).ln()
 }
 
 /// The modes' estimates and standard errors (frequency Hz, damping ratio), in the order of
@@ -1470,7 +1476,7 @@ pub(super) mod tests {
             max_iterations: 40,
             ..opts.clone()
         };
-        let penalty = 0.5 * 6.0 * (model.k() as f64).ln();
+        let penalty = bic_penalty(2, model.k());
         let rest = [full.lambdas[0]];
         let th = model.start(&rest).unwrap();
         let report = Evidence {
