@@ -42,6 +42,11 @@
 
 #![warn(missing_docs)]
 
+// The README's example runs as a doctest, so what it shows stays true.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;
+
 pub mod corr;
 mod linalg;
 pub mod refine;
