@@ -627,6 +627,9 @@ enum What {
     Value,
     /// The score U = −∇L and the Fisher information F.
     Fisher,
+    /// U and F of the numerators alone (the poles held): the poles' entries of U and their
+    /// rows and columns of F are zero.
+    FisherNumerators,
     /// U, and the covariance J of the score in place of F.
     Sandwich,
     /// The ratios I/S of every channel and frequency.
@@ -983,12 +986,15 @@ impl<'a> Model<'a> {
     /// L at θ and what `what` asks for besides. `None` when θ is outside the model (a pole at
     /// Nyquist, a numerator zero on the unit circle, overflow).
     fn eval(&self, th: &[f64], m: usize, what: What) -> Option<Eval> {
-        let derivs = matches!(what, What::Fisher | What::Sandwich);
+        let derivs = matches!(what, What::Fisher | What::Sandwich | What::FisherNumerators);
         let sandwich = what == What::Sandwich;
         let ratios = what == What::Ratios;
         let l = self.x.len();
         let q = 2 * m;
-        let per = 2 * m + q + 1;
+        // ∂ log S_c by the poles' parameters is −∂ ln|A|², the same for every channel: its
+        // columns D_p are stored once (none when the poles are held), and each channel's
+        // D_c holds those by ln σ_c² and by B_c's coefficients.
+        let pole_derivs = derivs && what != What::FisherNumerators;
         let np = 2 * m + l * (q + 1);
         let den = Denominator::new(th, m, self.fs)?;
         let nchunks = self.k().div_ceil(CHUNK);
@@ -1000,20 +1006,23 @@ impl<'a> Model<'a> {
                 let hi = (lo + CHUNK).min(self.k());
                 let mut acc = zero();
                 let mut d = if derivs {
-                    vec![Dense::zeros(hi - lo, per); l]
+                    vec![Dense::zeros(hi - lo, q + 1); l]
                 } else {
                     Vec::new()
                 };
+                let mut dp = Dense::zeros(if pole_derivs { hi - lo } else { 0 }, 2 * m);
                 let mut da = vec![0.0; 2 * m];
                 let mut pw = vec![C64::new(0.0, 0.0); q + 1];
                 for (row, kk) in (lo..hi).enumerate() {
                     let z = self.z[kk];
-                    let log_a2 = den.at(z, derivs, &mut da);
+                    let log_a2 = den.at(z, pole_derivs, &mut da);
                     let zc = z.conj();
                     pw[0] = C64::new(1.0, 0.0);
                     for k in 1..=q {
                         pw[k] = pw[k - 1] * zc;
                     }
+                    // Σ_c r_c, by which the poles' score grows.
+                    let mut r_sum = 0.0;
                     for (c, xc) in self.x.iter().enumerate() {
                         let off = 2 * m + c * (q + 1);
                         let b = pw[0]
@@ -1035,32 +1044,84 @@ impl<'a> Model<'a> {
                             // score is summed as the row is written: reading the row back
                             // would stride across D_c's columns.
                             let r = ic / s - 1.0;
+                            r_sum += r;
                             let dc = &mut d[c];
-                            for (t, dat) in da.iter().enumerate() {
-                                dc.set(row, t, -dat);
-                                acc.u[t] -= dat * r;
-                            }
-                            dc.set(row, 2 * m, 1.0);
+                            dc.set(row, 0, 1.0);
                             acc.u[off] += r;
                             let bc = b.conj();
                             for (k, pk) in pw.iter().enumerate().skip(1) {
                                 let v = 2.0 * (pk * bc).re / b2;
-                                dc.set(row, 2 * m + k, v);
+                                dc.set(row, k, v);
                                 acc.u[off + k] += v * r;
                             }
                         }
                     }
+                    if pole_derivs {
+                        for (t, dat) in da.iter().enumerate() {
+                            dp.set(row, t, -dat);
+                            acc.u[t] -= dat * r_sum;
+                        }
+                    }
                 }
-                if derivs {
-                    // F: Σ_c D_cᵀ D_c. With `sandwich`, the covariance of the score instead,
-                    // J = Σ_{c,c'} D_cᵀ diag(γ²_cc') D_c' (cov(I_c/S_c, I_c'/S_c') = γ²_cc').
+                if derivs && !sandwich {
+                    // F: Σ_c [D_p D_c]ᵀ[D_p D_c], by blocks: l D_pᵀD_p for the poles, D_pᵀD_c
+                    // between the poles and channel c, D_cᵀD_c within channel c.
+                    let nb = q + 1;
+                    let add = |f: &mut Dense, block: &Dense, r0: usize, c0: usize| {
+                        for a in 0..block.rows {
+                            for b in 0..block.cols {
+                                f.set(r0 + a, c0 + b, f.at(r0 + a, c0 + b) + block.at(a, b));
+                            }
+                        }
+                    };
+                    if pole_derivs {
+                        let mut gp = Dense::zeros(2 * m, 2 * m);
+                        linalg::gram_add(&dp, &mut gp);
+                        gp.data.iter_mut().for_each(|v| *v *= l as f64);
+                        add(&mut acc.f, &gp, 0, 0);
+                    }
+                    let mut cross = Dense::zeros(2 * m, nb);
+                    let mut gc = Dense::zeros(nb, nb);
+                    for (c, dc) in d.iter().enumerate() {
+                        let off = 2 * m + c * nb;
+                        gc.data.iter_mut().for_each(|v| *v = 0.0);
+                        linalg::gram_add(dc, &mut gc);
+                        add(&mut acc.f, &gc, off, off);
+                        if pole_derivs {
+                            cross.data.iter_mut().for_each(|v| *v = 0.0);
+                            linalg::tn_add(&dp, dc, &mut cross);
+                            add(&mut acc.f, &cross, 0, off);
+                            for a in 0..2 * m {
+                                for b in 0..nb {
+                                    acc.f.set(off + b, a, acc.f.at(off + b, a) + cross.at(a, b));
+                                }
+                            }
+                        }
+                    }
+                }
+                if sandwich {
+                    // J = Σ_{c,c'} D_cᵀ diag(γ²_cc') D_c' (cov(I_c/S_c, I_c'/S_c') = γ²_cc'),
+                    // D_c = [D_p D_c] in full.
+                    let per = 2 * m + q + 1;
+                    let d: Vec<Dense> = d
+                        .iter()
+                        .map(|dc| {
+                            let mut full = Dense::zeros(hi - lo, per);
+                            for row in 0..hi - lo {
+                                for t in 0..2 * m {
+                                    full.set(row, t, dp.at(row, t));
+                                }
+                                for t in 0..=q {
+                                    full.set(row, 2 * m + t, dc.at(row, t));
+                                }
+                            }
+                            full
+                        })
+                        .collect();
                     let mut block = Dense::zeros(per, per);
                     for (c, dc) in d.iter().enumerate() {
                         let off = 2 * m + c * (q + 1);
                         for (c2, dc2) in d.iter().enumerate() {
-                            if c2 != c && !sandwich {
-                                continue;
-                            }
                             block.data.iter_mut().for_each(|v| *v = 0.0);
                             if c2 == c {
                                 linalg::gram_add(dc, &mut block);
@@ -1171,9 +1232,14 @@ impl<'a> Model<'a> {
         hold_poles: bool,
         evidence: Option<Evidence>,
     ) -> Result<Fit, SsiError> {
-        let eval = |t: &[f64], derivs: bool| {
-            self.eval(t, m, if derivs { What::Fisher } else { What::Value })
+        // Held poles need no derivatives by the poles.
+        let fisher = if hold_poles {
+            What::FisherNumerators
+        } else {
+            What::Fisher
         };
+        let eval =
+            |t: &[f64], derivs: bool| self.eval(t, m, if derivs { fisher } else { What::Value });
         scoring(eval, th, m, opts, tol, hold_poles, evidence)
     }
 }
@@ -1545,13 +1611,10 @@ pub(super) mod tests {
         assert_eq!(split(5), vec![(vec![1, 3, 0, 4, 2], 0..k)]);
     }
 
-    #[test]
-    fn score_is_minus_the_gradient_of_l() {
-        let y = two_modes_two_channels(4096, 1);
-        let v = views(&y);
-        let means = vec![0.0; 2];
-        let model = Model::new(&v, &means, FS);
-        let th = [
+    /// θ of a per-channel model of two modes (near 1.52 and 2.9 Hz) in two channels, away
+    /// from any fit.
+    fn two_mode_theta() -> [f64; 14] {
+        [
             pole(1.52, 0.0).norm().ln(),
             pole(2.9, 0.0).norm().ln(),
             (0.03f64 / 0.97).ln(),
@@ -1566,7 +1629,16 @@ pub(super) mod tests {
             -0.1,
             0.05,
             0.02, // channel 1
-        ];
+        ]
+    }
+
+    #[test]
+    fn score_is_minus_the_gradient_of_l() {
+        let y = two_modes_two_channels(4096, 1);
+        let v = views(&y);
+        let means = vec![0.0; 2];
+        let model = Model::new(&v, &means, FS);
+        let th = two_mode_theta();
         let e = model.eval(&th, 2, What::Fisher).unwrap();
         for t in 0..th.len() {
             let h = 1e-6;
@@ -1582,6 +1654,59 @@ pub(super) mod tests {
                 "parameter {t}: {num} vs {}",
                 -e.u[t]
             );
+        }
+    }
+
+    /// F = Σ_{c,k} ∇ln S_c ∇ln S_cᵀ, with ∇ln S_c(ω_k) by central differences of the
+    /// ratios I/S (a path that shares nothing with the blocks F is summed by); with the poles
+    /// held, the same numerators' block and nothing for the poles.
+    #[test]
+    fn fisher_information_is_the_gram_of_the_log_spectra_gradients() {
+        let y = two_modes_two_channels(4096, 1);
+        let v = views(&y);
+        let means = vec![0.0; 2];
+        let model = Model::new(&v, &means, FS);
+        let th = two_mode_theta();
+        let np = th.len();
+        let log_s = |t: &[f64]| -> Vec<f64> {
+            let e = model.eval(t, 2, What::Ratios).unwrap();
+            // Ratios run over frequencies, each channel in turn: I/S, so ln S = ln I − ln(I/S).
+            e.ratios
+                .iter()
+                .enumerate()
+                .map(|(i, r)| model.x[i % 2][i / 2].norm_sqr().ln() - r.ln())
+                .collect()
+        };
+        let grads: Vec<Vec<f64>> = (0..np)
+            .map(|t| {
+                let h = 1e-6;
+                let (mut a, mut b) = (th, th);
+                a[t] += h;
+                b[t] -= h;
+                let (sa, sb) = (log_s(&a), log_s(&b));
+                sa.iter()
+                    .zip(&sb)
+                    .map(|(x, y)| (x - y) / (2.0 * h))
+                    .collect()
+            })
+            .collect();
+        let full = model.eval(&th, 2, What::Fisher).unwrap();
+        let held = model.eval(&th, 2, What::FisherNumerators).unwrap();
+        for a in 0..np {
+            for b in 0..np {
+                let fd: f64 = grads[a].iter().zip(&grads[b]).map(|(x, y)| x * y).sum();
+                // Central differences of smooth log spectra: 1e-6 of the entry's scale.
+                let scale = (full.f.at(a, a) * full.f.at(b, b)).sqrt();
+                assert!(
+                    (full.f.at(a, b) - fd).abs() <= 1e-6 * scale,
+                    "F[{a},{b}] {} vs {fd}",
+                    full.f.at(a, b)
+                );
+                let expect = if a < 4 || b < 4 { 0.0 } else { full.f.at(a, b) };
+                assert!((held.f.at(a, b) - expect).abs() <= 1e-12 * scale);
+            }
+            let expect = if a < 4 { 0.0 } else { full.u[a] };
+            assert!((held.u[a] - expect).abs() <= 1e-12 * full.u[a].abs().max(1.0));
         }
     }
 
