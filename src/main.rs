@@ -550,9 +550,42 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
             json!({"order": o.order, "poles": poles})
         })
         .collect();
+    // The SSI result first: the refinement can take a minute on many channels and modes.
+    for m in &res.modes {
+        // Members come by increasing order: the first and last give the span of orders.
+        let span = match (m.members.first(), m.members.last()) {
+            (Some(lo), Some(hi)) => format!(", orders {}–{}", lo.0, hi.0),
+            _ => String::new(),
+        };
+        println!(
+            "mode {:>9.4} ± {:.4} Hz  damping {:.4} ± {:.4}  ({} poles{span})",
+            m.frequency_hz,
+            m.frequency_std_hz,
+            m.damping_ratio,
+            m.damping_std,
+            m.members.len()
+        );
+    }
+    for r in &res.real_poles {
+        println!(
+            "real pole {:.4} ± {:.4} rad/s ({} poles)",
+            r.lambda,
+            r.lambda_std,
+            r.members.len()
+        );
+    }
+    for n in &res.notes {
+        println!("note: {n}");
+    }
     let refined = if a.no_refine || res.modes.is_empty() {
         None
     } else {
+        eprintln!(
+            "refining {} SSI modes by maximum likelihood on {} channel(s) of {} samples…",
+            res.modes.len(),
+            views.len(),
+            views.first().map_or(0, |v| v.len())
+        );
         Some(
             covssi::refine(
                 &views,
@@ -613,32 +646,6 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
             covssi::svg::stabilization_svg(&res.diagram, None, &title),
         )
         .map_err(|e| fail(format!("{}: {e}", svg.display())))?;
-    }
-    for m in &res.modes {
-        // Members come by increasing order: the first and last give the span of orders.
-        let span = match (m.members.first(), m.members.last()) {
-            (Some(lo), Some(hi)) => format!(", orders {}–{}", lo.0, hi.0),
-            _ => String::new(),
-        };
-        println!(
-            "mode {:>9.4} ± {:.4} Hz  damping {:.4} ± {:.4}  ({} poles{span})",
-            m.frequency_hz,
-            m.frequency_std_hz,
-            m.damping_ratio,
-            m.damping_std,
-            m.members.len()
-        );
-    }
-    for r in &res.real_poles {
-        println!(
-            "real pole {:.4} ± {:.4} rad/s ({} poles)",
-            r.lambda,
-            r.lambda_std,
-            r.members.len()
-        );
-    }
-    for n in &res.notes {
-        println!("note: {n}");
     }
     if let Some(r) = &refined {
         println!(

@@ -209,6 +209,11 @@ fn ssi_writes_modes_json_and_svg() {
     ]);
     assert!(ok, "{err}");
     assert!(out.contains("mode"), "{out}");
+    // The refinement's wait is announced (after the SSI modes are printed).
+    assert!(
+        err.contains("by maximum likelihood on 1 channel(s) of 65536 samples"),
+        "{err}"
+    );
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let modes = v["modes"].as_array().unwrap();
@@ -303,7 +308,10 @@ fn ssi_without_refinement() {
         "--no-refine",
     ]);
     assert!(ok, "{err}");
-    assert!(!out.contains("refined"), "{out}");
+    assert!(
+        !out.contains("refined") && !err.contains("refining"),
+        "{out}{err}"
+    );
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert!(v["refined"].is_null() && !v["modes"].as_array().unwrap().is_empty());
