@@ -136,6 +136,19 @@ fn c_reference() {
     }
 }
 
+/// The modes of [`linear_record`]: frequency (Hz) and damping ratio. Each is sampled exactly
+/// (the discrete pole is e^{λ dt}), so these are the continuous-time truth.
+const BENCH_MODES: [(f64, f64); 8] = [
+    (1.1, 0.01),
+    (2.7, 0.02),
+    (4.4, 0.02),
+    (6.8, 0.03),
+    (9.3, 0.04),
+    (12.1, 0.03),
+    (15.2, 0.035),
+    (18.6, 0.04),
+];
+
 /// Response of a linear system of up to 8 modes (1.1–18.6 Hz, 1–4 % damping) at 50 Hz to white
 /// noise, seen through `channels` channels with white measurement noise; only the lowest
 /// `modes` modes respond (with at most 5, the same noise drives them whatever `modes` is).
@@ -144,17 +157,7 @@ fn linear_record(n: usize, channels: usize, modes: usize, seed: u64) -> Vec<Vec<
     let states = (2 * modes).max(10);
     let w = white_noise(n * states + n * channels, 1.0, seed).expect("valid rms");
     let dt = 0.02;
-    let all_modes = [
-        (1.1f64, 0.01f64),
-        (2.7, 0.02),
-        (4.4, 0.02),
-        (6.8, 0.03),
-        (9.3, 0.04),
-        (12.1, 0.03),
-        (15.2, 0.035),
-        (18.6, 0.04),
-    ];
-    let blocks: Vec<[f64; 4]> = all_modes[..modes.min(all_modes.len())]
+    let blocks: Vec<[f64; 4]> = BENCH_MODES[..modes.min(BENCH_MODES.len())]
         .iter()
         .map(|&(f, z)| {
             let om = 2.0 * std::f64::consts::PI * f;
@@ -224,22 +227,37 @@ fn bench_covssi() {
     let three = linear_record(65536, 10, 3, 7);
     // Sixteen channels reading eight modes: the per-channel selection's cost grows with both.
     let large = linear_record(131_072, 16, 8, 7);
-    // Each line: name, record, samples, channels, runs (the best counts).
+    // Each line: name, record, its modes, samples, channels, runs (the best counts).
     let lines = [
         (
             "covssi_refine_ms_65536_1ch",
             &all,
+            5usize,
             65536usize,
             1usize,
             2usize,
         ),
-        ("covssi_refine_ms_65536_3ch", &all, 65536, 3, 2),
-        ("covssi_refine_ms_65536_10ch", &all, 65536, 10, 2),
-        ("covssi_refine_ms_65536_10ch_3modes", &three, 65536, 10, 2),
-        ("covssi_refine_ms_1e6_1ch", &all, n, 1, 2),
-        ("covssi_refine_ms_131072_16ch_8modes", &large, 131072, 16, 1),
+        ("covssi_refine_ms_65536_3ch", &all, 5, 65536, 3, 2),
+        ("covssi_refine_ms_65536_10ch", &all, 5, 65536, 10, 2),
+        (
+            "covssi_refine_ms_65536_10ch_3modes",
+            &three,
+            3,
+            65536,
+            10,
+            2,
+        ),
+        ("covssi_refine_ms_1e6_1ch", &all, 5, n, 1, 2),
+        (
+            "covssi_refine_ms_131072_16ch_8modes",
+            &large,
+            8,
+            131072,
+            16,
+            1,
+        ),
     ];
-    for (name, rec, len, ch, runs) in lines {
+    for (name, rec, modes, len, ch, runs) in lines {
         let views: Vec<&[f64]> = rec[..ch].iter().map(|c| &c[..len]).collect();
         let opts = SsiOptions {
             block_rows: BlockRows::Count(20),
@@ -256,8 +274,39 @@ fn bench_covssi() {
             t = t.min(start.elapsed().as_secs_f64());
         }
         let r = r.expect("at least one run");
+        // The estimates against the generator's modes, in standard errors: their RMS is near
+        // 1 when the standard errors are right.
+        let z: Vec<f64> = r
+            .modes
+            .iter()
+            .flat_map(|m| {
+                let &(f, zeta) = BENCH_MODES[..modes]
+                    .iter()
+                    .min_by(|a, b| {
+                        (a.0 - m.frequency_hz)
+                            .abs()
+                            .total_cmp(&(b.0 - m.frequency_hz).abs())
+                    })
+                    .expect("records have modes");
+                [
+                    m.frequency_se_hz.map(|se| (m.frequency_hz - f) / se),
+                    m.damping_se.map(|se| (m.damping_ratio - zeta) / se),
+                ]
+            })
+            .flatten()
+            .collect();
+        let z_rms = (z.iter().map(|v| v * v).sum::<f64>() / z.len() as f64).sqrt();
+        let z_max = z.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let calibration = if z.is_empty() {
+            "no standard errors".to_string()
+        } else {
+            format!(
+                "z-score RMS {z_rms:.2}, largest |z| {z_max:.1}, over {} estimates",
+                z.len()
+            )
+        };
         println!(
-            "{name} {:.0} ms ({} SSI modes in, {} kept{})",
+            "{name} {:.0} ms ({} SSI modes in, {} kept{}; misfit {:.3}; {calibration})",
             t * 1e3,
             res.modes.len(),
             r.modes.len(),
@@ -265,7 +314,8 @@ fn bench_covssi() {
                 format!(", {}", r.fitted_by())
             } else {
                 String::new()
-            }
+            },
+            r.misfit
         );
     }
 }
