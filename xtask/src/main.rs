@@ -191,7 +191,8 @@ fn linear_record(n: usize, channels: usize, modes: usize, seed: u64) -> Vec<Vec<
 fn bench_covssi() {
     use hyst::covssi::{BlockRows, SsiOptions, identify};
     let n = 1_000_000;
-    let all = linear_record(n, 10, 5, 7);
+    let all_modes = 5;
+    let all = linear_record(n, 10, all_modes, 7);
     for (name, ch, br, order) in [
         ("covssi_ms_1e6_1ch", 1usize, 20usize, 40usize),
         ("covssi_ms_1e6_3ch", 3, 20, 40),
@@ -224,34 +225,36 @@ fn bench_covssi() {
     // records of the OMA files' length and on the long one.
     // Three modes in ten channels: the joint fit through four combinations of them (the
     // five-mode record's ten channels are fitted band by band).
-    let three = linear_record(65536, 10, 3, 7);
+    let three_modes = 3;
+    let three = linear_record(65536, 10, three_modes, 7);
     // Sixteen channels reading eight modes: the per-channel selection's cost grows with both.
-    let large = linear_record(131_072, 16, 8, 7);
+    let large_modes = 8;
+    let large = linear_record(131_072, 16, large_modes, 7);
     // Each line: name, record, its modes, samples, channels, runs (the best counts).
     let lines = [
         (
             "covssi_refine_ms_65536_1ch",
             &all,
-            5usize,
+            all_modes,
             65536usize,
             1usize,
             2usize,
         ),
-        ("covssi_refine_ms_65536_3ch", &all, 5, 65536, 3, 2),
-        ("covssi_refine_ms_65536_10ch", &all, 5, 65536, 10, 2),
+        ("covssi_refine_ms_65536_3ch", &all, all_modes, 65536, 3, 2),
+        ("covssi_refine_ms_65536_10ch", &all, all_modes, 65536, 10, 2),
         (
             "covssi_refine_ms_65536_10ch_3modes",
             &three,
-            3,
+            three_modes,
             65536,
             10,
             2,
         ),
-        ("covssi_refine_ms_1e6_1ch", &all, 5, n, 1, 2),
+        ("covssi_refine_ms_1e6_1ch", &all, all_modes, n, 1, 2),
         (
             "covssi_refine_ms_131072_16ch_8modes",
             &large,
-            8,
+            large_modes,
             131072,
             16,
             1,
@@ -295,11 +298,11 @@ fn bench_covssi() {
             })
             .flatten()
             .collect();
-        let z_rms = (z.iter().map(|v| v * v).sum::<f64>() / z.len() as f64).sqrt();
-        let z_max = z.iter().fold(0.0f64, |a, v| a.max(v.abs()));
         let calibration = if z.is_empty() {
             "no standard errors".to_string()
         } else {
+            let z_rms = (z.iter().map(|v| v * v).sum::<f64>() / z.len() as f64).sqrt();
+            let z_max = z.iter().fold(0.0f64, |a, v| a.max(v.abs()));
             format!(
                 "z-score RMS {z_rms:.2}, largest |z| {z_max:.1}, over {} estimates",
                 z.len()
