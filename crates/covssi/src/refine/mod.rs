@@ -1067,10 +1067,16 @@ impl<'a> Model<'a> {
                     // F: Σ_c [D_p D_c]ᵀ[D_p D_c], by blocks: l D_pᵀD_p for the poles, D_pᵀD_c
                     // between the poles and channel c, D_cᵀD_c within channel c.
                     let nb = q + 1;
-                    let add = |f: &mut Dense, block: &Dense, r0: usize, c0: usize| {
+                    // `block` (or its transpose) added into f from row r0, column c0.
+                    let add = |f: &mut Dense, block: &Dense, r0: usize, c0: usize, t: bool| {
                         for a in 0..block.rows {
                             for b in 0..block.cols {
-                                f.set(r0 + a, c0 + b, f.at(r0 + a, c0 + b) + block.at(a, b));
+                                let (i, j) = if t {
+                                    (r0 + b, c0 + a)
+                                } else {
+                                    (r0 + a, c0 + b)
+                                };
+                                f.set(i, j, f.at(i, j) + block.at(a, b));
                             }
                         }
                     };
@@ -1078,7 +1084,7 @@ impl<'a> Model<'a> {
                         let mut gp = Dense::zeros(2 * m, 2 * m);
                         linalg::gram_add(&dp, &mut gp);
                         gp.data.iter_mut().for_each(|v| *v *= l as f64);
-                        add(&mut acc.f, &gp, 0, 0);
+                        add(&mut acc.f, &gp, 0, 0, false);
                     }
                     let mut cross = Dense::zeros(2 * m, nb);
                     let mut gc = Dense::zeros(nb, nb);
@@ -1086,16 +1092,12 @@ impl<'a> Model<'a> {
                         let off = 2 * m + c * nb;
                         gc.data.iter_mut().for_each(|v| *v = 0.0);
                         linalg::gram_add(dc, &mut gc);
-                        add(&mut acc.f, &gc, off, off);
+                        add(&mut acc.f, &gc, off, off, false);
                         if pole_derivs {
                             cross.data.iter_mut().for_each(|v| *v = 0.0);
                             linalg::tn_add(&dp, dc, &mut cross);
-                            add(&mut acc.f, &cross, 0, off);
-                            for a in 0..2 * m {
-                                for b in 0..nb {
-                                    acc.f.set(off + b, a, acc.f.at(off + b, a) + cross.at(a, b));
-                                }
-                            }
+                            add(&mut acc.f, &cross, 0, off, false);
+                            add(&mut acc.f, &cross, off, 0, true);
                         }
                     }
                 }
