@@ -57,6 +57,16 @@ pub(super) fn parameters(l: usize, m: usize) -> usize {
     4 * l * m + l * (l + 1) / 2
 }
 
+/// θ of all `m` modes (for `l` channels) split into the first `free` modes' and Λ, and the
+/// others' ([`layout`]); [`Joint::full`] puts them back together.
+fn split(th: &[f64], m: usize, free: usize, l: usize) -> (Vec<f64>, Vec<f64>) {
+    let (mut fitted, mut held) = (Vec::new(), Vec::new());
+    for (r, is_free) in layout(m, free, l, th.len()) {
+        if is_free { &mut fitted } else { &mut held }.extend_from_slice(&th[r]);
+    }
+    (fitted, held)
+}
+
 const ZERO: C64 = C64 { re: 0.0, im: 0.0 };
 
 /// The stretches of θ of all `m` modes (`len` entries, for `l` channels), in order, each
@@ -184,11 +194,7 @@ impl<'a> Joint<'a> {
         if !th.iter().all(|v| v.is_finite()) {
             return None;
         }
-        // θ of all modes, split into the free modes' (and Λ) and the held ones'.
-        let (mut fth, mut held) = (Vec::new(), Vec::new());
-        for (r, is_free) in layout(m, free, l, th.len()) {
-            if is_free { &mut fth } else { &mut held }.extend_from_slice(&th[r]);
-        }
+        let (fth, held) = split(&th, m, free, l);
         let joint = Joint {
             rec,
             refs,
@@ -237,11 +243,7 @@ impl<'a> Joint<'a> {
         };
         let held = scoring(eval, th, self.free, &settle, opts.tolerance, true, None)?;
         // Modes moving..free join the held ones.
-        let full = self.full(&held.theta);
-        let (mut th, mut kept) = (Vec::new(), Vec::new());
-        for (r, is_free) in layout(self.refs.len(), moving, self.l(), full.len()) {
-            if is_free { &mut th } else { &mut kept }.extend_from_slice(&full[r]);
-        }
+        let (th, kept) = split(&self.full(&held.theta), self.refs.len(), moving, self.l());
         self.free = moving;
         self.held = kept;
         self.band = narrow;
