@@ -30,9 +30,10 @@ use std::ops::Range;
 /// Frequencies per parallel chunk (each gives l² rows of the Jacobian).
 const CHUNK: usize = 512;
 
-/// Iterations of the first phase of [`Joint::fit`], the poles held. On the bench's 16-channel,
-/// 8-mode record (seed 8) the fit by bands lands on the same estimates (their z-scores equal
-/// to 0.05) with this cap as with the default 200, in 94 s instead of 150 s.
+/// Iterations of the first phase of [`Joint::fit`], the poles held. On a 16-channel, 8-mode
+/// record of the bench's generator (seed 8, measured with a temporary program, not a
+/// repository command) the fit by bands lands on the same estimates (their z-scores equal to
+/// 0.05) with this cap as with the default 200, in 94 s instead of 150 s.
 const SETTLE_ITERATIONS: usize = 40;
 
 /// The joint model of a record's channels, over a band of its frequencies, with its first
