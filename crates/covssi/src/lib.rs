@@ -430,6 +430,36 @@ fn references(opts: &SsiOptions, l: usize) -> Result<Vec<usize>, SsiError> {
     }
 }
 
+/// The options that are not checked where they are used: counts at least 1, thresholds
+/// positive and finite (a threshold of 0 or below would reject every pole, and the user would
+/// see "no mode found" instead of the option at fault).
+fn check_options(opts: &SsiOptions) -> Result<(), SsiError> {
+    let counts = [
+        ("order_step", Some(opts.order_step)),
+        ("max_order", opts.max_order),
+        ("min_cluster_size", opts.min_cluster_size),
+    ];
+    if let Some((name, _)) = counts.iter().find(|(_, v)| *v == Some(0)) {
+        return Err(SsiError::InvalidOption { name, value: 0.0 });
+    }
+    let c = &opts.criteria;
+    let thresholds = [
+        ("criteria.frequency", c.frequency),
+        ("criteria.damping", c.damping),
+        ("criteria.mac", c.mac),
+        ("criteria.real", c.real),
+        ("max_damping", opts.max_damping),
+        ("cluster_tolerance", opts.cluster_tolerance),
+    ];
+    match thresholds
+        .iter()
+        .find(|(_, v)| !(v.is_finite() && *v > 0.0))
+    {
+        Some(&(name, value)) => Err(SsiError::InvalidOption { name, value }),
+        None => Ok(()),
+    }
+}
+
 /// Identify modes from the output channels `y` (equal lengths) sampled at `fs` Hz.
 ///
 /// The channels' means are removed first.
@@ -467,12 +497,7 @@ pub fn identify_from_correlations(
             value: i as f64,
         });
     }
-    if opts.order_step == 0 {
-        return Err(SsiError::InvalidOption {
-            name: "order_step",
-            value: 0.0,
-        });
-    }
+    check_options(opts)?;
     // Block Toeplitz T (l·i × r·i), block (p, q) = R_{i+p−q}.
     let (rows, cols) = (l * i, r * i);
     let mut t = Dense::zeros(rows, cols);

@@ -147,3 +147,80 @@ fn no_stable_pole_gives_an_empty_result_with_the_reason() {
         r.notes
     );
 }
+
+#[test]
+fn options_out_of_range_name_the_option() {
+    // A zero count or a threshold that is zero, negative or NaN would otherwise reject every
+    // pole and read as "no mode found"; each is named instead.
+    let y = sine(2000);
+    let cases: [(SsiOptions, &str, f64); 6] = [
+        (
+            SsiOptions {
+                max_order: Some(0),
+                ..SsiOptions::default()
+            },
+            "max_order",
+            0.0,
+        ),
+        (
+            SsiOptions {
+                order_step: 0,
+                ..SsiOptions::default()
+            },
+            "order_step",
+            0.0,
+        ),
+        (
+            SsiOptions {
+                min_cluster_size: Some(0),
+                ..SsiOptions::default()
+            },
+            "min_cluster_size",
+            0.0,
+        ),
+        (
+            SsiOptions {
+                criteria: covssi::StabilityCriteria {
+                    frequency: -1.0,
+                    ..Default::default()
+                },
+                ..SsiOptions::default()
+            },
+            "criteria.frequency",
+            -1.0,
+        ),
+        (
+            SsiOptions {
+                max_damping: 0.0,
+                ..SsiOptions::default()
+            },
+            "max_damping",
+            0.0,
+        ),
+        (
+            SsiOptions {
+                cluster_tolerance: f64::INFINITY,
+                ..SsiOptions::default()
+            },
+            "cluster_tolerance",
+            f64::INFINITY,
+        ),
+    ];
+    for (opts, name, value) in cases {
+        let e = identify(&[&y], 10.0, &opts).unwrap_err();
+        assert_eq!(e, SsiError::InvalidOption { name, value }, "{e}");
+        assert!(e.to_string().contains(name), "{e}");
+    }
+    let nan = SsiOptions {
+        criteria: covssi::StabilityCriteria {
+            damping: f64::NAN,
+            ..Default::default()
+        },
+        ..SsiOptions::default()
+    };
+    let e = identify(&[&y], 10.0, &nan).unwrap_err();
+    assert!(
+        matches!(e, SsiError::InvalidOption { name: "criteria.damping", value } if value.is_nan()),
+        "{e}"
+    );
+}
