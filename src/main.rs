@@ -943,7 +943,10 @@ fn ident(a: &IdentArgs) -> Result<(), Error> {
     };
     let id = match ident::identify(&y, fs, &opts) {
         Ok(id) => id,
-        Err(e @ ident::IdentError::NoStablePair { .. }) => {
+        Err(
+            e @ (ident::IdentError::NoStablePair { .. }
+            | ident::IdentError::PairNotSupported { .. }),
+        ) => {
             // Save the diagram the user needs to see why.
             let path = a
                 .svg_dir
@@ -957,7 +960,7 @@ fn ident(a: &IdentArgs) -> Result<(), Error> {
                     let svg = hyst::covssi::svg::stabilization_svg(
                         &r.diagram,
                         Some(4.0 * p.dominant_hz),
-                        "Stabilization diagram (no stable pair found)",
+                        "Stabilization diagram (no supported stable pair)",
                     );
                     std::fs::create_dir_all(path.parent()?).ok()?;
                     std::fs::write(&path, svg).ok()

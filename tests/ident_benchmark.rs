@@ -199,6 +199,35 @@ fn no_stable_pair_is_an_error() {
     assert!(matches!(e, IdentError::NoStablePair { .. }), "{e}");
 }
 
+/// White noise has no resonance, yet its stabilization diagram now and then holds a stable
+/// cluster near the spectrum's largest bump. Every record of 24 seeds must end in an error,
+/// never in models built on noise: some at the diagram (no stable pair), the others at the
+/// likelihood test of the pair.
+#[test]
+fn white_noise_never_yields_a_model() {
+    let (mut no_pair, mut not_supported) = (0, 0);
+    for seed in 0..24 {
+        let y = hyst::sim::excitation::white_noise(20000, 1.0, seed).unwrap();
+        match ident::identify(&y, 750.0, &IdentOptions::default()) {
+            Err(IdentError::NoStablePair { .. }) => no_pair += 1,
+            Err(IdentError::PairNotSupported {
+                evidence, penalty, ..
+            }) => {
+                assert!(evidence < penalty, "seed {seed}: {evidence} >= {penalty}");
+                not_supported += 1;
+            }
+            Ok(id) => panic!(
+                "seed {seed}: white noise gave models from the pair {:.2}",
+                id.poles.pair
+            ),
+            Err(e) => panic!("seed {seed}: white noise gave another error: {e}"),
+        }
+    }
+    eprintln!(
+        "white noise, 24 seeds: {no_pair} without a stable pair, {not_supported} with a stable pair the likelihood rejects"
+    );
+}
+
 #[test]
 fn too_short_and_bad_mass() {
     let y = vec![1.0, 2.0, 3.0];

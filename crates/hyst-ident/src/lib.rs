@@ -10,7 +10,8 @@
 //! 2. [`run_ssi`]: [`covssi`] with block rows spanning [`IdentOptions::periods`] periods of the
 //!    dominant mode and the paper's thresholds (Δω = Δζ = 0.05, real-pole criterion 1.5).
 //! 3. [`select_poles`]: the oscillating pair (the stable cluster nearest the dominant
-//!    frequency, most members first), the real pole (the largest stable real cluster, else the
+//!    frequency, most members first, kept only when the record's likelihood supports it:
+//!    its evidence in [`covssi::refine`] at least the BIC penalty of a mode), the real pole (the largest stable real cluster, else the
 //!    median of all stable real poles), and the viscous damping guess c
 //!    ([`DampingGuess`]).
 //! 4. [`build_models`]: linear $k = m|\lambda|^2$, $c = -2m\operatorname{Re}\lambda$; Zener
@@ -72,6 +73,19 @@ pub enum IdentError {
     NoStablePair {
         /// The dominant frequency of the spectrum.
         dominant_hz: f64,
+    },
+    /// The stable pair the stabilization diagram offers is not supported by the record's
+    /// likelihood: a spurious cluster, as white noise can give.
+    #[error(
+        "the stable pole pair at {frequency_hz:.2} Hz is not supported by the record: removing it raises the negative log-likelihood by only {evidence:.1}, below the BIC penalty {penalty:.1} of a mode; the record shows no resonance there (see the stabilization diagram)"
+    )]
+    PairNotSupported {
+        /// Frequency of the pair's cluster (Hz).
+        frequency_hz: f64,
+        /// Rise of the negative log-likelihood when the pair is removed.
+        evidence: f64,
+        /// The BIC penalty of one mode.
+        penalty: f64,
     },
     /// The sampling rate is not a positive finite number.
     #[error("sampling rate must be > 0 Hz, got {fs}")]
@@ -321,6 +335,7 @@ pub fn select_poles(
         .ok_or(IdentError::NoStablePair {
             dominant_hz: p.dominant_hz,
         })?;
+    check_support(mode, p, &mut notes)?;
     let pair = mode.lambda;
     let pair_cluster: Vec<Complex64> = mode
         .members
@@ -401,6 +416,37 @@ pub fn select_poles(
         c_source,
         notes,
     })
+}
+
+/// Whether the record supports the pair: a stabilization diagram can hold a stable cluster
+/// that is a draw of the noise (white noise gives one now and then), and every model would
+/// then be built on it. The pair is fitted to the whole record by maximum likelihood
+/// ([`covssi::refine`], one mode) and kept only when removing it raises the negative
+/// log-likelihood by at least the BIC penalty of a mode: an error otherwise. When the test
+/// cannot run (a record too short for it), a note says so.
+fn check_support(
+    mode: &covssi::Mode,
+    p: &Prepared,
+    notes: &mut Vec<String>,
+) -> Result<(), IdentError> {
+    let opts = covssi::RefineOptions {
+        joint: false,
+        ..covssi::RefineOptions::default()
+    };
+    match covssi::refine(&[&p.y], p.fs, std::slice::from_ref(mode), &opts) {
+        Ok(r) if r.modes.is_empty() => Err(IdentError::PairNotSupported {
+            frequency_hz: mode.frequency_hz,
+            evidence: r.dropped.last().map_or(0.0, |d| d.evidence),
+            penalty: r.penalty,
+        }),
+        Ok(_) => Ok(()),
+        Err(e) => {
+            notes.push(format!(
+                "the pair's support by the record could not be tested: {e}"
+            ));
+            Ok(())
+        }
+    }
 }
 
 /// The identified models.
