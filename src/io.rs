@@ -59,9 +59,9 @@ pub enum IoError {
         /// The value.
         value: f64,
     },
-    /// A row has fewer cells than the header.
+    /// A row has fewer or more cells than the header names columns.
     #[error("{path}: row {row} has {found} cells, the header has {expected}")]
-    ShortRow {
+    CellCount {
         /// The file.
         path: PathBuf,
         /// 1-based line number.
@@ -70,6 +70,14 @@ pub enum IoError {
         found: usize,
         /// Cells expected.
         expected: usize,
+    },
+    /// The header names one column twice (a column asked for by name would be ambiguous).
+    #[error("{path}: the header names column `{column}` twice")]
+    DuplicateColumn {
+        /// The file.
+        path: PathBuf,
+        /// The repeated name.
+        column: String,
     },
     /// The file has a header but no data rows.
     #[error("{path}: the record is empty (a header but no rows)")]
@@ -114,8 +122,8 @@ impl Table {
     }
 }
 
-/// Read a CSV file with a header line. Empty lines are skipped; every cell must be a finite
-/// number.
+/// Read a CSV file with a header line. Empty lines are skipped; every row must have one cell
+/// per column of the header, and every cell must be a finite number.
 pub fn read_csv(path: &Path) -> Result<Table, IoError> {
     let text = std::fs::read_to_string(path).map_err(|source| IoError::File {
         path: path.to_path_buf(),
@@ -131,12 +139,25 @@ pub fn read_csv(path: &Path) -> Result<Table, IoError> {
         });
     };
     let names: Vec<String> = header.split(',').map(|s| s.trim().to_string()).collect();
+    if let Some(column) = repeated(&names) {
+        return Err(IoError::DuplicateColumn {
+            path: path.to_path_buf(),
+            column: column.to_string(),
+        });
+    }
     let mut columns: Vec<Vec<f64>> = vec![Vec::new(); names.len()];
     for (i, line) in lines {
         let row = i + 1;
-        let mut count = 0;
-        for (c, cell) in line.split(',').enumerate().take(names.len()) {
-            count += 1;
+        let found = line.matches(',').count() + 1;
+        if found != names.len() {
+            return Err(IoError::CellCount {
+                path: path.to_path_buf(),
+                row,
+                found,
+                expected: names.len(),
+            });
+        }
+        for (c, cell) in line.split(',').enumerate() {
             let t = cell.trim();
             let v: f64 = t.parse().map_err(|_| IoError::NotANumber {
                 path: path.to_path_buf(),
@@ -154,14 +175,6 @@ pub fn read_csv(path: &Path) -> Result<Table, IoError> {
             }
             columns[c].push(v);
         }
-        if count < names.len() {
-            return Err(IoError::ShortRow {
-                path: path.to_path_buf(),
-                row,
-                found: count,
-                expected: names.len(),
-            });
-        }
     }
     if columns.first().is_none_or(Vec::is_empty) {
         return Err(IoError::Empty {
@@ -173,6 +186,15 @@ pub fn read_csv(path: &Path) -> Result<Table, IoError> {
         columns,
         path: path.to_path_buf(),
     })
+}
+
+/// The first name that appears twice in `names`, if any.
+pub fn repeated(names: &[String]) -> Option<&str> {
+    names
+        .iter()
+        .enumerate()
+        .find(|(i, n)| names[..*i].contains(n))
+        .map(|(_, n)| n.as_str())
 }
 
 /// Write columns of equal length under a header, numbers with 17 significant digits

@@ -452,6 +452,11 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
             .cloned()
             .collect(),
     };
+    if let Some(n) = hyst::io::repeated(&names) {
+        return Err(fail(format!(
+            "--columns names `{n}` twice: each channel once"
+        )));
+    }
     if a.skip >= t.len() {
         return Err(fail(format!(
             "--skip {} leaves no rows of the {} in {}",

@@ -142,6 +142,35 @@ fn nan_cell() {
 }
 
 #[test]
+fn row_with_too_many_or_too_few_cells_names_its_row() {
+    // An extra cell would otherwise be dropped silently, shifting nothing but hiding a
+    // malformed file; a missing one would leave the columns of unequal length.
+    let p = write("long_row.csv", "u,y\n1,2\n3,4,5\n");
+    let err = simulate_fails(&["--input", s(&p), "--fs", "750"]);
+    assert!(
+        err.contains("long_row.csv") && err.contains("row 3 has 3 cells, the header has 2"),
+        "{err}"
+    );
+    let p = write("short_row.csv", "u,y\n1,2\n3\n");
+    let err = simulate_fails(&["--input", s(&p), "--fs", "750"]);
+    assert!(err.contains("row 3 has 1 cells, the header has 2"), "{err}");
+}
+
+#[test]
+fn a_column_named_twice_is_an_error() {
+    // In the header, a column asked for by name would be ambiguous; in --columns, the same
+    // channel twice makes the Toeplitz matrix rank-deficient and says nothing new.
+    let p = write("dup_header.csv", "u,u\n1,2\n");
+    let err = simulate_fails(&["--input", s(&p), "--fs", "750"]);
+    assert!(
+        err.contains("dup_header.csv") && err.contains("names column `u` twice"),
+        "{err}"
+    );
+    let err = ssi_fails_on_columns("a,b,a");
+    assert!(err.contains("--columns names `a` twice"), "{err}");
+}
+
+#[test]
 fn empty_record() {
     let p = write("empty.csv", "u,y\n");
     let err = simulate_fails(&["--input", s(&p), "--fs", "750"]);
@@ -559,8 +588,9 @@ fn ssi_record_too_short_for_the_lags() {
     );
 }
 
-#[test]
-fn ssi_missing_column() {
+/// Run `hyst ssi` on a two-column record `a,b` with these `--columns`, expecting failure;
+/// return stderr.
+fn ssi_fails_on_columns(columns: &str) -> String {
     let p = write("cols.csv", "a,b\n1,2\n3,4\n");
     let (ok, _, err) = hyst(&[
         "ssi",
@@ -569,11 +599,17 @@ fn ssi_missing_column() {
         "--fs",
         "10",
         "--columns",
-        "c",
+        columns,
         "--json",
         s(&tmp("y.json")),
     ]);
-    assert!(!ok);
+    assert!(!ok, "expected failure for --columns {columns}");
+    err
+}
+
+#[test]
+fn ssi_missing_column() {
+    let err = ssi_fails_on_columns("c");
     assert!(err.contains("no column `c`"), "{err}");
 }
 
