@@ -11,9 +11,9 @@
 //!    dominant mode and the paper's thresholds (Δω = Δζ = 0.05, real-pole criterion 1.5).
 //! 3. [`select_poles`]: the oscillating pair (the stable cluster nearest the dominant
 //!    frequency, most members first, kept only when the record's likelihood supports it:
-//!    its evidence in [`covssi::refine`] at least the BIC penalty of a mode), the real pole (the largest stable real cluster, else the
-//!    median of all stable real poles), and the viscous damping guess c
-//!    ([`DampingGuess`]).
+//!    its evidence in [`covssi::refine()`] at least the BIC penalty of a mode), the real
+//!    pole (the largest stable real cluster, else the median of all stable real poles), and
+//!    the viscous damping guess c ([`DampingGuess`]).
 //! 4. [`build_models`]: linear $k = m|\lambda|^2$, $c = -2m\operatorname{Re}\lambda$; Zener
 //!    $(k, k_\infty, \Omega)$ by coefficient matching of eq. (32); Bouc-Wen with α from eq. (37)
 //!    and (βγ, βδ) from eq. (38) ([`Linearization::Paper`]) or from the exact inversion of the
@@ -421,7 +421,7 @@ pub fn select_poles(
 /// Whether the record supports the pair: a stabilization diagram can hold a stable cluster
 /// that is a draw of the noise (white noise gives one now and then), and every model would
 /// then be built on it. The pair is fitted to the whole record by maximum likelihood
-/// ([`covssi::refine`], one mode) and kept only when removing it raises the negative
+/// ([`covssi::refine()`], one mode) and kept only when removing it raises the negative
 /// log-likelihood by at least the BIC penalty of a mode: an error otherwise. When the test
 /// cannot run (a record too short for it), a note says so.
 fn check_support(
