@@ -485,8 +485,24 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
         references: a.references.clone(),
         ..SsiOptions::default()
     };
-    // Errors of covssi name the file and the columns they came from.
+    // Errors of covssi name the file and the columns they came from; an option out of
+    // range is named by the flag that set it.
     let context = |e: covssi::SsiError| {
+        if let covssi::SsiError::InvalidOption { name, value } = &e {
+            let flag = match *name {
+                "block_rows" => Some(("--block-rows", "at least 2")),
+                "max_order" => Some(("--max-order", "at least 1")),
+                "order_step" => Some(("--order-step", "at least 1")),
+                "criteria.frequency" => Some(("--df", "positive")),
+                "criteria.damping" => Some(("--dzeta", "positive")),
+                "criteria.mac" => Some(("--dmac", "positive")),
+                "criteria.real" => Some(("--dreal", "positive")),
+                _ => None,
+            };
+            if let Some((flag, needed)) = flag {
+                return fail(format!("{flag} must be {needed}, got {value}"));
+            }
+        }
         fail(format!(
             "{}: columns {}: {e}",
             a.input.display(),

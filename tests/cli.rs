@@ -572,39 +572,59 @@ fn ssi_record_too_short_for_the_lags() {
                 .collect::<String>()
         ),
     );
-    let (ok, _, err) = hyst(&[
-        "ssi",
-        "--input",
-        s(&p),
-        "--fs",
-        "10",
-        "--json",
-        s(&tmp("x.json")),
-    ]);
-    assert!(!ok);
+    let err = ssi_fails(&p, &[]);
     assert!(
         err.contains("30 samples are too few") && err.contains("short.csv"),
         "{err}"
     );
 }
 
-/// Run `hyst ssi` on a two-column record `a,b` with these `--columns`, expecting failure;
+/// Run `hyst ssi --input FILE --fs 10` with these further arguments, expecting failure;
 /// return stderr.
+fn ssi_fails(input: &Path, args: &[&str]) -> String {
+    let json = tmp("failed.json");
+    let mut all = vec!["ssi", "--input", s(input), "--fs", "10"];
+    all.extend_from_slice(args);
+    all.extend_from_slice(&["--json", s(&json)]);
+    let (ok, _, err) = hyst(&all);
+    assert!(!ok, "expected failure for {args:?}");
+    err
+}
+
+/// `hyst ssi` on a two-column record `a,b` with these `--columns`, expecting failure.
 fn ssi_fails_on_columns(columns: &str) -> String {
     let p = write("cols.csv", "a,b\n1,2\n3,4\n");
-    let (ok, _, err) = hyst(&[
-        "ssi",
-        "--input",
-        s(&p),
-        "--fs",
-        "10",
-        "--columns",
-        columns,
-        "--json",
-        s(&tmp("y.json")),
-    ]);
-    assert!(!ok, "expected failure for --columns {columns}");
-    err
+    ssi_fails(&p, &["--columns", columns])
+}
+
+#[test]
+fn ssi_option_out_of_range_names_its_flag() {
+    let p = write(
+        "sine.csv",
+        &format!(
+            "y\n{}",
+            (0..400)
+                .map(|k| format!(
+                    "{}\n",
+                    (0.7 * k as f64).sin() + 0.3 * (1.9 * k as f64).cos()
+                ))
+                .collect::<String>()
+        ),
+    );
+    for (flag, value, said) in [
+        ("--df", "-1", "--df must be positive, got -1"),
+        ("--dzeta", "0", "--dzeta must be positive, got 0"),
+        ("--max-order", "0", "--max-order must be at least 1, got 0"),
+        (
+            "--block-rows",
+            "1",
+            "--block-rows must be at least 2, got 1",
+        ),
+    ] {
+        let arg = format!("{flag}={value}");
+        let err = ssi_fails(&p, &[&arg]);
+        assert!(err.contains(said), "{arg}: {err}");
+    }
 }
 
 #[test]
