@@ -97,6 +97,15 @@ pub enum SsiError {
         /// Its value.
         value: f64,
     },
+    /// The correlations are beyond what double precision computes with: the record's values
+    /// are of order 1e150 or more, or 1e-145 or less, in its units.
+    #[error(
+        "the correlations' largest value at lag 0 is {value:e}, beyond what double precision computes with (record values between about 1e-145 and 1e150): rescale the record, e.g. to other units"
+    )]
+    OutOfRange {
+        /// The largest absolute correlation at lag 0 (infinite or NaN if they overflowed).
+        value: f64,
+    },
     /// The record is too short for the requested lags.
     #[error(
         "{samples} samples are too few for {block_rows} block rows: the correlations need lags up to {lags}, so at least {needed} samples"
@@ -460,6 +469,11 @@ fn check_options(opts: &SsiOptions) -> Result<(), SsiError> {
     }
 }
 
+/// The smallest largest lag-0 correlation (a variance, for one channel) SSI works with:
+/// below it the correlations are too close to the smallest normal double (2.2e-308) for
+/// their lags to keep their precision, and [`SsiError::OutOfRange`] asks for other units.
+pub const MIN_CORRELATION: f64 = 1e-290;
+
 /// Identify modes from the output channels `y` (equal lengths) sampled at `fs` Hz.
 ///
 /// The channels' means are removed first.
@@ -498,6 +512,18 @@ pub fn identify_from_correlations(
         });
     }
     check_options(opts)?;
+    // The SVD loses accuracy, or fails, on entries near the ends of the double range (a record
+    // in units that make its values 1e100 or 1e-100), so T is built from the correlations
+    // times the power of two that brings their largest lag-0 value near 1: exact in floating
+    // point, so the poles and shapes are those of the correlations as given.
+    if let Some(&value) = corr.r.iter().flatten().find(|v| !v.is_finite()) {
+        return Err(SsiError::OutOfRange { value });
+    }
+    let peak = corr.r[0].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    if peak < MIN_CORRELATION {
+        return Err(SsiError::OutOfRange { value: peak });
+    }
+    let scale = 2f64.powi(-(peak.log2().round() as i32));
     // Block Toeplitz T (l·i × r·i), block (p, q) = R_{i+p−q}.
     let (rows, cols) = (l * i, r * i);
     let mut t = Dense::zeros(rows, cols);
@@ -506,12 +532,15 @@ pub fn identify_from_correlations(
             let rk = &corr.r[i + p - q];
             for b in 0..r {
                 for a in 0..l {
-                    t.set(p * l + a, q * r + b, rk[a + b * l]);
+                    t.set(p * l + a, q * r + b, scale * rk[a + b * l]);
                 }
             }
         }
     }
-    let (u, s) = linalg::thin_svd_u(&t).map_err(SsiError::LinearAlgebra)?;
+    let (u, mut s) = linalg::thin_svd_u(&t).map_err(SsiError::LinearAlgebra)?;
+    for v in &mut s {
+        *v /= scale;
+    }
     let s0 = s.first().copied().unwrap_or(0.0);
     let rank = s.iter().filter(|&&v| v > s0 * 1e-12).count();
     let max_order = match opts.max_order {

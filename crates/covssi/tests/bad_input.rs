@@ -224,3 +224,37 @@ fn options_out_of_range_name_the_option() {
         "{e}"
     );
 }
+
+#[test]
+fn any_units_give_the_same_poles_or_say_they_are_out_of_range() {
+    // SSI scales the Toeplitz matrix by a power of two, so a record in any units whose
+    // correlations are normal doubles gives the poles it gives in its own units, bit for bit
+    // when the units differ by a power of two (before, 1e100-sized values made the SVD fail
+    // and 1e-100-sized ones moved the poles); beyond that range it is an error, not a
+    // "constant channel" or "rank 0".
+    let base = sine(3000);
+    let opts = SsiOptions {
+        max_order: Some(8),
+        ..SsiOptions::default()
+    };
+    let poles = |r: &covssi::SsiResult| -> Vec<covssi::Complex64> {
+        r.diagram
+            .orders
+            .iter()
+            .flat_map(|o| o.poles.iter().map(|p| p.lambda))
+            .collect()
+    };
+    let reference = poles(&identify(&[&base], 10.0, &opts).unwrap());
+    for k in [-450, -300, -100, 100, 300, 490] {
+        let s = 2f64.powi(k);
+        let y: Vec<f64> = base.iter().map(|v| v * s).collect();
+        let r = identify(&[&y], 10.0, &opts).unwrap();
+        assert_eq!(poles(&r), reference, "scale 2^{k}");
+    }
+    for s in [1e-160, 1e160, 1e300] {
+        let y: Vec<f64> = base.iter().map(|v| v * s).collect();
+        let e = identify(&[&y], 10.0, &opts).unwrap_err();
+        assert!(matches!(e, SsiError::OutOfRange { .. }), "scale {s:e}: {e}");
+        assert!(e.to_string().contains("rescale the record"), "{e}");
+    }
+}
