@@ -228,6 +228,53 @@ fn white_noise_never_yields_a_model() {
     );
 }
 
+/// A noise-free free decay, x = sin(225 t)·e^(−0.75 t) at 750 Hz (pole −0.75 + 225i rad/s),
+/// does not follow the stationary model the pair's likelihood test rests on: the test then
+/// says nothing, a note says so, and the pair is kept. The decay also leaves the Toeplitz
+/// matrix below the default order's rank, so fewer orders are used, with a note.
+#[test]
+fn a_free_decay_keeps_its_pair_with_notes() {
+    let y: Vec<f64> = (0..3000)
+        .map(|k| (0.3 * k as f64).sin() * (-1e-3 * k as f64).exp())
+        .collect();
+    let id = ident::identify(&y, 750.0, &IdentOptions::default()).unwrap();
+    let pair = id.poles.pair;
+    // SSI on a short decimated decay: the frequency to 0.1 %, the decay rate to 30 %.
+    assert!((pair.im - 225.0).abs() < 0.225, "{pair}");
+    assert!((pair.re + 0.75).abs() < 0.25, "{pair}");
+    assert!(
+        id.poles
+            .notes
+            .iter()
+            .any(|n| n.contains("could not be tested") && n.contains("misfit")),
+        "{:?}",
+        id.poles.notes
+    );
+    assert!(
+        id.ssi.notes.iter().any(|n| n.contains("orders up to")),
+        "{:?}",
+        id.ssi.notes
+    );
+}
+
+/// A record whose variance is not a normal double with room to spare is an error naming the
+/// range, not a "constant" record or a garbage dominant frequency.
+#[test]
+fn a_record_beyond_the_double_range_is_an_error() {
+    let y = hyst::sim::excitation::white_noise(4000, 1.0, 9).unwrap();
+    for s in [1e-160, 1e160] {
+        let ys: Vec<f64> = y.iter().map(|v| v * s).collect();
+        let e = ident::identify(&ys, 750.0, &IdentOptions::default()).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                IdentError::Ssi(hyst::covssi::SsiError::OutOfRange { .. })
+            ),
+            "scale {s:e}: {e}"
+        );
+    }
+}
+
 #[test]
 fn too_short_and_bad_mass() {
     let y = vec![1.0, 2.0, 3.0];

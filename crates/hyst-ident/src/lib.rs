@@ -75,9 +75,10 @@ pub enum IdentError {
         dominant_hz: f64,
     },
     /// The stable pair the stabilization diagram offers is not supported by the record's
-    /// likelihood: a spurious cluster, as white noise can give.
+    /// likelihood, and the record follows the model without it: a spurious cluster, as white
+    /// noise can give.
     #[error(
-        "the stable pole pair at {frequency_hz:.2} Hz is not supported by the record: removing it raises the negative log-likelihood by only {evidence:.1}, below the BIC penalty {penalty:.1} of a mode; the record shows no resonance there (see the stabilization diagram)"
+        "the stable pole pair at {frequency_hz:.2} Hz is not supported by the record: removing it raises the negative log-likelihood by only {evidence:.1}, below the BIC penalty {penalty:.1} of a mode, and the record follows the model without it (misfit {misfit:.3}); the record shows no resonance there (see the stabilization diagram)"
     )]
     PairNotSupported {
         /// Frequency of the pair's cluster (Hz).
@@ -86,6 +87,8 @@ pub enum IdentError {
         evidence: f64,
         /// The BIC penalty of one mode.
         penalty: f64,
+        /// Misfit of the model without the pair ([`covssi::Refinement::misfit`]).
+        misfit: f64,
     },
     /// The sampling rate is not a positive finite number.
     #[error("sampling rate must be > 0 Hz, got {fs}")]
@@ -211,13 +214,23 @@ pub struct Prepared {
     pub dominant_hz: f64,
 }
 
+/// Mean, standard deviation, skewness and kurtosis. The deviations are divided by the
+/// largest of them first, so that their fourth powers neither underflow nor overflow in any
+/// units the record may be in.
 fn moments(y: &[f64]) -> (f64, f64, f64, f64) {
     let n = y.len() as f64;
-    let mean = y.iter().sum::<f64>() / n;
-    let m2 = y.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n;
-    let m3 = y.iter().map(|v| (v - mean).powi(3)).sum::<f64>() / n;
-    let m4 = y.iter().map(|v| (v - mean).powi(4)).sum::<f64>() / n;
-    (mean, m2.sqrt(), m3 / m2.powf(1.5), m4 / (m2 * m2))
+    let sum = y.iter().sum::<f64>();
+    let mean = if sum.is_finite() {
+        sum / n
+    } else {
+        y.iter().map(|v| v / n).sum()
+    };
+    let s = y.iter().fold(0.0f64, |m, v| m.max((v - mean).abs()));
+    let d = |v: &f64| (v - mean) / s;
+    let m2 = y.iter().map(|v| d(v).powi(2)).sum::<f64>() / n;
+    let m3 = y.iter().map(|v| d(v).powi(3)).sum::<f64>() / n;
+    let m4 = y.iter().map(|v| d(v).powi(4)).sum::<f64>() / n;
+    (mean, s * m2.sqrt(), m3 / m2.powf(1.5), m4 / (m2 * m2))
 }
 
 /// The frequency of the largest peak of the record's correlation-based spectrum.
@@ -259,14 +272,22 @@ pub fn prepare(y: &[f64], fs: f64, opts: &IdentOptions) -> Result<Prepared, Iden
             value,
         }));
     }
-    let (mean, sigma_x, _, _) = moments(y);
-    let centred: Vec<f64> = y.iter().map(|v| v - mean).collect();
-    if sigma_x == 0.0 {
+    if y.iter().all(|v| *v == y[0]) {
         return Err(IdentError::Ssi(covssi::SsiError::ConstantChannel {
             channel: 0,
-            value: mean,
+            value: y[0],
         }));
     }
+    let (mean, sigma_x, _, _) = moments(y);
+    // The correlations SSI works from are of the order of the variance: it must be a normal
+    // double with room to spare (covssi's own range), or every later step reads garbage.
+    let variance = sigma_x * sigma_x;
+    if !(variance.is_finite() && variance >= covssi::MIN_CORRELATION) {
+        return Err(IdentError::Ssi(covssi::SsiError::OutOfRange {
+            value: variance,
+        }));
+    }
+    let centred: Vec<f64> = y.iter().map(|v| v - mean).collect();
     let dominant_hz = dominant_frequency(&centred, fs)?;
     let r = ((fs / dominant_hz / opts.samples_per_period).floor() as usize).max(1);
     let yd = hyst_sim::resample::decimate(&centred, r);
@@ -294,7 +315,22 @@ pub fn run_ssi(p: &Prepared, opts: &IdentOptions) -> Result<SsiResult, IdentErro
         criteria: opts.criteria,
         ..SsiOptions::default()
     };
-    Ok(covssi::identify(&[&p.y], p.fs, &so)?)
+    match covssi::identify(&[&p.y], p.fs, &so) {
+        // A record with little noise (a simulated one, a free decay) can leave the Toeplitz
+        // matrix of lower rank than the order asked for: every order it has is then used.
+        Err(covssi::SsiError::OrderAboveRank { order, rank, .. }) if rank >= 2 => {
+            let lower = SsiOptions {
+                max_order: Some(rank),
+                ..so
+            };
+            let mut res = covssi::identify(&[&p.y], p.fs, &lower)?;
+            res.notes.push(format!(
+                "the block Toeplitz matrix has rank {rank}, below the maximum order {order}: orders up to {rank} used"
+            ));
+            Ok(res)
+        }
+        other => Ok(other?),
+    }
 }
 
 /// The poles the models are built from.
@@ -421,9 +457,12 @@ pub fn select_poles(
 /// Whether the record supports the pair: a stabilization diagram can hold a stable cluster
 /// that is a draw of the noise (white noise gives one now and then), and every model would
 /// then be built on it. The pair is fitted to the whole record by maximum likelihood
-/// ([`covssi::refine()`], one mode) and kept only when removing it raises the negative
-/// log-likelihood by at least the BIC penalty of a mode: an error otherwise. When the test
-/// cannot run (a record too short for it), a note says so.
+/// ([`covssi::refine()`], one mode) and kept when removing it raises the negative
+/// log-likelihood by at least the BIC penalty of a mode; otherwise it is an error when the
+/// record follows the model without the pair (misfit within
+/// [`covssi::refine::MISFIT_LIMIT`]). When it does not (a free decay, a record with little
+/// noise: the stationary model does not apply), or the test cannot run (a record too short
+/// for it), a note says so and the pair is kept.
 fn check_support(
     mode: &covssi::Mode,
     p: &Prepared,
@@ -434,11 +473,26 @@ fn check_support(
         ..covssi::RefineOptions::default()
     };
     match covssi::refine(&[&p.y], p.fs, std::slice::from_ref(mode), &opts) {
-        Ok(r) if r.modes.is_empty() => Err(IdentError::PairNotSupported {
-            frequency_hz: mode.frequency_hz,
-            evidence: r.dropped.last().map_or(0.0, |d| d.evidence),
-            penalty: r.penalty,
-        }),
+        Ok(r) if r.modes.is_empty() => {
+            let evidence = r.dropped.last().map_or(0.0, |d| d.evidence);
+            if r.misfit <= covssi::refine::MISFIT_LIMIT {
+                // The record follows a model without the pair: it shows no resonance.
+                Err(IdentError::PairNotSupported {
+                    frequency_hz: mode.frequency_hz,
+                    evidence,
+                    penalty: r.penalty,
+                    misfit: r.misfit,
+                })
+            } else {
+                // Nor does it follow the model without the pair (a free decay, a record with
+                // little noise, a non-random excitation): the test says nothing.
+                notes.push(format!(
+                    "the pair's support by the record could not be tested: its evidence ({evidence:.1}) is below the penalty ({:.1}), but the record does not follow the stationary model without it either (misfit {:.3}); the pair is kept",
+                    r.penalty, r.misfit
+                ));
+                Ok(())
+            }
+        }
         Ok(_) => Ok(()),
         Err(e) => {
             notes.push(format!(
