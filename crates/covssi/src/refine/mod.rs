@@ -234,7 +234,28 @@ fn refine_up_to(
             needed,
         });
     }
-    let model = Model::new(y, &means, fs);
+    // Each channel centred and scaled by the power of two nearest the inverse of its largest
+    // deviation, so that the fit does not depend on the channels' units: the start's
+    // regressions across channels of very different sizes were ill-conditioned, and with
+    // one channel 1e6 times another the joint fit failed and fell back to the per-channel
+    // one. Only the likelihood's value depends on the units, and it is given back in theirs.
+    let scales: Vec<f64> = y
+        .iter()
+        .zip(&means)
+        .map(|(c, m)| {
+            let peak = c.iter().fold(0.0f64, |a, v| a.max((v - m).abs()));
+            2f64.powi(-(peak.log2().round() as i32))
+        })
+        .collect();
+    let scaled: Vec<Vec<f64>> = y
+        .iter()
+        .zip(&means)
+        .zip(&scales)
+        .map(|((c, m), d)| c.iter().map(|v| (v - m) * d).collect())
+        .collect();
+    let views: Vec<&[f64]> = scaled.iter().map(Vec::as_slice).collect();
+    let centred = vec![0.0; l];
+    let model = Model::new(&views, &centred, fs);
     let penalty = bic_penalty(l, model.k());
     // 1. The strong SSI modes (at least half the largest member count) are fitted together:
     //    each then has a pole at its place from the start, and no pole has to travel to a
@@ -397,7 +418,13 @@ fn refine_up_to(
         modes: kept,
         dropped,
         penalty,
-        neg_log_likelihood: est.l,
+        // S of a channel scaled by d is d² times its own: each frequency's ln S (ln det S,
+        // jointly) rises by Σ ln d². Combinations are built from the channels over their own
+        // noise floors, whatever their units, and need no correction.
+        neg_log_likelihood: match est.combinations {
+            None => est.l - model.k() as f64 * scales.iter().map(|d| 2.0 * d.ln()).sum::<f64>(),
+            Some(_) => est.l,
+        },
         misfit: est.misfit,
         frequencies: model.k(),
         iterations: est.iterations,
@@ -1864,6 +1891,53 @@ pub(super) mod tests {
                 "{p:?} {q:?}"
             );
         }
+    }
+
+    /// Three channels in km, m and µm are fitted jointly as in like units, with the same
+    /// poles, standard errors and evidence,
+    /// and the likelihood given back in their own units: before, the start's regressions
+    /// failed across such channels and the fit fell back to the per-channel likelihood.
+    #[test]
+    fn channels_in_units_far_apart_are_fitted_jointly_as_in_like_units() {
+        let y = record(
+            8192,
+            &[(1.5, 0.02), (3.2, 0.05)],
+            &[vec![1.0, 0.7], vec![0.4, -1.0], vec![0.8, 0.3]],
+            0.05,
+            4,
+        );
+        let units = [1e-3, 1.0, 1e3 * 1e3];
+        let apart: Vec<Vec<f64>> = y
+            .iter()
+            .zip(units)
+            .map(|(c, u)| c.iter().map(|v| v * u).collect())
+            .collect();
+        let start = [mode(1.5, 0.02, 30), mode(3.2, 0.05, 20)];
+        let a = refine(&views(&y), FS, &start, &RefineOptions::default()).unwrap();
+        let b = refine(&views(&apart), FS, &start, &RefineOptions::default()).unwrap();
+        assert!(a.joint && b.joint, "{a:?} {b:?}");
+        for (p, q) in a.modes.iter().zip(&b.modes) {
+            // The fits stop at a tolerance on L: the same optimum to far below the
+            // standard errors (0.1–1 % of λ here).
+            assert!(
+                (p.lambda - q.lambda).norm() < 1e-6 * p.lambda.norm(),
+                "{p:?} {q:?}"
+            );
+            let (pz, qz) = (p.damping_se.unwrap(), q.damping_se.unwrap());
+            assert!((pz - qz).abs() < 1e-6 * pz, "{p:?} {q:?}");
+            assert!(
+                (p.evidence - q.evidence).abs() < 1e-6 * p.evidence,
+                "{p:?} {q:?}"
+            );
+        }
+        // S of a channel in units u is u² times its own, so L in the new units is
+        // K Σ ln u² above L in the old ones (K frequencies).
+        let shift = a.frequencies as f64 * units.iter().map(|u| (u * u).ln()).sum::<f64>();
+        let moved = b.neg_log_likelihood - a.neg_log_likelihood;
+        assert!(
+            (moved - shift).abs() < 1e-9 * a.neg_log_likelihood.abs().max(shift.abs()),
+            "L moved by {moved}, expected {shift}"
+        );
     }
 
     /// Over 40 records of a known oscillator, started 1 % and 30 % off: the errors divided by
