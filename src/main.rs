@@ -704,6 +704,14 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
         } else {
             println!("misfit {:.3} (the record follows the model)", r.misfit);
         }
+        if !res.real_poles.is_empty() {
+            // White noise alone can give a stable real-pole cluster; say that no likelihood
+            // has weighed these.
+            println!(
+                "note: the real poles above are SSI's alone: the refinement has no real poles, \
+                 so the record's likelihood has not tested them"
+            );
+        }
     }
     Ok(())
 }

@@ -29,6 +29,13 @@ fn write(name: &str, text: &str) -> PathBuf {
     p
 }
 
+/// A one-column record `y` of 20 000 samples of unit white noise.
+fn write_white_noise(name: &str, seed: u64) -> PathBuf {
+    let noise = hyst::sim::excitation::white_noise(20000, 1.0, seed).unwrap();
+    let text: String = noise.iter().map(|v| format!("{v}\n")).collect();
+    write(name, &format!("y\n{text}"))
+}
+
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
@@ -628,6 +635,35 @@ fn ssi_option_out_of_range_names_its_flag() {
 }
 
 #[test]
+fn ssi_says_its_real_poles_are_untested_by_the_refinement() {
+    // White noise now and then gives SSI a stable real-pole cluster beside a spurious mode;
+    // the refinement drops the mode but has no real poles to weigh, and says so. Over the
+    // seeds tried, at least one must show the case, and every one that does must say it.
+    let mut shown = 0;
+    for seed in 0..12 {
+        let p = write_white_noise("ssi_noise.csv", seed);
+        let json = tmp("ssi_noise.json");
+        let (ok, out, err) = hyst(&[
+            "ssi",
+            "--input",
+            s(&p),
+            "--fs",
+            "750",
+            "--block-rows",
+            "40",
+            "--json",
+            s(&json),
+        ]);
+        assert!(ok, "{err}");
+        if out.contains("real pole") && out.contains("refined by") {
+            shown += 1;
+            assert!(out.contains("has not tested them"), "seed {seed}: {out}");
+        }
+    }
+    assert!(shown > 0, "no seed gave real poles and a refinement");
+}
+
+#[test]
 fn ssi_missing_column() {
     let err = ssi_fails_on_columns("c");
     assert!(err.contains("no column `c`"), "{err}");
@@ -670,14 +706,7 @@ fn ident_default_job_writes_the_json_the_issue_asks_for() {
 #[test]
 fn ident_without_a_stable_pair_says_so_and_saves_the_diagram() {
     // White noise has no resonance.
-    let noise = hyst::sim::excitation::white_noise(20000, 1.0, 3).unwrap();
-    let p = write(
-        "y_noise.csv",
-        &format!(
-            "y\n{}",
-            noise.iter().map(|v| format!("{v}\n")).collect::<String>()
-        ),
-    );
+    let p = write_white_noise("y_noise.csv", 3);
     let dir = tmp("ident_nopair_svg");
     let (ok, _, err) = hyst(&[
         "ident",
