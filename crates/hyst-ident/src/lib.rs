@@ -67,9 +67,7 @@ pub enum IdentError {
         needed: usize,
     },
     /// No oscillating pair stable in frequency and damping was found.
-    #[error(
-        "no oscillating pole pair is stable in frequency and damping near {dominant_hz:.2} Hz (see the stabilization diagram)"
-    )]
+    #[error("no oscillating pole pair is stable in frequency and damping near {dominant_hz:.2} Hz")]
     NoStablePair {
         /// The dominant frequency of the spectrum.
         dominant_hz: f64,
@@ -78,7 +76,7 @@ pub enum IdentError {
     /// likelihood, and the record follows the model without it: a spurious cluster, as white
     /// noise can give.
     #[error(
-        "the stable pole pair at {frequency_hz:.2} Hz is not supported by the record: removing it raises the negative log-likelihood by only {evidence:.1}, below the BIC penalty {penalty:.1} of a mode, and the record follows the model without it (misfit {misfit:.3}); the record shows no resonance there (see the stabilization diagram)"
+        "the stable pole pair at {frequency_hz:.2} Hz is not supported by the record: removing it raises the negative log-likelihood by only {evidence:.1}, below the BIC penalty {penalty:.1} of a mode, and the record follows the model without it (misfit {misfit:.3}); the record shows no resonance there"
     )]
     PairNotSupported {
         /// Frequency of the pair's cluster (Hz).
