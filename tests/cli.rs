@@ -52,6 +52,13 @@ fn simulate_fails(args: &[&str]) -> String {
     err
 }
 
+/// Write `text` to the file `name` and run `hyst simulate` on it at 750 Hz, expecting
+/// failure; return stderr.
+fn simulate_fails_on(name: &str, text: &str) -> String {
+    let p = write(name, text);
+    simulate_fails(&["--input", s(&p), "--fs", "750"])
+}
+
 #[test]
 fn reproduces_multisine_val_through_the_command_line() {
     let Some(path) = common::data_file("boucwen/multisine_val.csv") else {
@@ -126,8 +133,7 @@ fn missing_file() {
 
 #[test]
 fn missing_column() {
-    let p = write("nocol.csv", "a,b\n1,2\n");
-    let err = simulate_fails(&["--input", s(&p), "--fs", "750"]);
+    let err = simulate_fails_on("nocol.csv", "a,b\n1,2\n");
     assert!(
         err.contains("no column `u`") && err.contains("a,b"),
         "{err}"
@@ -136,15 +142,13 @@ fn missing_column() {
 
 #[test]
 fn non_numeric_cell_names_its_row() {
-    let p = write("text.csv", "u\n1\n2\nabc\n");
-    let err = simulate_fails(&["--input", s(&p), "--fs", "750"]);
+    let err = simulate_fails_on("text.csv", "u\n1\n2\nabc\n");
     assert!(err.contains("row 4") && err.contains("`abc`"), "{err}");
 }
 
 #[test]
 fn nan_cell() {
-    let p = write("nan.csv", "u\n1\nNaN\n");
-    let err = simulate_fails(&["--input", s(&p), "--fs", "750"]);
+    let err = simulate_fails_on("nan.csv", "u\n1\nNaN\n");
     assert!(err.contains("row 3") && err.contains("not finite"), "{err}");
 }
 
@@ -152,14 +156,12 @@ fn nan_cell() {
 fn row_with_too_many_or_too_few_cells_names_its_row() {
     // An extra cell would otherwise be dropped silently, shifting nothing but hiding a
     // malformed file; a missing one would leave the columns of unequal length.
-    let p = write("long_row.csv", "u,y\n1,2\n3,4,5\n");
-    let err = simulate_fails(&["--input", s(&p), "--fs", "750"]);
+    let err = simulate_fails_on("long_row.csv", "u,y\n1,2\n3,4,5\n");
     assert!(
         err.contains("long_row.csv") && err.contains("row 3 has 3 cells, the header has 2"),
         "{err}"
     );
-    let p = write("short_row.csv", "u,y\n1,2\n3\n");
-    let err = simulate_fails(&["--input", s(&p), "--fs", "750"]);
+    let err = simulate_fails_on("short_row.csv", "u,y\n1,2\n3\n");
     assert!(err.contains("row 3 has 1 cells, the header has 2"), "{err}");
 }
 
@@ -167,8 +169,7 @@ fn row_with_too_many_or_too_few_cells_names_its_row() {
 fn a_column_named_twice_is_an_error() {
     // In the header, a column asked for by name would be ambiguous; in --columns, the same
     // channel twice makes the Toeplitz matrix rank-deficient and says nothing new.
-    let p = write("dup_header.csv", "u,u\n1,2\n");
-    let err = simulate_fails(&["--input", s(&p), "--fs", "750"]);
+    let err = simulate_fails_on("dup_header.csv", "u,u\n1,2\n");
     assert!(
         err.contains("dup_header.csv") && err.contains("names column `u` twice"),
         "{err}"
@@ -179,8 +180,7 @@ fn a_column_named_twice_is_an_error() {
 
 #[test]
 fn empty_record() {
-    let p = write("empty.csv", "u,y\n");
-    let err = simulate_fails(&["--input", s(&p), "--fs", "750"]);
+    let err = simulate_fails_on("empty.csv", "u,y\n");
     assert!(err.contains("empty"), "{err}");
 }
 
