@@ -263,16 +263,14 @@ fn refine_up_to(
     } else {
         vec![1.0; l]
     };
-    let scaled: Vec<Vec<f64>> = if equilibrate {
-        y.iter()
+    let scaled: Vec<Vec<f64>>;
+    let (views, centres): (Vec<&[f64]>, Vec<f64>) = if equilibrate {
+        scaled = y
+            .iter()
             .zip(&means)
             .zip(&scales)
             .map(|((c, m), d)| c.iter().map(|v| (v - m) * d).collect())
-            .collect()
-    } else {
-        Vec::new()
-    };
-    let (views, centres): (Vec<&[f64]>, Vec<f64>) = if equilibrate {
+            .collect();
         (scaled.iter().map(Vec::as_slice).collect(), vec![0.0; l])
     } else {
         (y.to_vec(), means.clone())
