@@ -21,7 +21,8 @@
 //!    distance in the complex plane, $|\lambda_i-\lambda_j|/\max(|\lambda_i|,|\lambda_j|)$, so that
 //!    poles of one frequency but different damping stay apart; stable real poles into
 //!    [`RealPoleCluster`]s.
-//! 6. Optionally, [`refine()`]: the modes fitted to the whole record by maximum likelihood
+//! 6. Optionally, [`refine()`]: the modes (with [`refine_with_real_poles`], the real poles too)
+//!    fitted to the whole record by maximum likelihood
 //!    (Whittle; several channels jointly, cross-spectra included, above 4 channels through 4
 //!    combinations of them, band by band for more than 4 modes), with standard errors, the
 //!    modes the record does not support dropped, and a check that the record follows the model
@@ -56,7 +57,10 @@ pub mod svg;
 
 pub use corr::Correlations;
 pub use linalg::C64 as Complex64;
-pub use refine::{DroppedMode, RefineOptions, RefinedMode, Refinement, refine};
+pub use refine::{
+    DroppedMode, DroppedRealPole, RefineOptions, RefinedMode, RefinedRealPole, Refinement, refine,
+    refine_with_real_poles,
+};
 pub use stabilize::{Mode, Pole, PoleStatus, RealPoleCluster, Rejection, Stability};
 
 use linalg::{C64, Dense};
@@ -162,6 +166,13 @@ pub enum SsiError {
         modes: usize,
         /// Minimum number of samples.
         needed: usize,
+    },
+    /// A real pole given to the refinement is not a negative finite number (λ of a decaying
+    /// component, rad/s).
+    #[error("a real pole to refine must be negative and finite, got {lambda}")]
+    NotNegativeRealPole {
+        /// The pole λ (rad/s).
+        lambda: f64,
     },
     /// The maximum-likelihood refinement could not proceed.
     #[error("refinement failed: {reason}")]

@@ -242,14 +242,22 @@ impl<'a> Joint<'a> {
             max_iterations: opts.max_iterations.min(SETTLE_ITERATIONS),
             ..opts.clone()
         };
-        let held = scoring(eval, th, self.free, &settle, opts.tolerance, true, None)?;
+        let held = scoring(
+            eval,
+            th,
+            (self.free, 0),
+            &settle,
+            opts.tolerance,
+            true,
+            None,
+        )?;
         // Modes moving..free join the held ones.
         let (th, kept) = split(&self.full(&held.theta), self.refs.len(), moving, self.l());
         self.free = moving;
         self.held = kept;
         self.band = narrow;
         let eval = |t: &[f64], derivs: bool| self.eval(t, derivs, false);
-        let free = scoring(eval, th, moving, opts, opts.tolerance, false, None)?;
+        let free = scoring(eval, th, (moving, 0), opts, opts.tolerance, false, None)?;
         Ok(Fit {
             iterations: held.iterations + free.iterations,
             ..free
@@ -1116,7 +1124,7 @@ mod tests {
             );
             let v = views(&y);
             let comb = refine(&v, FS, &start, &opts).unwrap();
-            let all = refine_up_to(&v, FS, &start, &opts, 6).unwrap();
+            let all = refine_up_to(&v, FS, &start, &[], &opts, 6).unwrap();
             assert_eq!((comb.combinations, all.combinations), (Some(4), None));
             assert!(comb.joint && all.joint);
             let mut moved = y.clone();

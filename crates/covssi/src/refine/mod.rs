@@ -51,12 +51,19 @@
 //!    other modes in the model but held ([`Refinement::bands`]); the likelihood of a band is
 //!    that of its own frequencies, which are independent of the others'.
 //!
-//! Real poles are not part of this model; records whose spectrum needs one are better read from
-//! the SSI result.
+//! **Real poles** ([`refine_with_real_poles`]): a real pole λ = −ρ adds the factor
+//! $z - e^{-\rho/f_s}$ to $A$ (parametrised by $\ln\rho$) and one to each $B_c$'s degree. The
+//! SSI real-pole clusters are tested as the modes are, against their own penalty
+//! $\tfrac12(1+l)\ln K$: the strong ones (by the same member count rule) join the strong
+//! modes' fit, the others are added next, before the weak modes (a model without a record's
+//! real pole spends a mode on it, a pole pair damped near ζ = 1, and the real pole then has
+//! nothing left to explain); each kept one's evidence is its removal's cost, and the
+//! weakest goes while that is below the penalty. The joint likelihood has no real poles: with
+//! one kept, the estimates are the per-channel fit's.
 
 use crate::linalg::{self, C64, Dense};
 use crate::stabilize::pole_distance;
-use crate::{Mode, SsiError};
+use crate::{Mode, RealPoleCluster, SsiError};
 use rayon::prelude::*;
 use realfft::RealFftPlanner;
 use std::ops::Range;
@@ -147,6 +154,32 @@ pub struct DroppedMode {
     pub evidence: f64,
 }
 
+/// A real pole (a non-oscillating, exponentially decaying component) after refinement.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RefinedRealPole {
+    /// Index of the SSI real-pole cluster it started from.
+    pub source: usize,
+    /// The pole λ (rad/s, negative).
+    pub lambda: f64,
+    /// Standard error of λ (rad/s) from the Fisher information; `None` if that is singular.
+    pub lambda_se: Option<f64>,
+    /// Rise of `L` when this pole is removed, the other poles held and the numerators
+    /// refitted. At least [`Refinement::real_pole_penalty`] when selecting.
+    pub evidence: f64,
+}
+
+/// An SSI real pole the likelihood does not support.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DroppedRealPole {
+    /// Index of the SSI real-pole cluster.
+    pub source: usize,
+    /// Its SSI value λ (rad/s).
+    pub lambda: f64,
+    /// Below [`Refinement::real_pole_penalty`]: the fall of `L` when it was added, or its
+    /// rise when it was removed and everything refitted.
+    pub evidence: f64,
+}
+
 /// What [`refine`] finds.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Refinement {
@@ -156,6 +189,13 @@ pub struct Refinement {
     pub dropped: Vec<DroppedMode>,
     /// BIC penalty of one mode, ½(2 + 2l) ln K.
     pub penalty: f64,
+    /// Kept real poles ([`refine_with_real_poles`]), slowest first; empty from [`refine`].
+    pub real_poles: Vec<RefinedRealPole>,
+    /// Real poles the likelihood does not support, in the order they were dropped.
+    pub dropped_real_poles: Vec<DroppedRealPole>,
+    /// BIC penalty of one real pole, ½(1 + l) ln K: its own parameter and each channel's
+    /// numerator coefficient.
+    pub real_pole_penalty: f64,
     /// `L` of the final model.
     pub neg_log_likelihood: f64,
     /// How far the record is from the model: the Kolmogorov–Smirnov distance between the
@@ -212,23 +252,47 @@ pub fn refine(
     modes: &[Mode],
     opts: &RefineOptions,
 ) -> Result<Refinement, SsiError> {
-    refine_up_to(y, fs, modes, opts, JOINT_MAX_CHANNELS)
+    refine_up_to(y, fs, modes, &[], opts, JOINT_MAX_CHANNELS)
 }
 
-/// [`refine`], fitting up to `joint_max` channels themselves by the joint likelihood and
-/// more through `joint_max` combinations of them.
+/// [`refine`], and then test and refine the real poles `real_poles` (e.g.
+/// [`crate::SsiResult::real_poles`]) too: each is added to the model of the chosen modes and
+/// kept when it lowers `L` by at least [`Refinement::real_pole_penalty`]
+/// ([`Refinement::real_poles`], [`Refinement::dropped_real_poles`]). The joint likelihood
+/// has no real poles, so when one is kept the estimates are those of each channel's
+/// spectrum. An error if a real pole is not negative and finite.
+pub fn refine_with_real_poles(
+    y: &[&[f64]],
+    fs: f64,
+    modes: &[Mode],
+    real_poles: &[RealPoleCluster],
+    opts: &RefineOptions,
+) -> Result<Refinement, SsiError> {
+    refine_up_to(y, fs, modes, real_poles, opts, JOINT_MAX_CHANNELS)
+}
+
+/// [`refine_with_real_poles`], fitting up to `joint_max` channels themselves by the joint
+/// likelihood and more through `joint_max` combinations of them.
 fn refine_up_to(
     y: &[&[f64]],
     fs: f64,
     modes: &[Mode],
+    real_poles: &[RealPoleCluster],
     opts: &RefineOptions,
     joint_max: usize,
 ) -> Result<Refinement, SsiError> {
     crate::check_fs(fs)?;
     let (n, means) = crate::check_channels(y)?;
+    if let Some(bad) = real_poles
+        .iter()
+        .find(|p| !(p.lambda < 0.0 && p.lambda.is_finite()))
+    {
+        return Err(SsiError::NotNegativeRealPole { lambda: bad.lambda });
+    }
     let m = modes.len();
     let l = y.len();
-    let params = 2 * m + l * (2 * m + 1);
+    let p = 2 * m + real_poles.len();
+    let params = p + l * (p + 1);
     // Enough frequencies that the Fisher information can be estimated: ten per parameter.
     let needed = 2 * (10 * params + 1) + 2;
     if n < needed {
@@ -283,15 +347,65 @@ fn refine_up_to(
     //    kept when L falls by at least the penalty; two starts for each, fresh numerators and
     //    the current model with the new pole cancelled by a numerator zero (L cannot rise),
     //    the better counts.
-    let most = modes.iter().map(|md| md.members.len()).max().unwrap_or(0);
+    //    Real poles ([`refine_with_real_poles`]) are treated as the modes are, and before the
+    //    weak modes: the strong ones join the strong modes' fit, the others are added next. A
+    //    model without a record's real pole spends a mode on it (a pole pair at damping near 1
+    //    under the real pole's low-frequency hump), which then leaves the real pole nothing
+    //    to explain.
+    let by_members = |a: &RealPoleCluster| a.members.len();
+    let most = modes
+        .iter()
+        .map(|md| md.members.len())
+        .chain(real_poles.iter().map(by_members))
+        .max()
+        .unwrap_or(0);
     let (core, mut weak): (Vec<usize>, Vec<usize>) =
         (0..m).partition(|&k| 2 * modes[k].members.len() >= most);
     weak.sort_by(|&a, &b| modes[b].members.len().cmp(&modes[a].members.len()));
+    let (strong, mut weak_reals): (Vec<usize>, Vec<usize>) =
+        (0..real_poles.len()).partition(|&i| 2 * real_poles[i].members.len() >= most);
+    weak_reals.sort_by(|&a, &b| by_members(&real_poles[b]).cmp(&by_members(&real_poles[a])));
     let start: Vec<C64> = core.iter().map(|&k| modes[k].lambda).collect();
-    let mut fit = model.fit(&start, opts, opts.tolerance, false)?;
+    let strong_fit = (!strong.is_empty())
+        .then(|| {
+            let lams: Vec<f64> = strong.iter().map(|&i| real_poles[i].lambda).collect();
+            let with = model.with_reals(lams.len());
+            let th = with.start_with(&start, &lams)?;
+            let fit = with.fit_from(th, start.len(), opts, opts.tolerance, false, None)?;
+            Ok::<_, SsiError>((fit, with))
+        })
+        .and_then(Result::ok);
+    let first = match strong_fit {
+        Some((fit, with)) => RealPoles {
+            model: Some(with),
+            fit,
+            sources: strong,
+            evidence: Vec::new(),
+            dropped: Vec::new(),
+        },
+        None => {
+            // No strong real pole, or their fit failed: every real pole is added in turn.
+            weak_reals = (0..real_poles.len()).collect();
+            weak_reals
+                .sort_by(|&a, &b| by_members(&real_poles[b]).cmp(&by_members(&real_poles[a])));
+            RealPoles {
+                model: None,
+                fit: model.fit(&start, opts, opts.tolerance, false)?,
+                sources: Vec::new(),
+                evidence: Vec::new(),
+                dropped: Vec::new(),
+            }
+        }
+    };
+    let real_penalty = 0.5 * (1.0 + l as f64) * (model.k() as f64).ln();
+    let reals = add_real_poles(&model, first, real_poles, &weak_reals, real_penalty, opts)?;
+    let mut fit = reals.fit;
+    let (real_sources, mut real_dropped) = (reals.sources, reals.dropped);
+    let with_reals = reals.model;
+    let cur = with_reals.as_ref().unwrap_or(&model);
     let mut dropped = Vec::new();
     for &cand in &weak {
-        let next = model.fit_with(&fit, modes[cand].lambda, opts)?;
+        let next = cur.fit_with(&fit, modes[cand].lambda, opts)?;
         let evidence = fit.l - next.l;
         if !opts.select || evidence >= penalty {
             fit = next;
@@ -303,16 +417,6 @@ fn refine_up_to(
             });
         }
     }
-    // Evidence fits need L only to well within the penalty, and a model missing one of
-    // its real modes descends slowly while its poles wander (hundreds of iterations, seconds
-    // each fit) without coming near the penalty: 40 iterations decide, and a fit stops
-    // sooner once its gains are small against the rise or the penalty is out of reach
-    // ([`Evidence`]).
-    let loose = 1e-3;
-    let eopts = RefineOptions {
-        max_iterations: opts.max_iterations.min(40),
-        ..opts.clone()
-    };
     // 2. Evidence of each kept mode: the rise of L when it is removed, the other poles held
     //    and the numerators refitted. For the decision, everything is then let move from
     //    there: the other poles stay at their own peaks unless the removed one shared a peak
@@ -324,34 +428,16 @@ fn refine_up_to(
             .map(|k| {
                 let mut rest = fit.lambdas.clone();
                 rest.remove(k);
-                // The rise is reported, as the mode's evidence: to about 10⁻⁵ of itself.
-                let report = Evidence {
-                    full: fit.l,
-                    drop_below: f64::NEG_INFINITY,
-                };
-                let th = model.start(&rest)?;
-                let held = model.fit_from(th, rest.len(), &eopts, loose, true, Some(report))?;
-                // Once L is within the penalty of the full model's, the mode goes whatever
-                // further iterations would find: stop there, or once that is out of reach.
-                let decide = Evidence {
-                    drop_below: if opts.select {
-                        fit.l + penalty
-                    } else {
-                        f64::NEG_INFINITY
-                    },
-                    ..report
-                };
-                let free =
-                    model.fit_from(held.theta, rest.len(), &eopts, loose, false, Some(decide))?;
-                Ok((held.l - fit.l, free))
+                cur.without(
+                    &fit,
+                    &rest,
+                    &fit.reals,
+                    opts.select.then_some(penalty),
+                    opts,
+                )
             })
             .collect::<Result<_, SsiError>>()?;
-        let weakest = without
-            .iter()
-            .map(|(_, free)| free.l - fit.l)
-            .enumerate()
-            .min_by(|a, b| a.1.total_cmp(&b.1));
-        match weakest {
+        match weakest(&fit, &without) {
             Some((k, ev)) if opts.select && ev < penalty => {
                 let src = nearest_mode(modes, fit.lambdas[k]);
                 dropped.push(DroppedMode {
@@ -360,7 +446,7 @@ fn refine_up_to(
                     evidence: ev,
                 });
                 let (_, next) = without.into_iter().nth(k).expect("k < modes");
-                fit = model.fit_from(
+                fit = cur.fit_from(
                     next.theta,
                     next.lambdas.len(),
                     opts,
@@ -372,19 +458,25 @@ fn refine_up_to(
             _ => break without.iter().map(|(held, _)| *held).collect::<Vec<f64>>(),
         }
     };
+    // 2b. The real poles' evidence, tested the same way.
+    let reals = real_pole_evidence(&model, fit, real_sources, real_poles, real_penalty, opts)?;
+    real_dropped.extend(reals.dropped);
+    let fit = reals.fit;
+    let fitted_model = reals.model.as_ref().unwrap_or(&model);
     // 3. The chosen modes fitted once more by the joint likelihood, when asked, when the
     //    record follows the per-channel model (a record that does not, e.g. under a
     //    multisine, will not follow the joint one either) and when it has enough frequencies
     //    for the joint parameters (ten observations each, a frequency giving l² of them). If
     //    that fails the per-channel fit stands.
     let mk = fit.lambdas.len();
-    let per_channel_misfit = model
+    let per_channel_misfit = fitted_model
         .eval(&fit.theta, mk, What::Ratios)
         .map_or(1.0, |e| ks_exponential(e.ratios));
     //    Above `joint_max` channels (the joint cost grows as l⁴) the joint likelihood is that
     //    of `joint_max` combinations of them carrying the modes; with more modes than
     //    combinations, band by band (see [`joint_by_bands`]).
-    let wanted = opts.joint && mk > 0 && per_channel_misfit <= MISFIT_LIMIT;
+    //    The joint model has no real poles: with one kept, the per-channel fit stands.
+    let wanted = opts.joint && mk > 0 && fit.reals.is_empty() && per_channel_misfit <= MISFIT_LIMIT;
     let joint_fit = wanted
         .then(|| joint_by_bands(&model, &fit, joint_max, opts))
         .flatten();
@@ -399,12 +491,21 @@ fn refine_up_to(
                 if l == 1 {
                     return Some(fi);
                 }
-                let j = model.eval(&fit.theta, mk, What::Sandwich)?.f;
+                let j = fitted_model.eval(&fit.theta, mk, What::Sandwich)?.f;
                 Some(linalg::sandwich(&fi, &j))
             });
             Estimates {
                 se: (0..mk)
                     .map(|j| cov.as_ref().map(|c| pole_se(c, j, mk, fit.lambdas[j])))
+                    .collect(),
+                reals: fit
+                    .reals
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &lam)| {
+                        let t = 2 * mk + i;
+                        (lam, cov.as_ref().map(|c| -lam * c.at(t, t).max(0.0).sqrt()))
+                    })
                     .collect(),
                 lambdas: fit.lambdas,
                 l: fit.l,
@@ -434,10 +535,27 @@ fn refine_up_to(
         })
         .collect();
     kept.sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
+    let mut real_kept: Vec<RefinedRealPole> = est
+        .reals
+        .iter()
+        .zip(reals.sources.iter().zip(&reals.evidence))
+        .map(
+            |(&(lambda, lambda_se), (&source, &evidence))| RefinedRealPole {
+                source,
+                lambda,
+                lambda_se,
+                evidence,
+            },
+        )
+        .collect();
+    real_kept.sort_by(|a, b| b.lambda.total_cmp(&a.lambda));
     Ok(Refinement {
         modes: kept,
         dropped,
         penalty,
+        real_poles: real_kept,
+        dropped_real_poles: real_dropped,
+        real_pole_penalty: real_penalty,
         // S of a channel scaled by d is d² times its own: each frequency's ln S (ln det S,
         // jointly) rises by Σ ln d². Combinations are built from the channels over their own
         // noise floors, whatever their units, and need no correction.
@@ -454,6 +572,144 @@ fn refine_up_to(
     })
 }
 
+/// What [`add_real_poles`] leaves.
+struct RealPoles<'a> {
+    /// The record's model with the kept real poles; `None` when none is kept.
+    model: Option<Model<'a>>,
+    /// The fit of the modes and the kept real poles.
+    fit: Fit,
+    /// The SSI cluster each kept real pole started from, in the fit's order.
+    sources: Vec<usize>,
+    /// Each kept real pole's evidence, in the fit's order.
+    evidence: Vec<f64>,
+    dropped: Vec<DroppedRealPole>,
+}
+
+/// Step 1b: the real poles `order` of `candidates` added in turn to the fit of the strong
+/// modes and real poles `first`, each kept when it lowers L by at least `penalty` (two starts
+/// each: the model with the new pole cancelled by a numerator zero, and fresh numerators).
+/// No evidence yet.
+fn add_real_poles<'a>(
+    model: &Model<'a>,
+    first: RealPoles<'a>,
+    candidates: &[RealPoleCluster],
+    order: &[usize],
+    penalty: f64,
+    opts: &RefineOptions,
+) -> Result<RealPoles<'a>, SsiError> {
+    let RealPoles {
+        model: mut fitted,
+        mut fit,
+        mut sources,
+        mut dropped,
+        ..
+    } = first;
+    let m = fit.lambdas.len();
+    for &cand in order {
+        let new = candidates[cand].lambda;
+        let next_model = model.with_reals(fit.reals.len() + 1);
+        let nested = next_model.nested_real_start(&fit, new);
+        let nested = next_model.fit_from(nested, m, opts, opts.tolerance, false, None);
+        let mut reals = fit.reals.clone();
+        reals.push(new);
+        let fresh = next_model
+            .start_with(&fit.lambdas, &reals)
+            .and_then(|th| next_model.fit_from(th, m, opts, opts.tolerance, false, None));
+        let next = match (nested, fresh) {
+            (Ok(a), Ok(b)) => Ok(if a.l <= b.l { a } else { b }),
+            (Ok(a), Err(_)) | (Err(_), Ok(a)) => Ok(a),
+            (Err(e), Err(_)) => Err(e),
+        }?;
+        let evidence = fit.l - next.l;
+        if !opts.select || evidence >= penalty {
+            fit = next;
+            sources.push(cand);
+            fitted = Some(next_model);
+        } else {
+            dropped.push(DroppedRealPole {
+                source: cand,
+                lambda: new,
+                evidence,
+            });
+        }
+    }
+    Ok(RealPoles {
+        model: fitted,
+        fit,
+        sources,
+        evidence: Vec::new(),
+        dropped,
+    })
+}
+
+/// Step 2b: as for the modes, each real pole of `fit` (started from the clusters
+/// `sources` of `candidates`)'s evidence is the rise of L when it is removed, the other poles
+/// held; while the weakest rise with everything free is below `penalty`, that pole goes.
+fn real_pole_evidence<'a>(
+    model: &Model<'a>,
+    mut fit: Fit,
+    mut sources: Vec<usize>,
+    candidates: &[RealPoleCluster],
+    penalty: f64,
+    opts: &RefineOptions,
+) -> Result<RealPoles<'a>, SsiError> {
+    let m = fit.lambdas.len();
+    let mut dropped = Vec::new();
+    let mut fitted = (!fit.reals.is_empty()).then(|| model.with_reals(fit.reals.len()));
+    let evidence = loop {
+        let r = fit.reals.len();
+        if r == 0 {
+            break Vec::new();
+        }
+        let less = model.with_reals(r - 1);
+        let without: Vec<(f64, Fit)> = (0..r)
+            .into_par_iter()
+            .map(|i| {
+                let mut rest = fit.reals.clone();
+                rest.remove(i);
+                less.without(
+                    &fit,
+                    &fit.lambdas,
+                    &rest,
+                    opts.select.then_some(penalty),
+                    opts,
+                )
+            })
+            .collect::<Result<_, SsiError>>()?;
+        match weakest(&fit, &without) {
+            Some((i, ev)) if opts.select && ev < penalty => {
+                let source = sources.remove(i);
+                dropped.push(DroppedRealPole {
+                    source,
+                    lambda: candidates[source].lambda,
+                    evidence: ev,
+                });
+                let (_, next) = without.into_iter().nth(i).expect("i < real poles");
+                fit = less.fit_from(next.theta, m, opts, opts.tolerance, false, None)?;
+                fitted = (r > 1).then_some(less);
+            }
+            _ => break without.iter().map(|(held, _)| *held).collect(),
+        }
+    };
+    Ok(RealPoles {
+        model: fitted,
+        fit,
+        sources,
+        evidence,
+        dropped,
+    })
+}
+
+/// Which pole's removal (`without`, from [`Model::without`]) raises `full`'s L least once
+/// everything is let move, and by how much.
+fn weakest(full: &Fit, without: &[(f64, Fit)]) -> Option<(usize, f64)> {
+    without
+        .iter()
+        .map(|(_, free)| free.l - full.l)
+        .enumerate()
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+}
+
 /// The BIC penalty of one mode for `l` channels and `k` frequencies: ½(2 + 2l) ln k, its
 /// pole's two parameters and each channel's two numerator coefficients.
 fn bic_penalty(l: usize, k: usize) -> f64 {
@@ -465,6 +721,8 @@ fn bic_penalty(l: usize, k: usize) -> f64 {
 struct Estimates {
     lambdas: Vec<C64>,
     se: Vec<Option<(f64, f64)>>,
+    /// Real poles λ and their standard errors (rad/s), in the order of the per-channel fit.
+    reals: Vec<(f64, Option<f64>)>,
     l: f64,
     misfit: f64,
     iterations: usize,
@@ -627,6 +885,7 @@ fn joint_by_bands(
         None
     };
     let mut est = Estimates {
+        reals: Vec::new(),
         lambdas: fit.lambdas.clone(),
         se: vec![None; mk],
         l: 0.0,
@@ -743,6 +1002,9 @@ struct Model<'a> {
     /// Squared coherence γ²_ab(ω_k) of each channel pair a < b at index `pair(a, b, l)`
     /// (empty otherwise), from periodograms smoothed over 2·COHERENCE_HALF_WIDTH + 1 bins.
     coherence: Vec<Vec<f64>>,
+    /// Real poles of the model besides its modes: θ holds their ln ρ (λ = −ρ) after the
+    /// modes' parameters, and each numerator's degree is 2m + `reals`.
+    reals: usize,
 }
 
 /// Half-width (bins) of the smoothing that estimates the channels' coherence.
@@ -752,6 +1014,8 @@ const COHERENCE_HALF_WIDTH: usize = 16;
 struct Fit {
     theta: Vec<f64>,
     lambdas: Vec<C64>,
+    /// The real poles λ = −ρ, after the modes in θ.
+    reals: Vec<f64>,
     l: f64,
     fisher: Dense,
     iterations: usize,
@@ -857,20 +1121,28 @@ fn poly_at(coef: &[f64], w: C64) -> C64 {
     acc
 }
 
-/// The denominator |A(e^{iω})|² of the spectrum: the discrete poles of θ's modes and their
-/// derivatives by the pole parameters.
+/// The denominator |A(e^{iω})|² of the spectrum: the discrete poles of θ's modes and real
+/// poles, and their derivatives by the pole parameters.
 struct Denominator {
-    /// μ_j, μ̄_j of each mode.
+    /// μ_j, μ̄_j of each mode, then μ_i = e^{−ρ_i/f_s} of each real pole λ_i = −ρ_i.
     mu: Vec<C64>,
     /// dμ_j/d(ln ω_j) and dμ_j/d(logit ζ_j).
     dmu: Vec<[C64; 2]>,
+    /// dμ_i/d(ln ρ_i) of each real pole.
+    dreal: Vec<f64>,
 }
 
 impl Denominator {
-    /// `None` when a natural frequency reaches Nyquist.
+    /// The modes of θ alone. `None` when a natural frequency reaches Nyquist.
     fn new(th: &[f64], m: usize, fs: f64) -> Option<Self> {
+        Self::with_reals(th, m, 0, fs)
+    }
+
+    /// The `m` modes of θ's first 2m entries and the `r` real poles of the next r (ln ρ).
+    /// `None` when a natural frequency reaches Nyquist or a real pole is not finite.
+    fn with_reals(th: &[f64], m: usize, r: usize, fs: f64) -> Option<Self> {
         let lambdas = unpack(th, m);
-        let mu = discrete_poles(&lambdas, fs)?;
+        let mut mu = discrete_poles(&lambdas, fs)?;
         let dmu = lambdas
             .iter()
             .enumerate()
@@ -882,11 +1154,21 @@ impl Denominator {
                 [mu[2 * j] * lam / fs, mu[2 * j] * dl_dz / fs]
             })
             .collect();
-        Some(Denominator { mu, dmu })
+        let mut dreal = Vec::with_capacity(r);
+        for &ln_rho in &th[2 * m..2 * m + r] {
+            let rho = ln_rho.exp();
+            let u = (-rho / fs).exp();
+            if !(rho.is_finite() && u.is_finite()) {
+                return None;
+            }
+            mu.push(C64::new(u, 0.0));
+            dreal.push(-u * rho / fs);
+        }
+        Some(Denominator { mu, dmu, dreal })
     }
 
-    /// ln|A(z)|² at z on the unit circle; with `derivs`, `da[t]` = ∂ ln|A|²/∂θ_t for the 2m
-    /// pole parameters.
+    /// ln|A(z)|² at z on the unit circle; with `derivs`, `da[t]` = ∂ ln|A|²/∂θ_t for the
+    /// 2m + r pole parameters.
     fn at(&self, z: C64, derivs: bool, da: &mut [f64]) -> f64 {
         let m = self.dmu.len();
         let mut log_a2 = 0.0;
@@ -898,6 +1180,13 @@ impl Denominator {
                 for (t, dm) in dm_j.iter().enumerate() {
                     da[t * m + j] = -2.0 * (dm / d1).re - 2.0 * (dm.conj() / d2).re;
                 }
+            }
+        }
+        for (i, dm) in self.dreal.iter().enumerate() {
+            let d1 = z - self.mu[2 * m + i];
+            log_a2 += d1.norm_sqr().ln();
+            if derivs {
+                da[2 * m + i] = -2.0 * (*dm / d1).re;
             }
         }
         log_a2
@@ -957,7 +1246,24 @@ impl<'a> Model<'a> {
             z,
             x,
             coherence,
+            reals: 0,
         }
+    }
+
+    /// This record's model with `r` real poles.
+    fn with_reals(&self, r: usize) -> Self {
+        Model {
+            z: self.z.clone(),
+            x: self.x.clone(),
+            coherence: self.coherence.clone(),
+            reals: r,
+            ..*self
+        }
+    }
+
+    /// Number of pole parameters of a model of `m` modes: 2m, and one per real pole.
+    fn poles(&self, m: usize) -> usize {
+        2 * m + self.reals
     }
 
     fn k(&self) -> usize {
@@ -968,11 +1274,11 @@ impl<'a> Model<'a> {
     /// per-channel fit with `m` modes): a bound on its white measurement noise's spectral
     /// level, and near it where the modes' tails are below the noise.
     fn noise_floor(&self, th: &[f64], m: usize) -> Option<Vec<f64>> {
-        let q = 2 * m;
-        let den = Denominator::new(th, m, self.fs)?;
+        let q = self.poles(m);
+        let den = Denominator::with_reals(th, m, self.reals, self.fs)?;
         let floor = (0..self.x.len())
             .map(|c| {
-                let off = 2 * m + c * (q + 1);
+                let off = q + c * (q + 1);
                 let mut b = vec![1.0];
                 b.extend_from_slice(&th[off + 1..=off + q]);
                 self.z
@@ -1127,13 +1433,15 @@ impl<'a> Model<'a> {
         let sandwich = what == What::Sandwich;
         let ratios = what == What::Ratios;
         let l = self.x.len();
-        let q = 2 * m;
+        // Pole parameters, and each numerator's degree: 2m, plus one per real pole.
+        let p = self.poles(m);
+        let q = p;
         // ∂ log S_c by the poles' parameters is −∂ ln|A|², the same for every channel: its
         // columns D_p are stored once (none when the poles are held), and each channel's
         // D_c holds those by ln σ_c² and by B_c's coefficients.
         let pole_derivs = derivs && what != What::FisherNumerators;
-        let np = 2 * m + l * (q + 1);
-        let den = Denominator::new(th, m, self.fs)?;
+        let np = p + l * (q + 1);
+        let den = Denominator::with_reals(th, m, self.reals, self.fs)?;
         let nchunks = self.k().div_ceil(CHUNK);
         let zero = || Eval::zero(if derivs { np } else { 0 });
         let partial = (0..nchunks)
@@ -1147,8 +1455,8 @@ impl<'a> Model<'a> {
                 } else {
                     Vec::new()
                 };
-                let mut dp = Dense::zeros(if pole_derivs { hi - lo } else { 0 }, 2 * m);
-                let mut da = vec![0.0; 2 * m];
+                let mut dp = Dense::zeros(if pole_derivs { hi - lo } else { 0 }, p);
+                let mut da = vec![0.0; p];
                 let mut pw = vec![C64::new(0.0, 0.0); q + 1];
                 for (row, kk) in (lo..hi).enumerate() {
                     let z = self.z[kk];
@@ -1161,7 +1469,7 @@ impl<'a> Model<'a> {
                     // Σ_c r_c, by which the poles' score grows.
                     let mut r_sum = 0.0;
                     for (c, xc) in self.x.iter().enumerate() {
-                        let off = 2 * m + c * (q + 1);
+                        let off = p + c * (q + 1);
                         let b = pw[0]
                             + pw[1..]
                                 .iter()
@@ -1218,15 +1526,15 @@ impl<'a> Model<'a> {
                         }
                     };
                     if pole_derivs {
-                        let mut gp = Dense::zeros(2 * m, 2 * m);
+                        let mut gp = Dense::zeros(p, p);
                         linalg::gram_add(&dp, &mut gp);
                         gp.data.iter_mut().for_each(|v| *v *= l as f64);
                         add(&mut acc.f, &gp, 0, 0, false);
                     }
-                    let mut cross = Dense::zeros(2 * m, nb);
+                    let mut cross = Dense::zeros(p, nb);
                     let mut gc = Dense::zeros(nb, nb);
                     for (c, dc) in d.iter().enumerate() {
-                        let off = 2 * m + c * nb;
+                        let off = p + c * nb;
                         gc.data.iter_mut().for_each(|v| *v = 0.0);
                         linalg::gram_add(dc, &mut gc);
                         add(&mut acc.f, &gc, off, off, false);
@@ -1241,17 +1549,17 @@ impl<'a> Model<'a> {
                 if sandwich {
                     // J = Σ_{c,c'} D_cᵀ diag(γ²_cc') D_c' (cov(I_c/S_c, I_c'/S_c') = γ²_cc'),
                     // D_c = [D_p D_c] in full.
-                    let per = 2 * m + q + 1;
+                    let per = p + q + 1;
                     let d: Vec<Dense> = d
                         .iter()
                         .map(|dc| {
                             let mut full = Dense::zeros(hi - lo, per);
                             for row in 0..hi - lo {
-                                for t in 0..2 * m {
+                                for t in 0..p {
                                     full.set(row, t, dp.at(row, t));
                                 }
                                 for t in 0..=q {
-                                    full.set(row, 2 * m + t, dc.at(row, t));
+                                    full.set(row, p + t, dc.at(row, t));
                                 }
                             }
                             full
@@ -1259,7 +1567,7 @@ impl<'a> Model<'a> {
                         .collect();
                     let mut block = Dense::zeros(per, per);
                     for (c, dc) in d.iter().enumerate() {
-                        let off = 2 * m + c * (q + 1);
+                        let off = p + c * (q + 1);
                         for (c2, dc2) in d.iter().enumerate() {
                             block.data.iter_mut().for_each(|v| *v = 0.0);
                             if c2 == c {
@@ -1274,10 +1582,10 @@ impl<'a> Model<'a> {
                                 }
                                 linalg::tn_add(dc, &scaled, &mut block);
                             }
-                            let off2 = 2 * m + c2 * (q + 1);
+                            let off2 = p + c2 * (q + 1);
                             for a in 0..per {
                                 for b in 0..per {
-                                    let (ga, gb) = (global(a, m, off), global(b, m, off2));
+                                    let (ga, gb) = (global(a, p, off), global(b, p, off2));
                                     acc.f.set(ga, gb, acc.f.at(ga, gb) + block.at(a, b));
                                 }
                             }
@@ -1304,11 +1612,20 @@ impl<'a> Model<'a> {
 
     /// θ of the starting poles, with numerators from [`Self::start_numerator`].
     fn start(&self, poles: &[C64]) -> Result<Vec<f64>, SsiError> {
+        self.start_with(poles, &[])
+    }
+
+    /// θ of the starting modes' poles and real poles (as many as the model has), with
+    /// numerators from [`Self::start_numerator`].
+    fn start_with(&self, poles: &[C64], reals: &[f64]) -> Result<Vec<f64>, SsiError> {
+        debug_assert_eq!(reals.len(), self.reals);
         let (mut th, logits): (Vec<f64>, Vec<f64>) = poles.iter().map(|&s| pole_params(s)).unzip();
         th.extend(logits);
-        let mu = discrete_poles(poles, self.fs).ok_or(SsiError::Refinement {
+        th.extend(reals.iter().map(|v| (-v).ln()));
+        let mut mu = discrete_poles(poles, self.fs).ok_or(SsiError::Refinement {
             reason: "a starting pole is at or above the Nyquist frequency",
         })?;
+        mu.extend(reals.iter().map(|v| C64::new((v / self.fs).exp(), 0.0)));
         for c in 0..self.x.len() {
             th.extend(self.start_numerator(c, &mu));
         }
@@ -1319,8 +1636,9 @@ impl<'a> Model<'a> {
     /// cancelled by a numerator zero pair, so the spectrum and L are exactly `prev`'s. The
     /// fit from here can only lower L.
     fn nested_start(&self, prev: &Fit, new: C64) -> Option<Vec<f64>> {
-        let m = prev.lambdas.len();
-        let q = 2 * m;
+        let (m, r) = (prev.lambdas.len(), prev.reals.len());
+        debug_assert_eq!(self.reals, r);
+        let q = 2 * m + r;
         let mu = discrete_poles(&[new], self.fs)?[0];
         let factor = [1.0, -2.0 * mu.re, mu.norm_sqr()];
         let (ln_w, logit_zeta) = pole_params(new);
@@ -1328,8 +1646,9 @@ impl<'a> Model<'a> {
         th.push(ln_w);
         th.extend_from_slice(&prev.theta[m..2 * m]);
         th.push(logit_zeta);
+        th.extend_from_slice(&prev.theta[2 * m..q]);
         for c in 0..self.x.len() {
-            let off = 2 * m + c * (q + 1);
+            let off = q + c * (q + 1);
             th.push(prev.theta[off]);
             let mut b = vec![1.0];
             b.extend_from_slice(&prev.theta[off + 1..off + 1 + q]);
@@ -1344,12 +1663,38 @@ impl<'a> Model<'a> {
         Some(th)
     }
 
+    /// The start that nests `prev` (a fit with one real pole fewer than this model has) in
+    /// this model, its new real pole `new` (λ < 0) cancelled by a numerator zero: the
+    /// spectrum and L are exactly `prev`'s.
+    fn nested_real_start(&self, prev: &Fit, new: f64) -> Vec<f64> {
+        let (m, r) = (prev.lambdas.len(), prev.reals.len());
+        debug_assert_eq!(self.reals, r + 1);
+        let q = 2 * m + r;
+        let mu = (new / self.fs).exp();
+        let mut th: Vec<f64> = prev.theta[..q].to_vec();
+        th.push((-new).ln());
+        for c in 0..self.x.len() {
+            let off = q + c * (q + 1);
+            th.push(prev.theta[off]);
+            // B(z)·(1 − μ z⁻¹): coefficients b_k − μ b_{k−1}, b_0 = 1, b_{q+1} = 0.
+            let b = |k: usize| match k {
+                0 => 1.0,
+                k if k <= q => prev.theta[off + k],
+                _ => 0.0,
+            };
+            th.extend((1..=q + 1).map(|k| b(k) - mu * b(k - 1)));
+        }
+        th
+    }
+
     /// `prev` with the mode `new` added, refitted from two starts, fresh numerators and
     /// [`Self::nested_start`]; the better fit.
     fn fit_with(&self, prev: &Fit, new: C64, opts: &RefineOptions) -> Result<Fit, SsiError> {
         let mut trial = prev.lambdas.clone();
         trial.push(new);
-        let fresh = self.fit(&trial, opts, opts.tolerance, false);
+        let fresh = self
+            .start_with(&trial, &prev.reals)
+            .and_then(|th| self.fit_from(th, trial.len(), opts, opts.tolerance, false, None));
         let nested = self
             .nested_start(prev, new)
             .map(|th| self.fit_from(th, trial.len(), opts, opts.tolerance, false, None));
@@ -1359,6 +1704,45 @@ impl<'a> Model<'a> {
             (Err(_), Some(Ok(b))) => Ok(b),
             (Err(e), _) => Err(e),
         }
+    }
+
+    /// `full` without one of its poles, as this model (as many real poles as `reals`) with
+    /// the modes `pairs` and the real poles `reals`: the rise of L when the poles are held and
+    /// the numerators refitted (the removed pole's evidence, to about 10⁻⁵ of itself), and
+    /// the fit with everything let move from there. That fit stops once L is within `penalty`
+    /// of `full`'s (the pole goes whatever further iterations would find) or once that is out
+    /// of reach; with no penalty (no selection) at convergence.
+    fn without(
+        &self,
+        full: &Fit,
+        pairs: &[C64],
+        reals: &[f64],
+        penalty: Option<f64>,
+        opts: &RefineOptions,
+    ) -> Result<(f64, Fit), SsiError> {
+        // These fits need L only to well within the penalty, and a model missing one of its
+        // real modes descends slowly while its poles wander (hundreds of iterations, seconds
+        // each fit) without coming near the penalty: 40 iterations decide, and a fit stops
+        // sooner once its gains are small against the rise or the penalty is out of reach
+        // ([`Evidence`]).
+        let loose = 1e-3;
+        let eopts = &RefineOptions {
+            max_iterations: opts.max_iterations.min(40),
+            ..opts.clone()
+        };
+        let report = Evidence {
+            full: full.l,
+            drop_below: f64::NEG_INFINITY,
+        };
+        let m = pairs.len();
+        let th = self.start_with(pairs, reals)?;
+        let held = self.fit_from(th, m, eopts, loose, true, Some(report))?;
+        let decide = Evidence {
+            drop_below: penalty.map_or(f64::NEG_INFINITY, |p| full.l + p),
+            ..report
+        };
+        let free = self.fit_from(held.theta, m, eopts, loose, false, Some(decide))?;
+        Ok((held.l - full.l, free))
     }
 
     /// [`scoring`] on this model's likelihood.
@@ -1379,7 +1763,7 @@ impl<'a> Model<'a> {
         };
         let eval =
             |t: &[f64], derivs: bool| self.eval(t, m, if derivs { fisher } else { What::Value });
-        scoring(eval, th, m, opts, tol, hold_poles, evidence)
+        scoring(eval, th, (m, self.reals), opts, tol, hold_poles, evidence)
     }
 }
 
@@ -1394,8 +1778,8 @@ struct Evidence {
 }
 
 /// Fisher scoring with a Levenberg–Marquardt safeguard from θ, whose first 2m entries are the
-/// poles' ln ω and logit ζ; `eval(θ, true)` gives L, the score and the Fisher information,
-/// `eval(θ, false)` L alone (`None` outside the model). Stops when neither the last step nor
+/// `m` modes' ln ω and logit ζ and the next `reals` the real poles' ln ρ; `eval(θ, true)`
+/// gives L, the score and the Fisher information, `eval(θ, false)` L alone (`None` outside the model). Stops when neither the last step nor
 /// a full Gauss–Newton step gains `tol`; for an `evidence` fit, also when neither gains
 /// 10⁻⁵ of the rise of L above the full model's, when L is below `drop_below`, or when
 /// `drop_below` is out of reach: further from L than ten times the larger of the two gains
@@ -1404,7 +1788,7 @@ struct Evidence {
 fn scoring(
     eval: impl Fn(&[f64], bool) -> Option<Eval>,
     mut th: Vec<f64>,
-    m: usize,
+    (m, reals): (usize, usize),
     opts: &RefineOptions,
     tol: f64,
     hold_poles: bool,
@@ -1420,11 +1804,11 @@ fn scoring(
         let mut accepted = None;
         for _ in 0..30 {
             let mut a = damped(&cur.f, nu);
-            let u = masked(&cur.u, m, hold_poles);
+            let u = masked(&cur.u, 2 * m + reals, hold_poles);
             if hold_poles {
                 // Rows and columns of the pole parameters become identity (their score is
                 // 0): the poles do not move.
-                for t in 0..2 * m {
+                for t in 0..2 * m + reals {
                     for k in 0..a.rows {
                         a.set(t, k, 0.0);
                         a.set(k, t, 0.0);
@@ -1454,7 +1838,7 @@ fn scoring(
         nu = (nu / 10.0).max(1e-12);
         // Converged when even a full Gauss–Newton step would gain less than `tol` (the
         // Newton decrement ½ Uᵀ F⁻¹ U); a small gain alone may be a short damped step.
-        let u = masked(&cur.u, m, hold_poles);
+        let u = masked(&cur.u, 2 * m + reals, hold_poles);
         let decrement = linalg::spd_solve(&damped(&cur.f, 0.0), &u)
             .map(|x| 0.5 * x.iter().zip(&u).map(|(a, b)| a * b).sum::<f64>());
         let gains_below = |t: f64| gain < t && decrement.is_none_or(|d| d < t);
@@ -1474,6 +1858,7 @@ fn scoring(
     }
     Ok(Fit {
         lambdas: unpack(&th, m),
+        reals: th[2 * m..2 * m + reals].iter().map(|v| -v.exp()).collect(),
         theta: th,
         l: cur.l,
         fisher: cur.f,
@@ -1492,11 +1877,11 @@ fn damped(f: &Dense, nu: f64) -> Dense {
     a
 }
 
-/// The score with the pole entries zeroed when the poles are held.
-fn masked(u: &[f64], m: usize, hold_poles: bool) -> Vec<f64> {
+/// The score with the first `p` (the pole parameters') entries zeroed when the poles are held.
+fn masked(u: &[f64], p: usize, hold_poles: bool) -> Vec<f64> {
     let mut v = u.to_vec();
     if hold_poles {
-        v.iter_mut().take(2 * m).for_each(|x| *x = 0.0);
+        v.iter_mut().take(p).for_each(|x| *x = 0.0);
     }
     v
 }
@@ -1544,10 +1929,10 @@ fn pair(a: usize, b: usize, l: usize) -> usize {
     a * l + b
 }
 
-/// Global index of local parameter `t` of a channel block starting at `off`: the first 2m are
-/// the shared pole parameters.
-fn global(t: usize, m: usize, off: usize) -> usize {
-    if t < 2 * m { t } else { off + t - 2 * m }
+/// Global index of local parameter `t` of a channel block starting at `off`: the first `p`
+/// are the shared pole parameters.
+fn global(t: usize, p: usize, off: usize) -> usize {
+    if t < p { t } else { off + t - p }
 }
 
 #[cfg(test)]
@@ -1632,6 +2017,9 @@ pub(super) mod tests {
             modes: Vec::new(),
             dropped: Vec::new(),
             penalty: 0.0,
+            real_poles: Vec::new(),
+            dropped_real_poles: Vec::new(),
+            real_pole_penalty: 0.0,
             neg_log_likelihood: 0.0,
             misfit: 0.0,
             frequencies: 0,
@@ -1790,17 +2178,32 @@ pub(super) mod tests {
         ]
     }
 
+    /// θ of a two-mode, two-channel model with one real pole at −2 rad/s: two_mode_theta's
+    /// poles, ln ρ, and numerators of degree 5.
+    fn two_mode_real_theta() -> Vec<f64> {
+        let t = two_mode_theta();
+        let mut th = t[..4].to_vec();
+        th.push(2f64.ln());
+        th.extend_from_slice(&[-0.05, -0.1, 0.2, -0.1, 0.05, 0.1]); // channel 0: ln σ², b1..b5
+        th.extend_from_slice(&[0.02, 0.3, -0.2, 0.1, 0.0, -0.05]); // channel 1
+        th
+    }
+
     #[test]
     fn score_is_minus_the_gradient_of_l() {
         let y = two_modes_two_channels(4096, 1);
         let v = views(&y);
         let means = vec![0.0; 2];
         let model = Model::new(&v, &means, FS);
-        let th = two_mode_theta();
-        let e = model.eval(&th, 2, What::Fisher).unwrap();
+        score_matches_differences(&model, &two_mode_theta());
+        score_matches_differences(&model.with_reals(1), &two_mode_real_theta());
+    }
+
+    fn score_matches_differences(model: &Model, th: &[f64]) {
+        let e = model.eval(th, 2, What::Fisher).unwrap();
         for t in 0..th.len() {
             let h = 1e-6;
-            let (mut a, mut b) = (th, th);
+            let (mut a, mut b) = (th.to_vec(), th.to_vec());
             a[t] += h;
             b[t] -= h;
             let num = (model.eval(&a, 2, What::Value).unwrap().l
@@ -1817,15 +2220,21 @@ pub(super) mod tests {
 
     /// F = Σ_{c,k} ∇ln S_c ∇ln S_cᵀ, with ∇ln S_c(ω_k) by central differences of the
     /// ratios I/S (a path that shares nothing with the blocks F is summed by); with the poles
-    /// held, the same numerators' block and nothing for the poles.
+    /// held, the same numerators' block and nothing for the poles. With and without a real
+    /// pole.
     #[test]
     fn fisher_information_is_the_gram_of_the_log_spectra_gradients() {
         let y = two_modes_two_channels(4096, 1);
         let v = views(&y);
         let means = vec![0.0; 2];
         let model = Model::new(&v, &means, FS);
-        let th = two_mode_theta();
+        fisher_is_gram(&model, &two_mode_theta());
+        fisher_is_gram(&model.with_reals(1), &two_mode_real_theta());
+    }
+
+    fn fisher_is_gram(model: &Model, th: &[f64]) {
         let np = th.len();
+        let poles = model.poles(2);
         let log_s = |t: &[f64]| -> Vec<f64> {
             let e = model.eval(t, 2, What::Ratios).unwrap();
             // Ratios run over frequencies, each channel in turn: I/S, so ln S = ln I − ln(I/S).
@@ -1838,7 +2247,7 @@ pub(super) mod tests {
         let grads: Vec<Vec<f64>> = (0..np)
             .map(|t| {
                 let h = 1e-6;
-                let (mut a, mut b) = (th, th);
+                let (mut a, mut b) = (th.to_vec(), th.to_vec());
                 a[t] += h;
                 b[t] -= h;
                 let (sa, sb) = (log_s(&a), log_s(&b));
@@ -1848,8 +2257,8 @@ pub(super) mod tests {
                     .collect()
             })
             .collect();
-        let full = model.eval(&th, 2, What::Fisher).unwrap();
-        let held = model.eval(&th, 2, What::FisherNumerators).unwrap();
+        let full = model.eval(th, 2, What::Fisher).unwrap();
+        let held = model.eval(th, 2, What::FisherNumerators).unwrap();
         for a in 0..np {
             for b in 0..np {
                 let fd: f64 = grads[a].iter().zip(&grads[b]).map(|(x, y)| x * y).sum();
@@ -1860,10 +2269,14 @@ pub(super) mod tests {
                     "F[{a},{b}] {} vs {fd}",
                     full.f.at(a, b)
                 );
-                let expect = if a < 4 || b < 4 { 0.0 } else { full.f.at(a, b) };
+                let expect = if a < poles || b < poles {
+                    0.0
+                } else {
+                    full.f.at(a, b)
+                };
                 assert!((held.f.at(a, b) - expect).abs() <= 1e-12 * scale);
             }
-            let expect = if a < 4 { 0.0 } else { full.u[a] };
+            let expect = if a < poles { 0.0 } else { full.u[a] };
             assert!((held.u[a] - expect).abs() <= 1e-12 * full.u[a].abs().max(1.0));
         }
     }
@@ -2068,5 +2481,124 @@ pub(super) mod tests {
         // No modes: an empty model, nothing kept.
         let r = refine(&[&y[0]], FS, &[], &opts).unwrap();
         assert!(r.modes.is_empty() && r.dropped.is_empty());
+    }
+}
+
+#[cfg(test)]
+mod real_pole_tests {
+    use super::tests::{record, views};
+    use super::*;
+    use rand::rngs::Xoshiro256PlusPlus;
+    use rand::{RngExt, SeedableRng};
+    use rand_distr::StandardNormal;
+
+    const FS: f64 = 20.0;
+
+    /// 16 384 samples at FS of a 1.5 Hz, 2 % oscillator under white noise plus `gain` times a
+    /// first-order process with the real pole λ = −2 rad/s (each driven by its own unit white
+    /// noise; at gain 2 the two have about equal variance), plus 5 % white measurement noise.
+    fn oscillator_and_relaxation(gain: f64, seed: u64) -> Vec<Vec<f64>> {
+        let mut y = record(16384, &[(1.5, 0.02)], &[vec![1.0]], 0.0, seed);
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(1000 + seed);
+        let mu = (-2.0 / FS).exp();
+        let mut x = 0.0f64;
+        for _ in 0..2000 {
+            x = mu * x + rng.sample::<f64, _>(StandardNormal);
+        }
+        for v in y[0].iter_mut() {
+            x = mu * x + rng.sample::<f64, _>(StandardNormal);
+            *v += gain * x;
+        }
+        let sd = (y[0].iter().map(|v| v * v).sum::<f64>() / y[0].len() as f64).sqrt();
+        for v in y[0].iter_mut() {
+            *v += 0.05 * sd * rng.sample::<f64, _>(StandardNormal);
+        }
+        y
+    }
+
+    /// SSI (40 block rows, defaults otherwise) and the refinement with its real poles.
+    fn ssi_and_refine(y: &[Vec<f64>]) -> (crate::SsiResult, Refinement) {
+        let v = views(y);
+        let opts = crate::SsiOptions {
+            block_rows: crate::BlockRows::Count(40),
+            ..Default::default()
+        };
+        let ssi = crate::identify(&v, FS, &opts).unwrap();
+        let r = refine_with_real_poles(
+            &v,
+            FS,
+            &ssi.modes,
+            &ssi.real_poles,
+            &RefineOptions::default(),
+        )
+        .unwrap();
+        (ssi, r)
+    }
+
+    /// On every record the refinement keeps one real pole and the one mode, whatever else the
+    /// diagram held (spurious modes and real-pole clusters on most records), and the real
+    /// pole's standard error is what it claims.
+    #[test]
+    fn a_real_pole_is_found_with_calibrated_standard_errors() {
+        let mut z = Vec::new();
+        for seed in 0..20 {
+            let (ssi, r) = ssi_and_refine(&oscillator_and_relaxation(2.0, seed));
+            assert!(!ssi.real_poles.is_empty(), "seed {seed}: no SSI real pole");
+            assert_eq!(r.real_poles.len(), 1, "seed {seed}: {r:?}");
+            assert_eq!(r.modes.len(), 1, "seed {seed}: {r:?}");
+            assert!((r.modes[0].frequency_hz - 1.5).abs() < 0.01, "{r:?}");
+            let p = &r.real_poles[0];
+            assert!(p.evidence >= r.real_pole_penalty);
+            z.push((p.lambda + 2.0) / p.lambda_se.unwrap());
+        }
+        let rms = (z.iter().map(|v| v * v).sum::<f64>() / z.len() as f64).sqrt();
+        println!("real pole z-scores {z:.2?}, RMS {rms:.3}");
+        // The RMS of 20 standard normal variables is 1 ± 0.16 (1/√40): ±2.8 of that.
+        assert!((0.55..=1.45).contains(&rms), "RMS z {rms}");
+    }
+
+    /// Without a real pole in the record, the real-pole clusters the diagram holds are
+    /// dropped, and the mode is the one `refine` finds.
+    #[test]
+    fn spurious_real_poles_are_dropped() {
+        let mut candidates = 0;
+        for seed in 0..20 {
+            let y = oscillator_and_relaxation(0.0, seed);
+            let (ssi, r) = ssi_and_refine(&y);
+            candidates += ssi.real_poles.len();
+            assert!(r.real_poles.is_empty(), "seed {seed}: {r:?}");
+            assert_eq!(r.dropped_real_poles.len(), ssi.real_poles.len());
+            assert!(
+                r.dropped_real_poles
+                    .iter()
+                    .all(|d| d.evidence < r.real_pole_penalty)
+            );
+            let plain = refine(&views(&y), FS, &ssi.modes, &RefineOptions::default()).unwrap();
+            assert_eq!(r.modes.len(), plain.modes.len());
+            for (a, b) in r.modes.iter().zip(&plain.modes) {
+                // Same model, fitted from the same start: to the optimiser's tolerance.
+                assert!((a.lambda - b.lambda).norm() < 1e-6 * a.lambda.norm());
+            }
+        }
+        // Not vacuous: 7 of the 20 diagrams hold a real-pole cluster.
+        assert!(candidates >= 5, "{candidates} candidates");
+    }
+
+    #[test]
+    fn a_real_pole_that_is_not_negative_is_an_error() {
+        let y = oscillator_and_relaxation(2.0, 0);
+        let v = views(&y);
+        for lambda in [0.0, 1.0, f64::NAN] {
+            let bad = RealPoleCluster {
+                lambda,
+                lambda_std: 0.0,
+                members: vec![(1, 0)],
+            };
+            let r = refine_with_real_poles(&v, FS, &[], &[bad], &RefineOptions::default());
+            assert!(
+                matches!(r, Err(SsiError::NotNegativeRealPole { lambda: l }) if l.to_bits() == lambda.to_bits()),
+                "{r:?}"
+            );
+        }
     }
 }
