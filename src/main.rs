@@ -598,20 +598,22 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
     for n in &res.notes {
         println!("note: {n}");
     }
-    let refined = if a.no_refine || res.modes.is_empty() {
+    let refined = if a.no_refine || (res.modes.is_empty() && res.real_poles.is_empty()) {
         None
     } else {
         eprintln!(
-            "refining {} SSI modes by maximum likelihood on {} channel(s) of {} samples…",
+            "refining {} SSI mode(s) and {} real pole(s) by maximum likelihood on {} channel(s) of {} samples…",
             res.modes.len(),
+            res.real_poles.len(),
             views.len(),
             views.first().map_or(0, |v| v.len())
         );
         Some(
-            covssi::refine(
+            covssi::refine_with_real_poles(
                 &views,
                 fs_used,
                 &res.modes,
+                &res.real_poles,
                 &covssi::RefineOptions {
                     joint: !a.no_joint,
                     ..Default::default()
@@ -637,6 +639,18 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
                 "evidence": d.evidence,
             })).collect::<Vec<_>>(),
             "penalty": r.penalty,
+            "real_poles": r.real_poles.iter().map(|p| json!({
+                "lambda": p.lambda,
+                "lambda_se": p.lambda_se,
+                "evidence": p.evidence,
+                "ssi_real_pole": p.source,
+            })).collect::<Vec<_>>(),
+            "dropped_real_poles": r.dropped_real_poles.iter().map(|d| json!({
+                "ssi_real_pole": d.source,
+                "lambda": d.lambda,
+                "evidence": d.evidence,
+            })).collect::<Vec<_>>(),
+            "real_pole_penalty": r.real_pole_penalty,
             "neg_log_likelihood": r.neg_log_likelihood,
             "misfit": r.misfit,
             "misfit_limit": covssi::refine::MISFIT_LIMIT,
@@ -693,6 +707,22 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
                 d.frequency_hz, d.evidence
             );
         }
+        for p in &r.real_poles {
+            println!(
+                "real pole {:.4} ± {} rad/s  (evidence {:.0}, above {:.1}; SSI real pole at {:.4})",
+                p.lambda,
+                se(p.lambda_se),
+                p.evidence,
+                r.real_pole_penalty,
+                res.real_poles[p.source].lambda
+            );
+        }
+        for d in &r.dropped_real_poles {
+            println!(
+                "dropped the SSI real pole at {:.4} rad/s: evidence {:.1}, below {:.1}",
+                d.lambda, d.evidence, r.real_pole_penalty
+            );
+        }
         if r.misfit > covssi::refine::MISFIT_LIMIT {
             println!(
                 "warning: the record does not follow the refinement's model (misfit {:.3} > {}): \
@@ -703,14 +733,6 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
             );
         } else {
             println!("misfit {:.3} (the record follows the model)", r.misfit);
-        }
-        if !res.real_poles.is_empty() {
-            // White noise alone can give a stable real-pole cluster; say that no likelihood
-            // has weighed these.
-            println!(
-                "note: the real poles above are SSI's alone: the refinement has no real poles, \
-                 so the record's likelihood has not tested them"
-            );
         }
     }
     Ok(())

@@ -1,0 +1,87 @@
+//! The Zener oscillator's real pole, found from its response alone: covssi's SSI and its
+//! refinement with real poles (`covssi::refine_with_real_poles`) on records simulated by
+//! hyst-sim, against the exact poles of the model's state-space form (hyst-model).
+
+use hyst::covssi::{self, BlockRows, SsiOptions};
+use hyst::model::{Oscillator, Restoring, ZenerParams};
+use hyst::sim::{self, Input, SimOptions};
+
+const FS: f64 = 750.0;
+
+/// The Zener model the output-only pipeline finds on the benchmark record (docs/results.md):
+/// m = 2, c = 11.70, k = 46899, k∞ = 81432, Ω = 61.72.
+fn zener() -> Oscillator {
+    let mut o = Oscillator::linear(2.0, 11.70, 46899.0);
+    o.restoring = Restoring::Zener(ZenerParams {
+        k_inf: 81432.0,
+        omega: 61.72,
+    });
+    o
+}
+
+/// 2¹⁵ samples of the response to white noise (after 8192 samples of start-up), with 5 %
+/// white measurement noise.
+fn record(seed: u64) -> Vec<f64> {
+    let n = 1 << 15;
+    let warm = 8192;
+    let u = sim::excitation::white_noise(n + warm, 50.0, seed).unwrap();
+    let opts = SimOptions::default();
+    let mut y = sim::simulate(&zener(), Input::Sampled(&u), FS, n + warm, &opts)
+        .unwrap()
+        .split_off(warm);
+    let sd = (y.iter().map(|v| v * v).sum::<f64>() / n as f64).sqrt();
+    sim::excitation::add_noise(&mut y, 0.05 * sd, 1000 + seed).unwrap();
+    y
+}
+
+/// On every record the refinement keeps the one mode and the one real pole, each within four
+/// of its standard errors of the exact pole, and its real pole is closer over the records
+/// than SSI's (the stabilized real-pole cluster with the most members).
+#[test]
+fn the_zener_real_pole_is_found_from_the_response_alone() {
+    let poles = zener().poles().unwrap();
+    let real = poles.iter().find(|p| p.im == 0.0).unwrap().re;
+    let pair = *poles.iter().find(|p| p.im > 0.0).unwrap();
+    let (f, zeta) = (
+        pair.norm() / (2.0 * std::f64::consts::PI),
+        -pair.re / pair.norm(),
+    );
+    let opts = SsiOptions {
+        block_rows: BlockRows::Count(60),
+        ..SsiOptions::default()
+    };
+    let (mut refined_err, mut ssi_err, mut z) = (Vec::new(), Vec::new(), Vec::new());
+    for seed in 0..8 {
+        let y = record(seed);
+        let ssi = covssi::identify(&[&y], FS, &opts).unwrap();
+        let largest = ssi.real_poles.iter().max_by_key(|p| p.members.len());
+        ssi_err.push(largest.expect("SSI finds a real pole").lambda - real);
+        let r = covssi::refine_with_real_poles(
+            &[&y],
+            FS,
+            &ssi.modes,
+            &ssi.real_poles,
+            &covssi::RefineOptions::default(),
+        )
+        .unwrap();
+        assert_eq!(r.real_poles.len(), 1, "seed {seed}: {r:?}");
+        assert_eq!(r.modes.len(), 1, "seed {seed}: {r:?}");
+        assert!(r.misfit < covssi::refine::MISFIT_LIMIT, "{r:?}");
+        let (p, m) = (&r.real_poles[0], &r.modes[0]);
+        refined_err.push(p.lambda - real);
+        z.extend([
+            (p.lambda - real) / p.lambda_se.unwrap(),
+            (m.frequency_hz - f) / m.frequency_se_hz.unwrap(),
+            (m.damping_ratio - zeta) / m.damping_se.unwrap(),
+        ]);
+    }
+    let rms = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt();
+    println!(
+        "exact real pole {real:.3}, pair {pair:.3}\nrefined real pole errors {refined_err:.2?}, RMS {:.2} rad/s\nSSI real pole errors {ssi_err:.2?}, RMS {:.2} rad/s\nz-scores (real pole, f, ζ per record) {z:.2?}",
+        rms(&refined_err),
+        rms(&ssi_err)
+    );
+    // 24 standard normal scores: |z| > 4 has probability 1.5e-3 for the lot.
+    assert!(z.iter().all(|v| v.abs() < 4.0), "{z:?}");
+    assert!(rms(&refined_err) < rms(&ssi_err));
+}
