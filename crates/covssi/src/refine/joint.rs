@@ -248,7 +248,7 @@ impl<'a> Joint<'a> {
             (self.free, 0),
             &settle,
             opts.tolerance,
-            true,
+            2 * self.free,
             None,
         )?;
         // Modes moving..free join the held ones.
@@ -257,7 +257,7 @@ impl<'a> Joint<'a> {
         self.held = kept;
         self.band = narrow;
         let eval = |t: &[f64], derivs: bool| self.eval(t, derivs, false);
-        let free = scoring(eval, th, (moving, 0), opts, opts.tolerance, false, None)?;
+        let free = scoring(eval, th, (moving, 0), opts, opts.tolerance, 0, None)?;
         Ok(Fit {
             iterations: held.iterations + free.iterations,
             ..free
