@@ -201,9 +201,9 @@ struct SsiArgs {
     /// Draw the stabilization diagram as SVG here.
     #[arg(long)]
     svg: Option<PathBuf>,
-    /// Skip the maximum-likelihood refinement of the modes (on by default: it fits the modes
-    /// to the whole record, gives each a standard error, and drops the modes the record does
-    /// not support).
+    /// Skip the maximum-likelihood refinement of the modes and real poles (on by default: it
+    /// fits them to the whole record, gives each a standard error, and drops those the record
+    /// does not support).
     #[arg(long)]
     no_refine: bool,
     /// Refine with each channel's likelihood alone, not the joint likelihood of all channels
