@@ -1104,9 +1104,13 @@ fn ident(a: &IdentArgs) -> Result<(), Error> {
         id.prepared.skewness,
         id.prepared.kurtosis
     );
+    let real = id
+        .poles
+        .real
+        .map_or("none".to_string(), |r| format!("{r:.4} rad/s"));
     println!(
-        "pair {:.4}, real pole {:?}, c = {:.3} ({})",
-        id.poles.pair, id.poles.real, id.poles.c, id.poles.c_source
+        "pair {:.4} rad/s, real pole {real}, c = {:.3} ({})",
+        id.poles.pair, id.poles.c, id.poles.c_source
     );
     println!("linear: {}", osc_json(&id.models.linear));
     if let Some(z) = &id.models.zener {

@@ -675,6 +675,48 @@ fn ssi_refinement_drops_the_real_poles_of_white_noise() {
 }
 
 #[test]
+fn ident_refines_the_pair_and_real_pole_of_a_record_under_random_excitation() {
+    // A Zener oscillator under white noise (hyst simulate), identified from its output: the
+    // record follows the stationary model, so the Zener model is built from the refined pair
+    // and real pole, and the command says so.
+    let params = write(
+        "zener_params.json",
+        r#"{"mass": 2, "damping": 11.7, "stiffness": 46899, "zener": {"k_inf": 81432, "omega": 61.72}}"#,
+    );
+    let record = tmp("zener_white.csv");
+    let (ok, _, err) = hyst(&[
+        "simulate",
+        "--params",
+        s(&params),
+        "--excitation",
+        "white",
+        "--samples",
+        "40960",
+        "--seed",
+        "3",
+        "--noise",
+        "1e-6",
+        "--out",
+        s(&record),
+    ]);
+    assert!(ok, "{err}");
+    let (ok, out, err) = hyst(&[
+        "ident",
+        "--data",
+        s(&record),
+        "--fs",
+        "750",
+        "--mass",
+        "2",
+        "--skip",
+        "8192",
+    ]);
+    assert!(ok, "{err}");
+    assert!(out.contains("note: pair and real pole refined"), "{out}");
+    assert!(out.contains("zener: "), "{out}");
+}
+
+#[test]
 fn ssi_missing_column() {
     let err = ssi_fails_on_columns("c");
     assert!(err.contains("no column `c`"), "{err}");
