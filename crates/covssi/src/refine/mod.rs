@@ -369,9 +369,11 @@ fn refine_up_to(
     let (core, mut weak): (Vec<usize>, Vec<usize>) =
         (0..m).partition(|&k| 2 * modes[k].members.len() >= most);
     weak.sort_by(|&a, &b| modes[b].members.len().cmp(&modes[a].members.len()));
-    let (strong, mut weak_reals): (Vec<usize>, Vec<usize>) =
-        (0..real_poles.len()).partition(|&i| 2 * real_poles[i].members.len() >= most);
-    weak_reals.sort_by(|&a, &b| by_members(&real_poles[b]).cmp(&by_members(&real_poles[a])));
+    let is_strong = |i: usize| 2 * real_poles[i].members.len() >= most;
+    let strong: Vec<usize> = (0..real_poles.len()).filter(|&i| is_strong(i)).collect();
+    let mut by_size: Vec<usize> = (0..real_poles.len()).collect();
+    by_size.sort_by(|&a, &b| by_members(&real_poles[b]).cmp(&by_members(&real_poles[a])));
+    let mut weak_reals: Vec<usize> = by_size.iter().copied().filter(|&i| !is_strong(i)).collect();
     let start: Vec<C64> = core.iter().map(|&k| modes[k].lambda).collect();
     let strong_fit = (!strong.is_empty())
         .then(|| {
@@ -392,9 +394,7 @@ fn refine_up_to(
         },
         None => {
             // No strong real pole, or their fit failed: every real pole is added in turn.
-            weak_reals = (0..real_poles.len()).collect();
-            weak_reals
-                .sort_by(|&a, &b| by_members(&real_poles[b]).cmp(&by_members(&real_poles[a])));
+            weak_reals = by_size;
             RealPoles {
                 model: None,
                 fit: model.fit(&start, opts, opts.tolerance, false)?,
@@ -636,11 +636,7 @@ fn add_real_poles<'a>(
         let fresh = next_model
             .start_with(&fit.lambdas, &reals)
             .and_then(|th| next_model.fit_from(th, m, opts, opts.tolerance, false, ev));
-        let next = match (nested, fresh) {
-            (Ok(a), Ok(b)) => Ok(if a.l <= b.l { a } else { b }),
-            (Ok(a), Err(_)) | (Err(_), Ok(a)) => Ok(a),
-            (Err(e), Err(_)) => Err(e),
-        }?;
+        let next = better(nested, fresh)?;
         let evidence = fit.l - next.l;
         if !opts.select || evidence >= penalty {
             fit = next;
@@ -714,6 +710,16 @@ fn real_pole_evidence<'a>(
         evidence,
         dropped,
     })
+}
+
+/// The better (lower L) of two fits of one model from different starts, `a` on a tie; if one
+/// failed, the other; if both, `a`'s error.
+fn better(a: Result<Fit, SsiError>, b: Result<Fit, SsiError>) -> Result<Fit, SsiError> {
+    match (a, b) {
+        (Ok(a), Ok(b)) => Ok(if a.l <= b.l { a } else { b }),
+        (Ok(a), Err(_)) | (Err(_), Ok(a)) => Ok(a),
+        (Err(e), Err(_)) => Err(e),
+    }
 }
 
 /// Which pole's removal (`without`, from [`Model::without`]) raises `full`'s L least once
@@ -1663,19 +1669,7 @@ impl<'a> Model<'a> {
         th.extend_from_slice(&prev.theta[m..2 * m]);
         th.push(logit_zeta);
         th.extend_from_slice(&prev.theta[2 * m..q]);
-        for c in 0..self.x.len() {
-            let off = q + c * (q + 1);
-            th.push(prev.theta[off]);
-            let mut b = vec![1.0];
-            b.extend_from_slice(&prev.theta[off + 1..off + 1 + q]);
-            let mut nb = vec![0.0; q + 3];
-            for (k, bk) in b.iter().enumerate() {
-                for (t, ft) in factor.iter().enumerate() {
-                    nb[k + t] += bk * ft;
-                }
-            }
-            th.extend_from_slice(&nb[1..]);
-        }
+        th.extend(self.numerators_times(&prev.theta, q, &factor));
         Some(th)
     }
 
@@ -1689,18 +1683,29 @@ impl<'a> Model<'a> {
         let mu = (new / self.fs).exp();
         let mut th: Vec<f64> = prev.theta[..q].to_vec();
         th.push((-new).ln());
+        th.extend(self.numerators_times(&prev.theta, q, &[1.0, -mu]));
+        th
+    }
+
+    /// The numerators of θ (pole parameters and numerator degree `q`), each multiplied by
+    /// `factor` (coefficients of z⁻ᵏ from k = 0, leading 1): every channel's ln σ², then its
+    /// new B's coefficients after the leading 1. They cancel the poles `factor` adds to A.
+    fn numerators_times(&self, theta: &[f64], q: usize, factor: &[f64]) -> Vec<f64> {
+        let mut out = Vec::with_capacity(self.x.len() * (q + factor.len()));
         for c in 0..self.x.len() {
             let off = q + c * (q + 1);
-            th.push(prev.theta[off]);
-            // B(z)·(1 − μ z⁻¹): coefficients b_k − μ b_{k−1}, b_0 = 1, b_{q+1} = 0.
-            let b = |k: usize| match k {
-                0 => 1.0,
-                k if k <= q => prev.theta[off + k],
-                _ => 0.0,
-            };
-            th.extend((1..=q + 1).map(|k| b(k) - mu * b(k - 1)));
+            out.push(theta[off]);
+            let mut b = vec![1.0];
+            b.extend_from_slice(&theta[off + 1..off + 1 + q]);
+            let mut nb = vec![0.0; q + factor.len()];
+            for (k, bk) in b.iter().enumerate() {
+                for (t, ft) in factor.iter().enumerate() {
+                    nb[k + t] += bk * ft;
+                }
+            }
+            out.extend_from_slice(&nb[1..]);
         }
-        th
+        out
     }
 
     /// `prev` with the mode `new` added, refitted from two starts, fresh numerators and
@@ -1719,15 +1724,13 @@ impl<'a> Model<'a> {
         let fresh = self
             .start_with(&trial, &prev.reals)
             .and_then(|th| self.fit_from(th, m, opts, tol, false, ev));
-        let nested = self
-            .nested_start(prev, new)
-            .map(|th| self.fit_from(th, m, opts, tol, false, ev));
-        match (fresh, nested) {
-            (Ok(a), Some(Ok(b))) => Ok(if a.l <= b.l { a } else { b }),
-            (Ok(a), _) => Ok(a),
-            (Err(_), Some(Ok(b))) => Ok(b),
-            (Err(e), _) => Err(e),
-        }
+        let nested = self.nested_start(prev, new).map_or(
+            Err(SsiError::Refinement {
+                reason: "the new pole is at or above the Nyquist frequency",
+            }),
+            |th| self.fit_from(th, m, opts, tol, false, ev),
+        );
+        better(fresh, nested)
     }
 
     /// `full` without one of its poles, as this model (as many real poles as `reals`) with
