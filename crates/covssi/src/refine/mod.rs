@@ -78,8 +78,11 @@ pub const JOINT_MAX_CHANNELS: usize = 4;
 /// Above this [`Refinement::misfit`] the record does not follow the model.
 pub const MISFIT_LIMIT: f64 = 0.05;
 
-/// Kolmogorov–Smirnov distance of the sample `x` from the unit exponential law.
-fn ks_exponential(mut x: Vec<f64>) -> f64 {
+/// Kolmogorov–Smirnov distance of the sample `x` from the unit exponential law: the
+/// [`Refinement::misfit`] of the ratios $I/S$ of a periodogram to a fitted spectrum, which a
+/// record following the model makes unit exponential variables. Other spectral fits can use it
+/// to report their misfit on the same scale (compare it with [`MISFIT_LIMIT`]).
+pub fn exponential_misfit(mut x: Vec<f64>) -> f64 {
     x.sort_by(f64::total_cmp);
     let n = x.len() as f64;
     x.iter()
@@ -491,7 +494,7 @@ fn refine_up_to(
     let mk = fit.lambdas.len();
     let per_channel_misfit = fitted_model
         .eval(&fit.theta, mk, What::Ratios)
-        .map_or(1.0, |e| ks_exponential(e.ratios));
+        .map_or(1.0, |e| exponential_misfit(e.ratios));
     //    Above `joint_max` channels (the joint cost grows as l⁴) the joint likelihood is that
     //    of `joint_max` combinations of them carrying the modes; with more modes than
     //    combinations, band by band (see [`joint_by_bands`]).
@@ -992,7 +995,7 @@ fn joint_by_bands(
         est.iterations += jf.iterations;
         est.combinations = combine.then_some(lj);
     }
-    est.misfit = ks_exponential(ratios);
+    est.misfit = exponential_misfit(ratios);
     Some(est)
 }
 
