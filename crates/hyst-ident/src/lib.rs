@@ -16,6 +16,11 @@
 //!    the viscous damping guess c ([`DampingGuess`]). When the record follows the stationary
 //!    model (a random excitation), the pair and the real pole are then refined together by
 //!    maximum likelihood ([`covssi::refine_with_real_poles`]) and used in place of SSI's.
+//!
+//!    Step 3b, [`fit_zener_spectrum`], when they were: the Zener oscillator fitted to the
+//!    record's spectrum by maximum likelihood ([`zener_spectrum`]). The spectrum's zero at
+//!    $-\Omega$ is the fourth relation the poles lack, so c comes from the record, with a
+//!    standard error, instead of the guess (white force assumed; [`DampingGuess`]).
 //! 4. [`build_models`]: linear $k = m|\lambda|^2$, $c = -2m\operatorname{Re}\lambda$; Zener
 //!    $(k, k_\infty, \Omega)$ by coefficient matching of eq. (32); Bouc-Wen with α from eq. (37)
 //!    and (βγ, βδ) from eq. (38) ([`Linearization::Paper`]) or from the exact inversion of the
@@ -33,6 +38,7 @@ mod fft;
 pub mod flatness;
 pub mod floor;
 pub mod refine;
+pub mod zener_spectrum;
 
 use covssi::{BlockRows, RealPoleCluster, SsiOptions, SsiResult, Stability, StabilityCriteria};
 use hyst_linearize::{Amplitude, LinearizeError};
@@ -116,6 +122,17 @@ pub enum IdentError {
         /// Why.
         reason: String,
     },
+    /// The poles a Zener spectral fit starts from are not a stable pair and a negative real
+    /// pole, or no fit from them gave a valid spectrum.
+    #[error(
+        "the Zener spectral fit cannot start from the pair {pair} and the real pole {real} rad/s: it needs Re < 0 < Im and a real pole < 0, and a valid spectrum from them"
+    )]
+    UnstableStart {
+        /// The oscillating pole given (rad/s).
+        pair: Complex64,
+        /// The real pole given (rad/s).
+        real: f64,
+    },
     /// Input and output records differ in length.
     #[error("input has {input} samples, output {output}")]
     LengthMismatch {
@@ -129,9 +146,15 @@ pub enum IdentError {
 /// Where the viscous damping c of the Zener and Bouc-Wen models comes from.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum DampingGuess {
+    /// From the record, with no guess, when it follows the stationary model (a random
+    /// excitation) and SSI's pair and real pole were refined: the Zener oscillator fitted to
+    /// the record's spectrum ([`zener_spectrum`], step 3b), which assumes a force white over
+    /// the band. Otherwise, or when that fit does not hold or gives c < 0, as
+    /// [`DampingGuess::LowDampingCluster`] (a note says why).
+    #[default]
+    ZenerSpectrum,
     /// The paper's choice: a cluster of lightly damped poles near the dominant frequency,
     /// $c = -2m\operatorname{Re}\lambda$; if there is none, c = 0.
-    #[default]
     LowDampingCluster,
     /// A given value (N s/m).
     Value(f64),
@@ -344,6 +367,9 @@ pub struct SelectedPoles {
     pub pair_cluster: Vec<Complex64>,
     /// The real pole, if one was found (rad/s): SSI's, or refined with the pair.
     pub real: Option<f64>,
+    /// Whether the pair and the real pole are the refined ones (the record follows the
+    /// stationary model).
+    pub refined: bool,
     /// Viscous damping guess c (N s/m).
     pub c: f64,
     /// Where c came from.
@@ -375,9 +401,9 @@ pub fn select_poles(
         })?;
     let (ssi_real, real_candidates) = real_pole(ssi, &mut notes);
     let refined = check_support(mode, &real_candidates, p, &mut notes)?;
-    let (pair, real) = match refined {
-        Some((pair, real)) => (pair, Some(real)),
-        None => (mode.lambda, ssi_real),
+    let (pair, real, refined) = match refined {
+        Some((pair, real)) => (pair, Some(real), true),
+        None => (mode.lambda, ssi_real, false),
     };
     let pair_cluster: Vec<Complex64> = mode
         .members
@@ -392,7 +418,7 @@ pub fn select_poles(
         .collect();
     let (c, c_source) = match opts.damping_guess {
         DampingGuess::Value(c) => (c, "given".to_string()),
-        DampingGuess::LowDampingCluster => {
+        DampingGuess::LowDampingCluster | DampingGuess::ZenerSpectrum => {
             // Poles at least stable in frequency, within 10 % of the pair's frequency, damped
             // less than half as much as the pair.
             let f0 = mode.frequency_hz;
@@ -428,6 +454,7 @@ pub fn select_poles(
         pair,
         pair_cluster,
         real,
+        refined,
         c,
         c_source,
         notes,
@@ -657,8 +684,11 @@ pub struct Identification {
     pub prepared: Prepared,
     /// Step 2.
     pub ssi: SsiResult,
-    /// Step 3.
+    /// Step 3 (with step 3b's pair, real pole and c when it held).
     pub poles: SelectedPoles,
+    /// Step 3b, when it ran ([`DampingGuess::ZenerSpectrum`]): the Zener oscillator fitted to
+    /// the record's spectrum; [`SelectedPoles::c_source`] says whether it was used.
+    pub zener_spectrum: Option<zener_spectrum::ZenerSpectralFit>,
     /// Step 4.
     pub models: Models,
     /// Step 4b, when the excitation band is known: the flatness fit.
@@ -698,7 +728,8 @@ pub fn identify(y: &[f64], fs: f64, opts: &IdentOptions) -> Result<Identificatio
     }
     let prepared = prepare(y, fs, opts)?;
     let ssi = run_ssi(&prepared, opts)?;
-    let poles = select_poles(&ssi, &prepared, opts)?;
+    let mut poles = select_poles(&ssi, &prepared, opts)?;
+    let zener_spectrum = fit_zener_spectrum(y, fs, &prepared, &mut poles, opts);
     let mut models = build_models(&poles, &prepared, opts)?;
     let flatness = match &opts.excitation {
         None => None,
@@ -732,9 +763,76 @@ pub fn identify(y: &[f64], fs: f64, opts: &IdentOptions) -> Result<Identificatio
         prepared,
         ssi,
         poles,
+        zener_spectrum,
         models,
         flatness,
     })
+}
+
+/// Step 3b ([`DampingGuess::ZenerSpectrum`]): when the pair and the real pole were refined
+/// (the record follows the stationary model), fit the Zener oscillator to the spectrum of
+/// the record `y` (sampled at `fs`, undecimated) up to three times the pair's frequency (at
+/// most fs/4), and take c, the pair
+/// and the real pole from it when it holds: misfit within [`covssi::refine::MISFIT_LIMIT`],
+/// c ≥ 0 and k > 0. Otherwise c stays the low-damping cluster's and a note says why.
+pub fn fit_zener_spectrum(
+    y: &[f64],
+    fs: f64,
+    p: &Prepared,
+    sel: &mut SelectedPoles,
+    opts: &IdentOptions,
+) -> Option<zener_spectrum::ZenerSpectralFit> {
+    let real = sel.real.filter(|_| sel.refined)?;
+    if opts.damping_guess != DampingGuess::ZenerSpectrum {
+        return None;
+    }
+    let centred: Vec<f64> = y.iter().map(|v| v - p.mean).collect();
+    // The band: three times the pair's frequency, and at most a quarter of the sampling rate.
+    // The model's force is white at every frequency, so the record's spectrum holds the
+    // power aliased from above the Nyquist frequency; a real force (band-limited, or behind an
+    // anti-aliasing filter) lacks it near there, and where noise does not hide that the fit
+    // is biased. At fs/4 the aliased part is (1/3)⁴ ≈ 1 % of the response's.
+    let f_max = (3.0 * sel.pair.norm() / (2.0 * std::f64::consts::PI)).min(fs / 4.0);
+    match zener_spectrum::fit(&centred, fs, opts.mass, sel.pair, real, f_max) {
+        Ok(f) => {
+            let why = if f.misfit > covssi::refine::MISFIT_LIMIT {
+                Some(format!(
+                    "the record does not follow it (misfit {:.3})",
+                    f.misfit
+                ))
+            } else if f.c < 0.0 || f.k <= 0.0 {
+                Some(format!(
+                    "it gives c = {:.3} ± {:.3} N s/m and k = {:.1} N/m, not both positive (is the force white over the band?)",
+                    f.c, f.se[0], f.k
+                ))
+            } else {
+                None
+            };
+            match why {
+                Some(why) => sel.notes.push(format!(
+                    "Zener spectral fit not used: {why}; c from the {}",
+                    sel.c_source
+                )),
+                None => {
+                    sel.pair = f.pair;
+                    sel.real = Some(f.real);
+                    sel.c = f.c;
+                    sel.c_source = format!(
+                        "Zener spectral fit (white force assumed): c = {:.3} ± {:.3} N s/m",
+                        f.c, f.se[0]
+                    );
+                }
+            }
+            Some(f)
+        }
+        Err(e) => {
+            sel.notes.push(format!(
+                "Zener spectral fit failed ({e}); c from the {}",
+                sel.c_source
+            ));
+            None
+        }
+    }
 }
 
 /// A model's error against a measured output.
