@@ -100,6 +100,15 @@ struct RefineArgs {
 }
 
 #[derive(Clone, Copy, ValueEnum, PartialEq, Eq, Debug)]
+enum DampingArg {
+    /// From the Zener oscillator fitted to the record's spectrum (white force assumed) when
+    /// the record follows the stationary model; else as `cluster`.
+    Spectrum,
+    /// The paper's guess: a cluster of lightly damped poles near the pair.
+    Cluster,
+}
+
+#[derive(Clone, Copy, ValueEnum, PartialEq, Eq, Debug)]
 enum LinearizationArg {
     /// Eqs. (37)-(38) as printed.
     Paper,
@@ -136,6 +145,12 @@ struct IdentArgs {
     /// harmonic without validation data).
     #[arg(long, value_enum)]
     linearization: Option<LinearizationArg>,
+    /// Where the viscous damping c of the Zener and Bouc-Wen models comes from.
+    #[arg(long, value_enum, default_value = "spectrum", conflicts_with = "c")]
+    damping: DampingArg,
+    /// A known viscous damping c (N s/m), in place of --damping.
+    #[arg(long)]
+    c: Option<f64>,
     /// The band LO:HI (Hz) on which the excitation's amplitude spectrum was flat (a
     /// multisine's design; needs --period). The Bouc-Wen model is then fitted by flatness of
     /// its implied input, and kept when it validates better than the mapped one (or when
@@ -233,7 +248,9 @@ enum DecimationArg {
 enum ExcitationKind {
     /// Random-phase multisine, flat on [--f-min, --f-max], periodic with --samples samples.
     Multisine,
-    /// Gaussian white noise.
+    /// Gaussian white noise at --fs. `simulate` interpolates it linearly between samples,
+    /// which colours the force (its spectrum falls as sinc^4(pi f/fs), 1.6 % down at fs/20);
+    /// with --periodic it is interpolated exactly and stays white up to fs/2.
     White,
     /// Linear sine sweep from --f-min to --f-max over the record (amplitude: sqrt(2)·rms).
     Sweep,
@@ -924,7 +941,7 @@ fn excitation_band(a: &IdentArgs) -> Result<Option<hyst::ident::flatness::Excita
 }
 
 fn ident(a: &IdentArgs) -> Result<(), Error> {
-    use hyst::ident::{self, IdentOptions, Linearization};
+    use hyst::ident::{self, DampingGuess, IdentOptions, Linearization};
     use serde_json::json;
     let mass = a.mass.unwrap_or(2.0);
     // (name, u, y, periodic)
@@ -986,10 +1003,17 @@ fn ident(a: &IdentArgs) -> Result<(), Error> {
     };
     let excitation = excitation_band(a)?;
     let t0 = std::time::Instant::now();
+    let damping_guess = match (a.c, a.damping) {
+        (Some(c), _) if c.is_finite() && c >= 0.0 => DampingGuess::Value(c),
+        (Some(c), _) => return Err(fail(format!("--c must be a number >= 0 N s/m, got {c}"))),
+        (None, DampingArg::Spectrum) => DampingGuess::ZenerSpectrum,
+        (None, DampingArg::Cluster) => DampingGuess::LowDampingCluster,
+    };
     let opts = IdentOptions {
         mass,
         linearization: choices[0],
         excitation,
+        damping_guess,
         ..IdentOptions::default()
     };
     let id = match ident::identify(&y, fs, &opts) {
@@ -1116,6 +1140,25 @@ fn ident(a: &IdentArgs) -> Result<(), Error> {
     if let Some(z) = &id.models.zener {
         println!("zener: {}", osc_json(z));
     }
+    if let Some(f) = &id.zener_spectrum {
+        println!(
+            "zener spectral fit (white force, {} frequencies up to {:.1} Hz, misfit {:.3}): c = {:.3} ± {:.3} N s/m, k = {:.1} ± {:.1} N/m, k_inf = {:.1} ± {:.1} N/m, omega = {:.3} ± {:.3} rad/s; force density {:.4e} ± {:.1e} N^2 s, noise std {:.3e}",
+            f.bins,
+            f.max_frequency_hz,
+            f.misfit,
+            f.c,
+            f.se[0],
+            f.k,
+            f.se[1],
+            f.k_inf,
+            f.se[2],
+            f.omega,
+            f.se[3],
+            f.force_density,
+            f.force_density_se,
+            f.noise_std
+        );
+    }
     if let Some(f) = &id.flatness {
         println!(
             "flatness fit: {} periods averaged (aperiodicity {}), bins {}..={}, spread of |U| over the band {:.3} dB -> {:.3} dB in {} iterations, implied input RMS {:.3} N",
@@ -1171,6 +1214,10 @@ fn ident(a: &IdentArgs) -> Result<(), Error> {
             "amplitude": id.models.amplitude,
             "linear": osc_json(&id.models.linear),
             "zener": id.models.zener.as_ref().map(osc_json),
+            "zener_spectrum": id.zener_spectrum.as_ref().map(|f| json!({"c": f.c, "k": f.k, "k_inf": f.k_inf, "omega": f.omega,
+                "se": {"c": f.se[0], "k": f.se[1], "k_inf": f.se[2], "omega": f.se[3]},
+                "force_density": f.force_density, "force_density_se": f.force_density_se, "noise_std": f.noise_std,
+                "misfit": f.misfit, "frequencies": f.bins, "max_frequency_hz": f.max_frequency_hz})),
             "bouc_wen": bouc_wen.as_ref().map(osc_json),
             "bouc_wen_candidates": candidates.iter().zip(&cand_rows).map(|((n, m), r)| json!({"route": n, "model": osc_json(m), "validation": r})).collect::<Vec<_>>(),
             "flatness": id.flatness.as_ref().map(|f| json!({"periods": f.periods, "aperiodicity": f.aperiodicity, "bins": [f.bins.0, f.bins.1],

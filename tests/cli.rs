@@ -674,46 +674,103 @@ fn ssi_refinement_drops_the_real_poles_of_white_noise() {
     assert!(shown > 0, "no seed gave real poles");
 }
 
-#[test]
-fn ident_refines_the_pair_and_real_pole_of_a_record_under_random_excitation() {
-    // A Zener oscillator under white noise (hyst simulate), identified from its output: the
-    // record follows the stationary model, so the Zener model is built from the refined pair
-    // and real pole, and the command says so.
+/// A record of the Zener oscillator the pipeline finds on the benchmark (m = 2, c = 11.7,
+/// k = 46899, k∞ = 81432, Ω = 61.72) under white noise at 750 Hz, written by `hyst simulate`
+/// with `args` added (the samples, and `--periodic` or not); returns its path.
+fn zener_white_record(name: &str, args: &[&str]) -> PathBuf {
     let params = write(
-        "zener_params.json",
+        &format!("{name}_params.json"),
         r#"{"mass": 2, "damping": 11.7, "stiffness": 46899, "zener": {"k_inf": 81432, "omega": 61.72}}"#,
     );
-    let record = tmp("zener_white.csv");
-    let (ok, _, err) = hyst(&[
+    let record = tmp(&format!("{name}.csv"));
+    let common = [
         "simulate",
         "--params",
         s(&params),
         "--excitation",
         "white",
-        "--samples",
-        "40960",
         "--seed",
         "3",
         "--noise",
         "1e-6",
         "--out",
         s(&record),
-    ]);
+    ];
+    let (ok, _, err) = hyst(&[&common[..], args].concat());
     assert!(ok, "{err}");
-    let (ok, out, err) = hyst(&[
-        "ident",
-        "--data",
-        s(&record),
-        "--fs",
-        "750",
-        "--mass",
-        "2",
-        "--skip",
-        "8192",
-    ]);
+    record
+}
+
+/// `hyst ident` on a record of [`zener_white_record`] (750 Hz, m = 2), with `args` added.
+fn ident_zener(record: &Path, args: &[&str]) -> (bool, String, String) {
+    let common = ["ident", "--data", s(record), "--fs", "750", "--mass", "2"];
+    hyst(&[&common[..], args].concat())
+}
+
+#[test]
+fn ident_refines_the_pair_and_real_pole_of_a_record_under_random_excitation() {
+    // A Zener oscillator under white noise (hyst simulate), identified from its output: the
+    // record follows the stationary model, so the Zener model is built from the refined pair
+    // and real pole, and the command says so.
+    let record = zener_white_record("zener_white", &["--samples", "40960"]);
+    let (ok, out, err) = ident_zener(&record, &["--skip", "8192"]);
     assert!(ok, "{err}");
     assert!(out.contains("note: pair and real pole refined"), "{out}");
     assert!(out.contains("zener: "), "{out}");
+}
+
+#[test]
+fn ident_finds_c_from_a_record_under_a_white_force() {
+    // The same Zener oscillator under a periodic white force (exactly white up to Nyquist),
+    // one steady-state period: c comes from the spectral fit, and every fitted parameter lies
+    // within four of its standard errors of the truth (probability 2.5e-4 each otherwise).
+    let record = zener_white_record(
+        "zener_white_periodic",
+        &["--periodic", "--samples", "32768"],
+    );
+    let json = tmp("zener_white_periodic.json");
+    let (ok, out, err) = ident_zener(&record, &["--json", s(&json)]);
+    assert!(ok, "{err}");
+    assert!(
+        out.contains("(Zener spectral fit (white force assumed)"),
+        "{out}"
+    );
+    assert!(out.contains("zener spectral fit (white force, "), "{out}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let fit = &v["zener_spectrum"];
+    for (key, truth) in [
+        ("c", 11.7),
+        ("k", 46899.0),
+        ("k_inf", 81432.0),
+        ("omega", 61.72),
+    ] {
+        let (got, se) = (fit[key].as_f64().unwrap(), fit["se"][key].as_f64().unwrap());
+        assert!(
+            (got - truth).abs() < 4.0 * se,
+            "{key}: {got} ± {se} against {truth}"
+        );
+        assert_eq!(
+            v["zener"][key]
+                .as_f64()
+                .map(|x| (x / got - 1.0).abs() < 1e-9),
+            Some(true),
+            "{key}"
+        );
+    }
+    // The paper's guess, a given c, and a c that cannot be.
+    let (ok, out, err) = ident_zener(&record, &["--damping", "cluster"]);
+    assert!(ok, "{err}");
+    assert!(!out.contains("(Zener spectral fit"), "{out}");
+    let (ok, out, err) = ident_zener(&record, &["--c", "10"]);
+    assert!(ok, "{err}");
+    assert!(out.contains("c = 10.000 (given)"), "{out}");
+    let (ok, _, err) = ident_zener(&record, &["--c=-1"]);
+    assert!(!ok);
+    assert!(
+        err.contains("--c must be a number >= 0 N s/m, got -1"),
+        "{err}"
+    );
 }
 
 #[test]
