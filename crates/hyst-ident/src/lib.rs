@@ -149,7 +149,7 @@ pub enum DampingGuess {
     /// From the record, with no guess, when it follows the stationary model (a random
     /// excitation) and SSI's pair and real pole were refined: the Zener oscillator fitted to
     /// the record's spectrum ([`zener_spectrum`], step 3b), which assumes a force white over
-    /// the band. Otherwise, or when that fit does not hold or gives c < 0, as
+    /// the band. Otherwise, or when that fit does not hold (see [`fit_zener_spectrum`]), as
     /// [`DampingGuess::LowDampingCluster`] (a note says why).
     #[default]
     ZenerSpectrum,
@@ -772,9 +772,10 @@ pub fn identify(y: &[f64], fs: f64, opts: &IdentOptions) -> Result<Identificatio
 /// Step 3b ([`DampingGuess::ZenerSpectrum`]): when the pair and the real pole were refined
 /// (the record follows the stationary model), fit the Zener oscillator to the spectrum of
 /// the record `y` (sampled at `fs`, undecimated) up to three times the pair's frequency (at
-/// most fs/4), and take c, the pair
-/// and the real pole from it when it holds: misfit within [`covssi::refine::MISFIT_LIMIT`],
-/// c ≥ 0 and k > 0. Otherwise c stays the low-damping cluster's and a note says why.
+/// most fs/4), and take c, the pair and the real pole from it when it holds: misfit within [`covssi::refine::MISFIT_LIMIT`],
+/// k > 0, and a most likely c not below 0 by more than three standard errors (then c is
+/// held at 0; see [`zener_spectrum`]). Otherwise c stays the low-damping cluster's and a
+/// note says why.
 pub fn fit_zener_spectrum(
     y: &[f64],
     fs: f64,
@@ -800,11 +801,12 @@ pub fn fit_zener_spectrum(
                     "the record does not follow it (misfit {:.3})",
                     f.misfit
                 ))
-            } else if f.c < 0.0 || f.k <= 0.0 {
+            } else if let Some([c, se]) = f.unconstrained_c.filter(|[c, se]| *c < -3.0 * se) {
                 Some(format!(
-                    "it gives c = {:.3} ± {:.3} N s/m and k = {:.1} N/m, not both positive (is the force white over the band?)",
-                    f.c, f.se[0], f.k
+                    "its most likely c is {c:.3} ± {se:.3} N s/m, below 0 by more than three standard errors (is the force white over the band?)"
                 ))
+            } else if f.k <= 0.0 {
+                Some(format!("it gives k = {:.1} N/m", f.k))
             } else {
                 None
             };
@@ -817,10 +819,15 @@ pub fn fit_zener_spectrum(
                     sel.pair = f.pair;
                     sel.real = Some(f.real);
                     sel.c = f.c;
-                    sel.c_source = format!(
-                        "Zener spectral fit (white force assumed): c = {:.3} ± {:.3} N s/m",
-                        f.c, f.se[0]
-                    );
+                    sel.c_source = match f.unconstrained_c {
+                        None => format!(
+                            "Zener spectral fit (white force assumed): c = {:.3} ± {:.3} N s/m",
+                            f.c, f.se[0]
+                        ),
+                        Some([c, se]) => format!(
+                            "Zener spectral fit (white force assumed): c held at its bound 0, the most likely c being {c:.3} ± {se:.3} N s/m"
+                        ),
+                    };
                 }
             }
             Some(f)
