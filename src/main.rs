@@ -1142,12 +1142,15 @@ fn ident(a: &IdentArgs) -> Result<(), Error> {
     }
     if let Some(f) = &id.zener_spectrum {
         println!(
-            "zener spectral fit (white force, {} frequencies up to {:.1} Hz, misfit {:.3}): c = {:.3} ± {:.3} N s/m, k = {:.1} ± {:.1} N/m, k_inf = {:.1} ± {:.1} N/m, omega = {:.3} ± {:.3} rad/s; force density {:.4e} ± {:.1e} N^2 s, noise std {:.3e}",
+            "zener spectral fit (white force, {} frequencies up to {:.1} Hz, misfit {:.3}): c = {:.3} ± {:.3} N s/m{}, k = {:.1} ± {:.1} N/m, k_inf = {:.1} ± {:.1} N/m, omega = {:.3} ± {:.3} rad/s; force density {:.4e} ± {:.1e} N^2 s, noise std {:.3e}",
             f.bins,
             f.max_frequency_hz,
             f.misfit,
             f.c,
             f.se[0],
+            f.unconstrained_c.map_or(String::new(), |[c, se]| format!(
+                " (held at 0: the most likely c is {c:.3} ± {se:.3})"
+            )),
             f.k,
             f.se[1],
             f.k_inf,
@@ -1215,7 +1218,7 @@ fn ident(a: &IdentArgs) -> Result<(), Error> {
             "linear": osc_json(&id.models.linear),
             "zener": id.models.zener.as_ref().map(osc_json),
             "zener_spectrum": id.zener_spectrum.as_ref().map(|f| json!({"c": f.c, "k": f.k, "k_inf": f.k_inf, "omega": f.omega,
-                "se": {"c": f.se[0], "k": f.se[1], "k_inf": f.se[2], "omega": f.se[3]},
+                "se": {"c": f.se[0], "k": f.se[1], "k_inf": f.se[2], "omega": f.se[3]}, "unconstrained_c": f.unconstrained_c,
                 "force_density": f.force_density, "force_density_se": f.force_density_se, "noise_std": f.noise_std,
                 "misfit": f.misfit, "frequencies": f.bins, "max_frequency_hz": f.max_frequency_hz})),
             "bouc_wen": bouc_wen.as_ref().map(osc_json),
