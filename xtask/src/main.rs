@@ -3,10 +3,14 @@
 //! - `cargo xtask bench` prints one line per figure, `name value unit`.
 //! - `cargo xtask sweep [--levels 10:90:10] [--samples N] [--seed S] [--out DIR]` runs the
 //!   paper's Section 5 amplitude study (see `sweep.rs`).
+//! - `cargo xtask sweep-random [--levels 10:90:10] [--samples N] [--seed S] [--out DIR]` runs
+//!   it under a white force, with c from the Zener spectral fit and from the paper's guess
+//!   (see `random_sweep.rs`).
 //! - `cargo xtask compare-tools [--seeds N] [--first-seed S] [--timing] [--clusters] [--crb] [--cases NAMES]`
 //!   runs covssi beside pyOMA2 and koma (see `compare.rs`).
 
 mod compare;
+mod random_sweep;
 mod sweep;
 
 use std::time::Instant;
@@ -17,7 +21,7 @@ use hyst_sim::{Input, SimOptions, simulate};
 
 fn usage() -> ! {
     eprintln!(
-        "usage: cargo xtask bench [rk4] [covssi] [ident] [refine]\n       cargo xtask sweep [--levels FROM:TO:STEP] [--samples N] [--seed S] [--out DIR]\n       cargo xtask compare-tools [--seeds N] [--first-seed S] [--timing] [--clusters] [--covssi-only] [--crb] [--cases NAMES]"
+        "usage: cargo xtask bench [rk4] [covssi] [ident] [refine]\n       cargo xtask sweep [--levels FROM:TO:STEP] [--samples N] [--seed S] [--out DIR]\n       cargo xtask sweep-random [--levels FROM:TO:STEP] [--samples N] [--seed S] [--out DIR]\n       cargo xtask compare-tools [--seeds N] [--first-seed S] [--timing] [--clusters] [--covssi-only] [--crb] [--cases NAMES]"
     );
     std::process::exit(2)
 }
@@ -37,12 +41,13 @@ fn parse_levels(s: &str) -> Option<Vec<f64>> {
     }
 }
 
-fn sweep_cmd(args: &[String]) {
+/// The options of `sweep` and `sweep-random` from the command line, with their defaults.
+fn sweep_options(args: &[String], samples: usize, out: &str) -> sweep::SweepOptions {
     let mut opts = sweep::SweepOptions {
         levels: (1..=9).map(|i| 10.0 * i as f64).collect(),
-        samples: 1 << 20,
+        samples,
         seed: 1,
-        out: std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/sweep"),
+        out: std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(out),
         progress: true,
     };
     let mut it = args.iter();
@@ -60,15 +65,28 @@ fn sweep_cmd(args: &[String]) {
         eprintln!("error: levels must be > 0 N and --samples at least 8192");
         std::process::exit(2);
     }
-    match sweep::run(&opts) {
+    opts
+}
+
+/// A sweep's study: run the levels, write the tables and figures, and the tables as Markdown.
+struct Study<T> {
+    run: fn(&sweep::SweepOptions) -> sweep::Outcome<T>,
+    write: fn(&std::path::Path, &[T], f64, usize) -> Result<(), String>,
+    markdown: fn(&[T], f64, usize) -> String,
+}
+
+/// Run `study` with the options `args` gives (defaults: `samples`, the folder `out`), print
+/// its tables and the wall time as `{name}_seconds`; exit 1 with the message on failure.
+fn sweep_cmd<T>(args: &[String], samples: usize, out: &str, name: &str, study: Study<T>) {
+    let opts = sweep_options(args, samples, out);
+    let done = (study.run)(&opts).and_then(|(results, secs)| {
+        (study.write)(&opts.out, &results, secs, opts.samples).map(|()| (results, secs))
+    });
+    match done {
         Ok((results, secs)) => {
-            if let Err(e) = sweep::write(&opts.out, &results, secs, opts.samples) {
-                eprintln!("error: {e}");
-                std::process::exit(1);
-            }
-            print!("{}", sweep::markdown(&results, secs, opts.samples));
+            print!("{}", (study.markdown)(&results, secs, opts.samples));
             println!("\nwritten to {}", opts.out.display());
-            println!("sweep_seconds {secs:.2} s");
+            println!("{name}_seconds {secs:.2} s");
         }
         Err(e) => {
             eprintln!("error: {e}");
@@ -512,7 +530,28 @@ fn main() {
                 }
             }
         }
-        Some("sweep") => sweep_cmd(&args[1..]),
+        Some("sweep") => sweep_cmd(
+            &args[1..],
+            1 << 20,
+            "../target/sweep",
+            "sweep",
+            Study {
+                run: sweep::run,
+                write: sweep::write,
+                markdown: sweep::markdown,
+            },
+        ),
+        Some("sweep-random") => sweep_cmd(
+            &args[1..],
+            1 << 17,
+            "../target/sweep-random",
+            "sweep_random",
+            Study {
+                run: random_sweep::run,
+                write: random_sweep::write,
+                markdown: random_sweep::markdown,
+            },
+        ),
         Some("compare-tools") => {
             if let Err(e) = compare::run(&args[1..]) {
                 eprintln!("error: {e}");

@@ -82,7 +82,7 @@ pub struct LevelResult {
     pub overlay: (Vec<f64>, Vec<f64>, Vec<f64>),
 }
 
-fn eps_of(model: Option<&Oscillator>, u: &[f64], y: &[f64]) -> (f64, Vec<f64>) {
+pub(crate) fn eps_of(model: Option<&Oscillator>, u: &[f64], y: &[f64]) -> (f64, Vec<f64>) {
     match model.map(|m| hyst_ident::simulate_model(m, u, FS, true)) {
         Some(Ok(yhat)) => (hyst_ident::epsilon(&yhat, y).epsilon, yhat),
         _ => (f64::NAN, Vec::new()),
@@ -227,8 +227,22 @@ pub fn paper_line(level: f64) -> f64 {
     0.022 + (0.036 - 0.022) * (level - 5.0) / 90.0
 }
 
+/// A sweep's results in level order and its wall time (s), or why it failed.
+pub type Outcome<T> = Result<(Vec<T>, f64), String>;
+
 /// Run all levels in parallel; returns the results in level order.
-pub fn run(opts: &SweepOptions) -> Result<(Vec<LevelResult>, f64), String> {
+pub fn run(opts: &SweepOptions) -> Outcome<LevelResult> {
+    run_levels(opts, "sweep", run_level)
+}
+
+/// Run `level(|F|, index, samples, seed)` for every level of `opts` in parallel, with a
+/// progress bar named `name` when asked; returns the results in level order and the wall
+/// time (s).
+pub(crate) fn run_levels<T: Send>(
+    opts: &SweepOptions,
+    name: &str,
+    level: impl Fn(f64, usize, usize, u64) -> Result<T, String> + Sync,
+) -> Outcome<T> {
     let t0 = Instant::now();
     let bar = if opts.progress {
         indicatif::ProgressBar::new(opts.levels.len() as u64)
@@ -236,15 +250,17 @@ pub fn run(opts: &SweepOptions) -> Result<(Vec<LevelResult>, f64), String> {
         indicatif::ProgressBar::hidden()
     };
     bar.set_style(
-        indicatif::ProgressStyle::with_template("sweep {bar:30} {pos}/{len} levels {elapsed}")
-            .map_err(|e| e.to_string())?,
+        indicatif::ProgressStyle::with_template(&format!(
+            "{name} {{bar:30}} {{pos}}/{{len}} levels {{elapsed}}"
+        ))
+        .map_err(|e| e.to_string())?,
     );
-    let results: Result<Vec<LevelResult>, String> = opts
+    let results: Result<Vec<T>, String> = opts
         .levels
         .par_iter()
         .enumerate()
         .map(|(i, &l)| {
-            let r = run_level(l, i, opts.samples, opts.seed);
+            let r = level(l, i, opts.samples, opts.seed);
             bar.inc(1);
             r
         })
@@ -331,9 +347,14 @@ fn row(r: &LevelResult) -> [f64; 34] {
 
 /// The results table as CSV (ε as fractions), one row per level.
 pub fn csv(results: &[LevelResult]) -> String {
-    let mut s = COLUMNS.join(",") + "\n";
-    for r in results {
-        let cells: Vec<String> = row(r).iter().map(|v| format!("{v:e}")).collect();
+    csv_table(&COLUMNS, results.iter().map(|r| row(r).to_vec()))
+}
+
+/// A CSV table: the header `columns`, then one line per row, every value in `{:e}` form.
+pub(crate) fn csv_table(columns: &[&str], rows: impl Iterator<Item = Vec<f64>>) -> String {
+    let mut s = columns.join(",") + "\n";
+    for r in rows {
+        let cells: Vec<String> = r.iter().map(|v| format!("{v:e}")).collect();
         s += &cells.join(",");
         s += "\n";
     }
@@ -407,6 +428,16 @@ pub fn markdown(results: &[LevelResult], seconds: f64, samples: usize) -> String
 
 use hyst::plot::chart;
 
+/// Create the folder `out` and write `results.csv` and `results.md` into it.
+pub(crate) fn write_tables(out: &Path, csv: String, markdown: String) -> Result<(), String> {
+    std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
+    for (name, text) in [("results.csv", csv), ("results.md", markdown)] {
+        std::fs::write(out.join(name), text)
+            .map_err(|e| format!("{}: {e}", out.join(name).display()))?;
+    }
+    Ok(())
+}
+
 /// Write results.csv, results.md and the figures (6–10) into `out`.
 pub fn write(
     out: &Path,
@@ -415,13 +446,7 @@ pub fn write(
     samples: usize,
 ) -> Result<(), String> {
     use plotters::style::RGBColor;
-    std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
-    let w = |name: &str, text: String| {
-        std::fs::write(out.join(name), text)
-            .map_err(|e| format!("{}: {e}", out.join(name).display()))
-    };
-    w("results.csv", csv(results))?;
-    w("results.md", markdown(results, seconds, samples))?;
+    write_tables(out, csv(results), markdown(results, seconds, samples))?;
     let purple = RGBColor(130, 50, 170);
     let (blue, black, red, grey, green) = (
         RGBColor(40, 100, 200),
@@ -575,6 +600,34 @@ pub fn write(
     Ok(())
 }
 
+/// Run levels 20 and 60 N on `samples` samples (seed 3) by `run`, on several threads and on
+/// one, and check that `csv` gives the same table bit for bit; returns the results and an
+/// empty folder named after `name` to write them into.
+#[cfg(test)]
+pub(crate) fn reproducible<T: Send>(
+    name: &str,
+    samples: usize,
+    run: impl Fn(&SweepOptions) -> Outcome<T> + Sync,
+    csv: impl Fn(&[T]) -> String,
+) -> (Vec<T>, PathBuf) {
+    let dir = std::env::temp_dir().join(format!("{name}-{}", std::process::id()));
+    let opts = SweepOptions {
+        levels: vec![20.0, 60.0],
+        samples,
+        seed: 3,
+        out: dir.clone(),
+        progress: false,
+    };
+    let (r1, _) = run(&opts).unwrap();
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let (r2, _) = one.install(|| run(&opts)).unwrap();
+    assert_eq!(csv(&r1), csv(&r2));
+    (r1, dir)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -583,22 +636,8 @@ mod tests {
     /// seed gives the same table bit for bit on one thread and on several.
     #[test]
     fn two_levels_small_record_reproducible() {
-        let dir = std::env::temp_dir().join(format!("hyst-sweep-{}", std::process::id()));
-        let opts = SweepOptions {
-            levels: vec![20.0, 60.0],
-            samples: 1 << 15,
-            seed: 3,
-            out: dir.clone(),
-            progress: false,
-        };
-        let (r1, secs) = run(&opts).unwrap();
-        let one = rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .build()
-            .unwrap();
-        let (r2, _) = one.install(|| run(&opts)).unwrap();
-        assert_eq!(csv(&r1), csv(&r2));
-        write(&dir, &r1, secs, opts.samples).unwrap();
+        let (r1, dir) = reproducible("hyst-sweep", 1 << 15, run, csv);
+        write(&dir, &r1, 0.0, 1 << 15).unwrap();
         let text = std::fs::read_to_string(dir.join("results.csv")).unwrap();
         let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
         assert_eq!(
