@@ -223,7 +223,9 @@ pub fn write(
     samples: usize,
 ) -> Result<(), String> {
     use hyst::plot::chart;
-    use hyst::plot::colors::{BLACK as black, BLUE as blue, GREY as grey, RED as red};
+    use hyst::plot::colors::{
+        BLACK as black, BLUE as blue, GREY as grey, ORANGE as orange, RED as red,
+    };
     crate::sweep::write_tables(out, csv(results), markdown(results, seconds, samples))?;
     let by = |f: &dyn Fn(&RandomLevel) -> f64| -> Vec<(f64, f64)> {
         results.iter().map(|r| (r.level_n, f(r))).collect()
@@ -290,7 +292,7 @@ pub fn write(
             series.push((
                 "most likely c, where held at 0".into(),
                 by(&|r| r.c_unconstrained),
-                black,
+                orange,
             ));
         }
         if let Some(t) = truth {
