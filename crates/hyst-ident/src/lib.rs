@@ -921,15 +921,13 @@ pub fn welch_psd(y: &[f64], fs: f64, segment: usize) -> (Vec<f64>, Vec<f64>) {
     let mut count = 0usize;
     let mut start = 0;
     while start + seg <= y.len() {
-        for (b, a) in acc.iter_mut().enumerate() {
-            let w = 2.0 * std::f64::consts::PI * b as f64 / seg as f64;
-            let (mut re, mut im) = (0.0, 0.0);
-            for (k, (v, wk)) in y[start..start + seg].iter().zip(&win).enumerate() {
-                let (sn, cs) = (w * k as f64).sin_cos();
-                re += v * wk * cs;
-                im -= v * wk * sn;
-            }
-            *a += re * re + im * im;
+        let windowed: Vec<f64> = y[start..start + seg]
+            .iter()
+            .zip(&win)
+            .map(|(v, w)| v * w)
+            .collect();
+        for (a, x) in acc.iter_mut().zip(fft::rfft(&windowed)) {
+            *a += x.norm_sqr();
         }
         count += 1;
         start += seg / 2;
@@ -1009,4 +1007,43 @@ pub(crate) fn solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
         b[col] = (b[col] - s) / a[col][col];
     }
     b.iter().all(|v| v.is_finite()).then_some(b)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Welch's PSD by FFT against the defining sums, and its level: a white sequence of
+    /// variance 1 at 100 Hz has a one-sided density of 2/100 per Hz.
+    #[test]
+    fn welch_psd_is_the_windowed_dft() {
+        let y = hyst_sim::excitation::white_noise(3000, 1.0, 5).unwrap();
+        let (f, s) = welch_psd(&y, 100.0, 256);
+        assert_eq!(f.len(), 129);
+        let win: Vec<f64> = (0..256)
+            .map(|i| 0.5 - 0.5 * (2.0 * std::f64::consts::PI * i as f64 / 256.0).cos())
+            .collect();
+        let u: f64 = win.iter().map(|w| w * w).sum();
+        for b in [0usize, 1, 37, 128] {
+            let w = 2.0 * std::f64::consts::PI * b as f64 / 256.0;
+            let (mut total, mut count, mut start) = (0.0, 0, 0);
+            while start + 256 <= y.len() {
+                let (mut re, mut im) = (0.0, 0.0);
+                for k in 0..256 {
+                    re += y[start + k] * win[k] * (w * k as f64).cos();
+                    im -= y[start + k] * win[k] * (w * k as f64).sin();
+                }
+                total += re * re + im * im;
+                count += 1;
+                start += 128;
+            }
+            let direct = 2.0 * total / (100.0 * u * count as f64);
+            // The FFT against the sums: rounding, 1e-13 of the value or so.
+            approx::assert_relative_eq!(s[b], direct, max_relative = 1e-10);
+        }
+        // 22 half-overlapping segments × 127 bins (about 1500 independent exponential values
+        // after the overlap): the mean's standard error is about 3 %, and 10 % is three of them.
+        let mean = s[1..128].iter().sum::<f64>() / 127.0;
+        approx::assert_relative_eq!(mean, 0.02, max_relative = 0.1);
+    }
 }
