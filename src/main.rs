@@ -833,6 +833,55 @@ fn implied_input_figure(
 
 /// Figures like the paper's 3(a) (the correlation function) and 5 (time and PSD overlays of
 /// the identified models on the first validation record).
+/// The record's PSD (Welch, 4096-sample segments) beside the Zener spectral fit's, over the
+/// fitted band, with the fit's noise floor.
+fn zener_spectrum_figure(
+    path: &std::path::Path,
+    y: &[f64],
+    fs: f64,
+    fit: &hyst::ident::zener_spectrum::ZenerSpectralFit,
+) -> Result<(), Error> {
+    use hyst::plot::{chart_log_y, colors};
+    let mean = y.iter().sum::<f64>() / y.len() as f64;
+    let centred: Vec<f64> = y.iter().map(|v| v - mean).collect();
+    let (f, s) = hyst::ident::welch_psd(&centred, fs, 4096);
+    let (f, s): (Vec<f64>, Vec<f64>) = f
+        .into_iter()
+        .zip(s)
+        .skip(1)
+        .take_while(|(f, _)| *f <= fit.max_frequency_hz)
+        .unzip();
+    let model = fit.psd(&f);
+    let floor = 2.0 * fit.noise_std * fit.noise_std / fs;
+    chart_log_y(
+        path,
+        &format!(
+            "Zener spectral fit: c = {:.2} ± {:.2}, k = {:.0}, k∞ = {:.0}, Ω = {:.1}",
+            fit.c, fit.se[0], fit.k, fit.k_inf, fit.omega
+        ),
+        "f (Hz)",
+        "PSD (units²/Hz)",
+        &[
+            (
+                "record (Welch)".into(),
+                f.iter().copied().zip(s).collect(),
+                colors::BLACK,
+            ),
+            (
+                "fitted Zener + noise".into(),
+                f.iter().copied().zip(model).collect(),
+                colors::BLUE,
+            ),
+            (
+                "fitted noise floor".into(),
+                f.iter().map(|&f| (f, floor)).collect(),
+                colors::GREY,
+            ),
+        ],
+    )?;
+    Ok(())
+}
+
 fn ident_figures(
     dir: &std::path::Path,
     id: &hyst::ident::Identification,
@@ -1242,6 +1291,9 @@ fn ident(a: &IdentArgs) -> Result<(), Error> {
         );
         std::fs::write(&p, svg).map_err(|e| fail(format!("{}: {e}", p.display())))?;
         ident_figures(dir, &id, bouc_wen.as_ref(), &validations)?;
+        if let Some(f) = &id.zener_spectrum {
+            zener_spectrum_figure(&dir.join("zener_spectrum.svg"), &y, fs, f)?;
+        }
         if let Some(band) = excitation.filter(|_| id.flatness.is_some()) {
             implied_input_figure(dir, &candidates, &y, fs, &band)?;
         }

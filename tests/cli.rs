@@ -729,13 +729,16 @@ fn ident_finds_c_from_a_record_under_a_white_force() {
         &["--periodic", "--samples", "32768"],
     );
     let json = tmp("zener_white_periodic.json");
-    let (ok, out, err) = ident_zener(&record, &["--json", s(&json)]);
+    let dir = tmp("zener_white_periodic_svg");
+    let (ok, out, err) = ident_zener(&record, &["--json", s(&json), "--svg-dir", s(&dir)]);
     assert!(ok, "{err}");
     assert!(
         out.contains("(Zener spectral fit (white force assumed)"),
         "{out}"
     );
     assert!(out.contains("zener spectral fit (white force, "), "{out}");
+    let svg = std::fs::read_to_string(dir.join("zener_spectrum.svg")).unwrap();
+    assert!(svg.contains("Zener spectral fit: c = "), "{svg}");
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let fit = &v["zener_spectrum"];
