@@ -122,6 +122,12 @@ pub enum IdentError {
         /// Why.
         reason: String,
     },
+    /// The upper edge of a spectral fit's band is not a positive number of Hz.
+    #[error("the band's upper edge must be a positive number of Hz, got {f_max}")]
+    BadMaxFrequency {
+        /// The edge given (Hz).
+        f_max: f64,
+    },
     /// The poles a Zener spectral fit starts from are not a stable pair and a negative real
     /// pole, or no fit from them gave a valid spectrum.
     #[error(
@@ -772,10 +778,10 @@ pub fn identify(y: &[f64], fs: f64, opts: &IdentOptions) -> Result<Identificatio
 /// Step 3b ([`DampingGuess::ZenerSpectrum`]): when the pair and the real pole were refined
 /// (the record follows the stationary model), fit the Zener oscillator to the spectrum of
 /// the record `y` (sampled at `fs`, undecimated) up to three times the pair's frequency (at
-/// most fs/4), and take c, the pair and the real pole from it when it holds: misfit within [`covssi::refine::MISFIT_LIMIT`],
-/// k > 0, and a most likely c not below 0 by more than three standard errors (then c is
-/// held at 0; see [`zener_spectrum`]). Otherwise c stays the low-damping cluster's and a
-/// note says why.
+/// most fs/4), and take c, the pair and the real pole from it when it holds: misfit within
+/// [`covssi::refine::MISFIT_LIMIT`], k > 0, and a most likely c not below 0 by more than
+/// three standard errors (then c is held at 0; see [`zener_spectrum`]). Otherwise c stays
+/// the low-damping cluster's and a note says why.
 pub fn fit_zener_spectrum(
     y: &[f64],
     fs: f64,

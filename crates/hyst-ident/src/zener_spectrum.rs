@@ -332,18 +332,29 @@ pub fn fit(
             value,
         }));
     }
+    if let Some(&first) = y.first()
+        && y.iter().all(|v| *v == first)
+    {
+        return Err(IdentError::Ssi(covssi::SsiError::ConstantChannel {
+            channel: 0,
+            value: first,
+        }));
+    }
+    if !(f_max.is_finite() && f_max > 0.0) {
+        return Err(IdentError::BadMaxFrequency { f_max });
+    }
     if !(pair.re < 0.0 && pair.im > 0.0 && real < 0.0 && pair.re.is_finite() && real.is_finite()) {
         return Err(IdentError::UnstableStart { pair, real });
     }
     let n = y.len();
-    let df = fs / n as f64;
-    let last = ((f_max.min(fs / 2.0) / df).ceil() as usize).min(n.div_ceil(2));
+    let top = f_max.min(fs / 2.0);
+    let last = ((top / (fs / n as f64)).ceil() as usize).min(n.div_ceil(2));
     // Bins 1..last: DC is gone with the mean, and the Nyquist bin is not exponential.
     const MIN_BINS: usize = 60;
     if last < MIN_BINS + 1 {
         return Err(IdentError::TooShort {
             samples: n,
-            needed: ((MIN_BINS + 1) as f64 * fs / f_max.min(fs / 2.0)).ceil() as usize,
+            needed: ((MIN_BINS + 1) as f64 * fs / top).ceil() as usize,
         });
     }
     let spec = rfft(y);
@@ -424,7 +435,7 @@ pub fn fit(
         noise_std: p.noise.sqrt(),
         misfit: covssi::refine::exponential_misfit(ratios),
         bins: setup.band.phasor.len(),
-        max_frequency_hz: f_max.min(fs / 2.0),
+        max_frequency_hz: top,
     })
 }
 
@@ -724,5 +735,15 @@ mod tests {
             fit(&y[..100], 750.0, 2.0, pair, real, 375.0),
             Err(IdentError::TooShort { samples: 100, .. })
         ));
+        assert!(matches!(
+            fit(&[0.5; 4096], 750.0, 2.0, pair, real, 375.0),
+            Err(IdentError::Ssi(covssi::SsiError::ConstantChannel { .. }))
+        ));
+        for f_max in [0.0, -3.0, f64::NAN] {
+            assert!(matches!(
+                fit(&y, 750.0, 2.0, pair, real, f_max),
+                Err(IdentError::BadMaxFrequency { .. })
+            ));
+        }
     }
 }
