@@ -42,6 +42,7 @@
 #![warn(missing_docs)]
 
 pub mod paper;
+pub mod statistical;
 
 use hyst_model::{BoucWen, ZenerParams};
 use nalgebra::Complex;
@@ -80,6 +81,14 @@ pub enum LinearizeError {
         /// c/m.
         c_over_m: f64,
     },
+    /// The statistical linearization gives a Zener element that adds energy on average.
+    #[error(
+        "the statistical linearization gives Ω = {omega} rad/s ≤ 0 (βγ + ρβδ ≤ 0): the element adds energy on average, no Zener element matches"
+    )]
+    NonDissipative {
+        /// The Ω obtained.
+        omega: f64,
+    },
     /// The describing function has no positive stiffness to match.
     #[error("equivalent stiffness K = {stiffness} ≤ 0: no Zener element matches")]
     NonPositiveStiffness {
@@ -110,6 +119,20 @@ pub enum LinearizeError {
         /// Final relative residual.
         residual: f64,
     },
+}
+
+/// Bouc-Wen parameters checked, the error naming the first bad one.
+fn check_bouc_wen(bw: &BoucWen) -> Result<(), LinearizeError> {
+    bw.validate().map_err(|e| match e {
+        hyst_model::ModelError::NonFinite { name, value }
+        | hyst_model::ModelError::NonPositive { name, value } => {
+            LinearizeError::Invalid { name, value }
+        }
+        _ => LinearizeError::Invalid {
+            name: "Bouc-Wen parameters",
+            value: f64::NAN,
+        },
+    })
 }
 
 fn check_amplitude(a: f64) -> Result<(), LinearizeError> {
@@ -240,10 +263,7 @@ fn half_loop(bw: &BoucWen, a: f64, z0: f64, out: Option<&mut Vec<f64>>) -> f64 {
 /// The periodic loop over a half cycle: z(θ) at θ = iπ/2000, i = 0..=2000, with z(π) = −z(0).
 pub fn periodic_half_loop(bw: &BoucWen, a: f64) -> Result<Vec<f64>, LinearizeError> {
     check_amplitude(a)?;
-    bw.validate().map_err(|_| LinearizeError::Invalid {
-        name: "Bouc-Wen parameters",
-        value: f64::NAN,
-    })?;
+    check_bouc_wen(bw)?;
     // Solve G(z0) = z(π; z0) + z0 = 0 by the secant method, started at the top of the loop
     // of the linear element (z0 ≈ αA) and slightly below.
     let g = |z0: f64| half_loop(bw, a, z0, None) + z0;
