@@ -31,12 +31,17 @@
 //!    over the band ([`flatness`]); this replaces the mapped Bouc-Wen model.
 //! 5. [`validate`]: simulate a model with a measured input and report
 //!    $\varepsilon = \text{RMS}(\hat y - y)/(\max y - \min y)$ (eq. 39) and the RMS.
+//!
+//! Across records: [`levels::bouc_wen_from_levels`] takes the step-3b fits of records at two
+//! or more force levels and gives one Bouc-Wen model for all, through the statistical
+//! linearization of [`hyst_linearize::statistical`].
 
 #![warn(missing_docs)]
 
 mod fft;
 pub mod flatness;
 pub mod floor;
+pub mod levels;
 pub mod refine;
 pub mod zener_spectrum;
 
