@@ -8,11 +8,19 @@
 //! Zener and the Bouc-Wen model (the paper's mapping at A = σₓ) of each validated with the
 //! input on one steady-state period (8192 samples) of a fresh realization. Levels run in
 //! parallel; each level's seeds derive from (seed, level index).
+//!
+//! Then, across the levels: the statistical linearization
+//! ([`hyst_linearize::statistical`]) of the true benchmark predicts each level's Zener
+//! (k∞, Ω), against which the identified ones are compared; and one Bouc-Wen model is
+//! identified from all levels' Zener fits ([`levels_model`]) and validated at every level.
 
 use std::path::Path;
 
+use hyst_ident::levels::LevelsBoucWen;
+use hyst_ident::zener_spectrum::ZenerSpectralFit;
 use hyst_ident::{DampingGuess, IdentOptions, Linearization};
-use hyst_model::Oscillator;
+use hyst_linearize::statistical;
+use hyst_model::{Oscillator, ZenerParams};
 use hyst_sim::SimOptions;
 use hyst_sim::excitation::{add_noise, white_noise};
 
@@ -47,6 +55,25 @@ pub struct RandomLevel {
     pub eps_bouc_wen_fit: f64,
     pub eps_zener_cluster: f64,
     pub eps_bouc_wen_cluster: f64,
+    /// The fitted force density q (N² s).
+    pub force_density: f64,
+    /// (σ_v, σ_z, ρ) of the fitted Zener oscillator under q.
+    pub moments: [f64; 3],
+    /// (k∞, Ω) that the statistical linearization of the true benchmark predicts under the
+    /// true force density.
+    pub predicted: [f64; 2],
+    /// ε of the one Bouc-Wen model identified from all levels ([`levels_model`]).
+    pub eps_bouc_wen_levels: f64,
+    /// The spectral fit itself.
+    pub spectral: ZenerSpectralFit,
+}
+
+/// The validation record of level `i`: input and noise-free output.
+fn validation(level: f64, i: usize, seed: u64) -> Result<(Vec<f64>, Vec<f64>), String> {
+    let s0 = seed.wrapping_mul(1000).wrapping_add(10 * i as u64);
+    let uv = white_noise(VALIDATION_SAMPLES, level, s0 + 3).map_err(|e| e.to_string())?;
+    let yv = steady(&uv)?;
+    Ok((uv, yv))
 }
 
 fn steady(u: &[f64]) -> Result<Vec<f64>, String> {
@@ -68,8 +95,7 @@ pub fn run_level(level: f64, i: usize, samples: usize, seed: u64) -> Result<Rand
     let u = white_noise(samples, level, s0 + 1).map_err(|e| e.to_string())?;
     let mut y = steady(&u)?;
     add_noise(&mut y, NOISE, s0 + 2).map_err(|e| e.to_string())?;
-    let uv = white_noise(VALIDATION_SAMPLES, level, s0 + 3).map_err(|e| e.to_string())?;
-    let yv = steady(&uv)?;
+    let (uv, yv) = validation(level, i, seed)?;
     let ident = |damping_guess| {
         let o = IdentOptions {
             linearization: Linearization::Paper,
@@ -88,6 +114,18 @@ pub fn run_level(level: f64, i: usize, samples: usize, seed: u64) -> Result<Rand
     let eps = |m: Option<&Oscillator>| eps_of(m, &uv, &yv).0;
     let [cu, cu_se] = f.unconstrained_c.unwrap_or([f64::NAN; 2]);
     let fit_used = id.poles.c_source.starts_with("Zener spectral fit");
+    let zener = ZenerParams {
+        k_inf: f.k_inf,
+        omega: f.omega,
+    };
+    let mo = statistical::zener_response_moments(f.mass, f.c, f.k, &zener, f.force_density)
+        .map_err(|e| format!("{level} N: moments of the fitted model: {e}"))?;
+    let truth = Oscillator::benchmark();
+    let hyst_model::Restoring::BoucWen(bw) = &truth.restoring else {
+        return Err("the benchmark has no Bouc-Wen element".into());
+    };
+    let (pz, _) = statistical::equivalent_zener(truth.mass, truth.damping, truth.stiffness, bw, q)
+        .map_err(|e| format!("{level} N: statistical linearization of the benchmark: {e}"))?;
     Ok(RandomLevel {
         level_n: level,
         sigma_x: id.prepared.sigma_x,
@@ -104,15 +142,45 @@ pub fn run_level(level: f64, i: usize, samples: usize, seed: u64) -> Result<Rand
         eps_bouc_wen_fit: eps(id.models.bouc_wen_mapped.as_ref()),
         eps_zener_cluster: eps(paper.models.zener.as_ref()),
         eps_bouc_wen_cluster: eps(paper.models.bouc_wen_mapped.as_ref()),
+        force_density: f.force_density,
+        moments: [mo.sigma_v, mo.sigma_z, mo.rho],
+        predicted: [pz.k_inf, pz.omega],
+        eps_bouc_wen_levels: f64::NAN,
+        spectral: f.clone(),
     })
 }
 
-/// Run all levels in parallel; returns the results in level order and the wall time (s).
-pub fn run(opts: &SweepOptions) -> crate::sweep::Outcome<RandomLevel> {
-    crate::sweep::run_levels(opts, "random sweep", run_level)
+/// The one Bouc-Wen model of all levels ([`hyst_ident::levels::bouc_wen_from_levels`]) from
+/// the levels' Zener spectral fits.
+pub fn levels_model(results: &[RandomLevel]) -> Result<LevelsBoucWen, String> {
+    let refs: Vec<&ZenerSpectralFit> = results.iter().map(|r| &r.spectral).collect();
+    hyst_ident::levels::bouc_wen_from_levels(&refs).map_err(|e| e.to_string())
 }
 
-const COLUMNS: [&str; 21] = [
+/// Run all levels in parallel, then the levels' Bouc-Wen model, validated at each level;
+/// returns the results in level order and the wall time (s).
+pub fn run(opts: &SweepOptions) -> crate::sweep::Outcome<RandomLevel> {
+    use rayon::prelude::*;
+    let (mut results, secs) = crate::sweep::run_levels(opts, "random sweep", run_level)?;
+    let t = std::time::Instant::now();
+    if results.len() >= 2 {
+        let model = levels_model(&results)?.oscillator;
+        let eps: Vec<f64> = results
+            .par_iter()
+            .enumerate()
+            .map(|(i, r)| {
+                let (uv, yv) = validation(r.level_n, i, opts.seed)?;
+                Ok(eps_of(Some(&model), &uv, &yv).0)
+            })
+            .collect::<Result<_, String>>()?;
+        for (r, e) in results.iter_mut().zip(eps) {
+            r.eps_bouc_wen_levels = e;
+        }
+    }
+    Ok((results, secs + t.elapsed().as_secs_f64()))
+}
+
+const COLUMNS: [&str; 28] = [
     "level_n",
     "sigma_x",
     "c",
@@ -134,6 +202,13 @@ const COLUMNS: [&str; 21] = [
     "eps_bouc_wen_fit",
     "eps_zener_cluster",
     "eps_bouc_wen_cluster",
+    "force_density",
+    "sigma_v",
+    "sigma_z",
+    "rho",
+    "k_inf_predicted",
+    "omega_c_predicted",
+    "eps_bouc_wen_levels",
 ];
 
 fn row(r: &RandomLevel) -> Vec<f64> {
@@ -152,7 +227,11 @@ fn row(r: &RandomLevel) -> Vec<f64> {
         r.eps_bouc_wen_fit,
         r.eps_zener_cluster,
         r.eps_bouc_wen_cluster,
+        r.force_density,
     ]);
+    v.extend(r.moments);
+    v.extend(r.predicted);
+    v.push(r.eps_bouc_wen_levels);
     v
 }
 
@@ -212,6 +291,67 @@ pub fn markdown(results: &[RandomLevel], seconds: f64, samples: usize) -> String
             p(r.eps_bouc_wen_cluster)
         );
     }
+    s += "\n## The identified Zener against the statistical linearization of the benchmark\n\n\
+          Predicted: the fixed point of the Gaussian linearization of the true benchmark under the \
+          true force density. z: (identified − predicted) / standard error.\n\n\
+          | \\|F\\| (N) | k∞ identified | k∞ predicted | z | Ω identified | Ω predicted | z | σ_v (m/s) | σ_z (N) | ρ |\n\
+          |---|---|---|---|---|---|---|---|---|---|\n";
+    for r in results {
+        let z = |j: usize| (r.fit[2 + j] - r.predicted[j]) / r.fit_se[2 + j];
+        s += &format!(
+            "| {} | {:.0} ± {:.0} | {:.0} | {:+.2} | {:.2} ± {:.2} | {:.2} | {:+.2} | {:.4} | {:.2} | {:.3} |\n",
+            r.level_n,
+            r.fit[2],
+            r.fit_se[2],
+            r.predicted[0],
+            z(0),
+            r.fit[3],
+            r.fit_se[3],
+            r.predicted[1],
+            z(1),
+            r.moments[0],
+            r.moments[1],
+            r.moments[2]
+        );
+    }
+    match levels_model(results) {
+        Ok(fit) => {
+            let model = fit.oscillator;
+            let hyst_model::Restoring::BoucWen(bw) = model.restoring else {
+                unreachable!("the levels' model is a Bouc-Wen oscillator")
+            };
+            s += &format!(
+                "\n## One Bouc-Wen model from all levels\n\n\
+                 (α, βγ, βδ) by weighted least squares from the levels' Zener fits; c and k the \
+                 levels' weighted means. Benchmark: c = 10, k = 50000, α = 50000, βγ = 800, βδ = −1100.\n\n\
+                 c = {:.2} ± {:.2} N s/m, k = {:.0} ± {:.0} N/m, α = {:.0} ± {:.0} N/m, \
+                 βγ = {:.1} ± {:.1} 1/m, βδ = {:.1} ± {:.1} 1/m; χ² per degree of freedom {:.2}.\n\n\
+                 | \\|F\\| (N) | ε Bouc-Wen, all levels | ε Bouc-Wen, this level (A = σₓ) | ε Zener, this level |\n\
+                 |---|---|---|---|\n",
+                model.damping,
+                fit.se[0],
+                model.stiffness,
+                fit.se[1],
+                bw.alpha,
+                fit.se[2],
+                bw.beta_gamma(),
+                fit.se[3],
+                bw.beta * bw.delta,
+                fit.se[4],
+                fit.chi2_per_dof
+            );
+            for r in results {
+                s += &format!(
+                    "| {} | {} | {} | {} |\n",
+                    r.level_n,
+                    p(r.eps_bouc_wen_levels),
+                    p(r.eps_bouc_wen_fit),
+                    p(r.eps_zener_fit)
+                );
+            }
+        }
+        Err(e) => s += &format!("\n## One Bouc-Wen model from all levels\n\nnone: {e}\n"),
+    }
     s
 }
 
@@ -232,7 +372,7 @@ pub fn write(
     };
     chart(
         &out.join("fig_random_epsilon.svg"),
-        "Validation error under a white force: c from the spectrum vs the paper's guess",
+        "Validation error under a white force, by model and source of c",
         "|F| (N)",
         "ε",
         &[
@@ -255,6 +395,11 @@ pub fn write(
                 "Bouc-Wen (A = σₓ), cluster's c".into(),
                 by(&|r| r.eps_bouc_wen_cluster),
                 black,
+            ),
+            (
+                "Bouc-Wen, one model of all levels".into(),
+                by(&|r| r.eps_bouc_wen_levels),
+                orange,
             ),
         ],
     )?;
@@ -295,6 +440,13 @@ pub fn write(
                 orange,
             ));
         }
+        if i >= 2 {
+            series.push((
+                "statistical linearization of the benchmark".into(),
+                by(&|r| r.predicted[i - 2]),
+                black,
+            ));
+        }
         if let Some(t) = truth {
             series.push(("benchmark".into(), by(&|_| t), black));
         }
@@ -322,8 +474,15 @@ mod tests {
         write(&dir, &r1, 0.0, 1 << 14).unwrap();
         let text = std::fs::read_to_string(dir.join("results.csv")).unwrap();
         assert_eq!(text.lines().count(), 3);
-        assert_eq!(text.lines().next().unwrap().split(',').count(), 21);
+        assert_eq!(text.lines().next().unwrap().split(',').count(), 28);
         for r in &r1 {
+            // Wired: the levels' model was built and validated at each level. (On these
+            // short records and two levels it is no better than each level's mapping; the
+            // claim is made on the full sweep, docs/results.md.)
+            assert!(
+                r.eps_bouc_wen_levels > 0.0 && r.eps_bouc_wen_levels < 0.5,
+                "{r:?}"
+            );
             let z = (r.force_ratio - 1.0) / r.force_ratio_se;
             assert!(z.abs() < 4.0, "{r:?}");
             assert!(r.eps_zener_fit > 0.0 && r.eps_zener_fit < 0.2, "{r:?}");
