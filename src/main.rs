@@ -56,6 +56,47 @@ enum Command {
     ///   hyst refine --data SNLS80mV.csv --fs 610.3515625 --start linear --estimate 40650:105712 --test 100:40575 --test 100:32100 --json refine.json
     #[command(verbatim_doc_comment)]
     Refine(RefineArgs),
+    /// One Bouc-Wen model from records of the same structure at several force levels, each
+    /// under a random (white) force: the Zener oscillator fitted to each record's spectrum,
+    /// mapped to Bouc-Wen through the statistical linearization of all levels together.
+    ///
+    /// Example:
+    ///   hyst levels --data bw10.csv bw50.csv bw90.csv --fs 750 --mass 2 --validate bw50v.csv --periodic --json levels.json
+    #[command(verbatim_doc_comment)]
+    Levels(LevelsArgs),
+}
+
+#[derive(Args, Debug)]
+struct LevelsArgs {
+    /// Records with the measured output (CSV with a header), two or more, one per force level.
+    #[arg(long, num_args = 2.., required = true)]
+    data: Vec<PathBuf>,
+    /// Sampling rate of the records (Hz).
+    #[arg(long)]
+    fs: f64,
+    /// Mass of the oscillator (kg), assumed known.
+    #[arg(long)]
+    mass: f64,
+    /// Column of the output (displacement).
+    #[arg(long, default_value = "y")]
+    output_column: String,
+    /// Column of the input force (only used by --validate files).
+    #[arg(long, default_value = "u")]
+    input_column: String,
+    /// Skip this many leading rows of each --data record (e.g. a start-up transient).
+    #[arg(long, default_value_t = 0)]
+    skip: usize,
+    /// Validation records (input and output columns): the model is simulated with the input
+    /// and compared with the output.
+    #[arg(long, num_args = 1..)]
+    validate: Vec<PathBuf>,
+    /// The validation records are one steady-state period of a periodic force (else the
+    /// model is simulated from rest).
+    #[arg(long)]
+    periodic: bool,
+    /// Write the results as JSON here.
+    #[arg(long)]
+    json: Option<PathBuf>,
 }
 
 #[derive(Clone, Copy, ValueEnum, PartialEq, Eq, Debug)]
@@ -1508,6 +1549,99 @@ fn refine(a: &RefineArgs) -> Result<(), Error> {
     Ok(())
 }
 
+fn levels(a: &LevelsArgs) -> Result<(), Error> {
+    use hyst::ident::{self, IdentOptions};
+    use serde_json::json;
+    let fs = check_fs(a.fs)?;
+    if !(a.mass.is_finite() && a.mass > 0.0) {
+        return Err(fail(format!("--mass must be > 0 kg, got {}", a.mass)));
+    }
+    let opts = IdentOptions {
+        mass: a.mass,
+        ..IdentOptions::default()
+    };
+    let mut fits = Vec::with_capacity(a.data.len());
+    let mut rows = Vec::new();
+    for path in &a.data {
+        let name = path.display().to_string();
+        let t = read_csv(path)?;
+        let col = t.column(&a.output_column)?;
+        if a.skip >= col.len() {
+            return Err(fail(format!(
+                "--skip {} leaves none of the {} rows of {name}",
+                a.skip,
+                col.len()
+            )));
+        }
+        let id =
+            ident::identify(&col[a.skip..], fs, &opts).map_err(|e| fail(format!("{name}: {e}")))?;
+        let f = id.zener_spectrum.ok_or_else(|| {
+            fail(format!(
+                "{name}: no Zener spectral fit, so no level for the model ({}); each record must \
+                 be the response to a broadband random force",
+                id.poles.notes.join("; ")
+            ))
+        })?;
+        println!(
+            "{name}: c {:.2} ± {:.2} N s/m, k {:.0} ± {:.0} N/m, k∞ {:.0} ± {:.0} N/m, Ω {:.2} ± {:.2} rad/s, force density {:.4} N² s",
+            f.c, f.se[0], f.k, f.se[1], f.k_inf, f.se[2], f.omega, f.se[3], f.force_density
+        );
+        rows.push(
+            json!({"file": name, "c": f.c, "k": f.k, "k_inf": f.k_inf, "omega": f.omega,
+            "se": f.se, "force_density": f.force_density, "misfit": f.misfit}),
+        );
+        fits.push(f);
+    }
+    let refs: Vec<_> = fits.iter().collect();
+    let model = ident::levels::bouc_wen_from_levels(&refs).map_err(|e| fail(e.to_string()))?;
+    let o = &model.oscillator;
+    let hyst::model::Restoring::BoucWen(bw) = &o.restoring else {
+        return Err(fail("the levels' model has no Bouc-Wen element"));
+    };
+    let se = model.se;
+    println!(
+        "Bouc-Wen of all levels: c {:.2} ± {:.2} N s/m, k {:.0} ± {:.0} N/m, α {:.0} ± {:.0} N/m, βγ {:.1} ± {:.1} 1/m, βδ {:.1} ± {:.1} 1/m (χ² per degree of freedom {:.2})",
+        o.damping,
+        se[0],
+        o.stiffness,
+        se[1],
+        bw.alpha,
+        se[2],
+        bw.beta_gamma(),
+        se[3],
+        bw.beta_delta(),
+        se[4],
+        model.chi2_per_dof
+    );
+    for (r, m) in rows.iter_mut().zip(&model.moments) {
+        r["sigma_v"] = json!(m.sigma_v);
+        r["sigma_z"] = json!(m.sigma_z);
+        r["rho"] = json!(m.rho);
+    }
+    let mut validation = Vec::new();
+    for v in &a.validate {
+        let name = v.display().to_string();
+        let t = read_csv(v)?;
+        let (u, yv) = (t.column(&a.input_column)?, t.column(&a.output_column)?);
+        let r =
+            ident::validate(o, u, yv, fs, a.periodic).map_err(|e| fail(format!("{name}: {e}")))?;
+        println!("validation on {name}: ε = {:.3} %", 100.0 * r.epsilon);
+        validation.push(json!({"file": name, "epsilon": r.epsilon, "rms": r.rms}));
+    }
+    if let Some(path) = &a.json {
+        let doc = json!({
+            "levels": rows,
+            "model": osc_json(o),
+            "se": {"c": se[0], "k": se[1], "alpha": se[2], "beta_gamma": se[3], "beta_delta": se[4]},
+            "chi2_per_dof": model.chi2_per_dof,
+            "validation": validation,
+        });
+        std::fs::write(path, serde_json::to_string_pretty(&doc)?)
+            .map_err(|e| fail(format!("{}: {e}", path.display())))?;
+    }
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
@@ -1516,6 +1650,7 @@ fn main() -> ExitCode {
         Command::Ssi(a) => ssi(a),
         Command::Ident(a) => ident(a),
         Command::Refine(a) => refine(a),
+        Command::Levels(a) => levels(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
