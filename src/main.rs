@@ -749,14 +749,22 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
         );
         let se = |v: Option<f64>| v.map_or("?".to_string(), |v| format!("{v:.4}"));
         for m in &r.modes {
+            let ssi = m.source.map_or_else(
+                || {
+                    format!(
+                        "no SSI mode within {:.0} % of its pole",
+                        100.0 * covssi::refine::SAME_MODE_DISTANCE
+                    )
+                },
+                |i| format!("SSI mode at {:.4} Hz", res.modes[i].frequency_hz),
+            );
             println!(
-                "mode {:>9.4} ± {} Hz  damping {:.4} ± {}  (evidence {:.0}; SSI mode at {:.4} Hz)",
+                "mode {:>9.4} ± {} Hz  damping {:.4} ± {}  (evidence {:.0}; {ssi})",
                 m.frequency_hz,
                 se(m.frequency_se_hz),
                 m.damping_ratio,
                 se(m.damping_se),
                 m.evidence,
-                res.modes[m.source].frequency_hz
             );
         }
         for d in &r.dropped {

@@ -239,6 +239,12 @@ fn f16_bending_and_torsion_modes() {
     // refinement says its model does not hold rather than report confident numbers.
     let r = covssi::refine(&views, 50.0, &res.modes, &covssi::RefineOptions::default()).unwrap();
     eprintln!("F-16: refinement misfit {:.3}", r.misfit);
+    // Its modes move away from SSI's; no two are named after one SSI mode.
+    let named: Vec<usize> = r.modes.iter().filter_map(|m| m.source).collect();
+    let mut distinct = named.clone();
+    distinct.sort_unstable();
+    distinct.dedup();
+    assert_eq!(distinct.len(), named.len(), "{:?}", r.modes);
     assert!(
         r.misfit > covssi::refine::MISFIT_LIMIT,
         "misfit {}",
