@@ -62,6 +62,8 @@ pub struct RandomLevel {
     /// (k∞, Ω) that the statistical linearization of the true benchmark predicts under the
     /// true force density.
     pub predicted: [f64; 2],
+    /// The σₓ it predicts (the record's is `sigma_x`).
+    pub predicted_sigma_x: f64,
     /// ε of the one Bouc-Wen model identified from all levels ([`levels_model`]).
     pub eps_bouc_wen_levels: f64,
     /// The spectral fit itself.
@@ -124,7 +126,7 @@ pub fn run_level(level: f64, i: usize, samples: usize, seed: u64) -> Result<Rand
     let hyst_model::Restoring::BoucWen(bw) = &truth.restoring else {
         return Err("the benchmark has no Bouc-Wen element".into());
     };
-    let (pz, _) = statistical::equivalent_zener(truth.mass, truth.damping, truth.stiffness, bw, q)
+    let (pz, pm) = statistical::equivalent_zener(truth.mass, truth.damping, truth.stiffness, bw, q)
         .map_err(|e| format!("{level} N: statistical linearization of the benchmark: {e}"))?;
     Ok(RandomLevel {
         level_n: level,
@@ -145,6 +147,7 @@ pub fn run_level(level: f64, i: usize, samples: usize, seed: u64) -> Result<Rand
         force_density: f.force_density,
         moments: [mo.sigma_v, mo.sigma_z, mo.rho],
         predicted: [pz.k_inf, pz.omega],
+        predicted_sigma_x: pm.sigma_x,
         eps_bouc_wen_levels: f64::NAN,
         spectral: f.clone(),
     })
@@ -180,7 +183,7 @@ pub fn run(opts: &SweepOptions) -> crate::sweep::Outcome<RandomLevel> {
     Ok((results, secs + t.elapsed().as_secs_f64()))
 }
 
-const COLUMNS: [&str; 28] = [
+const COLUMNS: [&str; 29] = [
     "level_n",
     "sigma_x",
     "c",
@@ -209,6 +212,7 @@ const COLUMNS: [&str; 28] = [
     "k_inf_predicted",
     "omega_c_predicted",
     "eps_bouc_wen_levels",
+    "sigma_x_predicted",
 ];
 
 fn row(r: &RandomLevel) -> Vec<f64> {
@@ -232,6 +236,7 @@ fn row(r: &RandomLevel) -> Vec<f64> {
     v.extend(r.moments);
     v.extend(r.predicted);
     v.push(r.eps_bouc_wen_levels);
+    v.push(r.predicted_sigma_x);
     v
 }
 
@@ -294,12 +299,12 @@ pub fn markdown(results: &[RandomLevel], seconds: f64, samples: usize) -> String
     s += "\n## The identified Zener against the statistical linearization of the benchmark\n\n\
           Predicted: the fixed point of the Gaussian linearization of the true benchmark under the \
           true force density. z: (identified − predicted) / standard error.\n\n\
-          | \\|F\\| (N) | k∞ identified | k∞ predicted | z | Ω identified | Ω predicted | z | σ_v (m/s) | σ_z (N) | ρ |\n\
-          |---|---|---|---|---|---|---|---|---|---|\n";
+          | \\|F\\| (N) | k∞ identified | k∞ predicted | z | Ω identified | Ω predicted | z | σₓ simulated / predicted | σ_v (m/s) | σ_z (N) | ρ |\n\
+          |---|---|---|---|---|---|---|---|---|---|---|\n";
     for r in results {
         let z = |j: usize| (r.fit[2 + j] - r.predicted[j]) / r.fit_se[2 + j];
         s += &format!(
-            "| {} | {:.0} ± {:.0} | {:.0} | {:+.2} | {:.2} ± {:.2} | {:.2} | {:+.2} | {:.4} | {:.2} | {:.3} |\n",
+            "| {} | {:.0} ± {:.0} | {:.0} | {:+.2} | {:.2} ± {:.2} | {:.2} | {:+.2} | {:.3} | {:.4} | {:.2} | {:.3} |\n",
             r.level_n,
             r.fit[2],
             r.fit_se[2],
@@ -309,6 +314,7 @@ pub fn markdown(results: &[RandomLevel], seconds: f64, samples: usize) -> String
             r.fit_se[3],
             r.predicted[1],
             z(1),
+            r.sigma_x / r.predicted_sigma_x,
             r.moments[0],
             r.moments[1],
             r.moments[2]
@@ -474,7 +480,7 @@ mod tests {
         write(&dir, &r1, 0.0, 1 << 14).unwrap();
         let text = std::fs::read_to_string(dir.join("results.csv")).unwrap();
         assert_eq!(text.lines().count(), 3);
-        assert_eq!(text.lines().next().unwrap().split(',').count(), 28);
+        assert_eq!(text.lines().next().unwrap().split(',').count(), 29);
         for r in &r1 {
             // Wired: the levels' model was built and validated at each level. (On these
             // short records and two levels it is no better than each level's mapping; the
