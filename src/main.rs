@@ -747,7 +747,17 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
             r.fitted_by(),
             r.penalty
         );
-        let se = |v: Option<f64>| v.map_or("?".to_string(), |v| format!("{v:.4}"));
+        // A standard error beyond 1e5 (a real pole far outside the band, say) in exponent
+        // form: thirty digits say nothing more than that the record does not determine it.
+        let se = |v: Option<f64>| {
+            v.map_or("?".to_string(), |v| {
+                if v.abs() < 1e5 {
+                    format!("{v:.4}")
+                } else {
+                    format!("{v:.1e}")
+                }
+            })
+        };
         for m in &r.modes {
             let ssi = m.source.map_or_else(
                 || {
