@@ -10,6 +10,7 @@
 //! paper's mapping needs eq. 37's α, which does not hold). The linearization leaves c and k
 //! as they are: the model's c and k are the levels' inverse-variance weighted means.
 
+use hyst_linearize::LinearizeError;
 use hyst_linearize::statistical::{self, LevelEquivalent, ResponseMoments};
 use hyst_model::{Oscillator, ZenerParams};
 
@@ -34,21 +35,15 @@ pub struct LevelsBoucWen {
 /// One Bouc-Wen model from the Zener spectral fits of records at two or more force levels of
 /// the same structure (same mass).
 pub fn bouc_wen_from_levels(fits: &[&ZenerSpectralFit]) -> Result<LevelsBoucWen, IdentError> {
-    let Some(first) = fits.first() else {
-        return Err(IdentError::Linearize(
-            hyst_linearize::LinearizeError::Invalid {
-                name: "levels (two or more are needed for three unknowns)",
-                value: 0.0,
-            },
-        ));
+    let first = match fits {
+        [first, _, ..] => first,
+        _ => return Err(LinearizeError::TooFewLevels { levels: fits.len() }.into()),
     };
     if let Some(f) = fits.iter().find(|f| f.mass != first.mass) {
-        return Err(IdentError::Linearize(
-            hyst_linearize::LinearizeError::Invalid {
-                name: "mass (the levels' fits must share one structure's mass)",
-                value: f.mass,
-            },
-        ));
+        return Err(IdentError::MassesDiffer {
+            first: first.mass,
+            other: f.mass,
+        });
     }
     let mut levels = Vec::with_capacity(fits.len());
     for f in fits {
@@ -71,12 +66,11 @@ pub fn bouc_wen_from_levels(fits: &[&ZenerSpectralFit]) -> Result<LevelsBoucWen,
     let (c, c_se) = weighted_mean(fits.iter().map(|f| (f.c, c_se(f))));
     let (k, k_se) = weighted_mean(fits.iter().map(|f| (f.k, f.se[1])));
     if !(c.is_finite() && k.is_finite()) {
-        return Err(IdentError::Linearize(
-            hyst_linearize::LinearizeError::Invalid {
-                name: "c and k (no level has finite standard errors)",
-                value: if c.is_finite() { k } else { c },
-            },
-        ));
+        return Err(LinearizeError::Invalid {
+            name: "c and k (no level has a finite standard error of them)",
+            value: if c.is_finite() { k } else { c },
+        }
+        .into());
     }
     let oscillator = Oscillator::bouc_wen(first.mass, c, k, fit.bouc_wen);
     Ok(LevelsBoucWen {
@@ -161,17 +155,30 @@ mod tests {
         approx::assert_relative_eq!(b.beta * b.delta, bw.beta * bw.delta, max_relative = 1e-6);
         assert!(got.chi2_per_dof < 1e-6, "{got:?}");
         assert_eq!(got.moments.len(), 3);
-        // Bad input: one level, or two masses.
-        assert!(bouc_wen_from_levels(&refs[..1]).is_err());
+        // Bad input: one level, two masses, none.
+        assert!(matches!(
+            bouc_wen_from_levels(&refs[..1]),
+            Err(IdentError::Linearize(LinearizeError::TooFewLevels {
+                levels: 1
+            }))
+        ));
         let other = ZenerSpectralFit {
             mass: 3.0,
             ..fits[0].clone()
         };
         assert!(matches!(
             bouc_wen_from_levels(&[&fits[1], &other]),
-            Err(IdentError::Linearize(hyst_linearize::LinearizeError::Invalid { value, .. })) if value == 3.0
+            Err(IdentError::MassesDiffer {
+                first: 2.0,
+                other: 3.0
+            })
         ));
-        assert!(bouc_wen_from_levels(&[]).is_err());
+        assert!(matches!(
+            bouc_wen_from_levels(&[]),
+            Err(IdentError::Linearize(LinearizeError::TooFewLevels {
+                levels: 0
+            }))
+        ));
     }
 
     #[test]

@@ -144,6 +144,14 @@ pub enum IdentError {
         /// The real pole given (rad/s).
         real: f64,
     },
+    /// Records of one structure were given with different masses.
+    #[error("the levels' records must share one structure's mass: {first} kg and {other} kg")]
+    MassesDiffer {
+        /// The first record's mass (kg).
+        first: f64,
+        /// A record's other mass (kg).
+        other: f64,
+    },
     /// Input and output records differ in length.
     #[error("input has {input} samples, output {output}")]
     LengthMismatch {

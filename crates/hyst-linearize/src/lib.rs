@@ -89,6 +89,20 @@ pub enum LinearizeError {
         /// The Ω obtained.
         omega: f64,
     },
+    /// Fewer force levels than the three unknowns (α, βγ, βδ) need.
+    #[error("{levels} level(s) given: two or more are needed for α, βγ and βδ")]
+    TooFewLevels {
+        /// Levels given.
+        levels: usize,
+    },
+    /// The levels' equations do not separate α, βγ and βδ (the same moments twice, say).
+    #[error(
+        "the levels do not determine α, βγ and βδ: their scaled normal matrix has smallest eigenvalue {smallest_eigenvalue:.3e}"
+    )]
+    LevelsDegenerate {
+        /// Smallest eigenvalue of the normal matrix scaled to a unit diagonal.
+        smallest_eigenvalue: f64,
+    },
     /// The describing function has no positive stiffness to match.
     #[error("equivalent stiffness K = {stiffness} ≤ 0: no Zener element matches")]
     NonPositiveStiffness {

@@ -255,9 +255,8 @@ pub fn bouc_wen_from_levels(
     levels: &[LevelEquivalent],
 ) -> Result<BoucWenFromLevels, LinearizeError> {
     if levels.len() < 2 {
-        return Err(LinearizeError::Invalid {
-            name: "levels (two or more are needed for three unknowns)",
-            value: levels.len() as f64,
+        return Err(LinearizeError::TooFewLevels {
+            levels: levels.len(),
         });
     }
     let mut normal = Matrix3::<f64>::zeros();
@@ -298,9 +297,8 @@ pub fn bouc_wen_from_levels(
     let inverse = (smallest > 1e-10)
         .then(|| scaled.try_inverse())
         .flatten()
-        .ok_or(LinearizeError::Invalid {
-            name: "levels (their equations do not determine α, βγ and βδ; smallest eigenvalue)",
-            value: smallest,
+        .ok_or(LinearizeError::LevelsDegenerate {
+            smallest_eigenvalue: smallest,
         })?;
     let cov = Matrix3::from_fn(|i, j| inverse[(i, j)] * scale[i] * scale[j]);
     let x = cov * rhs;
@@ -503,9 +501,15 @@ mod tests {
             omega_se: 1.0,
             moments: mo,
         };
-        assert!(bouc_wen_from_levels(&[one]).is_err());
+        assert!(matches!(
+            bouc_wen_from_levels(&[one]),
+            Err(LinearizeError::TooFewLevels { levels: 1 })
+        ));
         // Two levels with the same moments cannot separate α from βδ.
-        assert!(bouc_wen_from_levels(&[one, one]).is_err());
+        assert!(matches!(
+            bouc_wen_from_levels(&[one, one]),
+            Err(LinearizeError::LevelsDegenerate { .. })
+        ));
         let nan = LevelEquivalent {
             k_inf_se: f64::NAN,
             ..one
