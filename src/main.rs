@@ -97,6 +97,9 @@ struct LevelsArgs {
     /// Write the results as JSON here.
     #[arg(long)]
     json: Option<PathBuf>,
+    /// Write figures (SVG) into this folder: each level's k∞ and Ω beside the model's.
+    #[arg(long)]
+    svg_dir: Option<PathBuf>,
 }
 
 #[derive(Clone, Copy, ValueEnum, PartialEq, Eq, Debug)]
@@ -1579,6 +1582,7 @@ fn levels(a: &LevelsArgs) -> Result<(), Error> {
         ..IdentOptions::default()
     };
     let mut fits = Vec::with_capacity(a.data.len());
+    let mut sigma_x = Vec::with_capacity(a.data.len());
     let mut rows = Vec::new();
     for path in &a.data {
         let name = path.display().to_string();
@@ -1593,6 +1597,7 @@ fn levels(a: &LevelsArgs) -> Result<(), Error> {
         }
         let id =
             ident::identify(&col[a.skip..], fs, &opts).map_err(|e| fail(format!("{name}: {e}")))?;
+        sigma_x.push(id.prepared.sigma_x);
         let f = id.zener_spectrum.ok_or_else(|| {
             fail(format!(
                 "{name}: no Zener spectral fit, so no level for the model ({}); each record must \
@@ -1631,10 +1636,94 @@ fn levels(a: &LevelsArgs) -> Result<(), Error> {
         se[4],
         model.chi2_per_dof
     );
-    for (r, m) in rows.iter_mut().zip(&model.moments) {
+    // The model's own statistical linearization at each level's force density, beside the
+    // Zener identified there: how well one element explains every level.
+    let own: Vec<Option<hyst::model::ZenerParams>> = fits
+        .iter()
+        .map(|f| {
+            hyst::linearize::statistical::equivalent_zener(
+                o.mass,
+                o.damping,
+                o.stiffness,
+                bw,
+                f.force_density,
+            )
+            .ok()
+            .map(|(z, _)| z)
+        })
+        .collect();
+    let show = |v: Option<f64>, digits: usize| v.map_or("—".into(), |v| format!("{v:.digits$}"));
+    for ((r, m), (f, z)) in rows
+        .iter_mut()
+        .zip(&model.moments)
+        .zip(fits.iter().zip(&own))
+    {
         r["sigma_v"] = json!(m.sigma_v);
         r["sigma_z"] = json!(m.sigma_z);
         r["rho"] = json!(m.rho);
+        r["model_k_inf"] = json!(z.map(|z| z.k_inf));
+        r["model_omega"] = json!(z.map(|z| z.omega));
+        println!(
+            "  {}: k∞ {:.0} ± {:.0} (model {}), Ω {:.2} ± {:.2} (model {})",
+            r["file"].as_str().unwrap_or(""),
+            f.k_inf,
+            f.se[2],
+            show(z.map(|z| z.k_inf), 0),
+            f.omega,
+            f.se[3],
+            show(z.map(|z| z.omega), 2)
+        );
+    }
+    if let Some(dir) = &a.svg_dir {
+        use hyst::plot::{chart, colors};
+        std::fs::create_dir_all(dir).map_err(|e| fail(format!("{}: {e}", dir.display())))?;
+        let at = |v: &dyn Fn(usize) -> Option<f64>| -> Vec<(f64, f64)> {
+            (0..fits.len())
+                .filter_map(|i| v(i).map(|y| (sigma_x[i], y)))
+                .collect()
+        };
+        for (j, file, title, yl) in [
+            (
+                2,
+                "levels_kinf.svg",
+                "Zener stiffness k∞ by level",
+                "k∞ (N/m)",
+            ),
+            (
+                3,
+                "levels_omega.svg",
+                "Corner frequency Ω by level",
+                "Ω (rad/s)",
+            ),
+        ] {
+            let value = |i: usize| if j == 2 { fits[i].k_inf } else { fits[i].omega };
+            let model = |i: usize| own[i].map(|z| if j == 2 { z.k_inf } else { z.omega });
+            chart(
+                &dir.join(file),
+                title,
+                "σₓ of the record (m)",
+                yl,
+                &[
+                    ("identified".into(), at(&|i| Some(value(i))), colors::BLUE),
+                    (
+                        "− SE".into(),
+                        at(&|i| Some(value(i) - fits[i].se[j])),
+                        colors::GREY,
+                    ),
+                    (
+                        "+ SE".into(),
+                        at(&|i| Some(value(i) + fits[i].se[j])),
+                        colors::GREY,
+                    ),
+                    (
+                        "the model's statistical linearization".into(),
+                        at(&model),
+                        colors::BLACK,
+                    ),
+                ],
+            )
+            .map_err(fail)?;
+        }
     }
     let mut validation = Vec::new();
     for v in &a.validate {

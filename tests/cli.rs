@@ -982,6 +982,7 @@ fn levels_gives_one_bouc_wen_model_of_several_records() {
         .collect();
     let val = bouc_wen_white_record("bw_levels_val.csv", "50", "8192", "4", "0");
     let json = tmp("bw_levels.json");
+    let svg_dir = tmp("bw_levels_svg");
     let mut args = vec!["levels", "--data"];
     args.extend(records.iter().map(|p| s(p)));
     args.extend([
@@ -994,13 +995,32 @@ fn levels_gives_one_bouc_wen_model_of_several_records() {
         "--periodic",
         "--json",
         s(&json),
+        "--svg-dir",
+        s(&svg_dir),
     ]);
     let (ok, out, err) = hyst(&args);
     assert!(ok, "{err}");
     assert!(out.contains("Bouc-Wen of all levels: c "), "{out}");
+    for f in ["levels_kinf.svg", "levels_omega.svg"] {
+        let svg = std::fs::read_to_string(svg_dir.join(f)).unwrap();
+        assert!(
+            svg.contains("the model&apos;s statistical linearization"),
+            "{f}"
+        );
+    }
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert_eq!(v["levels"].as_array().map(Vec::len), Some(3));
+    // The model's own linearization at each level lies near the Zener identified there.
+    for lv in v["levels"].as_array().unwrap() {
+        let (got, own, se) = (
+            lv["k_inf"].as_f64().unwrap(),
+            lv["model_k_inf"].as_f64().unwrap(),
+            lv["se"][2].as_f64().unwrap(),
+        );
+        // Three levels, three parameters fitted to six numbers: each within 4 SE.
+        assert!((got - own).abs() < 4.0 * se, "{lv}");
+    }
     assert!(
         v["levels"][2]["sigma_z"].as_f64().unwrap() > v["levels"][0]["sigma_z"].as_f64().unwrap()
     );
