@@ -171,7 +171,8 @@ pub fn zener_response_moments(
 /// The equivalent Zener element of the Bouc-Wen oscillator $m\ddot x + c\dot x + kx + z = u$
 /// under a white force of two-sided density `q`: the fixed point of
 /// [`zener_response_moments`] and [`zener_from_bouc_wen`], started from the moments of the
-/// linear oscillator of stiffness k + α.
+/// linear oscillator of stiffness k + α (with at least 1 % of critical damping: c may be 0,
+/// the element dissipating alone).
 pub fn equivalent_zener(
     mass: f64,
     c: f64,
@@ -181,13 +182,20 @@ pub fn equivalent_zener(
 ) -> Result<(ZenerParams, ResponseMoments), LinearizeError> {
     check_nu(bw)?;
     positive("mass", mass)?;
-    positive("damping", c)?;
+    if !(c.is_finite() && c >= 0.0) {
+        return Err(LinearizeError::Invalid {
+            name: "damping",
+            value: c,
+        });
+    }
+    positive("stiffness k + α", k + bw.alpha)?;
     positive("force density q", q)?;
     // Linear oscillator of stiffness k + α: σ_x² = q/(2c(k+α)), σ_v² = q/(2cm).
-    let sx = (q / (2.0 * c * (k + bw.alpha))).sqrt();
+    let c0 = c.max(0.02 * ((k + bw.alpha) * mass).sqrt());
+    let sx = (q / (2.0 * c0 * (k + bw.alpha))).sqrt();
     let mut moments = ResponseMoments {
         sigma_x: sx,
-        sigma_v: (q / (2.0 * c * mass)).sqrt(),
+        sigma_v: (q / (2.0 * c0 * mass)).sqrt(),
         sigma_z: bw.alpha * sx,
         rho: 0.0,
     };
@@ -432,6 +440,25 @@ mod tests {
                 want.omega
             );
         }
+    }
+
+    /// Without a dashpot the element dissipates alone: the fixed point exists, and the
+    /// power balance holds with c = 0 (all of q/(2m) taken by the element).
+    #[test]
+    fn no_dashpot_is_a_fixed_point_too() {
+        let q = 50.0 * 50.0 / 750.0;
+        let (z, mo) = equivalent_zener(M, 0.0, K, &BoucWen::benchmark(), q).unwrap();
+        assert!(z.omega > 0.0 && z.k_inf > 0.0, "{z:?}");
+        let taken = mo.rho * mo.sigma_v * mo.sigma_z;
+        // As in the_moments_balance_power.
+        assert!((taken / (q / (2.0 * M)) - 1.0).abs() < 1e-8, "{taken}");
+        assert!(matches!(
+            equivalent_zener(M, -1.0, K, &BoucWen::benchmark(), q),
+            Err(LinearizeError::Invalid {
+                name: "damping",
+                ..
+            })
+        ));
     }
 
     /// Under the benchmark's drives the fixed point is a Zener element that stiffens and
