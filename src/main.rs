@@ -1316,6 +1316,12 @@ fn ident(a: &IdentArgs) -> Result<(), Error> {
     {
         println!("note: {n}");
     }
+    if id.zener_spectrum.is_some() && a.excitation_band.is_none() {
+        println!(
+            "note: one record maps to Bouc-Wen through one amplitude; records of the same \
+             structure at several force levels map to one Bouc-Wen model together: hyst levels"
+        );
+    }
     println!("identification time: {:.3} s", ident_seconds);
     if let Some(path) = &a.json {
         let doc = json!({
