@@ -1642,6 +1642,17 @@ fn levels(a: &LevelsArgs) -> Result<(), Error> {
         se[4],
         model.chi2_per_dof
     );
+    let values = [bw.alpha, bw.beta_gamma(), bw.beta_delta()];
+    if values
+        .iter()
+        .zip(&se[2..])
+        .any(|(v, s)| s.partial_cmp(&v.abs()) != Some(std::cmp::Ordering::Less))
+    {
+        println!(
+            "warning: the levels do not determine α, βγ and βδ (a standard error as large as \
+             its value): their response levels are too close together; record levels further apart"
+        );
+    }
     // The model's own statistical linearization at each level's force density, beside the
     // Zener identified there: how well one element explains every level.
     let own: Vec<Option<hyst::model::ZenerParams>> = fits

@@ -1001,6 +1001,7 @@ fn levels_gives_one_bouc_wen_model_of_several_records() {
     let (ok, out, err) = hyst(&args);
     assert!(ok, "{err}");
     assert!(out.contains("Bouc-Wen of all levels: c "), "{out}");
+    assert!(!out.contains("warning"), "{out}");
     for f in ["levels_kinf.svg", "levels_omega.svg"] {
         let svg = std::fs::read_to_string(svg_dir.join(f)).unwrap();
         assert!(
@@ -1043,6 +1044,23 @@ fn levels_gives_one_bouc_wen_model_of_several_records() {
     // length (the per-level mapped models give 2.1-4.6 % on the sweep's longer records).
     let eps = v["validation"][0]["epsilon"].as_f64().unwrap();
     assert!(eps > 0.0 && eps < 0.05, "{eps}");
+    // Two records at the same level do not separate the three unknowns, and the user is told.
+    let again = bouc_wen_white_record("bw_levels_90b.csv", "90", "65536", "9", "7.4e-6");
+    let (ok, out, err) = hyst(&[
+        "levels",
+        "--data",
+        s(&records[2]),
+        s(&again),
+        "--fs",
+        "750",
+        "--mass",
+        "2",
+    ]);
+    assert!(ok, "{err}");
+    assert!(
+        out.contains("warning: the levels do not determine"),
+        "{out}"
+    );
     // A record that is no oscillator's response (white noise) gives no level, and the
     // file is named.
     let (ok, _, err) = hyst(&[
