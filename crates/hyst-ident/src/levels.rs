@@ -12,7 +12,8 @@
 
 use hyst_linearize::LinearizeError;
 use hyst_linearize::statistical::{self, LevelEquivalent, ResponseMoments};
-use hyst_model::{Oscillator, ZenerParams};
+use hyst_model::{BoucWen, Oscillator, ZenerParams};
+use nalgebra::{Matrix4, Matrix5, Vector4, Vector5};
 
 use crate::IdentError;
 use crate::zener_spectrum::ZenerSpectralFit;
@@ -81,6 +82,246 @@ pub fn bouc_wen_from_levels(fits: &[&ZenerSpectralFit]) -> Result<LevelsBoucWen,
     })
 }
 
+/// Options of [`bouc_wen_by_simulation`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct SimulationOptions {
+    /// Most Levenberg–Marquardt iterations. Default 10.
+    pub max_iterations: usize,
+    /// Stop when an iteration lowers the weighted sum of squares by less than this fraction of
+    /// it. Default 1e-4.
+    pub tolerance: f64,
+    /// Seed of the simulated forces and noise, the same at every evaluation (common random
+    /// numbers, so that the statistics are smooth functions of the parameters). Default 9000.
+    pub seed: u64,
+}
+
+impl Default for SimulationOptions {
+    fn default() -> Self {
+        SimulationOptions {
+            max_iterations: 10,
+            tolerance: 1e-4,
+            seed: 9000,
+        }
+    }
+}
+
+/// What [`bouc_wen_by_simulation`] finds.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SimulatedBoucWen {
+    /// The oscillator (ν = 1, β = 1).
+    pub oscillator: Oscillator,
+    /// Each level's (c, k, k∞, Ω) fitted to the model's simulated record, beside the measured
+    /// fit's.
+    pub simulated: Vec<[f64; 4]>,
+    /// RMS of (simulated − measured) over every level's four numbers, in the measured fit's
+    /// covariance (whitened): about √2 when the model explains each level within the noise
+    /// of both records.
+    pub residual_rms: f64,
+    /// Levenberg–Marquardt iterations done.
+    pub iterations: usize,
+    /// Standard errors of (c, k, α, βγ, βδ): 2 (JᵀJ)⁻¹ from the last iteration's Jacobian of
+    /// the whitened residuals, the 2 for the simulated records' own noise (one simulation per
+    /// measured record); NaN without an iteration.
+    pub se: [f64; 5],
+}
+
+/// The Bouc-Wen model whose simulated responses give the same Zener fits as the records
+/// (indirect inference, the Zener spectral fit the auxiliary model): at each level a periodic
+/// white force of the fitted density drives the model for one steady-state period of the
+/// record's length, the fitted measurement noise is added, and the record's fit is repeated;
+/// (c, k, α, βγ, βδ) minimize the squared differences from the measured fits, whitened by
+/// their covariances (Levenberg–Marquardt, finite differences, common random numbers). This
+/// removes the bias the Gaussian closure of [`bouc_wen_from_levels`] carries, from which it
+/// starts. `lengths` are the records' lengths (samples); `progress` hears each iteration and
+/// its weighted sum of squares. Each evaluation simulates every level (in parallel).
+pub fn bouc_wen_by_simulation(
+    fits: &[&ZenerSpectralFit],
+    lengths: &[usize],
+    start: &Oscillator,
+    opts: &SimulationOptions,
+    progress: &(dyn Fn(usize, f64) + Sync),
+) -> Result<SimulatedBoucWen, IdentError> {
+    use rayon::prelude::*;
+    if fits.len() < 2 {
+        return Err(LinearizeError::TooFewLevels { levels: fits.len() }.into());
+    }
+    if lengths.len() != fits.len() {
+        return Err(IdentError::LengthMismatch {
+            input: lengths.len(),
+            output: fits.len(),
+        });
+    }
+    let hyst_model::Restoring::BoucWen(bw) = start.restoring else {
+        return Err(LinearizeError::Invalid {
+            name: "start (a Bouc-Wen oscillator is needed)",
+            value: f64::NAN,
+        }
+        .into());
+    };
+    let mass = start.mass;
+    let osc = |p: &[f64; 5]| {
+        Oscillator::bouc_wen(
+            mass,
+            p[0],
+            p[1],
+            BoucWen::from_products(p[2], p[3], p[4], 1.0),
+        )
+    };
+    // The auxiliary statistics of the model p: one simulated record per level.
+    let aux = |p: &[f64; 5]| -> Result<Vec<[f64; 4]>, IdentError> {
+        let model = osc(p);
+        model.validate().map_err(|e| IdentError::Sim(e.into()))?;
+        fits.par_iter()
+            .zip(lengths)
+            .enumerate()
+            .map(|(i, (f, &n))| {
+                let seed = opts.seed.wrapping_add(2 * i as u64);
+                let u =
+                    hyst_sim::excitation::white_noise(n, (f.force_density * f.fs).sqrt(), seed)?;
+                let mut y = hyst_sim::steady_state_period(
+                    &model,
+                    &u,
+                    f.fs,
+                    &hyst_sim::SimOptions::default(),
+                    1e-10,
+                    200,
+                )?
+                .y;
+                hyst_sim::excitation::add_noise(&mut y, f.noise_std, seed + 1)?;
+                let mean = y.iter().sum::<f64>() / n as f64;
+                y.iter_mut().for_each(|v| *v -= mean);
+                let g = crate::zener_spectrum::fit(
+                    &y,
+                    f.fs,
+                    f.mass,
+                    f.pair,
+                    f.real,
+                    f.max_frequency_hz,
+                )?;
+                Ok([g.c, g.k, g.k_inf, g.omega])
+            })
+            .collect()
+    };
+    // Weights: the inverse Cholesky factor of each measured fit's covariance, so that the
+    // precise combinations (k + k∞ above all) weigh as much as they are precise. A fit held
+    // at c = 0 has no variance in c: its most likely c's standard error stands in.
+    let weights: Vec<Matrix4<f64>> = fits
+        .iter()
+        .map(|f| {
+            let mut cov = Matrix4::from_fn(|i, j| f.covariance[i][j]);
+            if let Some([_, s]) = f.unconstrained_c {
+                for j in 0..4 {
+                    cov[(0, j)] = 0.0;
+                    cov[(j, 0)] = 0.0;
+                }
+                cov[(0, 0)] = s * s;
+            }
+            cov.cholesky()
+                .and_then(|l| l.l().try_inverse())
+                .filter(|w| w.iter().all(|v| v.is_finite()))
+                .ok_or(LinearizeError::Invalid {
+                    name: "a level's fit covariance (not positive definite)",
+                    value: f.k,
+                })
+        })
+        .collect::<Result<_, _>>()?;
+    let resid = |a: &[[f64; 4]]| -> Vec<f64> {
+        a.iter()
+            .zip(fits)
+            .zip(&weights)
+            .flat_map(|((a, f), w)| {
+                let d = Vector4::new(a[0] - f.c, a[1] - f.k, a[2] - f.k_inf, a[3] - f.omega);
+                (w * d).iter().copied().collect::<Vec<_>>()
+            })
+            .collect()
+    };
+    let sum_sq = |r: &[f64]| r.iter().map(|v| v * v).sum::<f64>();
+    let mut p = [
+        start.damping,
+        start.stiffness,
+        bw.alpha,
+        bw.beta_gamma(),
+        bw.beta_delta(),
+    ];
+    let mut sim = aux(&p)?;
+    let mut r = resid(&sim);
+    let mut cost = sum_sq(&r);
+    let mut lambda: f64 = 1e-2;
+    let mut iterations = 0;
+    let mut last_jtj = None;
+    while iterations < opts.max_iterations {
+        iterations += 1;
+        // Forward differences, 1 % of each parameter (c at least 0.1 N s/m): large enough
+        // that the fits' own convergence tolerance does not show.
+        let steps: Vec<f64> = p
+            .iter()
+            .enumerate()
+            .map(|(k, v)| (0.01 * v.abs()).max(if k == 0 { 0.1 } else { 1e-3 }))
+            .collect();
+        let columns: Vec<Vec<f64>> = (0..5)
+            .map(|k| {
+                let mut q = p;
+                q[k] += steps[k];
+                let rq = resid(&aux(&q)?);
+                Ok(rq.iter().zip(&r).map(|(a, b)| (a - b) / steps[k]).collect())
+            })
+            .collect::<Result<_, IdentError>>()?;
+        let mut jtj = Matrix5::<f64>::zeros();
+        let mut jtr = Vector5::<f64>::zeros();
+        for a in 0..5 {
+            jtr[a] = columns[a].iter().zip(&r).map(|(j, v)| j * v).sum::<f64>();
+            for b in 0..5 {
+                jtj[(a, b)] = columns[a]
+                    .iter()
+                    .zip(&columns[b])
+                    .map(|(x, y)| x * y)
+                    .sum::<f64>();
+            }
+        }
+        last_jtj = Some(jtj);
+        let before = cost;
+        loop {
+            let mut m = jtj;
+            for a in 0..5 {
+                m[(a, a)] *= 1.0 + lambda;
+            }
+            let accepted = m.lu().solve(&jtr).and_then(|step| {
+                let mut q = p;
+                for k in 0..5 {
+                    q[k] -= step[k];
+                }
+                q[0] = q[0].max(0.0);
+                let s = aux(&q).ok()?;
+                let rq = resid(&s);
+                let c = sum_sq(&rq);
+                (c < cost).then_some((q, s, rq, c))
+            });
+            match accepted {
+                Some((q, s, rq, c)) => {
+                    (p, sim, r, cost) = (q, s, rq, c);
+                    lambda = (lambda / 3.0).max(1e-7);
+                    break;
+                }
+                None if lambda < 1e6 => lambda *= 10.0,
+                None => break,
+            }
+        }
+        progress(iterations, cost);
+        if before - cost <= opts.tolerance * before {
+            break;
+        }
+    }
+    let cov = last_jtj.and_then(|m| m.try_inverse());
+    let se = std::array::from_fn(|k| cov.map_or(f64::NAN, |c| (2.0 * c[(k, k)]).max(0.0).sqrt()));
+    Ok(SimulatedBoucWen {
+        oscillator: osc(&p),
+        simulated: sim,
+        residual_rms: (cost / r.len() as f64).sqrt(),
+        iterations,
+        se,
+    })
+}
+
 /// Inverse-variance weighted mean of (value, standard error) pairs with a finite positive
 /// standard error, and its standard error; NaN when there is none.
 fn weighted_mean(pairs: impl Iterator<Item = (f64, f64)>) -> (f64, f64) {
@@ -113,6 +354,9 @@ mod tests {
             k_inf: zener.k_inf,
             omega: zener.omega,
             se,
+            covariance: std::array::from_fn(|i| {
+                std::array::from_fn(|j| if i == j { se[i] * se[i] } else { 0.0 })
+            }),
             unconstrained_c: None,
             pair: crate::Complex64::new(-1.0, 200.0),
             real: -50.0,

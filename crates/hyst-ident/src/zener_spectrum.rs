@@ -51,6 +51,9 @@ pub struct ZenerSpectralFit {
     pub omega: f64,
     /// Standard errors of (c, k, k∞, Ω); NaN when the Fisher information is singular.
     pub se: [f64; 4],
+    /// Covariance of (c, k, k∞, Ω), whose diagonal `se` is the root of. k and k∞ are strongly
+    /// anti-correlated: their sum, the stiffness above Ω, is set by the resonance.
+    pub covariance: [[f64; 4]; 4],
     /// When the most likely c was negative: that c and its standard error. A dashpot gives
     /// no energy, so the fit is then the most likely one with c = 0 (Ω = −Σp), and `se[0]`
     /// is 0. A c below 0 by several standard errors says the record breaks an assumption
@@ -427,6 +430,7 @@ pub fn fit(
         k_inf,
         omega,
         se: summary.se,
+        covariance: summary.covariance,
         unconstrained_c,
         pair: p.poles[0],
         real: p.poles[2].re,
@@ -443,6 +447,7 @@ pub fn fit(
 struct Summary {
     physical: [f64; 4],
     se: [f64; 4],
+    covariance: [[f64; 4]; 4],
     force_density_se: f64,
 }
 
@@ -461,18 +466,21 @@ fn summarize(setup: &Setup, t: &Theta, s: &[f64]) -> Option<Summary> {
             std::array::from_fn(|i| (a[i] - b[i]) / (2.0 * h))
         })
         .collect();
-    let se = std::array::from_fn(|i| {
-        let mut v = 0.0;
-        for a in 0..NP {
-            for b in 0..NP {
-                v += jac[a][i] * cov[a][b] * jac[b][i];
+    let covariance: [[f64; 4]; 4] = std::array::from_fn(|i| {
+        std::array::from_fn(|j| {
+            let mut v = 0.0;
+            for a in 0..NP {
+                for b in 0..NP {
+                    v += jac[a][i] * cov[a][b] * jac[b][j];
+                }
             }
-        }
-        v.sqrt()
+            v
+        })
     });
     Some(Summary {
         physical: setup.physical(t),
-        se,
+        se: std::array::from_fn(|i| covariance[i][i].sqrt()),
+        covariance,
         force_density_se: t[4].exp() * cov[4][4].sqrt(),
     })
 }
