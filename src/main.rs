@@ -100,6 +100,12 @@ struct LevelsArgs {
     /// Write figures (SVG) into this folder: each level's k∞ and Ω beside the model's.
     #[arg(long)]
     svg_dir: Option<PathBuf>,
+    /// Then fit the model by simulation (indirect inference): the Bouc-Wen model whose
+    /// simulated records give the same Zener fits as the records. Removes the Gaussian
+    /// closure's bias; each iteration simulates every level six times (about 15 s for three
+    /// records of 2¹⁷ samples on two cores).
+    #[arg(long)]
+    by_simulation: bool,
 }
 
 #[derive(Clone, Copy, ValueEnum, PartialEq, Eq, Debug)]
@@ -1589,6 +1595,7 @@ fn levels(a: &LevelsArgs) -> Result<(), Error> {
     };
     let mut fits = Vec::with_capacity(a.data.len());
     let mut sigma_x = Vec::with_capacity(a.data.len());
+    let mut lengths = Vec::with_capacity(a.data.len());
     let mut rows = Vec::new();
     for path in &a.data {
         let name = path.display().to_string();
@@ -1604,6 +1611,7 @@ fn levels(a: &LevelsArgs) -> Result<(), Error> {
         let id =
             ident::identify(&col[a.skip..], fs, &opts).map_err(|e| fail(format!("{name}: {e}")))?;
         sigma_x.push(id.prepared.sigma_x);
+        lengths.push(col.len() - a.skip);
         let f = id.zener_spectrum.ok_or_else(|| {
             fail(format!(
                 "{name}: no Zener spectral fit, so no level for the model ({}); each record must \
@@ -1743,6 +1751,46 @@ fn levels(a: &LevelsArgs) -> Result<(), Error> {
         }
     }
     let mut validation = Vec::new();
+    let by_sim = if a.by_simulation {
+        eprintln!("fitting by simulation…");
+        let t0 = std::time::Instant::now();
+        let report = |it: usize, cost: f64| {
+            eprintln!(
+                "  iteration {it}: weighted sum of squares {cost:.2} ({:.1} s)",
+                t0.elapsed().as_secs_f64()
+            )
+        };
+        let s = ident::levels::bouc_wen_by_simulation(
+            &refs,
+            &lengths,
+            o,
+            &ident::levels::SimulationOptions::default(),
+            &report,
+        )
+        .map_err(|e| fail(format!("fit by simulation: {e}")))?;
+        let hyst::model::Restoring::BoucWen(b) = &s.oscillator.restoring else {
+            return Err(fail("the fit by simulation has no Bouc-Wen element"));
+        };
+        let e = s.se;
+        println!(
+            "Bouc-Wen by simulation: c {:.2} ± {:.2} N s/m, k {:.0} ± {:.0} N/m, α {:.0} ± {:.0} N/m, βγ {:.1} ± {:.1} 1/m, βδ {:.1} ± {:.1} 1/m (whitened residual RMS {:.2}, {} iterations)",
+            s.oscillator.damping,
+            e[0],
+            s.oscillator.stiffness,
+            e[1],
+            b.alpha,
+            e[2],
+            b.beta_gamma(),
+            e[3],
+            b.beta_delta(),
+            e[4],
+            s.residual_rms,
+            s.iterations
+        );
+        Some(s)
+    } else {
+        None
+    };
     for v in &a.validate {
         let name = v.display().to_string();
         let t = read_csv(v)?;
@@ -1750,7 +1798,17 @@ fn levels(a: &LevelsArgs) -> Result<(), Error> {
         let r =
             ident::validate(o, u, yv, fs, a.periodic).map_err(|e| fail(format!("{name}: {e}")))?;
         println!("validation on {name}: ε = {:.3} %", 100.0 * r.epsilon);
-        validation.push(json!({"file": name, "epsilon": r.epsilon, "rms": r.rms}));
+        let mut row = json!({"file": name, "epsilon": r.epsilon, "rms": r.rms});
+        if let Some(s) = &by_sim {
+            let r = ident::validate(&s.oscillator, u, yv, fs, a.periodic)
+                .map_err(|e| fail(format!("{name}: {e}")))?;
+            println!(
+                "validation on {name}, model by simulation: ε = {:.3} %",
+                100.0 * r.epsilon
+            );
+            row["epsilon_by_simulation"] = json!(r.epsilon);
+        }
+        validation.push(row);
     }
     if let Some(path) = &a.json {
         let doc = json!({
@@ -1758,6 +1816,13 @@ fn levels(a: &LevelsArgs) -> Result<(), Error> {
             "model": osc_json(o),
             "se": {"c": se[0], "k": se[1], "alpha": se[2], "beta_gamma": se[3], "beta_delta": se[4]},
             "chi2_per_dof": model.chi2_per_dof,
+            "by_simulation": by_sim.as_ref().map(|s| json!({
+                "model": osc_json(&s.oscillator),
+                "se": {"c": s.se[0], "k": s.se[1], "alpha": s.se[2], "beta_gamma": s.se[3], "beta_delta": s.se[4]},
+                "residual_rms": s.residual_rms,
+                "iterations": s.iterations,
+                "simulated": s.simulated,
+            })),
             "validation": validation,
         });
         std::fs::write(path, serde_json::to_string_pretty(&doc)?)
