@@ -36,16 +36,7 @@ pub struct LevelsBoucWen {
 /// One Bouc-Wen model from the Zener spectral fits of records at two or more force levels of
 /// the same structure (same mass).
 pub fn bouc_wen_from_levels(fits: &[&ZenerSpectralFit]) -> Result<LevelsBoucWen, IdentError> {
-    let first = match fits {
-        [first, _, ..] => first,
-        _ => return Err(LinearizeError::TooFewLevels { levels: fits.len() }.into()),
-    };
-    if let Some(f) = fits.iter().find(|f| f.mass != first.mass) {
-        return Err(IdentError::MassesDiffer {
-            first: first.mass,
-            other: f.mass,
-        });
-    }
+    let mass = shared_mass(fits)?;
     let mut levels = Vec::with_capacity(fits.len());
     for f in fits {
         let zener = ZenerParams {
@@ -62,9 +53,7 @@ pub fn bouc_wen_from_levels(fits: &[&ZenerSpectralFit]) -> Result<LevelsBoucWen,
         });
     }
     let fit = statistical::bouc_wen_from_levels(&levels)?;
-    // A fit held at c = 0 weighs with its most likely c's standard error.
-    let c_se = |f: &ZenerSpectralFit| f.unconstrained_c.map_or(f.se[0], |[_, se]| se);
-    let (c, c_se) = weighted_mean(fits.iter().map(|f| (f.c, c_se(f))));
+    let (c, c_se) = weighted_mean(fits.iter().map(|f| (f.c, c_standard_error(f))));
     let (k, k_se) = weighted_mean(fits.iter().map(|f| (f.k, f.se[1])));
     if !(c.is_finite() && k.is_finite()) {
         return Err(LinearizeError::Invalid {
@@ -73,7 +62,7 @@ pub fn bouc_wen_from_levels(fits: &[&ZenerSpectralFit]) -> Result<LevelsBoucWen,
         }
         .into());
     }
-    let oscillator = Oscillator::bouc_wen(first.mass, c, k, fit.bouc_wen);
+    let oscillator = Oscillator::bouc_wen(mass, c, k, fit.bouc_wen);
     Ok(LevelsBoucWen {
         oscillator,
         se: [c_se, k_se, fit.se[0], fit.se[1], fit.se[2]],
@@ -142,9 +131,7 @@ pub fn bouc_wen_by_simulation(
     progress: &(dyn Fn(usize, f64) + Sync),
 ) -> Result<SimulatedBoucWen, IdentError> {
     use rayon::prelude::*;
-    if fits.len() < 2 {
-        return Err(LinearizeError::TooFewLevels { levels: fits.len() }.into());
-    }
+    shared_mass(fits)?;
     if lengths.len() != fits.len() {
         return Err(IdentError::LengthMismatch {
             input: lengths.len(),
@@ -204,17 +191,17 @@ pub fn bouc_wen_by_simulation(
     };
     // Weights: the inverse Cholesky factor of each measured fit's covariance, so that the
     // precise combinations (k + k∞ above all) weigh as much as they are precise. A fit held
-    // at c = 0 has no variance in c: its most likely c's standard error stands in.
+    // at c = 0 has no variance in c: [`c_standard_error`] stands in, uncorrelated.
     let weights: Vec<Matrix4<f64>> = fits
         .iter()
         .map(|f| {
             let mut cov = Matrix4::from_fn(|i, j| f.covariance[i][j]);
-            if let Some([_, s]) = f.unconstrained_c {
+            if f.unconstrained_c.is_some() {
                 for j in 0..4 {
                     cov[(0, j)] = 0.0;
                     cov[(j, 0)] = 0.0;
                 }
-                cov[(0, 0)] = s * s;
+                cov[(0, 0)] = c_standard_error(f).powi(2);
             }
             cov.cholesky()
                 .and_then(|l| l.l().try_inverse())
@@ -320,6 +307,27 @@ pub fn bouc_wen_by_simulation(
         iterations,
         se,
     })
+}
+
+/// The mass the levels' fits share (two or more of them, of one structure).
+fn shared_mass(fits: &[&ZenerSpectralFit]) -> Result<f64, IdentError> {
+    let first = match fits {
+        [first, _, ..] => first,
+        _ => return Err(LinearizeError::TooFewLevels { levels: fits.len() }.into()),
+    };
+    match fits.iter().find(|f| f.mass != first.mass) {
+        Some(f) => Err(IdentError::MassesDiffer {
+            first: first.mass,
+            other: f.mass,
+        }),
+        None => Ok(first.mass),
+    }
+}
+
+/// The standard error of a fit's c; for a fit held at c = 0 (whose own is 0), its most likely
+/// c's.
+fn c_standard_error(f: &ZenerSpectralFit) -> f64 {
+    f.unconstrained_c.map_or(f.se[0], |[_, se]| se)
 }
 
 /// Inverse-variance weighted mean of (value, standard error) pairs with a finite positive
