@@ -1057,6 +1057,21 @@ fn excitation_band(a: &IdentArgs) -> Result<Option<hyst::ident::flatness::Excita
     }
 }
 
+/// The column `column` of the CSV record `path` after its first `skip` rows, which must
+/// leave some.
+fn output_after_skip(path: &std::path::Path, column: &str, skip: usize) -> Result<Vec<f64>, Error> {
+    let t = read_csv(path)?;
+    let col = t.column(column)?;
+    if skip >= col.len() {
+        return Err(fail(format!(
+            "--skip {skip} leaves none of the {} rows of {}",
+            col.len(),
+            path.display()
+        )));
+    }
+    Ok(col[skip..].to_vec())
+}
+
 fn ident(a: &IdentArgs) -> Result<(), Error> {
     use hyst::ident::{self, DampingGuess, IdentOptions, Linearization};
     use serde_json::json;
@@ -1071,17 +1086,8 @@ fn ident(a: &IdentArgs) -> Result<(), Error> {
                     "--mass is required with --data: the mapping from poles to stiffness needs the mass",
                 ));
             }
-            let t = read_csv(path)?;
-            let col = t.column(&a.output_column)?;
-            if a.skip >= col.len() {
-                return Err(fail(format!(
-                    "--skip {} leaves none of the {} rows of {}",
-                    a.skip,
-                    col.len(),
-                    path.display()
-                )));
-            }
-            (col[a.skip..].to_vec(), fs, path.display().to_string())
+            let y = output_after_skip(path, &a.output_column, a.skip)?;
+            (y, fs, path.display().to_string())
         }
         None => {
             let d = default_records()?;
@@ -1599,19 +1605,10 @@ fn levels(a: &LevelsArgs) -> Result<(), Error> {
     let mut rows = Vec::new();
     for path in &a.data {
         let name = path.display().to_string();
-        let t = read_csv(path)?;
-        let col = t.column(&a.output_column)?;
-        if a.skip >= col.len() {
-            return Err(fail(format!(
-                "--skip {} leaves none of the {} rows of {name}",
-                a.skip,
-                col.len()
-            )));
-        }
-        let id =
-            ident::identify(&col[a.skip..], fs, &opts).map_err(|e| fail(format!("{name}: {e}")))?;
+        let y = output_after_skip(path, &a.output_column, a.skip)?;
+        let id = ident::identify(&y, fs, &opts).map_err(|e| fail(format!("{name}: {e}")))?;
         sigma_x.push(id.prepared.sigma_x);
-        lengths.push(col.len() - a.skip);
+        lengths.push(y.len());
         let f = id.zener_spectrum.ok_or_else(|| {
             fail(format!(
                 "{name}: no Zener spectral fit, so no level for the model ({}); each record must \

@@ -1087,6 +1087,25 @@ fn levels_gives_one_bouc_wen_model_of_several_records() {
     ]);
     assert!(!ok);
     assert!(err.contains("levels_noise.csv"), "{err}");
+    // A --skip that leaves nothing names the record, as `hyst ident`'s does.
+    let (ok, _, err) = hyst(&[
+        "levels",
+        "--data",
+        s(&records[0]),
+        s(&records[1]),
+        "--fs",
+        "750",
+        "--mass",
+        "2",
+        "--skip",
+        "65536",
+    ]);
+    assert!(!ok);
+    assert!(
+        err.contains("--skip 65536 leaves none of the 65536 rows of")
+            && err.contains("bw_levels_10.csv"),
+        "{err}"
+    );
     let (ok, _, err) = hyst(&[
         "levels",
         "--data",
