@@ -85,7 +85,10 @@ fn identified_zener_is_the_statistical_linearization_and_levels_give_one_bouc_we
         &refs,
         &[1 << 17; 3],
         &model.oscillator,
-        &ident::levels::SimulationOptions::default(),
+        &ident::levels::SimulationOptions {
+            periodic: true,
+            ..Default::default()
+        },
         &|it, cost| eprintln!("simulation fit, iteration {it}: {cost:.2}"),
     )
     .unwrap();

@@ -193,7 +193,10 @@ pub fn simulated_model(
         &refs,
         &vec![samples; refs.len()],
         &start,
-        &hyst_ident::levels::SimulationOptions::default(),
+        &hyst_ident::levels::SimulationOptions {
+            periodic: true,
+            ..Default::default()
+        },
         &report,
     )
     .map_err(|e| e.to_string())

@@ -82,6 +82,12 @@ pub struct SimulationOptions {
     /// Seed of the simulated forces and noise, the same at every evaluation (common random
     /// numbers, so that the statistics are smooth functions of the parameters). Default 9000.
     pub seed: u64,
+    /// The records are each one steady-state period of a periodic force (as `hyst simulate
+    /// --periodic` writes them), and are simulated so. Otherwise (the default, as measured
+    /// records are) each level is simulated from rest under a sampled white force, and the
+    /// first 30 time constants of its fit's slowest pole are dropped: the simulated
+    /// periodogram then leaks as the record's does.
+    pub periodic: bool,
 }
 
 impl Default for SimulationOptions {
@@ -90,6 +96,7 @@ impl Default for SimulationOptions {
             max_iterations: 10,
             tolerance: 1e-4,
             seed: 9000,
+            periodic: false,
         }
     }
 }
@@ -115,9 +122,10 @@ pub struct SimulatedBoucWen {
 }
 
 /// The Bouc-Wen model whose simulated responses give the same Zener fits as the records
-/// (indirect inference, the Zener spectral fit the auxiliary model): at each level a periodic
-/// white force of the fitted density drives the model for one steady-state period of the
-/// record's length, the fitted measurement noise is added, and the record's fit is repeated;
+/// (indirect inference, the Zener spectral fit the auxiliary model): at each level a white
+/// force of the fitted density drives the model for the record's length (one steady-state
+/// period of a periodic force, or after a warm-up from rest: [`SimulationOptions::periodic`]),
+/// the fitted measurement noise is added, and the record's fit is repeated;
 /// (c, k, α, βγ, βδ) minimize the squared differences from the measured fits, whitened by
 /// their covariances (Levenberg–Marquardt, finite differences, common random numbers). This
 /// removes the bias the Gaussian closure of [`bouc_wen_from_levels`] carries, from which it
@@ -163,17 +171,24 @@ pub fn bouc_wen_by_simulation(
             .enumerate()
             .map(|(i, (f, &n))| {
                 let seed = opts.seed.wrapping_add(2 * i as u64);
-                let u =
-                    hyst_sim::excitation::white_noise(n, (f.force_density * f.fs).sqrt(), seed)?;
-                let mut y = hyst_sim::steady_state_period(
-                    &model,
-                    &u,
-                    f.fs,
-                    &hyst_sim::SimOptions::default(),
-                    1e-10,
-                    200,
-                )?
-                .y;
+                let rms = (f.force_density * f.fs).sqrt();
+                let sim = hyst_sim::SimOptions::default();
+                let mut y = if opts.periodic {
+                    let u = hyst_sim::excitation::white_noise(n, rms, seed)?;
+                    hyst_sim::steady_state_period(&model, &u, f.fs, &sim, 1e-10, 200)?.y
+                } else {
+                    let warm = warm_up_samples(f, n);
+                    let u = hyst_sim::excitation::white_noise(warm + n, rms, seed)?;
+                    let mut y = hyst_sim::simulate(
+                        &model,
+                        hyst_sim::Input::Sampled(&u),
+                        f.fs,
+                        warm + n,
+                        &sim,
+                    )?;
+                    y.drain(..warm);
+                    y
+                };
                 hyst_sim::excitation::add_noise(&mut y, f.noise_std, seed + 1)?;
                 let mean = y.iter().sum::<f64>() / n as f64;
                 y.iter_mut().for_each(|v| *v -= mean);
@@ -307,6 +322,19 @@ pub fn bouc_wen_by_simulation(
         iterations,
         se,
     })
+}
+
+/// Samples to simulate from rest before a level's simulated record starts: 30 time constants
+/// of the fit's slowest pole (its transient is then below e⁻³⁰ of where it began), at most
+/// the record's length `n` (a pole that slow is not resolved by the record anyway).
+fn warm_up_samples(f: &ZenerSpectralFit, n: usize) -> usize {
+    let slowest = f.pair.re.abs().min(f.real.abs());
+    let warm = 30.0 / slowest * f.fs;
+    if warm.is_finite() && warm < n as f64 {
+        warm.ceil() as usize
+    } else {
+        n
+    }
 }
 
 /// The mass the levels' fits share (two or more of them, of one structure).
