@@ -116,6 +116,97 @@ pub fn upsample_periodic(x: &[f64], r: usize) -> Vec<f64> {
     out
 }
 
+/// Half-length (taps on each side) of [`interpolate_band_limited`]'s kernel.
+pub const SINC_HALF_TAPS: usize = 16;
+
+/// Kaiser window parameter of [`interpolate_band_limited`]'s kernel.
+const KAISER_BETA: f64 = 10.0;
+
+/// Modified Bessel function I₀ (power series; converges for every argument the window uses).
+fn bessel_i0(x: f64) -> f64 {
+    let q = 0.25 * x * x;
+    let (mut term, mut sum) = (1.0, 1.0);
+    for k in 1..200 {
+        term *= q / (k * k) as f64;
+        sum += term;
+        if term < 1e-17 * sum {
+            break;
+        }
+    }
+    sum
+}
+
+/// Band-limited interpolation of a record (not periodic) by the integer factor `r`: the
+/// value at fraction τ = p/r of each interval is Σⱼ x[k+j] h(j − τ), h a sinc with a Kaiser
+/// window (β = 10) over [`SINC_HALF_TAPS`] samples on each side, the ends of the record
+/// extended by the point mirror 2x₀ − x₋ⱼ as [`decimate`] does. The result has (len − 1)·r + 1
+/// samples, every `r`-th the input sample itself. This is how a measured record, passed
+/// through an anti-aliasing filter, is best known between its samples: away from the ends,
+/// each component below 0.8 of the Nyquist frequency is reproduced to within 1e-5 of its
+/// amplitude (the kernel's response, for every phase, at 0.1–0.8 of Nyquist), where linear
+/// interpolation errs by up to 1e-2 at 0.1 of Nyquist and 0.2 at 0.4. Within
+/// [`SINC_HALF_TAPS`] samples of either end the mirror is only a guess of the record beyond
+/// it (errors of several percent for components near Nyquist): simulate from earlier.
+pub fn interpolate_band_limited(x: &[f64], r: usize) -> Vec<f64> {
+    let n = x.len();
+    if r <= 1 || n < 2 {
+        return x.to_vec();
+    }
+    let l = SINC_HALF_TAPS as isize;
+    let i0_beta = bessel_i0(KAISER_BETA);
+    let kernel = |d: f64| {
+        let u = d / SINC_HALF_TAPS as f64;
+        if u.abs() >= 1.0 {
+            return 0.0;
+        }
+        let sinc = if d == 0.0 {
+            1.0
+        } else {
+            (std::f64::consts::PI * d).sin() / (std::f64::consts::PI * d)
+        };
+        sinc * bessel_i0(KAISER_BETA * (1.0 - u * u).sqrt()) / i0_beta
+    };
+    // Taps of each phase p = 1..r, for j = −L+1..=L, normalized to unit gain at DC.
+    let phases: Vec<Vec<f64>> = (1..r)
+        .map(|p| {
+            let tau = p as f64 / r as f64;
+            let h: Vec<f64> = (-l + 1..=l).map(|j| kernel(j as f64 - tau)).collect();
+            let sum: f64 = h.iter().sum();
+            h.into_iter().map(|v| v / sum).collect()
+        })
+        .collect();
+    let last = n as isize - 1;
+    let ext = |i: isize| -> f64 {
+        if i < 0 {
+            2.0 * x[0] - x[(-i).min(last) as usize]
+        } else if i > last {
+            2.0 * x[last as usize] - x[(2 * last - i).max(0) as usize]
+        } else {
+            x[i as usize]
+        }
+    };
+    let mut out = Vec::with_capacity((n - 1) * r + 1);
+    for k in 0..n - 1 {
+        out.push(x[k]);
+        let ki = k as isize;
+        let inner = ki - l + 1 >= 0 && ki + l <= last;
+        for h in &phases {
+            let v = if inner {
+                let w = &x[(ki - l + 1) as usize..=(ki + l) as usize];
+                w.iter().zip(h).map(|(a, b)| a * b).sum::<f64>()
+            } else {
+                (-l + 1..=l)
+                    .zip(h)
+                    .map(|(j, b)| ext(ki + j) * b)
+                    .sum::<f64>()
+            };
+            out.push(v);
+        }
+    }
+    out.push(x[n - 1]);
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -209,5 +300,42 @@ mod tests {
         for (j, yj) in y.iter().enumerate() {
             assert_relative_eq!(*yj, f(j as f64 / (5 * n) as f64), epsilon = 1e-12);
         }
+    }
+
+    /// A sum of sines up to 0.75 of the Nyquist frequency, sampled, then interpolated by 8:
+    /// within 2e-5 (1e-5 per unit amplitude, the kernel's bound) of the continuous signal
+    /// away from the ends, where linear interpolation errs by more than 1e-2; every 8th
+    /// value is the sample itself.
+    #[test]
+    fn band_limited_interpolation_follows_a_band_limited_signal() {
+        // Components at 0.12, 0.35, 0.4 and 0.75 of Nyquist (π rad/sample), amplitudes
+        // summing to 2.
+        let f = |t: f64| {
+            (0.37 * t).sin()
+                + 0.4 * (1.1 * t + 0.3).cos()
+                + 0.3 * (0.4 * std::f64::consts::PI * t).sin()
+                + 0.3 * (0.75 * std::f64::consts::PI * t + 1.0).cos()
+        };
+        let n = 400;
+        let x: Vec<f64> = (0..n).map(|i| f(i as f64)).collect();
+        let r = 8;
+        let y = interpolate_band_limited(&x, r);
+        assert_eq!(y.len(), (n - 1) * r + 1);
+        let (mut worst, mut worst_linear) = (0.0f64, 0.0f64);
+        for (j, yj) in y.iter().enumerate() {
+            let t = j as f64 / r as f64;
+            if j % r == 0 {
+                assert_eq!(*yj, x[j / r]);
+            }
+            if t < 40.0 || t > (n - 40) as f64 {
+                continue;
+            }
+            worst = worst.max((yj - f(t)).abs());
+            let (k, frac) = (t.floor() as usize, t.fract());
+            let linear = x[k] + frac * (x[(k + 1).min(n - 1)] - x[k]);
+            worst_linear = worst_linear.max((linear - f(t)).abs());
+        }
+        assert!(worst < 2e-5, "{worst}");
+        assert!(worst_linear > 1e-2, "{worst_linear}");
     }
 }
