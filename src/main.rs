@@ -114,6 +114,14 @@ struct LevelsArgs {
 }
 
 #[derive(Clone, Copy, ValueEnum, PartialEq, Eq, Debug)]
+enum InterpolationArg {
+    /// A measured force behind an anti-aliasing filter: windowed-sinc interpolation.
+    BandLimited,
+    /// Linear between samples, as `hyst simulate` without --periodic drives its models.
+    Linear,
+}
+
+#[derive(Clone, Copy, ValueEnum, PartialEq, Eq, Debug)]
 enum StartArg {
     Linear,
     Zener,
@@ -140,6 +148,9 @@ struct RefineArgs {
     /// Starting model class.
     #[arg(long, value_enum, default_value = "linear")]
     start: StartArg,
+    /// How the input is known between samples when the models are simulated.
+    #[arg(long, value_enum, default_value = "band-limited")]
+    input_interpolation: InterpolationArg,
     /// Estimation rows A:B (0-based, B excluded); default the first 75 %.
     #[arg(long)]
     estimate: Option<String>,
@@ -853,10 +864,12 @@ fn default_records() -> Result<DefaultRecords, Error> {
     Ok(DefaultRecords { y, val_u, val_y })
 }
 
+/// The oscillator in the reports' short form (m, c, k, the restoring element's parameters),
+/// with any extra force terms that are on.
 fn osc_json(o: &Oscillator) -> serde_json::Value {
     use hyst::model::Restoring;
     use serde_json::json;
-    match &o.restoring {
+    let mut v = match &o.restoring {
         Restoring::None => json!({"m": o.mass, "c": o.damping, "k": o.stiffness}),
         Restoring::Zener(z) => {
             json!({"m": o.mass, "c": o.damping, "k": o.stiffness, "k_inf": z.k_inf, "omega": z.omega})
@@ -865,7 +878,11 @@ fn osc_json(o: &Oscillator) -> serde_json::Value {
             json!({"m": o.mass, "c": o.damping, "k": o.stiffness, "alpha": b.alpha,
             "beta_gamma": b.beta_gamma(), "beta_delta": b.beta_delta(), "nu": b.nu})
         }
+    };
+    if let Some(m) = v.as_object_mut() {
+        hyst::params::insert_extras(m, &o.extras);
     }
+    v
 }
 
 /// The amplitude spectrum of the force each Bouc-Wen candidate implies, over the
@@ -1498,7 +1515,15 @@ fn refine(a: &RefineArgs) -> Result<(), Error> {
         StartArg::Zener => Start::Zener,
         StartArg::BoucWen => Start::BoucWen,
     };
-    let rec = Record { u, y, fs };
+    let rec = Record {
+        u,
+        y,
+        fs,
+        interpolation: match a.input_interpolation {
+            InterpolationArg::BandLimited => refine::InputInterpolation::BandLimited,
+            InterpolationArg::Linear => refine::InputInterpolation::Linear,
+        },
+    };
     let t0 = std::time::Instant::now();
     let r = refine::refine_record(&rec, a.mass, start, estimate, &tests)
         .map_err(|e| fail(format!("{}: {e}", a.data.display())))?;

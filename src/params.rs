@@ -130,7 +130,13 @@ pub fn oscillator_to_json(o: &Oscillator) -> Value {
             m.insert("zener".into(), json!({"k_inf": z.k_inf, "omega": z.omega}));
         }
     }
-    let e = &o.extras;
+    insert_extras(m, &o.extras);
+    v
+}
+
+/// Add the extra force terms that are on to the JSON object `m` (keys as
+/// [`oscillator_from_json`] reads them).
+pub fn insert_extras(m: &mut Map<String, Value>, e: &ExtraForces) {
     if e.cubic_stiffness != 0.0 {
         m.insert("cubic_stiffness".into(), json!(e.cubic_stiffness));
     }
@@ -149,7 +155,6 @@ pub fn oscillator_to_json(o: &Oscillator) -> Value {
             json!({"mass": s.mass, "stiffness": s.stiffness, "damping": s.damping}),
         );
     }
-    v
 }
 
 #[cfg(test)]

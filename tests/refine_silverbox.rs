@@ -3,7 +3,7 @@
 
 mod common;
 
-use hyst::ident::refine::{self, Effect, Record, Start};
+use hyst::ident::refine::{self, Effect, InputInterpolation, Record, Start};
 
 #[test]
 fn silverbox_finds_the_cubic_spring() {
@@ -16,6 +16,7 @@ fn silverbox_finds_the_cubic_spring() {
         u,
         y,
         fs: 1e7 / 16384.0,
+        interpolation: InputInterpolation::BandLimited,
     };
     // The multisine part is rows 40650..127400; its first 75 % estimates.
     let estimate = (40650, 40650 + 3 * (127400 - 40650) / 4);
@@ -54,6 +55,7 @@ fn input_and_output_of_different_lengths() {
         u: &u,
         y: &y,
         fs: 100.0,
+        interpolation: InputInterpolation::BandLimited,
     };
     let e =
         refine::refine_record(&rec, Some(1.0), Start::Linear, (0, 80), &[(80, 90)]).unwrap_err();

@@ -2,7 +2,7 @@
 //! identification is not told about: the right effect is named and the held-out error at least
 //! halves; with no effect, `none`.
 
-use hyst::ident::refine::{self, Effect, Record, Start};
+use hyst::ident::refine::{self, Effect, InputInterpolation, Record, Start};
 use hyst::model::{BoucWen, Coulomb, Oscillator, SecondMass};
 use hyst::sim::excitation::{add_noise, white_noise};
 use hyst::sim::{self, Input, SimOptions};
@@ -38,6 +38,8 @@ fn run(truth: &Oscillator) -> refine::Refinement {
         u: &u,
         y: &y,
         fs: FS,
+        // The records are simulated with linearly interpolated input.
+        interpolation: InputInterpolation::Linear,
     };
     let est = (0, 3 * N / 4);
     let test = [(3 * N / 4, N)];

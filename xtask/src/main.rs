@@ -462,6 +462,7 @@ fn bench_refine() {
         u: &u,
         y: &y,
         fs: 200.0,
+        interpolation: refine::InputInterpolation::Linear,
     };
     let t = best_of(1, || {
         refine::refine_record(
