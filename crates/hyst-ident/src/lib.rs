@@ -892,7 +892,10 @@ pub fn epsilon(yhat: &[f64], y: &[f64]) -> Validation {
 }
 
 /// The response of `model` to the input `u` (RK4, 20 sub-steps): for a `periodic` record one
-/// steady-state period, otherwise from rest.
+/// steady-state period, otherwise from rest. Between samples the input is taken as
+/// band-limited, as a measured or designed excitation is: exactly for a periodic record, by a
+/// windowed sinc otherwise ([`hyst_sim::Input::BandLimited`]; linear interpolation would
+/// misstate the force by about 1 %).
 pub fn simulate_model(
     model: &Oscillator,
     u: &[f64],
@@ -906,7 +909,7 @@ pub fn simulate_model(
     Ok(if periodic {
         hyst_sim::steady_state_period(model, u, fs, &opts, 1e-9, 200)?.y
     } else {
-        hyst_sim::simulate(model, Input::Sampled(u), fs, u.len(), &opts)?
+        hyst_sim::simulate(model, Input::BandLimited(u), fs, u.len(), &opts)?
     })
 }
 
