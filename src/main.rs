@@ -1563,6 +1563,17 @@ fn refine(a: &RefineArgs) -> Result<(), Error> {
         }
     }
     println!("final model: {}", osc_json(&r.model));
+    if !r.estimates.is_empty() {
+        let list: Vec<String> = r
+            .estimates
+            .iter()
+            .map(|e| format!("{} {:.6} ± {:.2e}", e.name, e.value, e.se))
+            .collect();
+        println!(
+            "  with standard errors (output error, residual taken as white): {}",
+            list.join(", ")
+        );
+    }
     if let Some(dir) = &a.svg_dir {
         refine_figures(dir, &r, &rec, estimate, tests[0])?;
     }
@@ -1609,6 +1620,7 @@ fn refine(a: &RefineArgs) -> Result<(), Error> {
             "steps": steps,
             "tests": test_rows,
             "model": hyst::params::oscillator_to_json(&r.model),
+            "standard_errors": r.estimates.iter().map(|e| (e.name.to_string(), json!(e.se))).collect::<serde_json::Map<_, _>>(),
             "baseline": hyst::params::oscillator_to_json(&r.baseline),
             "seconds": secs,
         });

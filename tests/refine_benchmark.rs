@@ -54,20 +54,34 @@ fn the_zener_start_lacks_hysteresis_and_the_loop_finds_it() {
         truth.epsilon
     );
     assert!(after < 1.01 * truth.epsilon, "{after} vs {}", truth.epsilon);
-    // And the parameters are the benchmark's: c = 10, k = α = 5e4, βγ = 800, βδ = −1100.
-    // Measured errors when written: c +0.84 %, the others within 0.07 %; c, whose damping
-    // is a small part of the loss, is the least determined.
-    let Restoring::BoucWen(b) = r.model.restoring else {
-        panic!("final model {:?}", r.model);
-    };
-    let rel = |got: f64, truth: f64| (got - truth).abs() / truth.abs();
-    assert!(rel(r.model.damping, 10.0) < 0.03, "{:?}", r.model);
-    for (got, truth) in [
-        (r.model.stiffness, 5e4),
-        (b.alpha, 5e4),
-        (b.beta_gamma(), 800.0),
-        (b.beta_delta(), -1100.0),
-    ] {
-        assert!(rel(got, truth) < 0.005, "{got} vs {truth}: {:?}", r.model);
+    // And the parameters are the benchmark's (Table 1: c = 10, k = α = 5e4, βγ = 800,
+    // βδ = −1100), within four of their standard errors. When written: z = +3.10 for c and
+    // at most 1.14 for the others. The standard errors know only the record's noise; the
+    // simulator differs from the benchmark's (RK4 with 4 sub-steps and subsampling against
+    // Newmark with 20 and FIR decimation, 2-3e-4 relative by the data's README), and c, the
+    // smallest part of the loss, feels that most.
+    assert!(
+        matches!(r.model.restoring, Restoring::BoucWen(_)),
+        "{:?}",
+        r.model
+    );
+    let table1 = [
+        ("damping", 10.0),
+        ("stiffness", 5e4),
+        ("alpha", 5e4),
+        ("beta_gamma", 800.0),
+        ("beta_delta", -1100.0),
+    ];
+    assert_eq!(r.estimates.len(), table1.len(), "{:?}", r.estimates);
+    for (e, (name, value)) in r.estimates.iter().zip(table1) {
+        assert_eq!(e.name, name);
+        let z = (e.value - value) / e.se;
+        eprintln!("{name}: {:.4} ± {:.4} (z = {z:+.2})", e.value, e.se);
+        assert!(
+            z.abs() < 4.0,
+            "{name}: {} ± {} against {value}",
+            e.value,
+            e.se
+        );
     }
 }

@@ -308,6 +308,88 @@ pub fn fit(
     Some((cur, c))
 }
 
+impl P {
+    fn name(self) -> &'static str {
+        match self {
+            P::Mass => "mass",
+            P::Damping => "damping",
+            P::Stiffness => "stiffness",
+            P::KInf => "k_inf",
+            P::Omega => "omega",
+            P::Alpha => "alpha",
+            P::BetaGamma => "beta_gamma",
+            P::BetaDelta => "beta_delta",
+            P::Cubic => "cubic_stiffness",
+            P::Quad => "quadratic_damping",
+            P::Coulomb => "coulomb_force",
+            P::M2 => "second_mass",
+            P::K2 => "second_stiffness",
+            P::C2 => "second_damping",
+        }
+    }
+}
+
+/// A fitted parameter with its standard error.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Estimate {
+    /// The parameter's name, as in the JSON of `hyst refine` (`damping`, `alpha`, …).
+    pub name: &'static str,
+    /// Its fitted value.
+    pub value: f64,
+    /// Its standard error (NaN when the sensitivities are singular).
+    pub se: f64,
+}
+
+/// Standard errors of the free parameters of `o`, fitted by output error on rows `range`:
+/// the diagonal of σ²(JᵀJ)⁻¹, J the simulated output's sensitivity to each parameter (central
+/// differences) and σ² = Σr²/(N − p), the residual taken as white noise. A residual that is
+/// not white (an effect the model misses, coloured noise) makes them too small. `None` when
+/// the model does not simulate.
+pub fn standard_errors(
+    o: &Oscillator,
+    rec: &Record<'_>,
+    range: (usize, usize),
+    fit_mass: bool,
+) -> Option<Vec<Estimate>> {
+    let ids = free(o, fit_mass);
+    let r = residual(o, rec, range)?;
+    let dof = r.len().saturating_sub(ids.len()).max(1) as f64;
+    let sigma2 = sse(&r) / dof;
+    let cols: Vec<Vec<f64>> = ids
+        .par_iter()
+        .map(|&p| {
+            let v = get(o, p);
+            let h = 1e-5 * v.abs().max(1e-12);
+            let (mut a, mut b) = (*o, *o);
+            set(&mut a, p, v + h);
+            set(&mut b, p, v - h);
+            let (ya, yb) = (simulate(&a, rec, range)?, simulate(&b, rec, range)?);
+            Some(
+                ya.iter()
+                    .zip(&yb)
+                    .map(|(x, y)| (x - y) / (2.0 * h))
+                    .collect(),
+            )
+        })
+        .collect::<Option<_>>()?;
+    let (jtj, _) = crate::normal_equations(&cols, &r);
+    Some(
+        ids.iter()
+            .enumerate()
+            .map(|(i, &p)| {
+                let mut e = vec![0.0; ids.len()];
+                e[i] = 1.0;
+                let var = crate::solve(jtj.clone(), e).map_or(f64::NAN, |c| c[i] * sigma2);
+                Estimate {
+                    name: p.name(),
+                    value: get(o, p),
+                    se: if var >= 0.0 { var.sqrt() } else { f64::NAN },
+                }
+            })
+            .collect(),
+    )
+}
+
 /// Where the residual's power lies.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Spectrum {
@@ -775,6 +857,9 @@ pub struct Refinement {
     pub model: Oscillator,
     /// Held-out errors of the final model.
     pub tests: Vec<Validation>,
+    /// The final model's free parameters with their standard errors ([`standard_errors`];
+    /// empty if they could not be computed).
+    pub estimates: Vec<Estimate>,
 }
 
 /// Most iterations of the fits of the baseline and of each model the loop accepts: enough to
@@ -879,11 +964,13 @@ pub fn refine(
         }
     }
     let tests_err = errs(&model);
+    let estimates = standard_errors(&model, rec, estimate, fit_mass).unwrap_or_default();
     Ok(Refinement {
         baseline,
         steps,
         model,
         tests: tests_err,
+        estimates,
     })
 }
 
