@@ -864,6 +864,19 @@ fn default_records() -> Result<DefaultRecords, Error> {
     Ok(DefaultRecords { y, val_u, val_y })
 }
 
+/// `v` to six significant digits: fixed-point for magnitudes in [1e-3, 1e6), else exponent.
+fn six_digits(v: f64) -> String {
+    let a = v.abs();
+    if a == 0.0 || !a.is_finite() {
+        format!("{v}")
+    } else if (1e-3..1e6).contains(&a) {
+        let decimals = (5 - a.log10().floor() as i32).max(0) as usize;
+        format!("{v:.decimals$}")
+    } else {
+        format!("{v:.5e}")
+    }
+}
+
 /// The oscillator in the reports' short form (m, c, k, the restoring element's parameters),
 /// with any extra force terms that are on.
 fn osc_json(o: &Oscillator) -> serde_json::Value {
@@ -1567,7 +1580,7 @@ fn refine(a: &RefineArgs) -> Result<(), Error> {
         let list: Vec<String> = r
             .estimates
             .iter()
-            .map(|e| format!("{} {:.6} ± {:.2e}", e.name, e.value, e.se))
+            .map(|e| format!("{} {} ± {:.2e}", e.name, six_digits(e.value), e.se))
             .collect();
         println!(
             "  with standard errors (output error, residual taken as white): {}",
