@@ -378,6 +378,11 @@ struct SimulateArgs {
     /// steady-state period (the input is interpolated exactly between samples).
     #[arg(long)]
     periodic: bool,
+    /// How a non-periodic input is known between samples. Default: band-limited for an
+    /// --input file (a measured force, as `hyst ident --validate` and `hyst refine` take it),
+    /// linear for a generated excitation (how the project's synthetic records are made).
+    #[arg(long, value_enum)]
+    input_interpolation: Option<InterpolationArg>,
     /// Integration sub-steps per sample.
     #[arg(long, default_value_t = 20)]
     oversample: usize,
@@ -502,8 +507,14 @@ fn simulate(a: &SimulateArgs) -> Result<(), Error> {
         },
         ..SimOptions::default()
     };
+    let band_limited = match (a.input_interpolation, &a.input) {
+        (Some(i), _) => i == InterpolationArg::BandLimited,
+        (None, from_file) => from_file.is_some(),
+    };
     let mut y = if periodic {
         sim::steady_state_period(&model, &u, fs, &opts, 1e-10, 200)?.y
+    } else if band_limited {
+        sim::simulate(&model, Input::BandLimited(&u), fs, u.len(), &opts)?
     } else {
         sim::simulate(&model, Input::Sampled(&u), fs, u.len(), &opts)?
     };
