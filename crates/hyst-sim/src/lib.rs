@@ -180,6 +180,18 @@ impl std::fmt::Debug for Input<'_> {
     }
 }
 
+/// A sampled input record that is valid and holds the `n_samples` the run needs.
+fn check_length(u: &[f64], n_samples: usize) -> Result<(), SimError> {
+    check_record(u)?;
+    if u.len() < n_samples {
+        return Err(SimError::InputTooShort {
+            requested: n_samples,
+            available: u.len(),
+        });
+    }
+    Ok(())
+}
+
 fn check_record(u: &[f64]) -> Result<(), SimError> {
     if u.is_empty() {
         return Err(SimError::EmptyInput);
@@ -427,13 +439,7 @@ pub fn simulate_from(
     let integ = opts.integrator;
     let s_end = match input {
         Input::Sampled(u) => {
-            check_record(u)?;
-            if u.len() < n_samples {
-                return Err(SimError::InputTooShort {
-                    requested: n_samples,
-                    available: u.len(),
-                });
-            }
+            check_length(u, n_samples)?;
             let inv_r = 1.0 / r as f64;
             drive(
                 model,
@@ -450,13 +456,7 @@ pub fn simulate_from(
             )?
         }
         Input::BandLimited(u) => {
-            check_record(u)?;
-            if u.len() < n_samples {
-                return Err(SimError::InputTooShort {
-                    requested: n_samples,
-                    available: u.len(),
-                });
-            }
+            check_length(u, n_samples)?;
             // Samples past the last needed still shape the interpolation near it.
             let used = &u[..(n_samples + resample::SINC_HALF_TAPS).min(u.len())];
             let fine_u = resample::interpolate_band_limited(used, 2 * r);

@@ -39,6 +39,19 @@ pub fn fir1_lowpass(order: usize, cutoff: f64) -> Vec<f64> {
     h
 }
 
+/// Sample `i` of `x` extended beyond its ends by the point mirror: 2x₀ − x₋ᵢ before the
+/// start, 2x_last − x_(2·last − i) after the end (`x` not empty).
+fn mirrored(x: &[f64], i: isize) -> f64 {
+    let last = x.len() as isize - 1;
+    if i < 0 {
+        2.0 * x[0] - x[(-i).min(last) as usize]
+    } else if i > last {
+        2.0 * x[last as usize] - x[(2 * last - i).max(0) as usize]
+    } else {
+        x[i as usize]
+    }
+}
+
 /// `decimate(x, r, 'fir')`: low-pass with [`fir1_lowpass`]`(30, 1/r)` and keep every `r`-th
 /// sample, starting with the first. `r = 1` returns a copy.
 ///
@@ -50,18 +63,8 @@ pub fn decimate(x: &[f64], r: usize) -> Vec<f64> {
         return x.to_vec();
     }
     let b = fir1_lowpass(FIR_ORDER, 1.0 / r as f64);
-    let n = x.len() as isize;
     let half = (FIR_ORDER / 2) as isize;
-    let last = n - 1;
-    let ext = |i: isize| -> f64 {
-        if i < 0 {
-            2.0 * x[0] - x[(-i).min(last) as usize]
-        } else if i > last {
-            2.0 * x[last as usize] - x[(2 * last - i).max(0) as usize]
-        } else {
-            x[i as usize]
-        }
-    };
+    let ext = |i: isize| mirrored(x, i);
     let count = x.len().div_ceil(r);
     (0..count)
         .map(|k| {
@@ -176,15 +179,6 @@ pub fn interpolate_band_limited(x: &[f64], r: usize) -> Vec<f64> {
         })
         .collect();
     let last = n as isize - 1;
-    let ext = |i: isize| -> f64 {
-        if i < 0 {
-            2.0 * x[0] - x[(-i).min(last) as usize]
-        } else if i > last {
-            2.0 * x[last as usize] - x[(2 * last - i).max(0) as usize]
-        } else {
-            x[i as usize]
-        }
-    };
     let mut out = Vec::with_capacity((n - 1) * r + 1);
     for k in 0..n - 1 {
         out.push(x[k]);
@@ -197,7 +191,7 @@ pub fn interpolate_band_limited(x: &[f64], r: usize) -> Vec<f64> {
             } else {
                 (-l + 1..=l)
                     .zip(h)
-                    .map(|(j, b)| ext(ki + j) * b)
+                    .map(|(j, b)| mirrored(x, ki + j) * b)
                     .sum::<f64>()
             };
             out.push(v);
