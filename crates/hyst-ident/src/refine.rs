@@ -517,7 +517,7 @@ pub struct Evidence {
     pub delta_bic: f64,
     /// The refitted model, unless the fit diverged or the candidate was rejected.
     pub model: Option<Oscillator>,
-    /// Why the candidate was not considered, if it was not.
+    /// Why the candidate was not considered, or was rejected after its fit, if so.
     pub rejected: Option<String>,
 }
 
