@@ -260,19 +260,35 @@ pub fn fit(
     fit_mass: bool,
     iterations: usize,
 ) -> Option<(Oscillator, f64)> {
+    fit_best_of(std::slice::from_ref(o), rec, range, fit_mass, iterations)
+}
+
+/// [`fit`] from several starts: each is fitted on the first window, where the cost is smooth
+/// and the fits are cheap, and only the best of them goes on to the larger windows. `None`
+/// when no start simulates.
+fn fit_best_of(
+    starts: &[Oscillator],
+    rec: &Record<'_>,
+    range: (usize, usize),
+    fit_mass: bool,
+    iterations: usize,
+) -> Option<(Oscillator, f64)> {
     let len = range.1 - range.0;
     let mut windows = vec![len];
     while windows.len() < 4 && windows[windows.len() - 1] / 2 >= FIRST_WINDOW {
         windows.push(windows[windows.len() - 1] / 2);
     }
-    let mut m = *o;
-    let mut last = None;
-    for &w in windows.iter().rev() {
-        let (mw, cw) = fit_window(&m, rec, (range.0, range.0 + w), fit_mass, iterations)?;
-        m = mw;
-        last = Some(cw);
+    let mut sizes = windows.iter().rev();
+    let first = *sizes.next()?;
+    let (mut m, mut c) = starts
+        .iter()
+        .filter_map(|s| fit_window(s, rec, (range.0, range.0 + first), fit_mass, iterations))
+        .filter(|(_, c)| c.is_finite())
+        .min_by(|a, b| a.1.total_cmp(&b.1))?;
+    for &w in sizes {
+        (m, c) = fit_window(&m, rec, (range.0, range.0 + w), fit_mass, iterations)?;
     }
-    last.map(|c| (m, c))
+    Some((m, c))
 }
 
 /// Fewest rows of the first window of [`fit`].
@@ -832,11 +848,8 @@ pub fn diagnose(
             } else {
                 60
             };
-            let best = starts
-                .iter()
-                .filter_map(|start| fit(start, rec, range, fit_mass, iterations))
-                .filter(|(_, c1)| c1.is_finite())
-                .min_by(|a, b| a.1.total_cmp(&b.1));
+            let best = fit_best_of(&starts, rec, range, fit_mass, iterations)
+                .filter(|(_, c1)| c1.is_finite());
             match best {
                 Some((m, c1)) => {
                     let dp = (free(&m, fit_mass).len() - p0) as f64;
