@@ -45,6 +45,12 @@ fn silverbox_finds_the_cubic_spring() {
     assert!(mv(first.before[0].rms) < 20.0);
     assert!(mv(first.after[0].rms) < 6.4);
     assert!(mv(r.tests[0].rms) <= 5.0, "{} mV", mv(r.tests[0].rms));
+    // The README's best published figures: polynomial NARX (FROLS) 4.15 mV on the full
+    // arrow head, the ARX with y² and y³ terms 1.9 mV without extrapolation. The loop ends at
+    // 1.35 and 1.26 mV (docs/refine.md), so these bounds hold with a wide margin and fail
+    // only if the loop stops finding what it finds now.
+    assert!(mv(r.tests[0].rms) < 4.15, "{} mV", mv(r.tests[0].rms));
+    assert!(mv(r.tests[1].rms) < 1.9, "{} mV", mv(r.tests[1].rms));
 }
 
 #[test]
