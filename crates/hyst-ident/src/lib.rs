@@ -32,6 +32,9 @@
 //! 5. [`validate`]: simulate a model with a measured input and report
 //!    $\varepsilon = \text{RMS}(\hat y - y)/(\max y - \min y)$ (eq. 39) and the RMS.
 //!
+//! With the input too, [`frf`] fits the modes of a periodic record's frequency response: the
+//! input-output second opinion on what output-only SSI reports.
+//!
 //! Across records: [`levels::bouc_wen_from_levels`] takes the step-3b fits of records at two
 //! or more force levels and gives one Bouc-Wen model for all, through the statistical
 //! linearization of [`hyst_linearize::statistical`].
@@ -41,6 +44,7 @@
 mod fft;
 pub mod flatness;
 pub mod floor;
+pub mod frf;
 pub mod levels;
 pub mod refine;
 pub mod zener_spectrum;
@@ -159,6 +163,50 @@ pub enum IdentError {
         input: usize,
         /// Output length.
         output: usize,
+    },
+    /// A frequency-response band holds too few excited lines for the fit asked of it.
+    #[error(
+        "the band {low_hz}..{high_hz} Hz holds {lines} excited lines of the input; the fit needs at least {needed}"
+    )]
+    FewLines {
+        /// Lower edge (Hz).
+        low_hz: f64,
+        /// Upper edge (Hz).
+        high_hz: f64,
+        /// Excited lines found there.
+        lines: usize,
+        /// Lines needed.
+        needed: usize,
+    },
+    /// A frequency-response band is not an interval within 0 Hz and Nyquist.
+    #[error(
+        "the band {low_hz}..{high_hz} Hz is not an interval within 0..{nyquist_hz} Hz (Nyquist)"
+    )]
+    BandOutOfRange {
+        /// Lower edge (Hz).
+        low_hz: f64,
+        /// Upper edge (Hz).
+        high_hz: f64,
+        /// Half the sampling rate (Hz).
+        nyquist_hz: f64,
+    },
+    /// No output channel was given.
+    #[error("no output channel was given")]
+    NoOutputs,
+    /// A response fit was asked for zero modes.
+    #[error("a response fit needs at least one mode")]
+    NoModesAsked,
+    /// A sample of a record is NaN or infinite.
+    #[error(
+        "record {channel} (0 = input, then the outputs), sample {index}: value {value} is not finite"
+    )]
+    NonFiniteSample {
+        /// 0 for the input, 1.. for the outputs.
+        channel: usize,
+        /// 0-based sample.
+        index: usize,
+        /// The value.
+        value: f64,
     },
 }
 
