@@ -10,6 +10,7 @@
 //!   runs covssi beside pyOMA2 and koma (see `compare.rs`).
 
 mod compare;
+mod f16;
 mod random_sweep;
 mod sweep;
 
@@ -21,9 +22,51 @@ use hyst_sim::{Input, SimOptions, simulate};
 
 fn usage() -> ! {
     eprintln!(
-        "usage: cargo xtask bench [rk4] [covssi] [ident] [refine]\n       cargo xtask sweep [--levels FROM:TO:STEP] [--samples N] [--seed S] [--out DIR]\n       cargo xtask sweep-random [--levels FROM:TO:STEP] [--samples N] [--seed S] [--out DIR]\n       cargo xtask compare-tools [--seeds N] [--first-seed S] [--timing] [--clusters] [--covssi-only] [--crb] [--cases NAMES]"
+        "usage: cargo xtask bench [rk4] [covssi] [ident] [refine]\n       cargo xtask sweep [--levels FROM:TO:STEP] [--samples N] [--seed S] [--out DIR]\n       cargo xtask sweep-random [--levels FROM:TO:STEP] [--samples N] [--seed S] [--out DIR]\n       cargo xtask f16 [--out DIR]\n       cargo xtask compare-tools [--seeds N] [--first-seed S] [--timing] [--clusters] [--covssi-only] [--crb] [--cases NAMES]"
     );
     std::process::exit(2)
+}
+
+/// `cargo xtask f16 [--out DIR]`: the F-16's wing modes over its four force levels.
+fn f16_cmd(args: &[String]) {
+    let mut out = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/f16");
+    match args {
+        [] => {}
+        [flag, dir] if flag == "--out" => out = dir.into(),
+        _ => usage(),
+    }
+    let Some(dir) = hyst::io::data_dir() else {
+        eprintln!(
+            "error: no data folder (set HYST_DATA_DIR, or put the shared data in ../shared/data)"
+        );
+        std::process::exit(1);
+    };
+    let t0 = Instant::now();
+    let rows = match f16::run(&dir) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::exit(1);
+        }
+    };
+    let table = f16::markdown(&rows);
+    print!("{table}");
+    let written = std::fs::create_dir_all(&out)
+        .and_then(|_| std::fs::write(out.join("f16_levels.md"), &table))
+        .map_err(|e| format!("{}: {e}", out.display()))
+        .and_then(|_| f16::figures(&rows, &out));
+    match written {
+        Ok(paths) => {
+            for p in paths {
+                eprintln!("wrote {}", p.display());
+            }
+            eprintln!("{:.1} s", t0.elapsed().as_secs_f64());
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::exit(1);
+        }
+    }
 }
 
 fn parse_levels(s: &str) -> Option<Vec<f64>> {
@@ -582,6 +625,7 @@ fn main() {
                 markdown: random_sweep::markdown,
             },
         ),
+        Some("f16") => f16_cmd(&args[1..]),
         Some("compare-tools") => {
             if let Err(e) = compare::run(&args[1..]) {
                 eprintln!("error: {e}");

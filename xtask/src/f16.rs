@@ -1,0 +1,326 @@
+//! `cargo xtask f16`: the measured F-16's wing modes at its four force levels, output-only
+//! (covssi on the three accelerations) beside the input-output fit of the force-to-acceleration
+//! response (`hyst_ident::frf`), and output-only again on the accelerations as they would be
+//! under a force of flat spectrum; figures of frequency and damping over force, and of the
+//! force's spectrum around each mode.
+
+use std::path::{Path, PathBuf};
+
+use hyst::covssi::{self, BlockRows, SsiOptions};
+use hyst::plot::Series;
+use hyst_ident::frf::{self, FrfFit, FrfMode, PeriodicRecord};
+use rayon::prelude::*;
+
+/// The records (README beside the data): 9 periods of 8192 samples at 400 Hz, the first a
+/// start-up transient.
+pub const LEVELS: [u32; 4] = [1, 3, 5, 7];
+const FS: f64 = 400.0;
+const PERIOD: usize = 8192;
+/// 400 → 50 Hz keeps the 2–15 Hz band for SSI.
+const DECIMATE: usize = 8;
+
+/// A mode followed over the levels.
+pub struct Target {
+    /// Name in the table.
+    pub name: &'static str,
+    /// The SSI cluster with most poles within `search` Hz of this frequency is taken.
+    pub nominal_hz: f64,
+    /// Search half-width (Hz).
+    pub search: f64,
+    /// The narrow band fitted with this mode alone (Hz).
+    pub narrow: (f64, f64),
+    /// A wide band and the modes fitted in it, neighbours included.
+    pub wide: ((f64, f64), usize),
+}
+
+/// The wing bending mode near 5.2 Hz and the wing torsion mode near 7.3 Hz (README).
+pub const TARGETS: [Target; 2] = [
+    Target {
+        name: "wing bending",
+        nominal_hz: 5.2,
+        search: 0.3,
+        narrow: (4.6, 5.8),
+        wide: ((3.2, 6.2), 3),
+    },
+    Target {
+        name: "wing torsion",
+        nominal_hz: 7.3,
+        search: 0.3,
+        narrow: (6.8, 7.8),
+        wide: ((6.0, 9.6), 3),
+    },
+];
+
+/// An SSI cluster: frequency (Hz), its spread over the cluster, damping ratio, its spread,
+/// and the number of poles.
+pub type Cluster = (f64, f64, f64, f64, usize);
+
+/// One mode at one level by every method.
+#[derive(Debug, Clone)]
+pub struct Row {
+    /// Level number of the file.
+    pub level: u32,
+    /// RMS of the force over the periods used (N).
+    pub force_rms: f64,
+    /// Index into [`TARGETS`].
+    pub target: usize,
+    /// Output-only SSI on the measured accelerations.
+    pub ssi: Option<Cluster>,
+    /// The same on the accelerations under a force of flat spectrum.
+    pub ssi_flat: Option<Cluster>,
+    /// The response fit of the narrow band (this mode alone) and its misfit.
+    pub narrow: (Option<FrfMode>, f64),
+    /// The response fit of the wide band (neighbours too) and its misfit.
+    pub wide: (Option<FrfMode>, f64),
+    /// Frequencies (Hz) and force amplitudes (N) of the lines of the narrow band.
+    pub force_lines: Vec<(f64, f64)>,
+}
+
+fn cluster(res: &covssi::SsiResult, tg: &Target) -> Option<Cluster> {
+    res.modes
+        .iter()
+        .filter(|m| (m.frequency_hz - tg.nominal_hz).abs() <= tg.search)
+        .max_by_key(|m| m.members.len())
+        .map(|m| {
+            (
+                m.frequency_hz,
+                m.frequency_std_hz,
+                m.damping_ratio,
+                m.damping_std,
+                m.members.len(),
+            )
+        })
+}
+
+fn nearest(fit: &FrfFit, f: f64) -> Option<FrfMode> {
+    fit.modes
+        .iter()
+        .min_by(|a, b| {
+            (a.frequency_hz - f)
+                .abs()
+                .total_cmp(&(b.frequency_hz - f).abs())
+        })
+        .copied()
+}
+
+/// Every analysis of one level's file.
+pub fn analyse(dir: &Path, level: u32) -> Result<Vec<Row>, String> {
+    let path = dir.join(format!("f16/msine_level{level}.csv"));
+    let err = |what: &str, e: &dyn std::fmt::Display| format!("{}: {what}{e}", path.display());
+    let t = hyst::io::read_csv(&path).map_err(|e| err("", &e))?;
+    let col = |n: &str| {
+        let c = t.column(n).map_err(|e| err("", &e))?;
+        // Drop the first period, the start-up transient.
+        c.get(PERIOD..)
+            .map(<[f64]>::to_vec)
+            .ok_or_else(|| err("", &format!("column {n} is shorter than one period")))
+    };
+    let force = col("force")?;
+    let acc: Vec<Vec<f64>> = ["acc1", "acc2", "acc3"]
+        .iter()
+        .map(|c| col(c))
+        .collect::<Result<_, _>>()?;
+    let force_rms = {
+        let m = force.iter().sum::<f64>() / force.len() as f64;
+        (force.iter().map(|v| (v - m).powi(2)).sum::<f64>() / force.len() as f64).sqrt()
+    };
+    let outs: Vec<&[f64]> = acc.iter().map(|c| c.as_slice()).collect();
+    let rec = PeriodicRecord {
+        input: &force,
+        outputs: &outs,
+        fs: FS,
+        period: PERIOD,
+    };
+    let flat = frf::outputs_under_flat_input(&rec).map_err(|e| err("flat force: ", &e))?;
+    // Output only, with the settings of the test and docs/covssi.md.
+    let opts = SsiOptions {
+        block_rows: BlockRows::Count(40),
+        max_order: Some(60),
+        ..SsiOptions::default()
+    };
+    let ssi = |channels: &[Vec<f64>]| {
+        let dec: Vec<Vec<f64>> = channels
+            .iter()
+            .map(|c| hyst::sim::resample::decimate(c, DECIMATE))
+            .collect();
+        let views: Vec<&[f64]> = dec.iter().map(|c| c.as_slice()).collect();
+        covssi::identify(&views, FS / DECIMATE as f64, &opts).map_err(|e| err("SSI: ", &e))
+    };
+    let (res, res_flat) = (ssi(&acc)?, ssi(&flat)?);
+    let mut rows = Vec::new();
+    for (i, tg) in TARGETS.iter().enumerate() {
+        let s = cluster(&res, tg);
+        let near = s.map_or(tg.nominal_hz, |c| c.0);
+        let narrow = frf::modes_from_frf(&rec, tg.narrow, 1).map_err(|e| err("fit: ", &e))?;
+        let wide = frf::modes_from_frf(&rec, tg.wide.0, tg.wide.1).map_err(|e| err("fit: ", &e))?;
+        rows.push(Row {
+            level,
+            force_rms,
+            target: i,
+            ssi: s,
+            ssi_flat: cluster(&res_flat, tg),
+            narrow: (nearest(&narrow, near), narrow.misfit),
+            wide: (nearest(&wide, near), wide.misfit),
+            force_lines: narrow
+                .frequency_hz
+                .iter()
+                .copied()
+                .zip(narrow.input_amplitude.iter().copied())
+                .collect(),
+        });
+    }
+    Ok(rows)
+}
+
+/// Every level, in parallel, in level order.
+pub fn run(dir: &Path) -> Result<Vec<Row>, String> {
+    let per: Vec<Result<Vec<Row>, String>> = LEVELS.par_iter().map(|&l| analyse(dir, l)).collect();
+    let mut rows = Vec::new();
+    for r in per {
+        rows.extend(r?);
+    }
+    rows.sort_by_key(|r| (r.target, r.level));
+    Ok(rows)
+}
+
+fn fmt_cluster(c: Option<Cluster>) -> String {
+    match c {
+        Some((f, fs, z, zs, n)) => format!(
+            "{f:.3} ± {fs:.3} | {:.2} ± {:.2} | {n}",
+            100.0 * z,
+            100.0 * zs
+        ),
+        None => "none | | ".into(),
+    }
+}
+
+fn fmt_fit(m: Option<FrfMode>, misfit: f64) -> String {
+    match m {
+        Some(m) => format!(
+            "{:.3} ± {:.3} | {:.2} ± {:.2} | {misfit:.0}",
+            m.frequency_hz,
+            m.frequency_se_hz,
+            100.0 * m.damping_ratio,
+            100.0 * m.damping_se
+        ),
+        None => format!("none | | {misfit:.0}"),
+    }
+}
+
+/// The table, as markdown: for SSI the "±" is the spread over the cluster's poles; for the
+/// fits it is the jackknife standard error over periods (noise only, see docs/results.md).
+pub fn markdown(rows: &[Row]) -> String {
+    let mut s = String::from(
+        "| mode | level | force RMS (N) | SSI f (Hz) | SSI ζ (%) | poles | SSI, flat force: f (Hz) | ζ (%) | poles | fit, mode alone: f (Hz) | ζ (%) | misfit | fit with neighbours: f (Hz) | ζ (%) | misfit |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+    );
+    for r in rows {
+        s += &format!(
+            "| {} | {} | {:.1} | {} | {} | {} | {} |\n",
+            TARGETS[r.target].name,
+            r.level,
+            r.force_rms,
+            fmt_cluster(r.ssi),
+            fmt_cluster(r.ssi_flat),
+            fmt_fit(r.narrow.0, r.narrow.1),
+            fmt_fit(r.wide.0, r.wide.1),
+        );
+    }
+    s
+}
+
+/// Per mode: frequency and damping over force by every method, and the force's line
+/// amplitudes across the mode's band at each level.
+pub fn figures(rows: &[Row], out: &Path) -> Result<Vec<PathBuf>, String> {
+    use hyst::plot::colors;
+    std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
+    let mut paths = Vec::new();
+    for (i, tg) in TARGETS.iter().enumerate() {
+        let mine: Vec<&Row> = rows.iter().filter(|r| r.target == i).collect();
+        let series = |f: &dyn Fn(&Row) -> Option<f64>| -> Vec<(f64, f64)> {
+            mine.iter()
+                .filter_map(|r| f(r).map(|v| (r.force_rms, v)))
+                .collect()
+        };
+        let slug = tg.name.replace(' ', "_");
+        let freq: Vec<Series> = vec![
+            (
+                "SSI, accelerations only".into(),
+                series(&|r| r.ssi.map(|c| c.0)),
+                colors::BLUE,
+            ),
+            (
+                "SSI, force made flat".into(),
+                series(&|r| r.ssi_flat.map(|c| c.0)),
+                colors::GREEN,
+            ),
+            (
+                "fit of the response, mode alone".into(),
+                series(&|r| r.narrow.0.map(|m| m.frequency_hz)),
+                colors::RED,
+            ),
+            (
+                "fit of the response, with neighbours".into(),
+                series(&|r| r.wide.0.map(|m| m.frequency_hz)),
+                colors::ORANGE,
+            ),
+        ];
+        let damp: Vec<Series> = vec![
+            (
+                freq[0].0.clone(),
+                series(&|r| r.ssi.map(|c| 100.0 * c.2)),
+                colors::BLUE,
+            ),
+            (
+                freq[1].0.clone(),
+                series(&|r| r.ssi_flat.map(|c| 100.0 * c.2)),
+                colors::GREEN,
+            ),
+            (
+                freq[2].0.clone(),
+                series(&|r| r.narrow.0.map(|m| 100.0 * m.damping_ratio)),
+                colors::RED,
+            ),
+            (
+                freq[3].0.clone(),
+                series(&|r| r.wide.0.map(|m| 100.0 * m.damping_ratio)),
+                colors::ORANGE,
+            ),
+        ];
+        for (what, unit, s) in [
+            ("frequency", "natural frequency (Hz)", freq),
+            ("damping", "damping ratio (%)", damp),
+        ] {
+            let p = out.join(format!("f16_{slug}_{what}.svg"));
+            hyst::plot::chart(
+                &p,
+                &format!("F-16 {}: {what} over force level", tg.name),
+                "force RMS (N)",
+                unit,
+                &s,
+            )?;
+            paths.push(p);
+        }
+        let palette = [colors::BLACK, colors::BLUE, colors::GREEN, colors::RED];
+        let force: Vec<Series> = mine
+            .iter()
+            .zip(palette)
+            .map(|(r, c)| {
+                (
+                    format!("level {} ({:.0} N RMS)", r.level, r.force_rms),
+                    r.force_lines.clone(),
+                    c,
+                )
+            })
+            .collect();
+        let p = out.join(format!("f16_{slug}_force.svg"));
+        hyst::plot::chart_log_y(
+            &p,
+            &format!("F-16: force amplitude per line across the {} band", tg.name),
+            "frequency (Hz)",
+            "force amplitude per line (N, log10)",
+            &force,
+        )?;
+        paths.push(p);
+    }
+    Ok(paths)
+}
