@@ -225,6 +225,19 @@ pub fn markdown(rows: &[Row]) -> String {
             fmt_fit(r.wide.0, r.wide.1),
         );
     }
+    s += "\n| mode | level | force per line across the band: mean (N) | lowest (N, at Hz) | highest (N, at Hz) |\n|---|---|---|---|---|\n";
+    for r in rows {
+        let lines = &r.force_lines;
+        let mean = lines.iter().map(|l| l.1).sum::<f64>() / lines.len().max(1) as f64;
+        let lo = lines.iter().min_by(|a, b| a.1.total_cmp(&b.1));
+        let hi = lines.iter().max_by(|a, b| a.1.total_cmp(&b.1));
+        if let (Some(lo), Some(hi)) = (lo, hi) {
+            s += &format!(
+                "| {} | {} | {mean:.3} | {:.3} at {:.3} | {:.3} at {:.3} |\n",
+                TARGETS[r.target].name, r.level, lo.1, lo.0, hi.1, hi.0
+            );
+        }
+    }
     s
 }
 
