@@ -745,8 +745,8 @@ fn bouc_wen_replacing(
         .map(|(m, _)| m)
 }
 
-/// The start of a fit that adds the effect `e` to `o`, given `small` (`o` with the effect at
-/// a small size). For a force term linear in its coefficient: the least-squares projection of
+/// The start of a fit that adds the effect `e` to the base model, given `small` (the base
+/// model with the effect at a small size) and the base model's residual `r0`. For a force term linear in its coefficient: the least-squares projection of
 /// the residual `r0` on the output's sensitivity to that coefficient — or better, when the
 /// model is a plain oscillator, the equation-error fit of m ÿ + c ẏ + k y + θ g(y, ẏ) = u on
 /// the measured record. A regression's start that simulates worse than `small` (the
@@ -754,7 +754,6 @@ fn bouc_wen_replacing(
 /// starts worse than the model it extends.
 fn regression_start(
     small: Oscillator,
-    o: &Oscillator,
     e: Effect,
     r0: &[f64],
     rec: &Record<'_>,
@@ -766,8 +765,14 @@ fn regression_start(
         start = eq;
     } else if let Some(p) = linear_coefficient(e) {
         let theta = get(&start, p);
-        if let (Some(y1), Some(y0)) = (simulate(&start, rec, range), simulate(o, rec, range)) {
-            let sens: Vec<f64> = y1.iter().zip(&y0).map(|(a, b)| (a - b) / theta).collect();
+        // The base model's output is y − r0: no need to simulate it again.
+        let y = &rec.y[range.0..range.1];
+        if let (Some(y1), true) = (simulate(&start, rec, range), r0.len() == y.len()) {
+            let sens: Vec<f64> = y1
+                .iter()
+                .zip(y.iter().zip(r0))
+                .map(|(a, (yi, ri))| (a - (yi - ri)) / theta)
+                .collect();
             let ss: f64 = sens.iter().map(|v| v * v).sum();
             if ss > 0.0 {
                 let t = sens.iter().zip(r0).map(|(a, b)| a * b).sum::<f64>() / ss;
@@ -825,7 +830,7 @@ pub fn diagnose(
                         })
                     }
                     None => with_effect(o, e, sx, sv)
-                        .map(|m| vec![regression_start(m, o, e, &r0, rec, range, fit_mass)])
+                        .map(|m| vec![regression_start(m, e, &r0, rec, range, fit_mass)])
                         .ok_or("the effect does not apply"),
                 },
             };
