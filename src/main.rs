@@ -3,6 +3,8 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+mod frf_cmd;
+
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use hyst::io::{read_csv, write_csv};
 use hyst::model::Oscillator;
@@ -64,6 +66,14 @@ enum Command {
     ///   hyst levels --data bw10.csv bw50.csv bw90.csv --fs 750 --mass 2 --data-periodic --validate bw50v.csv --periodic --json levels.json
     #[command(verbatim_doc_comment)]
     Levels(LevelsArgs),
+    /// With the input: the modes of a periodic record's frequency response over a band (an
+    /// input-output second opinion on `hyst ssi`), and optionally the outputs under a force
+    /// of flat spectrum.
+    ///
+    /// Example (the F-16 at its lowest level, the wing torsion mode):
+    ///   hyst frf --input msine_level1.csv --fs 400 --force force --period 8192 --skip 8192 --band 6.8:7.8 --json torsion.json --svg torsion.svg
+    #[command(verbatim_doc_comment)]
+    Frf(frf_cmd::FrfArgs),
 }
 
 #[derive(Args, Debug)]
@@ -436,6 +446,23 @@ fn generate(kind: ExcitationKind, a: &SignalArgs, fs: f64) -> Result<Vec<f64>, E
     })
 }
 
+/// The channels to analyse: those given, else every column but a time column (`t`, `time`)
+/// and those in `besides`.
+fn channel_names(t: &hyst::io::Table, given: Option<&[String]>, besides: &[&str]) -> Vec<String> {
+    match given {
+        Some(c) => c.to_vec(),
+        None => t
+            .names
+            .iter()
+            .filter(|n| {
+                !besides.contains(&n.as_str())
+                    && !matches!(n.to_ascii_lowercase().as_str(), "t" | "time")
+            })
+            .cloned()
+            .collect(),
+    }
+}
+
 fn check_fs(fs: f64) -> Result<f64, Error> {
     if fs.is_finite() && fs > 0.0 {
         Ok(fs)
@@ -537,15 +564,7 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
         return Err(fail("--decimate must be at least 1, got 0"));
     }
     let t = read_csv(&a.input)?;
-    let names: Vec<String> = match &a.columns {
-        Some(c) => c.clone(),
-        None => t
-            .names
-            .iter()
-            .filter(|n| !matches!(n.to_ascii_lowercase().as_str(), "t" | "time"))
-            .cloned()
-            .collect(),
-    };
+    let names = channel_names(&t, a.columns.as_deref(), &[]);
     if let Some(n) = hyst::io::repeated(&names) {
         return Err(fail(format!(
             "--columns names `{n}` twice: each channel once"
@@ -1906,6 +1925,7 @@ fn main() -> ExitCode {
         Command::Ident(a) => ident(a),
         Command::Refine(a) => refine(a),
         Command::Levels(a) => levels(a),
+        Command::Frf(a) => frf_cmd::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -22,8 +22,8 @@
 //! still describe the noise alone, and the change of the estimates with the band and the
 //! number of modes is the larger uncertainty.
 
-use crate::IdentError;
 use crate::fft::{C, rfft};
+use crate::{Complex64, IdentError};
 use nalgebra::{DMatrix, DVector};
 
 /// A periodic record: one input and one or more outputs, in steady state from the first
@@ -65,9 +65,9 @@ pub struct FrfFit {
     /// The input's amplitude at those lines (of its sine component: $2|\bar U|/M$).
     pub input_amplitude: Vec<f64>,
     /// The measured response at those lines, per channel.
-    pub response: Vec<Vec<C>>,
+    pub response: Vec<Vec<Complex64>>,
     /// The fitted response there, per channel.
-    pub fitted: Vec<Vec<C>>,
+    pub fitted: Vec<Vec<Complex64>>,
     /// Weighted residual mean square per real equation (near 1 when the fit is at the noise;
     /// computed with unit weights, and so not comparable to 1, with one period).
     pub misfit: f64,
