@@ -1200,13 +1200,13 @@ fn frf_fits_the_f16_torsion_mode_and_writes_flattened_outputs() {
         "400",
         "--force",
         "force",
-        "--period",
-        "8192",
         "--skip",
         "8192",
     ];
     let mut args = base.to_vec();
     args.extend_from_slice(&[
+        "--period",
+        "8192",
         "--band",
         "6.8:7.8",
         "--json",
@@ -1270,22 +1270,36 @@ fn frf_fits_the_f16_torsion_mode_and_writes_flattened_outputs() {
     // Bad input is named.
     for (extra, needle) in [
         (
-            &["--band", "6.8-7.8"][..],
+            &["--period", "8192", "--band", "6.8-7.8"][..],
             "--band must be LOW:HIGH in Hz, got `6.8-7.8`",
         ),
         (
-            &["--band", "6.8:300"][..],
+            &["--period", "8192", "--band", "6.8:300"][..],
             "is not an interval within 0..200 Hz",
         ),
         (
-            &["--band", "6.8:7.8", "--columns", "acc1,force"][..],
+            &[
+                "--period",
+                "8192",
+                "--band",
+                "6.8:7.8",
+                "--columns",
+                "acc1,force",
+            ][..],
             "includes the force column",
         ),
         (
-            &["--band", "6.8:7.8", "--modes", "0"][..],
+            &["--period", "8192", "--band", "6.8:7.8", "--modes", "0"][..],
             "needs at least one mode",
         ),
-        (&["--band", "0.001:0.01"][..], "holds 0 excited lines"),
+        (
+            &["--period", "8192", "--band", "0.001:0.01"][..],
+            "holds 0 excited lines",
+        ),
+        (
+            &["--period", "8000", "--band", "6.8:7.8"][..],
+            "does not repeat every 8000 samples",
+        ),
     ] {
         let mut args = base.to_vec();
         args.extend_from_slice(extra);

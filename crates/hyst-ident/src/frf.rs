@@ -75,6 +75,10 @@ pub struct FrfFit {
 
 /// Lines whose input amplitude is below this fraction of the largest line's are not excited.
 const EXCITED: f64 = 1e-2;
+/// An input whose period-to-period differences hold more than this share of its variance is
+/// not periodic with the period given. The F-16's measured forces: 1e-6 to 1e-5 at their
+/// period, 0.5–0.86 at a wrong one (half the period, 8000 samples for 8192).
+const MAX_APERIODIC: f64 = 0.2;
 /// Sanathanan–Koerner iterations at most, and the relative change of the denominator that
 /// ends them.
 const SK_ITERATIONS: usize = 50;
@@ -221,6 +225,25 @@ pub fn outputs_under_flat_input(rec: &PeriodicRecord<'_>) -> Result<Vec<Vec<f64>
         .collect())
 }
 
+/// The share of the input's variance (about its mean) that differs from period to period,
+/// $\sum_{p,n}(u_p[n] - \bar u[n])^2 / \sum_{p,n}(u_p[n] - \bar u)^2$; 0 with one period.
+fn aperiodic_fraction(u: &[f64], m: usize) -> f64 {
+    let periods = u.len() / m;
+    if periods < 2 {
+        return 0.0;
+    }
+    let mean = u.iter().sum::<f64>() / u.len() as f64;
+    let (mut num, mut den) = (0.0, 0.0);
+    for n in 0..m {
+        let ubar = (0..periods).map(|p| u[p * m + n]).sum::<f64>() / periods as f64;
+        for p in 0..periods {
+            num += (u[p * m + n] - ubar).powi(2);
+            den += (u[p * m + n] - mean).powi(2);
+        }
+    }
+    if den > 0.0 { num / den } else { 0.0 }
+}
+
 fn jackknife_se(v: &[f64]) -> f64 {
     let n = v.len() as f64;
     if v.len() < 2 {
@@ -292,6 +315,13 @@ impl Spectra {
             });
         }
         let periods = rec.input.len() / m;
+        let aperiodic = aperiodic_fraction(&rec.input[..periods * m], m);
+        if aperiodic > MAX_APERIODIC {
+            return Err(IdentError::NotPeriodic {
+                period: m,
+                fraction: aperiodic,
+            });
+        }
         let df = fs / m as f64;
         let spectra_of = |x: &[f64]| -> Vec<Vec<C>> {
             (0..periods).map(|p| rfft(&x[p * m..(p + 1) * m])).collect()
@@ -705,6 +735,16 @@ mod tests {
         assert!(
             e.to_string()
                 .contains("band 1..6 Hz is not an interval within 0..5 Hz"),
+            "{e}"
+        );
+        // A wrong period: the multisine repeats every 256 samples, not 200.
+        let short = PeriodicRecord {
+            period: 200,
+            ..good
+        };
+        let e = modes_from_frf(&short, (1.0, 4.0), 1).unwrap_err();
+        assert!(
+            e.to_string().contains("does not repeat every 200 samples"),
             "{e}"
         );
         let rec = PeriodicRecord { fs: 0.0, ..rec };

@@ -190,6 +190,17 @@ pub enum IdentError {
         /// Half the sampling rate (Hz).
         nyquist_hz: f64,
     },
+    /// The input does not repeat with the period given.
+    #[error(
+        "the input does not repeat every {period} samples: {:.0} % of its variance differs from period to period (at most 20 % allowed); is the period right?",
+        100.0 * fraction
+    )]
+    NotPeriodic {
+        /// The period given (samples).
+        period: usize,
+        /// Share of the input's variance that differs between periods.
+        fraction: f64,
+    },
     /// No output channel was given.
     #[error("no output channel was given")]
     NoOutputs,
