@@ -685,6 +685,9 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
         })
         .collect();
     // The SSI result first: the refinement can take a minute on many channels and modes.
+    if !res.modes.is_empty() || !res.real_poles.is_empty() {
+        println!("SSI (± is the spread over each cluster's poles, not a standard error):");
+    }
     for m in &res.modes {
         // Members come by increasing order: the first and last give the span of orders.
         let span = match (m.members.first(), m.members.last()) {
@@ -797,7 +800,7 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
     }
     if let Some(r) = &refined {
         println!(
-            "refined by maximum likelihood ({} frequencies, {}; a mode needs evidence above {:.1}):",
+            "refined by maximum likelihood ({} frequencies, {}; a mode needs evidence above {:.1}; ± one standard error):",
             r.frequencies,
             r.fitted_by(),
             r.penalty
