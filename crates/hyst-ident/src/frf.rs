@@ -300,6 +300,14 @@ impl Spectra {
                     value,
                 });
             }
+            // Spectra and variances square the values and sum them over a record.
+            if let Some((index, &value)) = x.iter().enumerate().find(|(_, v)| v.abs() > 1e150) {
+                return Err(IdentError::SampleTooLarge {
+                    channel,
+                    index,
+                    value,
+                });
+            }
         }
         let nyquist = fs / 2.0;
         if !(band.0.is_finite()
@@ -709,6 +717,19 @@ mod tests {
         };
         let e = modes_from_frf(&rec, (1.0, 10.0), 1).unwrap_err();
         assert!(e.to_string().contains("sample 17"), "{e}");
+        let mut big = vec![0.5; 100];
+        big[17] = 3e200;
+        let outs = [big.as_slice()];
+        let rec = PeriodicRecord {
+            outputs: &outs,
+            ..rec
+        };
+        let e = modes_from_frf(&rec, (1.0, 10.0), 1).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("sample 17: value 3e200 is too large"),
+            "{e}"
+        );
         let y = vec![0.5; 100];
         let outs = [y.as_slice()];
         let rec = PeriodicRecord {

@@ -190,6 +190,18 @@ pub enum IdentError {
         /// Half the sampling rate (Hz).
         nyquist_hz: f64,
     },
+    /// A sample of a record is too large to be squared and summed in double precision.
+    #[error(
+        "record {channel} (0 = input, then the outputs), sample {index}: value {value:e} is too large to compute spectra with in double precision (above 1e150): rescale the record, e.g. to other units"
+    )]
+    SampleTooLarge {
+        /// 0 for the input, 1.. for the outputs.
+        channel: usize,
+        /// 0-based sample.
+        index: usize,
+        /// The value.
+        value: f64,
+    },
     /// The input does not repeat with the period given.
     #[error(
         "the input does not repeat every {period} samples: {:.0} % of its variance differs from period to period (at most 20 % allowed); is the period right?",
