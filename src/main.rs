@@ -253,7 +253,8 @@ struct SsiArgs {
     /// Sampling rate of the file (Hz).
     #[arg(long)]
     fs: f64,
-    /// Channels to analyse, comma-separated; default: every column except `t` and `time`.
+    /// Channels to analyse, comma-separated; default: every column except `t` and `time` (with
+    /// a warning for columns named like a force: `u`, `force`, `input`, `excitation`, `load`).
     #[arg(long, value_delimiter = ',')]
     columns: Option<Vec<String>>,
     /// Decimate by this factor first (MATLAB-style FIR decimation).
@@ -565,6 +566,40 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
     }
     let t = read_csv(&a.input)?;
     let names = channel_names(&t, a.columns.as_deref(), &[]);
+    // Output only means responses only: a default that takes in the force is a mistake the
+    // user should hear about (the benchmarks' files hold `u,y`).
+    if a.columns.is_none() {
+        let looks_input = |n: &str| {
+            matches!(
+                n.to_ascii_lowercase().as_str(),
+                "u" | "force" | "input" | "excitation" | "load"
+            )
+        };
+        let (inputs, responses): (Vec<&String>, Vec<&String>) =
+            names.iter().partition(|n| looks_input(n));
+        if !inputs.is_empty() {
+            let list = |v: &[&String]| v.iter().map(|s| s.as_str()).collect::<Vec<_>>().join(",");
+            let (what, is) = if inputs.len() == 1 {
+                (
+                    format!("column `{}` looks like the input (a force)", inputs[0]),
+                    "it is analysed as a response",
+                )
+            } else {
+                (
+                    format!("columns {} look like inputs (forces)", list(&inputs)),
+                    "they are analysed as responses",
+                )
+            };
+            eprintln!(
+                "warning: {what}, and output-only analysis takes responses only; {is} because --columns was not given{}",
+                if responses.is_empty() {
+                    String::new()
+                } else {
+                    format!(" (for the responses alone: --columns {})", list(&responses))
+                }
+            );
+        }
+    }
     if let Some(n) = hyst::io::repeated(&names) {
         return Err(fail(format!(
             "--columns names `{n}` twice: each channel once"

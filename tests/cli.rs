@@ -1307,3 +1307,39 @@ fn frf_fits_the_f16_torsion_mode_and_writes_flattened_outputs() {
         assert!(!ok && err.contains(needle), "{extra:?}: {err}");
     }
 }
+
+/// Output only takes responses: `hyst ssi` without --columns on a `u,y` file warns that `u`
+/// looks like the force and says how to leave it out; with --columns it says nothing.
+#[test]
+fn ssi_warns_when_the_default_channels_take_in_the_force() {
+    let noise = hyst::sim::excitation::white_noise(4000, 1.0, 3).unwrap();
+    let resp = hyst::sim::excitation::white_noise(4000, 1.0, 4).unwrap();
+    let text: String = noise
+        .iter()
+        .zip(&resp)
+        .map(|(u, y)| format!("{u},{y}\n"))
+        .collect();
+    let p = write("uy_for_ssi.csv", &format!("u,y\n{text}"));
+    let json = tmp("uy_for_ssi.json");
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "ssi",
+            "--input",
+            s(&p),
+            "--fs",
+            "100",
+            "--no-refine",
+            "--json",
+            s(&json),
+        ];
+        args.extend_from_slice(extra);
+        hyst(&args)
+    };
+    let (_, _, err) = run(&[]);
+    assert!(
+        err.contains("column `u` looks like the input (a force)") && err.contains("--columns y"),
+        "{err}"
+    );
+    let (_, _, err) = run(&["--columns", "y"]);
+    assert!(!err.contains("looks like the input"), "{err}");
+}
