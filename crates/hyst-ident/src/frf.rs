@@ -47,7 +47,8 @@ pub struct FrfMode {
     pub frequency_hz: f64,
     /// Damping ratio $-\operatorname{Re}\lambda/|\lambda|$.
     pub damping_ratio: f64,
-    /// Jackknife standard error of the frequency over periods (Hz); NaN with one period.
+    /// Jackknife standard error of the frequency over periods (Hz); NaN with one period (or
+    /// when fewer than two of the leave-one-out fits succeeded).
     pub frequency_se_hz: f64,
     /// Jackknife standard error of the damping ratio; NaN with one period.
     pub damping_se: f64,
@@ -77,7 +78,7 @@ pub struct FrfFit {
 const EXCITED: f64 = 1e-2;
 /// An input whose period-to-period differences hold more than this share of its variance is
 /// not periodic with the period given. The F-16's measured forces: 1e-6 to 1e-5 at their
-/// period, 0.5–0.86 at a wrong one (half the period, 8000 samples for 8192).
+/// period, 0.5–0.86 at a wrong one (4096 or 8000 samples for 8192).
 const MAX_APERIODIC: f64 = 0.2;
 /// Sanathanan–Koerner iterations at most, and the relative change of the denominator that
 /// ends them.
@@ -112,7 +113,10 @@ pub fn modes_from_frf(
     let all: Vec<usize> = (0..p).collect();
     let (h, sigma) = spectra.response(&all);
     let x = spectra.scaled();
-    let fit = sk_fit(&x, &h, &sigma, q);
+    let fit = sk_fit(&x, &h, &sigma, q).ok_or(IdentError::ResponseFitFailed {
+        low_hz: band.0,
+        high_hz: band.1,
+    })?;
     let centre = spectra.omega0;
     let poles: Vec<C> = roots(&fit.den)
         .into_iter()
@@ -139,7 +143,9 @@ pub fn modes_from_frf(
         for leave in 0..p {
             let keep: Vec<usize> = (0..p).filter(|&i| i != leave).collect();
             let (hj, sj) = spectra.response(&keep);
-            let fj = sk_fit(&x, &hj, &sj, q);
+            let Some(fj) = sk_fit(&x, &hj, &sj, q) else {
+                continue;
+            };
             let pj: Vec<C> = roots(&fj.den).into_iter().map(|r| r * centre).collect();
             for (m, l) in poles.iter().enumerate() {
                 if let Some(best) = pj
@@ -409,6 +415,12 @@ impl Spectra {
                     (ss / ((n - 1.0) * n * ubar[i].norm_sqr())).sqrt()
                 })
                 .collect();
+            // Identical periods (a simulated record) have no spread, or rounding: the weights
+            // stay finite at 1e-12 of the response's RMS.
+            let rms =
+                (hc.iter().map(|v| v.norm_sqr()).sum::<f64>() / hc.len().max(1) as f64).sqrt();
+            let floor = (1e-12 * rms).max(f64::MIN_POSITIVE);
+            let sc = sc.into_iter().map(|v| v.max(floor)).collect();
             h.push(hc);
             sd.push(sc);
         }
@@ -435,7 +447,8 @@ fn monic(a: &[f64], s: C) -> C {
 }
 
 /// Sanathanan–Koerner: weighted linear least squares, reweighted by the last denominator.
-fn sk_fit(x: &[C], h: &[Vec<C>], sd: &[Vec<f64>], q: usize) -> Rational {
+/// `None` when the problem stops being finite (a denominator vanishing at a line).
+fn sk_fit(x: &[C], h: &[Vec<C>], sd: &[Vec<f64>], q: usize) -> Option<Rational> {
     let channels = h.len();
     let k = x.len();
     let n_par = q + channels * (q + 1);
@@ -475,6 +488,10 @@ fn sk_fit(x: &[C], h: &[Vec<C>], sd: &[Vec<f64>], q: usize) -> Rational {
         for (j, s) in scale.iter().enumerate() {
             a.column_mut(j).scale_mut(1.0 / s);
         }
+        // nalgebra's SVD does not return on non-finite input.
+        if !(a.iter().all(|v| v.is_finite()) && rhs.iter().all(|v| v.is_finite())) {
+            return None;
+        }
         let sol = a
             .svd(true, true)
             .solve(&rhs, 1e-14)
@@ -505,11 +522,11 @@ fn sk_fit(x: &[C], h: &[Vec<C>], sd: &[Vec<f64>], q: usize) -> Rational {
         }
     }
     let dof = (2 * channels * k).saturating_sub(n_par).max(1);
-    Rational {
+    Some(Rational {
         den,
         num,
         misfit: ss / dof as f64,
-    }
+    })
 }
 
 /// The roots of $s^q + \sum_{j<q} a_j s^j$ (eigenvalues of its companion matrix).
@@ -606,6 +623,27 @@ mod tests {
         }
         // With one period the misfit has unit weights: the rounding of the transforms.
         assert!(fit.misfit < 1e-20, "{}", fit.misfit);
+    }
+
+    #[test]
+    fn identical_periods_do_not_break_the_weights() {
+        // Copies of one period: no noise at all, so the spread over periods is 0 or rounding.
+        let truth = [(5.2, 0.008, 1.0), (7.3, 0.005, 0.6)];
+        let h = |s: C| accel(s, &truth);
+        let (u, ys) = periodic_record(4096, 100.0, 4, (2.0, 15.0), &|_| 1.0, &[&h]);
+        let outs: Vec<&[f64]> = ys.iter().map(|v| v.as_slice()).collect();
+        let rec = PeriodicRecord {
+            input: &u,
+            outputs: &outs,
+            fs: 100.0,
+            period: 4096,
+        };
+        let fit = modes_from_frf(&rec, (4.5, 8.0), 2).unwrap();
+        assert_eq!(fit.modes.len(), 2, "{fit:?}");
+        for (m, &(f, z, _)) in fit.modes.iter().zip(&truth) {
+            approx::assert_relative_eq!(m.frequency_hz, f, max_relative = 1e-8);
+            approx::assert_relative_eq!(m.damping_ratio, z, max_relative = 1e-6);
+        }
     }
 
     #[test]

@@ -213,6 +213,16 @@ pub enum IdentError {
         /// Share of the input's variance that differs between periods.
         fraction: f64,
     },
+    /// The rational fit of a response band stopped being finite.
+    #[error(
+        "the fit of the response over {low_hz}..{high_hz} Hz broke down (its denominator vanished at a line); try another band or number of modes"
+    )]
+    ResponseFitFailed {
+        /// Lower edge (Hz).
+        low_hz: f64,
+        /// Upper edge (Hz).
+        high_hz: f64,
+    },
     /// No output channel was given.
     #[error("no output channel was given")]
     NoOutputs,
