@@ -6,7 +6,9 @@
 //! $M$ samples is transformed period by period, $U_p(k)$, $Y_{c,p}(k)$, and averaged:
 //! $H_c(k) = \bar Y_c(k)/\bar U(k)$ at the lines $k$ the input excites (no leakage: whole
 //! periods). Its variance comes from the spread over periods,
-//! $\sigma^2_{c}(k) = \sum_p |Y_{c,p} - H_c U_p|^2 / \big((P-1) P\,|\bar U|^2\big)$.
+//! $\sigma^2_{c}(k) = \sum_p |Y_{c,p} - H_c U_p|^2 / \big((P-1) P\,|\bar U|^2\big)$,
+//! averaged over the 11 excited lines around $k$ (the noise's variance changes slowly with
+//! frequency; one line's, from a few periods, scatters by tens of per cent).
 //! For a nonlinear structure $H$ is its best linear approximation at that excitation.
 //!
 //! **The fit.** One denominator for all channels, $D(s) = s^{q} + \sum_{j<q} a_j s^j$ with
@@ -80,6 +82,8 @@ const EXCITED: f64 = 1e-2;
 /// not periodic with the period given. The F-16's measured forces: 1e-6 to 1e-5 at their
 /// period, 0.5–0.86 at a wrong one (4096 or 8000 samples for 8192).
 const MAX_APERIODIC: f64 = 0.2;
+/// The noise variance of a line is averaged over this many lines on either side.
+const VARIANCE_LINES: usize = 5;
 /// Sanathanan–Koerner iterations at most, and the relative change of the denominator that
 /// ends them.
 const SK_ITERATIONS: usize = 50;
@@ -415,6 +419,11 @@ impl Spectra {
                     (ss / ((n - 1.0) * n * ubar[i].norm_sqr())).sqrt()
                 })
                 .collect();
+            // The variance of one line from P periods is itself uncertain (2(P − 1) degrees of
+            // freedom: ±58 % from 4 periods), and weights that scatter that much move the fit
+            // wherever the model does not match the response exactly; the noise's variance
+            // changes slowly with frequency, so it is averaged over neighbouring lines.
+            let sc = smooth_variance(&sc, VARIANCE_LINES);
             // Identical periods (a simulated record) have no spread, or rounding: the weights
             // stay finite at 1e-12 of the response's RMS.
             let rms =
@@ -447,6 +456,18 @@ fn monic(a: &[f64], s: C) -> C {
 }
 
 /// Sanathanan–Koerner: weighted linear least squares, reweighted by the last denominator.
+/// Standard deviations whose variances are averaged over `half` lines on either side (fewer
+/// at the ends).
+fn smooth_variance(sd: &[f64], half: usize) -> Vec<f64> {
+    let n = sd.len();
+    (0..n)
+        .map(|i| {
+            let (a, b) = (i.saturating_sub(half), (i + half + 1).min(n));
+            (sd[a..b].iter().map(|v| v * v).sum::<f64>() / (b - a) as f64).sqrt()
+        })
+        .collect()
+}
+
 /// `None` when the problem stops being finite (a denominator vanishing at a line).
 fn sk_fit(x: &[C], h: &[Vec<C>], sd: &[Vec<f64>], q: usize) -> Option<Rational> {
     let channels = h.len();
@@ -689,9 +710,8 @@ mod tests {
         // With a jackknife over 8 periods the standardized error is t-like with 7 degrees of
         // freedom, RMS √(7/5) ≈ 1.18; over 40 draws that RMS is itself uncertain by about
         // ±0.15 (heavier tails than 1/√80 of a Gaussian), so 0.7–1.6 is allowed. Over 400 draws
-        // it measured 1.13 (frequency) and 1.04 (damping); with the full record's weights in
-        // every jackknife fit (a defect) it was 1.30 and 1.30, which the upper bound catches
-        // only loosely: the 400-draw figure is the evidence.
+        // it measured 1.16 (frequency) and 1.18 (damping); with the full record's weights in
+        // every jackknife fit (a defect) it was 1.30 and 1.30.
         let (a, b) = (rms_z(&zf), rms_z(&zz));
         eprintln!("z RMS over 40 draws: frequency {a:.3}, damping {b:.3}");
         assert!(a > 0.7 && a < 1.6, "frequency z RMS {a}");
