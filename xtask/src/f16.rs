@@ -74,6 +74,10 @@ pub struct Row {
     pub wide: (Option<FrfMode>, f64),
     /// Frequencies (Hz) and force amplitudes (N) of the lines of the narrow band.
     pub force_lines: Vec<(f64, f64)>,
+    /// RMS of each acceleration's periodic response within the narrow band.
+    pub band_rms: Vec<f64>,
+    /// RMS of each acceleration over the whole record (mean removed).
+    pub total_rms: Vec<f64>,
 }
 
 fn cluster(res: &covssi::SsiResult, tg: &Target) -> Option<Cluster> {
@@ -120,10 +124,12 @@ pub fn analyse(dir: &Path, level: u32) -> Result<Vec<Row>, String> {
         .iter()
         .map(|c| col(c))
         .collect::<Result<_, _>>()?;
-    let force_rms = {
-        let m = force.iter().sum::<f64>() / force.len() as f64;
-        (force.iter().map(|v| (v - m).powi(2)).sum::<f64>() / force.len() as f64).sqrt()
+    let rms = |x: &[f64]| {
+        let m = x.iter().sum::<f64>() / x.len() as f64;
+        (x.iter().map(|v| (v - m).powi(2)).sum::<f64>() / x.len() as f64).sqrt()
     };
+    let force_rms = rms(&force);
+    let total_rms: Vec<f64> = acc.iter().map(|c| rms(c)).collect();
     let outs: Vec<&[f64]> = acc.iter().map(|c| c.as_slice()).collect();
     let rec = PeriodicRecord {
         input: &force,
@@ -167,6 +173,21 @@ pub fn analyse(dir: &Path, level: u32) -> Result<Vec<Row>, String> {
                 .copied()
                 .zip(narrow.input_amplitude.iter().copied())
                 .collect(),
+            // Each line's response amplitude is |H| times the force's there; a sine of
+            // amplitude a has RMS a/√2.
+            band_rms: narrow
+                .response
+                .iter()
+                .map(|h| {
+                    let ms: f64 = h
+                        .iter()
+                        .zip(&narrow.input_amplitude)
+                        .map(|(h, a)| (h.norm() * a).powi(2) / 2.0)
+                        .sum();
+                    ms.sqrt()
+                })
+                .collect(),
+            total_rms: total_rms.clone(),
         });
     }
     Ok(rows)
@@ -237,6 +258,26 @@ pub fn markdown(rows: &[Row]) -> String {
                 TARGETS[r.target].name, r.level, lo.1, lo.0, hi.1, hi.0
             );
         }
+    }
+    s += "\n| mode | level | response RMS in the band: acc1, acc2, acc3 | whole record: acc1, acc2, acc3 | loss 2ζω² of the fit, mode alone (rad²/s²) |\n|---|---|---|---|---|\n";
+    let three = |v: &[f64]| {
+        v.iter()
+            .map(|x| format!("{x:.4}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    for r in rows {
+        let loss = r.narrow.0.map_or(f64::NAN, |m| {
+            let w = std::f64::consts::TAU * m.frequency_hz;
+            2.0 * m.damping_ratio * w * w
+        });
+        s += &format!(
+            "| {} | {} | {} | {} | {loss:.1} |\n",
+            TARGETS[r.target].name,
+            r.level,
+            three(&r.band_rms),
+            three(&r.total_rms)
+        );
     }
     s
 }

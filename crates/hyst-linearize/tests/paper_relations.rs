@@ -251,6 +251,44 @@ proptest! {
     }
 }
 
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(40))]
+
+    /// A Bouc-Wen element with ν = 1 and −γ ≤ δ ≤ γ (γ + δ ≥ 0: it does not harden without
+    /// bound) has a loss stiffness ωC_eq that grows no faster than the amplitude: ωC_eq(A)/A
+    /// does not increase with A. Its damping can rise in proportion to the amplitude, then
+    /// saturate, never set in late: the F-16's joint (docs/results.md) is beyond it. With
+    /// γ + δ < 0 (the benchmark's element) the ratio does grow, with the stiffness; with
+    /// δ > γ the periodic loop's solver stops converging far into saturation (βγA ≈ 70), so
+    /// that range is left out. Also checked with 3000 cases.
+    #[test]
+    fn nu_one_loss_grows_no_faster_than_amplitude(
+        alpha in 1e3f64..1e6,
+        bg in 1.0f64..1e4,
+        ratio in -1.0f64..1.0,
+        x1 in 1e-3f64..30.0,
+        growth in 1.05f64..4.0,
+    ) {
+        // βγ·A spans 1e-3 (linear) to 120 (far into the saturated loop).
+        let bw = BoucWen::from_products(alpha, bg, ratio * bg, 1.0);
+        let (a1, a2) = (x1 / bg, growth * x1 / bg);
+        let l1 = describing_function(&bw, a1).unwrap().loss / a1;
+        let l2 = describing_function(&bw, a2).unwrap().loss / a2;
+        // The describing function's quadrature (Simpson on 2000 steps per half cycle) is good
+        // to about 1e-9 of the loss.
+        prop_assert!(l2 <= l1 * (1.0 + 1e-7), "L/A {l1} at {a1:e} -> {l2} at {a2:e}");
+    }
+}
+
+#[test]
+fn a_hardening_element_s_loss_outgrows_its_amplitude() {
+    // The benchmark's element (γ + δ = −0.3): ωC_eq/A grows by orders of magnitude between
+    // 1 and 10 mm, so the restriction above is needed.
+    let bw = BoucWen::benchmark();
+    let r = |a: f64| describing_function(&bw, a).unwrap().loss / a;
+    assert!(r(1e-2) > 2.0 * r(1e-3), "{} {}", r(1e-3), r(1e-2));
+}
+
 /// How the first-order matching's energy degrades with amplitude (benchmark element).
 #[test]
 fn first_order_energy_error_grows_with_amplitude() {
