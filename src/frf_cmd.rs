@@ -126,10 +126,56 @@ pub fn run(a: &FrfArgs) -> Result<(), Error> {
     if fit.modes.is_empty() {
         println!("no stable oscillating pole inside the band: try another band or more modes");
     }
-    for m in &fit.modes {
+    // The same fit over the band narrowed and widened by a tenth of its width at each end:
+    // how far each mode moves is the band's share of the uncertainty, which the standard
+    // errors (noise alone) do not hold.
+    let width = band.1 - band.0;
+    let others: Vec<_> = [
+        (band.0 + 0.1 * width, band.1 - 0.1 * width),
+        (
+            (band.0 - 0.1 * width).max(0.0),
+            (band.1 + 0.1 * width).min(fs / 2.0),
+        ),
+    ]
+    .iter()
+    .filter_map(|&b| frf::modes_from_frf(&rec, b, a.modes).ok())
+    .collect();
+    let spread: Vec<(f64, f64)> = fit
+        .modes
+        .iter()
+        .map(|m| {
+            let mut d = (0.0_f64, 0.0_f64);
+            for o in &others {
+                let near = o.modes.iter().min_by(|x, y| {
+                    (x.frequency_hz - m.frequency_hz)
+                        .abs()
+                        .total_cmp(&(y.frequency_hz - m.frequency_hz).abs())
+                });
+                match near {
+                    Some(n) => {
+                        d.0 = d.0.max((n.frequency_hz - m.frequency_hz).abs());
+                        d.1 = d.1.max((n.damping_ratio - m.damping_ratio).abs());
+                    }
+                    None => d = (f64::NAN, f64::NAN),
+                }
+            }
+            if others.len() < 2 {
+                (f64::NAN, f64::NAN)
+            } else {
+                d
+            }
+        })
+        .collect();
+    for (m, d) in fit.modes.iter().zip(&spread) {
         println!(
-            "mode {:9.4} ± {:.4} Hz  damping {:.5} ± {:.5}",
-            m.frequency_hz, m.frequency_se_hz, m.damping_ratio, m.damping_se
+            "mode {:9.4} ± {:.4} Hz (band {:.4})  damping {:.5} ± {:.5} (band {:.5})",
+            m.frequency_hz, m.frequency_se_hz, d.0, m.damping_ratio, m.damping_se, d.1
+        );
+    }
+    if !fit.modes.is_empty() {
+        println!(
+            "± one standard error (the noise); band: the largest move of the mode when the band is \
+             narrowed or widened by a tenth of its width at each end"
         );
     }
     // With one period there is no noise estimate and the misfit has unit weights.
@@ -139,7 +185,8 @@ pub fn run(a: &FrfArgs) -> Result<(), Error> {
             println!(
                 "note: the response departs from the fitted model by more than its noise (a \
                  nonlinear structure's periodic distortions, or modes near the band left out); \
-                 the ± describe the noise alone: compare fits over other bands or with more modes"
+                 the ± describe the noise alone, and the band's share is given beside them: \
+                 compare fits with more modes too"
             );
         }
     } else {
@@ -152,9 +199,11 @@ pub fn run(a: &FrfArgs) -> Result<(), Error> {
             "periods": fit.periods,
             "lines": fit.frequency_hz.len(),
             "misfit": num(fit.misfit),
-            "modes": fit.modes.iter().map(|m| json!({
+            "modes": fit.modes.iter().zip(&spread).map(|(m, d)| json!({
                 "frequency_hz": m.frequency_hz,
                 "damping_ratio": m.damping_ratio,
+                "frequency_band_spread_hz": num(d.0),
+                "damping_band_spread": num(d.1),
                 "frequency_se_hz": num(m.frequency_se_hz),
                 "damping_se": num(m.damping_se),
             })).collect::<Vec<_>>(),

@@ -1230,6 +1230,11 @@ fn frf_fits_the_f16_torsion_mode_and_writes_flattened_outputs() {
         "{f} {z}"
     );
     assert!(modes[0]["frequency_se_hz"].as_f64().unwrap() > 0.0);
+    // The band's share of the uncertainty, from the fits over 6.9–7.7 and 6.7–7.9 Hz.
+    let spread = modes[0]["frequency_band_spread_hz"].as_f64().unwrap();
+    assert!((0.0..0.01).contains(&spread), "{v}");
+    assert!(modes[0]["damping_band_spread"].as_f64().unwrap() >= 0.0);
+    assert!(out.contains("(band "), "{out}");
     assert!(std::fs::read_to_string(&svg).unwrap().contains("<svg"));
     // The flattened outputs: 8 periods of the three channels, and SSI finds the mode there
     // within 0.3 % of the fit (7.317 against 7.320 Hz; on the measured outputs 7.352).
