@@ -86,7 +86,7 @@ pub fn run(a: &FrfArgs) -> Result<(), Error> {
             a.force
         )));
     }
-    if a.skip + a.period > t.len() {
+    if a.skip.saturating_add(a.period) > t.len() {
         return Err(fail(format!(
             "{}: {} rows after --skip {} hold no whole period of {} samples",
             a.input.display(),
