@@ -354,6 +354,37 @@ pub fn figures(rows: &[Row], out: &Path) -> Result<Vec<PathBuf>, String> {
             )?;
             paths.push(p);
         }
+        // The loss against the response of the sensor whose record grows most with the force
+        // (acc1, the excitation point), and the most a ν = 1 Bouc-Wen element allows above the
+        // second level: its loss per unit amplitude cannot grow (docs/results.md).
+        let loss: Vec<(f64, f64)> = mine
+            .iter()
+            .filter_map(|r| {
+                let m = r.narrow.0?;
+                let w = std::f64::consts::TAU * m.frequency_hz;
+                Some((r.total_rms[0], 2.0 * m.damping_ratio * w * w))
+            })
+            .collect();
+        let bound: Vec<(f64, f64)> = match loss.get(1) {
+            Some(&(a2, l2)) => loss[1..].iter().map(|&(a, _)| (a, l2 * a / a2)).collect(),
+            None => Vec::new(),
+        };
+        let p = out.join(format!("f16_{slug}_loss.svg"));
+        hyst::plot::chart(
+            &p,
+            &format!("F-16 {}: loss 2ζω² over response", tg.name),
+            "RMS of acc1 over the record",
+            "loss 2ζω² (rad²/s²)",
+            &[
+                ("fit of the response, mode alone".into(), loss, colors::RED),
+                (
+                    "largest a ν = 1 Bouc-Wen element allows from the second level".into(),
+                    bound,
+                    colors::GREY,
+                ),
+            ],
+        )?;
+        paths.push(p);
         let palette = [colors::BLACK, colors::BLUE, colors::GREEN, colors::RED];
         let force: Vec<Series> = mine
             .iter()
