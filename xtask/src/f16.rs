@@ -74,6 +74,9 @@ pub struct Row {
     pub wide: (Option<FrfMode>, f64),
     /// Frequencies (Hz) and force amplitudes (N) of the lines of the narrow band.
     pub force_lines: Vec<(f64, f64)>,
+    /// Frequencies (Hz) and |acc2 / force| at the lines of the narrow band (acc2: the wing
+    /// next to the interface).
+    pub response_lines: Vec<(f64, f64)>,
     /// RMS of each acceleration's periodic response within the narrow band.
     pub band_rms: Vec<f64>,
     /// RMS of each acceleration over the whole record (mean removed).
@@ -173,6 +176,12 @@ pub fn analyse(dir: &Path, level: u32) -> Result<Vec<Row>, String> {
                 .copied()
                 .zip(narrow.input_amplitude.iter().copied())
                 .collect(),
+            response_lines: narrow
+                .frequency_hz
+                .iter()
+                .zip(&narrow.response[1])
+                .map(|(f, h)| (*f, h.norm()))
+                .collect(),
             // Each line's response amplitude is |H| times the force's there; a sine of
             // amplitude a has RMS a/√2.
             band_rms: narrow
@@ -259,7 +268,7 @@ pub fn markdown(rows: &[Row]) -> String {
             );
         }
     }
-    s += "\n| mode | level | response RMS in the band: acc1, acc2, acc3 | whole record: acc1, acc2, acc3 | loss 2ζω² of the fit, mode alone (rad²/s²) |\n|---|---|---|---|---|\n";
+    s += "\n| mode | level | response RMS in the band: acc1, acc2, acc3 | whole record: acc1, acc2, acc3 | loss 2ζω² of the fit, mode alone (rad²/s²) | peak of the measured \\|acc2 / force\\| (at Hz) |\n|---|---|---|---|---|---|\n";
     let three = |v: &[f64]| {
         v.iter()
             .map(|x| format!("{x:.4}"))
@@ -271,12 +280,21 @@ pub fn markdown(rows: &[Row]) -> String {
             let w = std::f64::consts::TAU * m.frequency_hz;
             2.0 * m.damping_ratio * w * w
         });
+        // No fit at all: the largest measured response in the band.
+        let peak = r
+            .response_lines
+            .iter()
+            .copied()
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+            .unwrap_or((f64::NAN, f64::NAN));
         s += &format!(
-            "| {} | {} | {} | {} | {loss:.1} |\n",
+            "| {} | {} | {} | {} | {loss:.1} | {:.4} at {:.3} |\n",
             TARGETS[r.target].name,
             r.level,
             three(&r.band_rms),
-            three(&r.total_rms)
+            three(&r.total_rms),
+            peak.1,
+            peak.0
         );
     }
     s
@@ -385,27 +403,35 @@ pub fn figures(rows: &[Row], out: &Path) -> Result<Vec<PathBuf>, String> {
             ],
         )?;
         paths.push(p);
+        // One curve per level across the mode's band: the force's lines, the response's.
         let palette = [colors::BLACK, colors::BLUE, colors::GREEN, colors::RED];
-        let force: Vec<Series> = mine
-            .iter()
-            .zip(palette)
-            .map(|(r, c)| {
-                (
-                    format!("level {} ({:.0} N RMS)", r.level, r.force_rms),
-                    r.force_lines.clone(),
-                    c,
-                )
-            })
-            .collect();
-        let p = out.join(format!("f16_{slug}_force.svg"));
-        hyst::plot::chart_log_y(
-            &p,
-            &format!("F-16: force amplitude per line across the {} band", tg.name),
-            "frequency (Hz)",
-            "force amplitude per line (N, log10)",
-            &force,
-        )?;
-        paths.push(p);
+        let per_level = |lines: fn(&Row) -> &Vec<(f64, f64)>| -> Vec<Series> {
+            mine.iter()
+                .zip(palette)
+                .map(|(r, c)| {
+                    let name = format!("level {} ({:.0} N RMS)", r.level, r.force_rms);
+                    (name, lines(r).clone(), c)
+                })
+                .collect()
+        };
+        for (file, title, axis, series) in [
+            (
+                "response",
+                format!("F-16: |acc2 / force| across the {} band", tg.name),
+                "|acc2 / force| (log10)",
+                per_level(|r| &r.response_lines),
+            ),
+            (
+                "force",
+                format!("F-16: force amplitude per line across the {} band", tg.name),
+                "force amplitude per line (N, log10)",
+                per_level(|r| &r.force_lines),
+            ),
+        ] {
+            let p = out.join(format!("f16_{slug}_{file}.svg"));
+            hyst::plot::chart_log_y(&p, &title, "frequency (Hz)", axis, &series)?;
+            paths.push(p);
+        }
     }
     Ok(paths)
 }
