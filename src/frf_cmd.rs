@@ -126,45 +126,11 @@ pub fn run(a: &FrfArgs) -> Result<(), Error> {
     if fit.modes.is_empty() {
         println!("no stable oscillating pole inside the band: try another band or more modes");
     }
-    // The same fit over the band narrowed and widened by a tenth of its width at each end:
-    // how far each mode moves is the band's share of the uncertainty, which the standard
-    // errors (noise alone) do not hold.
-    let width = band.1 - band.0;
-    let others: Vec<_> = [
-        (band.0 + 0.1 * width, band.1 - 0.1 * width),
-        (
-            (band.0 - 0.1 * width).max(0.0),
-            (band.1 + 0.1 * width).min(fs / 2.0),
-        ),
-    ]
-    .iter()
-    .filter_map(|&b| frf::modes_from_frf(&rec, b, a.modes).ok())
-    .collect();
-    let spread: Vec<(f64, f64)> = fit
-        .modes
+    // The band's share of the uncertainty, which the standard errors (noise alone) do not
+    // hold.
+    let spread: Vec<(f64, f64)> = frf::band_spread(&rec, band, a.modes, &fit)
         .iter()
-        .map(|m| {
-            let mut d = (0.0_f64, 0.0_f64);
-            for o in &others {
-                let near = o.modes.iter().min_by(|x, y| {
-                    (x.frequency_hz - m.frequency_hz)
-                        .abs()
-                        .total_cmp(&(y.frequency_hz - m.frequency_hz).abs())
-                });
-                match near {
-                    Some(n) => {
-                        d.0 = d.0.max((n.frequency_hz - m.frequency_hz).abs());
-                        d.1 = d.1.max((n.damping_ratio - m.damping_ratio).abs());
-                    }
-                    None => d = (f64::NAN, f64::NAN),
-                }
-            }
-            if others.len() < 2 {
-                (f64::NAN, f64::NAN)
-            } else {
-                d
-            }
-        })
+        .map(|d| (d.frequency_hz, d.damping))
         .collect();
     for (m, d) in fit.modes.iter().zip(&spread) {
         println!(

@@ -22,7 +22,7 @@
 //! explains the response to its noise. Far above 1 (the periodic distortions of a nonlinear
 //! structure are not noise; neighbouring modes left out of the band), the standard errors
 //! still describe the noise alone, and the change of the estimates with the band and the
-//! number of modes is the larger uncertainty.
+//! number of modes is the larger uncertainty ([`band_spread`] measures the band's share).
 
 use crate::fft::{C, rfft};
 use crate::{Complex64, IdentError};
@@ -191,6 +191,66 @@ pub fn modes_from_frf(
         fitted,
         misfit: fit.misfit,
     })
+}
+
+/// How far a mode of a fit moves with the band: the band's share of the uncertainty, which
+/// the standard errors (the noise alone) do not hold when the misfit is far above 1.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BandSpread {
+    /// The largest change of the frequency (Hz).
+    pub frequency_hz: f64,
+    /// The largest change of the damping ratio.
+    pub damping: f64,
+}
+
+/// For each mode of `fit` (made by [`modes_from_frf`] over `band` with `modes` modes), the
+/// largest move of its nearest mode when the same fit is made over the band narrowed and
+/// widened by a tenth of its width at each end (widened within 0..Nyquist). NaN when either
+/// of those fits fails or finds no mode.
+pub fn band_spread(
+    rec: &PeriodicRecord<'_>,
+    band: (f64, f64),
+    modes: usize,
+    fit: &FrfFit,
+) -> Vec<BandSpread> {
+    let width = band.1 - band.0;
+    let others: Vec<Option<FrfFit>> = [
+        (band.0 + 0.1 * width, band.1 - 0.1 * width),
+        (
+            (band.0 - 0.1 * width).max(0.0),
+            (band.1 + 0.1 * width).min(rec.fs / 2.0),
+        ),
+    ]
+    .iter()
+    .map(|&b| modes_from_frf(rec, b, modes).ok())
+    .collect();
+    fit.modes
+        .iter()
+        .map(|m| {
+            let mut d = BandSpread {
+                frequency_hz: 0.0,
+                damping: 0.0,
+            };
+            for o in &others {
+                let near = o.as_ref().and_then(|o| {
+                    o.modes.iter().min_by(|x, y| {
+                        (x.frequency_hz - m.frequency_hz)
+                            .abs()
+                            .total_cmp(&(y.frequency_hz - m.frequency_hz).abs())
+                    })
+                });
+                let Some(n) = near else {
+                    return BandSpread {
+                        frequency_hz: f64::NAN,
+                        damping: f64::NAN,
+                    };
+                };
+                d.frequency_hz = d.frequency_hz.max((n.frequency_hz - m.frequency_hz).abs());
+                d.damping = d.damping.max((n.damping_ratio - m.damping_ratio).abs());
+            }
+            d
+        })
+        .collect()
 }
 
 /// The outputs as they would be under an input of flat amplitude spectrum: in each period,
@@ -641,6 +701,10 @@ mod tests {
             // Exact data: only rounding separates the fit from the truth.
             approx::assert_relative_eq!(m.frequency_hz, f, max_relative = 1e-8);
             approx::assert_relative_eq!(m.damping_ratio, z, max_relative = 1e-6);
+        }
+        // Exact data: the band does not matter.
+        for d in band_spread(&rec, (4.5, 8.0), 2, &fit) {
+            assert!(d.frequency_hz < 1e-8 && d.damping < 1e-8, "{d:?}");
         }
         // With one period the misfit has unit weights: the rounding of the transforms.
         assert!(fit.misfit < 1e-20, "{}", fit.misfit);
