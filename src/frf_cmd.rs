@@ -128,14 +128,16 @@ pub fn run(a: &FrfArgs) -> Result<(), Error> {
     }
     // The band's share of the uncertainty, which the standard errors (noise alone) do not
     // hold.
-    let spread: Vec<(f64, f64)> = frf::band_spread(&rec, band, a.modes, &fit)
-        .iter()
-        .map(|d| (d.frequency_hz, d.damping))
-        .collect();
+    let spread = frf::band_spread(&rec, band, a.modes, &fit);
     for (m, d) in fit.modes.iter().zip(&spread) {
         println!(
             "mode {:9.4} ± {:.4} Hz (band {:.4})  damping {:.5} ± {:.5} (band {:.5})",
-            m.frequency_hz, m.frequency_se_hz, d.0, m.damping_ratio, m.damping_se, d.1
+            m.frequency_hz,
+            m.frequency_se_hz,
+            d.frequency_hz,
+            m.damping_ratio,
+            m.damping_se,
+            d.damping
         );
     }
     if !fit.modes.is_empty() {
@@ -168,8 +170,8 @@ pub fn run(a: &FrfArgs) -> Result<(), Error> {
             "modes": fit.modes.iter().zip(&spread).map(|(m, d)| json!({
                 "frequency_hz": m.frequency_hz,
                 "damping_ratio": m.damping_ratio,
-                "frequency_band_spread_hz": num(d.0),
-                "damping_band_spread": num(d.1),
+                "frequency_band_spread_hz": num(d.frequency_hz),
+                "damping_band_spread": num(d.damping),
                 "frequency_se_hz": num(m.frequency_se_hz),
                 "damping_se": num(m.damping_se),
             })).collect::<Vec<_>>(),
