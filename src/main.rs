@@ -464,6 +464,42 @@ fn channel_names(t: &hyst::io::Table, given: Option<&[String]>, besides: &[&str]
     }
 }
 
+/// Output only means responses only: a default channel list that takes in the force is a
+/// mistake the user should hear about (the benchmarks' files hold `u,y`).
+fn warn_on_force_like(names: &[String]) {
+    let looks_input = |n: &str| {
+        matches!(
+            n.to_ascii_lowercase().as_str(),
+            "u" | "force" | "input" | "excitation" | "load"
+        )
+    };
+    let (inputs, responses): (Vec<&String>, Vec<&String>) =
+        names.iter().partition(|n| looks_input(n));
+    if inputs.is_empty() {
+        return;
+    }
+    let list = |v: &[&String]| v.iter().map(|s| s.as_str()).collect::<Vec<_>>().join(",");
+    let (what, is) = if inputs.len() == 1 {
+        (
+            format!("column `{}` looks like the input (a force)", inputs[0]),
+            "it is analysed as a response",
+        )
+    } else {
+        (
+            format!("columns {} look like inputs (forces)", list(&inputs)),
+            "they are analysed as responses",
+        )
+    };
+    eprintln!(
+        "warning: {what}, and output-only analysis takes responses only; {is} because --columns was not given{}",
+        if responses.is_empty() {
+            String::new()
+        } else {
+            format!(" (for the responses alone: --columns {})", list(&responses))
+        }
+    );
+}
+
 fn check_fs(fs: f64) -> Result<f64, Error> {
     if fs.is_finite() && fs > 0.0 {
         Ok(fs)
@@ -566,39 +602,8 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
     }
     let t = read_csv(&a.input)?;
     let names = channel_names(&t, a.columns.as_deref(), &[]);
-    // Output only means responses only: a default that takes in the force is a mistake the
-    // user should hear about (the benchmarks' files hold `u,y`).
     if a.columns.is_none() {
-        let looks_input = |n: &str| {
-            matches!(
-                n.to_ascii_lowercase().as_str(),
-                "u" | "force" | "input" | "excitation" | "load"
-            )
-        };
-        let (inputs, responses): (Vec<&String>, Vec<&String>) =
-            names.iter().partition(|n| looks_input(n));
-        if !inputs.is_empty() {
-            let list = |v: &[&String]| v.iter().map(|s| s.as_str()).collect::<Vec<_>>().join(",");
-            let (what, is) = if inputs.len() == 1 {
-                (
-                    format!("column `{}` looks like the input (a force)", inputs[0]),
-                    "it is analysed as a response",
-                )
-            } else {
-                (
-                    format!("columns {} look like inputs (forces)", list(&inputs)),
-                    "they are analysed as responses",
-                )
-            };
-            eprintln!(
-                "warning: {what}, and output-only analysis takes responses only; {is} because --columns was not given{}",
-                if responses.is_empty() {
-                    String::new()
-                } else {
-                    format!(" (for the responses alone: --columns {})", list(&responses))
-                }
-            );
-        }
+        warn_on_force_like(&names);
     }
     if let Some(n) = hyst::io::repeated(&names) {
         return Err(fail(format!(

@@ -213,6 +213,12 @@ pub fn run(dir: &Path) -> Result<Vec<Row>, String> {
     Ok(rows)
 }
 
+/// A mode's loss stiffness per unit modal mass, 2ζω² (rad²/s²).
+fn loss(m: &FrfMode) -> f64 {
+    let w = std::f64::consts::TAU * m.frequency_hz;
+    2.0 * m.damping_ratio * w * w
+}
+
 fn fmt_cluster(c: Option<Cluster>) -> String {
     match c {
         Some((f, fs, z, zs, n)) => format!(
@@ -276,10 +282,7 @@ pub fn markdown(rows: &[Row]) -> String {
             .join(", ")
     };
     for r in rows {
-        let loss = r.narrow.0.map_or(f64::NAN, |m| {
-            let w = std::f64::consts::TAU * m.frequency_hz;
-            2.0 * m.damping_ratio * w * w
-        });
+        let loss = r.narrow.0.map_or(f64::NAN, |m| loss(&m));
         // No fit at all: the largest measured response in the band.
         let peak = r
             .response_lines
@@ -377,11 +380,7 @@ pub fn figures(rows: &[Row], out: &Path) -> Result<Vec<PathBuf>, String> {
         // second level: its loss per unit amplitude cannot grow (docs/results.md).
         let loss: Vec<(f64, f64)> = mine
             .iter()
-            .filter_map(|r| {
-                let m = r.narrow.0?;
-                let w = std::f64::consts::TAU * m.frequency_hz;
-                Some((r.total_rms[0], 2.0 * m.damping_ratio * w * w))
-            })
+            .filter_map(|r| Some((r.total_rms[0], loss(&r.narrow.0?))))
             .collect();
         let bound: Vec<(f64, f64)> = match loss.get(1) {
             Some(&(a2, l2)) => loss[1..].iter().map(|&(a, _)| (a, l2 * a / a2)).collect(),

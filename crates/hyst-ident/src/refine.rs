@@ -746,12 +746,13 @@ fn bouc_wen_replacing(
 }
 
 /// The start of a fit that adds the effect `e` to the base model, given `small` (the base
-/// model with the effect at a small size) and the base model's residual `r0`. For a force term linear in its coefficient: the least-squares projection of
-/// the residual `r0` on the output's sensitivity to that coefficient — or better, when the
-/// model is a plain oscillator, the equation-error fit of m ÿ + c ẏ + k y + θ g(y, ẏ) = u on
-/// the measured record. A regression's start that simulates worse than `small` (the
-/// regression does not minimise the output error) gives way to it, so that no candidate
-/// starts worse than the model it extends.
+/// model with the effect at a small size) and the base model's residual `r0`. For a force
+/// term linear in its coefficient: the least-squares projection of the residual `r0` on the
+/// output's sensitivity to that coefficient — or better, when the model is a plain
+/// oscillator, the equation-error fit of m ÿ + c ẏ + k y + θ g(y, ẏ) = u on the measured
+/// record. A regression's start that simulates worse than `small` (the regression does not
+/// minimise the output error) gives way to it, so that no candidate starts worse than the
+/// model it extends.
 fn regression_start(
     small: Oscillator,
     e: Effect,
