@@ -764,13 +764,13 @@ fn bouc_wen_from(
         }
         Linearization::Harmonic => {
             let df = hyst_linearize::zener_at(&fit.zener, w, amplitude);
-            match hyst_linearize::bouc_wen_exact(alpha, &df) {
+            match hyst_linearize::bouc_wen_exact(alpha, 1.0, &df) {
                 Ok(b) => Some(b),
                 Err(e) => {
                     notes.push(format!(
                         "exact describing-function inversion failed ({e}); first-order closed form used"
                     ));
-                    hyst_linearize::bouc_wen_first_order(alpha, &df).ok()
+                    hyst_linearize::bouc_wen_first_order(alpha, 1.0, &df).ok()
                 }
             }
         }

@@ -732,8 +732,8 @@ fn bouc_wen_replacing(
         .par_iter()
         .filter_map(|&ratio| {
             let alpha = ratio * df.stiffness;
-            let bw = hyst_linearize::bouc_wen_exact(alpha, &df)
-                .or_else(|_| hyst_linearize::bouc_wen_first_order(alpha, &df))
+            let bw = hyst_linearize::bouc_wen_exact(alpha, 1.0, &df)
+                .or_else(|_| hyst_linearize::bouc_wen_first_order(alpha, 1.0, &df))
                 .ok()?;
             let mut m = *o;
             m.restoring = Restoring::BoucWen(bw);

@@ -18,11 +18,15 @@
 //! and its first harmonic $z_1 = K_{eq}x + C_{eq}\dot x$ by Simpson's rule:
 //! $K_{eq} = \frac{1}{\pi A}\oint z\cos\theta\,d\theta$ and the loss stiffness
 //! $\omega C_{eq} = -\frac{1}{\pi A}\oint z\sin\theta\,d\theta$ ([`describing_function`]).
-//! To first order in $A$ (ν = 1, $z = \alpha x + z_1$):
-//! $K_{eq} \approx \alpha\,(1 - \tfrac{4\beta\delta A}{3\pi})$ and
+//! To first order in the nonlinearity ($z = \alpha x + z_1$, so $|z|^\nu \approx (\alpha|x|)^\nu$):
+//! $K_{eq} \approx \alpha - \tfrac{2}{\pi}B(\tfrac32, \tfrac{\nu+1}{2})\,\beta\delta\,(\alpha A)^\nu$
+//! and $\omega C_{eq} \approx \tfrac{4}{\pi(\nu+2)}\,\beta\gamma\,(\alpha A)^\nu$, B the Beta
+//! function; for ν = 1, $K_{eq} \approx \alpha\,(1 - \tfrac{4\beta\delta A}{3\pi})$ and
 //! $\omega C_{eq} \approx \tfrac{4\alpha\beta\gamma A}{3\pi}$
 //! ([`describing_function_first_order`]): the loss depends on βγ only, the stiffness change on
-//! βδ only.
+//! βδ only, and at small amplitude the loss stiffness grows as $A^\nu$. The loss follows from
+//! the energy: $\oint z\,dx = -\oint x\,dz$, of which only the γ term survives, giving
+//! $4\beta\gamma\alpha^\nu\int_0^A x^{\nu+1}dx$ per cycle.
 //!
 //! **Zener matching.** A Zener element has, at frequency ω,
 //! $K = k_\infty\frac{\omega^2}{\Omega^2+\omega^2}$ and $\omega C = k_\infty\frac{\omega\Omega}{\Omega^2+\omega^2}$;
@@ -31,9 +35,10 @@
 //!
 //! **Back to Bouc-Wen.** One amplitude gives two numbers $(K, \omega C)$ for three unknowns
 //! (α, βγ, βδ), so α must come from elsewhere (the paper: eq. 37). Given α:
-//! closed form to first order $\beta\delta = \frac{3\pi}{4A}(1 - K/\alpha)$,
-//! $\beta\gamma = \frac{3\pi\,\omega C}{4\alpha A}$ ([`bouc_wen_first_order`]), or the exact
-//! numerical inversion of the describing function by Newton's method ([`bouc_wen_exact`]).
+//! closed form to first order (ν = 1: $\beta\delta = \frac{3\pi}{4A}(1 - K/\alpha)$,
+//! $\beta\gamma = \frac{3\pi\,\omega C}{4\alpha A}$; any ν: the two expressions above
+//! solved for βδ and βγ) ([`bouc_wen_first_order`]), or the exact numerical inversion of the
+//! describing function by Newton's method ([`bouc_wen_exact`]), ν given with α.
 //!
 //! **Energy per cycle.** $\oint z\,dx = \pi A^2\,\omega C_{eq}$: only the first harmonic
 //! dissipates, so a Zener element matched to the describing function dissipates exactly the
@@ -279,9 +284,16 @@ pub fn periodic_half_loop(bw: &BoucWen, a: f64) -> Result<Vec<f64>, LinearizeErr
     check_amplitude(a)?;
     check_bouc_wen(bw)?;
     // Solve G(z0) = z(π; z0) + z0 = 0 by the secant method, started at the top of the loop
-    // of the linear element (z0 ≈ αA) and slightly below.
+    // of the linear element (z0 ≈ αA) and slightly below, or at the level where the loading
+    // branch saturates, (α/β(γ+δ))^(1/ν), if that is lower: far above it, |z|^ν makes the
+    // half cycle stiff enough for RK4 to blow up when ν > 1 (ν = 4 at (βγ)^(1/ν)A ≈ 50).
     let g = |z0: f64| half_loop(bw, a, z0, None) + z0;
-    let (mut x0, mut x1) = (bw.alpha * a, 0.9 * bw.alpha * a);
+    let saturation = bw.beta * (bw.gamma + bw.delta);
+    let mut top = bw.alpha * a;
+    if saturation > 0.0 {
+        top = top.min((bw.alpha / saturation).powf(1.0 / bw.nu));
+    }
+    let (mut x0, mut x1) = (top, 0.9 * top);
     let (mut g0, mut g1) = (g(x0), g(x1));
     for _ in 0..60 {
         if !g1.is_finite() {
@@ -341,18 +353,61 @@ pub fn describing_function(bw: &BoucWen, a: f64) -> Result<DescribingFunction, L
     })
 }
 
-/// First-order closed form for ν = 1: $K = \alpha(1 - \frac{4\beta\delta A}{3\pi})$,
-/// $\omega C = \frac{4\alpha\beta\gamma A}{3\pi}$.
+/// ln Γ(x) for x ≥ 1/2 by Lanczos' approximation (g = 7, nine terms; relative error
+/// below 1e-14 there).
+fn ln_gamma(x: f64) -> f64 {
+    const G: f64 = 7.0;
+    const C: [f64; 9] = [
+        0.999_999_999_999_809_9,
+        676.520_368_121_885_1,
+        -1_259.139_216_722_402_8,
+        771.323_428_777_653_1,
+        -176.615_029_162_140_6,
+        12.507_343_278_686_905,
+        -0.138_571_095_265_720_12,
+        9.984_369_578_019_572e-6,
+        1.505_632_735_149_311_6e-7,
+    ];
+    let x = x - 1.0;
+    let t = x + G + 0.5;
+    let s = C[1..]
+        .iter()
+        .enumerate()
+        .fold(C[0], |s, (i, c)| s + c / (x + 1.0 + i as f64));
+    0.5 * (2.0 * std::f64::consts::PI).ln() + (x + 0.5) * t.ln() - t + s.ln()
+}
+
+/// The first-order coefficients of the describing function for exponent ν:
+/// $K \approx \alpha - s(\nu)\,\beta\delta(\alpha A)^\nu$, $\omega C \approx l(\nu)\,\beta\gamma(\alpha A)^\nu$,
+/// returned as (s, l); both are 4/(3π) at ν = 1.
+fn first_order_coefficients(nu: f64) -> (f64, f64) {
+    let p = 0.5 * (nu + 1.0);
+    // (2/π) B(3/2, p) = (2/π) Γ(3/2) Γ(p) / Γ(p + 3/2), with Γ(3/2) = √π/2.
+    let beta = (0.5 * std::f64::consts::PI.ln() - std::f64::consts::LN_2 + ln_gamma(p)
+        - ln_gamma(p + 1.5))
+    .exp();
+    (
+        2.0 * beta / std::f64::consts::PI,
+        4.0 / (std::f64::consts::PI * (nu + 2.0)),
+    )
+}
+
+/// First-order closed form, any ν > 0:
+/// $K = \alpha - \tfrac{2}{\pi}B(\tfrac32, \tfrac{\nu+1}{2})\,\beta\delta(\alpha A)^\nu$,
+/// $\omega C = \tfrac{4}{\pi(\nu+2)}\beta\gamma(\alpha A)^\nu$; for ν = 1,
+/// $K = \alpha(1 - \frac{4\beta\delta A}{3\pi})$, $\omega C = \frac{4\alpha\beta\gamma A}{3\pi}$.
 pub fn describing_function_first_order(
     bw: &BoucWen,
     a: f64,
 ) -> Result<DescribingFunction, LinearizeError> {
     check_amplitude(a)?;
-    let q = 4.0 * a / (3.0 * std::f64::consts::PI);
+    check_bouc_wen(bw)?;
+    let (s, l) = first_order_coefficients(bw.nu);
+    let q = (bw.alpha * a).powf(bw.nu);
     Ok(DescribingFunction {
         amplitude: a,
-        stiffness: bw.alpha * (1.0 - q * bw.beta_delta()),
-        loss: bw.alpha * q * bw.beta_gamma(),
+        stiffness: bw.alpha - s * bw.beta_delta() * q,
+        loss: l * bw.beta_gamma() * q,
     })
 }
 
@@ -389,46 +444,54 @@ pub fn zener_at(z: &ZenerParams, w: f64, amplitude: f64) -> DescribingFunction {
     }
 }
 
-/// Bouc-Wen products (βγ, βδ) from (K, ωC) at amplitude A with α given, to first order.
+/// Bouc-Wen products (βγ, βδ) from (K, ωC) at amplitude A with α and ν given, to first order
+/// (the closed form of [`describing_function_first_order`] solved for them).
 pub fn bouc_wen_first_order(
     alpha: f64,
+    nu: f64,
     df: &DescribingFunction,
 ) -> Result<BoucWen, LinearizeError> {
     check_amplitude(df.amplitude)?;
-    if !(alpha.is_finite() && alpha > 0.0) {
-        return Err(LinearizeError::Invalid {
-            name: "alpha",
-            value: alpha,
-        });
+    for (name, value) in [("alpha", alpha), ("nu", nu)] {
+        if !(value.is_finite() && value > 0.0) {
+            return Err(LinearizeError::Invalid { name, value });
+        }
     }
-    let q = 3.0 * std::f64::consts::PI / (4.0 * df.amplitude);
+    let (s, l) = first_order_coefficients(nu);
+    let q = (alpha * df.amplitude).powf(nu);
     Ok(BoucWen::from_products(
         alpha,
-        q * df.loss / alpha,
-        q * (1.0 - df.stiffness / alpha),
-        1.0,
+        df.loss / (l * q),
+        (alpha - df.stiffness) / (s * q),
+        nu,
     ))
 }
 
-/// Bouc-Wen products (βγ, βδ), ν = 1, whose numerical describing function at `df.amplitude`
-/// equals (K, ωC), with α given: Newton's method from the first-order solution.
-pub fn bouc_wen_exact(alpha: f64, df: &DescribingFunction) -> Result<BoucWen, LinearizeError> {
-    let start = bouc_wen_first_order(alpha, df)?;
+/// Bouc-Wen products (βγ, βδ) whose numerical describing function at `df.amplitude` equals
+/// (K, ωC), with α and ν given: Newton's method from the first-order solution.
+pub fn bouc_wen_exact(
+    alpha: f64,
+    nu: f64,
+    df: &DescribingFunction,
+) -> Result<BoucWen, LinearizeError> {
+    let start = bouc_wen_first_order(alpha, nu, df)?;
     let a = df.amplitude;
     let scale = df.stiffness.abs().max(df.loss.abs());
     let eval = |bg: f64, bd: f64| -> Result<(f64, f64), LinearizeError> {
-        let d = describing_function(&BoucWen::from_products(alpha, bg, bd, 1.0), a)?;
+        let d = describing_function(&BoucWen::from_products(alpha, bg, bd, nu), a)?;
         Ok((d.stiffness - df.stiffness, d.loss - df.loss))
     };
     let (mut bg, mut bd) = (start.beta_gamma(), start.beta_delta());
     let mut res = eval(bg, bd)?;
+    // The products enter as β·(αA)^ν: steps in units of 1/(αA)^ν, times α.
+    let unit = alpha / (alpha * a).powf(nu);
     for it in 0..40 {
         let norm = res.0.hypot(res.1) / scale;
         if norm <= 1e-10 {
-            return Ok(BoucWen::from_products(alpha, bg, bd, 1.0));
+            return Ok(BoucWen::from_products(alpha, bg, bd, nu));
         }
-        // Finite-difference Jacobian in units of 1/A.
-        let h = 1e-6 / a;
+        // Finite-difference Jacobian.
+        let h = 1e-6 * unit;
         let rg = eval(bg + h, bd)?;
         let rd = eval(bg, bd + h)?;
         let j = [
@@ -494,5 +557,40 @@ impl Amplitude {
         };
         check_amplitude(a)?;
         Ok(a)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn ln_gamma_matches_known_values() {
+        // Γ(1/2) = √π, Γ(1) = Γ(2) = 1, Γ(3/2) = √π/2, Γ(5) = 24, Γ(10.5) = 1133278.3889487856;
+        // the Lanczos form is good to ~1e-15 relative there, the log to ~1e-14 absolute.
+        let pi = std::f64::consts::PI;
+        for (x, g) in [
+            (0.5, pi.sqrt()),
+            (1.0, 1.0),
+            (1.5, 0.5 * pi.sqrt()),
+            (2.0, 1.0),
+            (5.0, 24.0),
+            (10.5, 1_133_278.388_948_785_6),
+        ] {
+            assert_relative_eq!(ln_gamma(x).exp(), g, max_relative = 1e-13);
+        }
+    }
+
+    #[test]
+    fn first_order_coefficients_at_nu_one_and_two() {
+        let pi = std::f64::consts::PI;
+        let (s, l) = first_order_coefficients(1.0);
+        assert_relative_eq!(s, 4.0 / (3.0 * pi), max_relative = 1e-13);
+        assert_relative_eq!(l, 4.0 / (3.0 * pi), max_relative = 1e-13);
+        // ν = 2: (1/π)∫₀^{2π} sin²θ cos²θ dθ = (2/π)·B(3/2, 3/2) = 1/4, and 4/(4π) = 1/π.
+        let (s, l) = first_order_coefficients(2.0);
+        assert_relative_eq!(s, 0.25, max_relative = 1e-13);
+        assert_relative_eq!(l, 1.0 / pi, max_relative = 1e-13);
     }
 }
