@@ -22,6 +22,9 @@ struct Level {
     ssi_flat: [(f64, f64); 2],
     /// The response fit of each mode alone in its band.
     fit: [(f64, f64); 2],
+    /// Each acceleration's RMS over the record, then within each mode's band (torsion,
+    /// bending), from the fit's measured lines.
+    rms: Vec<f64>,
 }
 
 const TORSION: usize = 0;
@@ -67,15 +70,31 @@ fn level(n: u32) -> Option<Level> {
         })
     };
     let flat = frf::outputs_under_flat_input(&rec).unwrap();
+    let mut rms: Vec<f64> = acc
+        .iter()
+        .map(|c| {
+            let m = c.iter().sum::<f64>() / c.len() as f64;
+            (c.iter().map(|v| (v - m).powi(2)).sum::<f64>() / c.len() as f64).sqrt()
+        })
+        .collect();
     let fit = MODES.map(|(_, band)| {
         let r = frf::modes_from_frf(&rec, band, 1).unwrap();
         assert_eq!(r.modes.len(), 1, "level {n}, band {band:?}: {:?}", r.modes);
+        // A line of amplitude |H|·|F| has mean square |H|²|F|²/2.
+        rms.extend(r.response.iter().map(|h| {
+            h.iter()
+                .zip(&r.input_amplitude)
+                .map(|(h, f)| (h.norm() * f).powi(2) / 2.0)
+                .sum::<f64>()
+                .sqrt()
+        }));
         (r.modes[0].frequency_hz, r.modes[0].damping_ratio)
     });
     let l = Level {
         ssi: ssi(&acc),
         ssi_flat: ssi(&flat),
         fit,
+        rms,
     };
     for (i, name) in ["torsion", "bending"].iter().enumerate() {
         eprintln!(
@@ -126,4 +145,48 @@ fn output_only_follows_the_torsion_mode_over_force_levels() {
         assert!((g - f).abs() < (s - f).abs(), "level {n}: {g} {s} {f}");
         assert!((g - f).abs() < 0.003 * f, "level {n}: {g} {f}");
     }
+}
+
+/// The torsion mode's damping sets in faster than a Bouc-Wen element with ν = 1 allows. For
+/// −γ ≤ δ < γ the element's loss grows no faster than A^ν (the property test
+/// `loss_grows_no_faster_than_amplitude_to_the_nu` in hyst-linearize), and a viscous part
+/// beside it only slows that. The torsion loss 2ζω² at 74 N over that at 37 N, from the least
+/// favourable pair of the estimates free of the force's colour (the fit and SSI under the
+/// flat force: the smaller at 74 N, the larger at 37 N), outgrows the fastest-growing
+/// response there is: any sensor's, in either mode's band or over the record. Measured: a
+/// ratio of 2.02 over a growth of 1.92 (acc1 in the bending band), so ν ≥ 1.08. With SSI on
+/// the measured accelerations among the estimates (biased by the force's drop at the
+/// resonance, see the test above) the ratio is 1.86, ν ≥ 0.95: printed, not asserted.
+#[test]
+fn torsion_damping_sets_in_faster_than_nu_one_allows() {
+    let (Some(l3), Some(l5)) = (level(3), level(5)) else {
+        return;
+    };
+    let loss = |(f, z): (f64, f64)| 2.0 * z * (std::f64::consts::TAU * f).powi(2);
+    let growth = l3
+        .rms
+        .iter()
+        .zip(&l5.rms)
+        .map(|(a, b)| b / a)
+        .fold(f64::NAN, f64::max);
+    let least_nu = |lo: &[(f64, f64)], hi: &[(f64, f64)]| {
+        let lower = lo
+            .iter()
+            .map(|&e| loss(e))
+            .fold(f64::NEG_INFINITY, f64::max);
+        let upper = hi.iter().map(|&e| loss(e)).fold(f64::INFINITY, f64::min);
+        (upper / lower, (upper / lower).ln() / growth.ln())
+    };
+    let (ratio, nu) = least_nu(
+        &[l3.fit[TORSION], l3.ssi_flat[TORSION]],
+        &[l5.fit[TORSION], l5.ssi_flat[TORSION]],
+    );
+    let (ratio_raw, nu_raw) = least_nu(
+        &[l3.fit[TORSION], l3.ssi_flat[TORSION], l3.ssi[TORSION]],
+        &[l5.fit[TORSION], l5.ssi_flat[TORSION], l5.ssi[TORSION]],
+    );
+    eprintln!(
+        "torsion loss ratio 37 -> 74 N {ratio:.3} (with raw SSI {ratio_raw:.3}), largest response growth {growth:.3}: ν ≥ {nu:.2} ({nu_raw:.2})"
+    );
+    assert!(nu > 1.0, "ν ≥ {nu}");
 }

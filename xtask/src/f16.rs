@@ -2,7 +2,8 @@
 //! (covssi on the three accelerations) beside the input-output fit of the force-to-acceleration
 //! response (`hyst_ident::frf`), and output-only again on the accelerations as they would be
 //! under a force of flat spectrum; figures of frequency and damping over force, and of the
-//! force's spectrum around each mode.
+//! force's spectrum around each mode; and the smallest Bouc-Wen exponent ν each mode's loss
+//! growth between levels allows ([`NuBound`]).
 
 use std::path::{Path, PathBuf};
 
@@ -219,6 +220,98 @@ fn loss(m: &FrfMode) -> f64 {
     2.0 * m.damping_ratio * w * w
 }
 
+/// A mode's loss 2ζω² at one level by the estimates free of the force's colour (the fit
+/// alone, the fit with neighbours, SSI under the flat force), then by SSI on the measured
+/// accelerations, which the force's drop at the resonance biases (docs/results.md).
+fn losses(r: &Row) -> (Vec<f64>, Option<f64>) {
+    let ssi =
+        |c: Option<Cluster>| c.map(|(f, _, z, _, _)| 2.0 * z * (std::f64::consts::TAU * f).powi(2));
+    let clean = [
+        r.narrow.0.map(|m| loss(&m)),
+        r.wide.0.map(|m| loss(&m)),
+        ssi(r.ssi_flat),
+    ];
+    (clean.into_iter().flatten().collect(), ssi(r.ssi))
+}
+
+/// Between two levels, the smallest Bouc-Wen exponent ν a mode's loss growth allows. For
+/// −γ ≤ δ < γ a Bouc-Wen element's loss stiffness grows no faster than A^ν (property test
+/// `loss_grows_no_faster_than_amplitude_to_the_nu` in hyst-linearize), and a viscous part
+/// beside it only slows the growth, so a loss ratio L₂/L₁ over an amplitude ratio g needs
+/// ν ≥ ln(L₂/L₁)/ln g. The joint's amplitude is not measured: g is the largest growth of
+/// any sensor's response, in any mode's band or over the whole record, which gives the
+/// smallest ν.
+#[derive(Debug, Clone, Copy)]
+pub struct NuBound {
+    /// Index into [`TARGETS`].
+    pub target: usize,
+    /// The two levels.
+    pub levels: (u32, u32),
+    /// The largest growth of a sensor's response RMS between them.
+    pub growth: f64,
+    /// The fit's (mode alone) loss at the two levels (rad²/s²).
+    pub loss_fit: (f64, f64),
+    /// The least loss ratio two estimates free of the force's colour give: the smallest at
+    /// the upper level over the largest at the lower.
+    pub least_ratio: f64,
+    /// The same with SSI on the measured accelerations among the estimates.
+    pub least_ratio_raw: f64,
+}
+
+impl NuBound {
+    /// The smallest ν from a loss ratio (`None` where the loss did not grow: no bound).
+    pub fn nu(&self, ratio: f64) -> Option<f64> {
+        (ratio > 1.0 && self.growth > 1.0).then(|| ratio.ln() / self.growth.ln())
+    }
+}
+
+/// The largest growth from level `a` to level `b` of any response measure: each sensor's
+/// RMS in each mode's band and over the whole record.
+fn largest_growth(rows: &[Row], a: u32, b: u32) -> f64 {
+    let measures = |level: u32| -> Vec<f64> {
+        let mine: Vec<&Row> = rows.iter().filter(|r| r.level == level).collect();
+        let mut v: Vec<f64> = mine.iter().flat_map(|r| r.band_rms.clone()).collect();
+        v.extend(mine.first().map_or(Vec::new(), |r| r.total_rms.clone()));
+        v
+    };
+    measures(a)
+        .iter()
+        .zip(&measures(b))
+        .map(|(x, y)| y / x)
+        .fold(f64::NAN, f64::max)
+}
+
+/// [`NuBound`] for each mode between consecutive levels.
+pub fn nu_bounds(rows: &[Row]) -> Vec<NuBound> {
+    let least = |a: &[f64], b: &[f64]| {
+        b.iter().copied().fold(f64::INFINITY, f64::min)
+            / a.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+    };
+    let mut out = Vec::new();
+    for (i, _) in TARGETS.iter().enumerate() {
+        let mine: Vec<&Row> = rows.iter().filter(|r| r.target == i).collect();
+        for w in mine.windows(2) {
+            let (a, b) = (w[0], w[1]);
+            let (Some(fa), Some(fb)) = (a.narrow.0, b.narrow.0) else {
+                continue;
+            };
+            let growth = largest_growth(rows, a.level, b.level);
+            let ((ca, ra), (cb, rb)) = (losses(a), losses(b));
+            let with_raw =
+                |c: &[f64], r: Option<f64>| c.iter().copied().chain(r).collect::<Vec<_>>();
+            out.push(NuBound {
+                target: i,
+                levels: (a.level, b.level),
+                growth,
+                loss_fit: (loss(&fa), loss(&fb)),
+                least_ratio: least(&ca, &cb),
+                least_ratio_raw: least(&with_raw(&ca, ra), &with_raw(&cb, rb)),
+            });
+        }
+    }
+    out
+}
+
 fn fmt_cluster(c: Option<Cluster>) -> String {
     match c {
         Some((f, fs, z, zs, n)) => format!(
@@ -300,6 +393,25 @@ pub fn markdown(rows: &[Row]) -> String {
             peak.0
         );
     }
+    s += "\n| mode | levels | largest response growth | loss 2ζω² of the fit, mode alone | smallest ν | least loss ratio, estimates free of the force's colour | smallest ν | least loss ratio, SSI on the measured accelerations too | smallest ν |\n|---|---|---|---|---|---|---|---|---|\n";
+    let nu = |v: Option<f64>| v.map_or("any (no growth)".into(), |v| format!("{v:.2}"));
+    for b in nu_bounds(rows) {
+        let ratio = b.loss_fit.1 / b.loss_fit.0;
+        s += &format!(
+            "| {} | {} → {} | {:.3} | {:.1} → {:.1} | {} | {:.3} | {} | {:.3} | {} |\n",
+            TARGETS[b.target].name,
+            b.levels.0,
+            b.levels.1,
+            b.growth,
+            b.loss_fit.0,
+            b.loss_fit.1,
+            nu(b.nu(ratio)),
+            b.least_ratio,
+            nu(b.nu(b.least_ratio)),
+            b.least_ratio_raw,
+            nu(b.nu(b.least_ratio_raw)),
+        );
+    }
     s
 }
 
@@ -375,25 +487,39 @@ pub fn figures(rows: &[Row], out: &Path) -> Result<Vec<PathBuf>, String> {
             )?;
             paths.push(p);
         }
-        // The loss against the response of the sensor whose record grows most with the force
-        // (acc1, the excitation point), and the most a ν = 1 Bouc-Wen element allows above the
-        // second level: its loss per unit amplitude cannot grow (docs/results.md).
-        let loss: Vec<(f64, f64)> = mine
+        // The loss over force, and the most a ν = 1 Bouc-Wen element allows above the second
+        // level: its loss grows no faster than its amplitude (docs/results.md), here taken to
+        // grow as the fastest-growing response measure ([`NuBound`]).
+        let loss_fit: Vec<(f64, f64)> = mine
             .iter()
-            .filter_map(|r| Some((r.total_rms[0], loss(&r.narrow.0?))))
+            .filter_map(|r| Some((r.force_rms, loss(&r.narrow.0?))))
             .collect();
-        let bound: Vec<(f64, f64)> = match loss.get(1) {
-            Some(&(a2, l2)) => loss[1..].iter().map(|&(a, _)| (a, l2 * a / a2)).collect(),
-            None => Vec::new(),
+        let bound: Vec<(f64, f64)> = match (mine.get(1), mine.get(1).and_then(|r| r.narrow.0)) {
+            (Some(r2), Some(m2)) => mine[1..]
+                .iter()
+                .map(|r| {
+                    let g = if r.level == r2.level {
+                        1.0
+                    } else {
+                        largest_growth(rows, r2.level, r.level)
+                    };
+                    (r.force_rms, loss(&m2) * g)
+                })
+                .collect(),
+            _ => Vec::new(),
         };
         let p = out.join(format!("f16_{slug}_loss.svg"));
         hyst::plot::chart(
             &p,
-            &format!("F-16 {}: loss 2ζω² over response", tg.name),
-            "RMS of acc1 over the record",
+            &format!("F-16 {}: loss 2ζω² over force", tg.name),
+            "force RMS (N)",
             "loss 2ζω² (rad²/s²)",
             &[
-                ("fit of the response, mode alone".into(), loss, colors::RED),
+                (
+                    "fit of the response, mode alone".into(),
+                    loss_fit,
+                    colors::RED,
+                ),
                 (
                     "largest a ν = 1 Bouc-Wen element allows from the second level".into(),
                     bound,
