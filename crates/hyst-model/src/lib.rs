@@ -150,9 +150,10 @@ impl BoucWen {
         if self.nu == 1.0 {
             self.alpha * v - bg * v.abs() * z - bd * v * z.abs()
         } else {
-            let az = z.abs();
-            let p = az.powf(self.nu - 1.0);
-            self.alpha * v - bg * v.abs() * p * z - bd * v * p * az
+            // |z|^(ν-1) z = sgn z |z|^ν: written so, it is 0 at z = 0 for ν < 1 too, where
+            // |z|^(ν-1) is infinite (and times z = 0 was NaN).
+            let zn = z.abs().powf(self.nu);
+            self.alpha * v - bg * v.abs() * sign(z) * zn - bd * v * zn
         }
     }
 
@@ -168,15 +169,16 @@ impl BoucWen {
             )
         } else {
             let az = z.abs();
-            let p = az.powf(self.nu - 1.0);
+            let zn = az.powf(self.nu);
+            // d(|z|^(ν-1) z)/dz = ν|z|^(ν-1); d(|z|^ν)/dz = ν|z|^(ν-1) sgn z. At z = 0 with
+            // ν < 1 these are infinite; 0 is used there (as for ν > 1, where they vanish).
             let dp = if az > 0.0 {
                 self.nu * az.powf(self.nu - 1.0)
             } else {
                 0.0
             };
-            // d(|z|^(ν-1) z)/dz = ν|z|^(ν-1); d(|z|^ν)/dz = ν|z|^(ν-1) sgn z
             (
-                self.alpha - bg * sv * p * z - bd * p * az,
+                self.alpha - bg * sv * sz * zn - bd * zn,
                 -bg * v.abs() * dp - bd * v * dp * sz,
             )
         }
@@ -552,6 +554,26 @@ mod tests {
         let zeta = -l.re / l.norm();
         assert!((f - 35.59).abs() < 0.005, "{f}");
         assert!((zeta - 0.0112).abs() < 5e-5, "{zeta}");
+    }
+
+    #[test]
+    fn bouc_wen_rate_is_finite_at_rest_for_any_nu_and_its_gradient_matches() {
+        for nu in [0.3, 0.7, 1.0, 1.5, 3.0] {
+            let bw = BoucWen::from_products(5e4, 800.0, -300.0, nu);
+            // From rest, z = 0: ż = αv whatever ν (it was NaN for ν < 1).
+            assert_eq!(bw.rate(0.01, 0.0), 5e4 * 0.01, "ν = {nu}");
+            // Away from z = 0 the gradient is the rate's central difference (relative step
+            // 1e-6: truncation and rounding both well below 1e-6 of the derivative).
+            for (v, z) in [(0.01, 3.0), (-0.02, 5.0), (0.03, -2.0), (-0.01, -4.0)] {
+                let (dv, dz) = bw.rate_gradient(v, z);
+                let hv = 1e-6 * v.abs();
+                let hz = 1e-6 * z.abs();
+                let nv = (bw.rate(v + hv, z) - bw.rate(v - hv, z)) / (2.0 * hv);
+                let nz = (bw.rate(v, z + hz) - bw.rate(v, z - hz)) / (2.0 * hz);
+                assert_relative_eq!(dv, nv, max_relative = 1e-6);
+                assert_relative_eq!(dz, nz, max_relative = 1e-6);
+            }
+        }
     }
 
     #[test]
