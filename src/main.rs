@@ -1626,8 +1626,15 @@ fn refine(a: &RefineArgs) -> Result<(), Error> {
             s.spectrum.peak_hz, s.spectrum.above_resonance
         );
         for e in &s.evidence {
+            // The exponent's candidate says which ν it fitted.
+            let nu = match (e.effect, e.model.map(|m| m.restoring)) {
+                (refine::Effect::HysteresisExponent, Some(hyst::model::Restoring::BoucWen(b))) => {
+                    format!("  (ν = {:.3})", b.nu)
+                }
+                _ => String::new(),
+            };
             println!(
-                "    {:<18} dBIC {:>12.1}  variance explained {:>7.3}{}",
+                "    {:<19} dBIC {:>12.1}  variance explained {:>7.3}{nu}{}",
                 e.effect.name(),
                 e.delta_bic,
                 e.variance_explained,

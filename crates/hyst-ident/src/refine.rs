@@ -37,6 +37,10 @@ pub enum Effect {
     /// place of a Zener element (its linearization), started from the Bouc-Wen elements
     /// whose describing function equals the Zener's at the model's resonance.
     Hysteresis,
+    /// The Bouc-Wen element's exponent ν freed (ν = 1 until then): how sharply the element
+    /// turns from stiff to slipping. Started from elements of several ν whose describing
+    /// function at A = σₓ equals the current element's.
+    HysteresisExponent,
 }
 
 impl Effect {
@@ -48,20 +52,24 @@ impl Effect {
             Effect::CoulombFriction => "coulomb_friction",
             Effect::SecondMode => "second_mode",
             Effect::Hysteresis => "hysteresis",
+            Effect::HysteresisExponent => "hysteresis_exponent",
         }
     }
 
     /// Every candidate.
-    pub const ALL: [Effect; 5] = [
+    pub const ALL: [Effect; 6] = [
         Effect::CubicStiffness,
         Effect::QuadraticDamping,
         Effect::CoulombFriction,
         Effect::SecondMode,
         Effect::Hysteresis,
+        Effect::HysteresisExponent,
     ];
 }
 
-/// The free parameters of a model, in a fixed order.
+/// The free parameters of a model, in a fixed order. A Bouc-Wen element's exponent ν is
+/// free when it differs from 1 (the elements the loop builds have ν = 1 until
+/// [`Effect::HysteresisExponent`] frees it).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum P {
     Mass,
@@ -72,6 +80,7 @@ enum P {
     Alpha,
     BetaGamma,
     BetaDelta,
+    Nu,
     Cubic,
     Quad,
     Coulomb,
@@ -89,7 +98,12 @@ fn free(o: &Oscillator, fit_mass: bool) -> Vec<P> {
     match o.restoring {
         Restoring::None => {}
         Restoring::Zener(_) => v.extend([P::KInf, P::Omega]),
-        Restoring::BoucWen(_) => v.extend([P::Alpha, P::BetaGamma, P::BetaDelta]),
+        Restoring::BoucWen(b) => {
+            v.extend([P::Alpha, P::BetaGamma, P::BetaDelta]);
+            if b.nu != 1.0 {
+                v.push(P::Nu);
+            }
+        }
     }
     let e = &o.extras;
     if e.cubic_stiffness != 0.0 {
@@ -117,6 +131,7 @@ fn get(o: &Oscillator, p: P) -> f64 {
         (P::Alpha, Restoring::BoucWen(b)) => b.alpha,
         (P::BetaGamma, Restoring::BoucWen(b)) => b.beta_gamma(),
         (P::BetaDelta, Restoring::BoucWen(b)) => b.beta_delta(),
+        (P::Nu, Restoring::BoucWen(b)) => b.nu,
         (P::Cubic, _) => o.extras.cubic_stiffness,
         (P::Quad, _) => o.extras.quadratic_damping,
         (P::Coulomb, _) => o.extras.coulomb.map_or(0.0, |c| c.force),
@@ -141,15 +156,17 @@ fn set(o: &mut Oscillator, p: P, v: f64) {
                 }
             }
         }
-        P::Alpha | P::BetaGamma | P::BetaDelta => {
+        P::Alpha | P::BetaGamma | P::BetaDelta | P::Nu => {
             if let Restoring::BoucWen(b) = &mut o.restoring {
-                let (mut a, mut bg, mut bd) = (b.alpha, b.beta_gamma(), b.beta_delta());
+                let (mut a, mut bg, mut bd, mut nu) =
+                    (b.alpha, b.beta_gamma(), b.beta_delta(), b.nu);
                 match p {
                     P::Alpha => a = v,
                     P::BetaGamma => bg = v,
-                    _ => bd = v,
+                    P::BetaDelta => bd = v,
+                    _ => nu = v,
                 }
-                *b = BoucWen::from_products(a, bg, bd, b.nu);
+                *b = BoucWen::from_products(a, bg, bd, nu);
             }
         }
         P::Cubic => o.extras.cubic_stiffness = v,
@@ -366,6 +383,7 @@ impl P {
             P::Alpha => "alpha",
             P::BetaGamma => "beta_gamma",
             P::BetaDelta => "beta_delta",
+            P::Nu => "nu",
             P::Cubic => "cubic_stiffness",
             P::Quad => "quadratic_damping",
             P::Coulomb => "coulomb_force",
@@ -640,10 +658,14 @@ fn linear_coefficient(e: Effect) -> Option<P> {
 fn not_dissipating(e: Effect, m: &Oscillator) -> Option<String> {
     let x = &m.extras;
     match (e, m.restoring) {
-        (Effect::Hysteresis, Restoring::BoucWen(b)) if b.beta_gamma() <= 0.0 => Some(format!(
-            "the fitted Bouc-Wen element does not dissipate (βγ = {:.3e} ≤ 0): a nonlinear spring, not hysteresis",
-            b.beta_gamma()
-        )),
+        (Effect::Hysteresis | Effect::HysteresisExponent, Restoring::BoucWen(b))
+            if b.beta_gamma() <= 0.0 =>
+        {
+            Some(format!(
+                "the fitted Bouc-Wen element does not dissipate (βγ = {:.3e} ≤ 0): a nonlinear spring, not hysteresis",
+                b.beta_gamma()
+            ))
+        }
         (Effect::CoulombFriction, _) => match x.coulomb {
             Some(c) if c.force <= 0.0 => Some(format!(
                 "the fitted friction force is {:.3e} ≤ 0: it feeds energy in",
@@ -694,8 +716,9 @@ fn with_effect(o: &Oscillator, effect: Effect, sx: f64, sv: f64) -> Option<Oscil
                 smoothing_velocity: 0.05 * sv,
             })
         }
-        // Started from the residual's peaks: [`second_mass_starts`].
-        Effect::SecondMode => return None,
+        // Started from the residual's peaks ([`second_mass_starts`]) and from the current
+        // element ([`exponent_starts`]).
+        Effect::SecondMode | Effect::HysteresisExponent => return None,
         Effect::Hysteresis => {
             if o.restoring != Restoring::None {
                 return None;
@@ -743,6 +766,29 @@ fn bouc_wen_replacing(
         })
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .map(|(m, _)| m)
+}
+
+/// Exponents the fit of [`Effect::HysteresisExponent`] starts from.
+const EXPONENT_STARTS: [f64; 6] = [0.5, 0.8, 1.02, 1.25, 2.0, 3.0];
+
+/// Starts for freeing the exponent of the Bouc-Wen element `b` of `o`: for each ν of
+/// [`EXPONENT_STARTS`], the element with the same α whose describing function at A = σₓ
+/// equals `b`'s ([`hyst_linearize::bouc_wen_exact`] with that ν), so that each start
+/// dissipates and stiffens as the fitted model does at the record's amplitude and differs in
+/// how the loop's shape changes with amplitude.
+fn exponent_starts(o: &Oscillator, b: &BoucWen, sx: f64) -> Vec<Oscillator> {
+    let Ok(df) = hyst_linearize::describing_function(b, sx) else {
+        return Vec::new();
+    };
+    EXPONENT_STARTS
+        .iter()
+        .filter_map(|&nu| {
+            let bw = hyst_linearize::bouc_wen_exact(b.alpha, nu, &df).ok()?;
+            let mut m = *o;
+            m.restoring = Restoring::BoucWen(bw);
+            m.validate().ok().map(|_| m)
+        })
+        .collect()
 }
 
 /// The start of a fit that adds the effect `e` to the base model, given `small` (the base
@@ -821,6 +867,17 @@ pub fn diagnose(
                 (Effect::Hysteresis, Restoring::BoucWen(_)) => {
                     Err("the model already has a Bouc-Wen element")
                 }
+                (Effect::HysteresisExponent, Restoring::BoucWen(b)) if b.nu != 1.0 => {
+                    Err("the Bouc-Wen element's exponent is free already")
+                }
+                (Effect::HysteresisExponent, Restoring::BoucWen(b)) => {
+                    Ok(exponent_starts(o, &b, sx)).and_then(|v| {
+                        (!v.is_empty())
+                            .then_some(v)
+                            .ok_or("no element of another exponent matches the current one")
+                    })
+                }
+                (Effect::HysteresisExponent, _) => Err("the model has no Bouc-Wen element"),
                 _ => match already_has(o, e) {
                     Some(why) => Err(why),
                     None if e == Effect::SecondMode => {
@@ -854,8 +911,24 @@ pub fn diagnose(
             } else {
                 60
             };
-            let best = fit_best_of(&starts, rec, range, fit_mass, iterations)
-                .filter(|(_, c1)| c1.is_finite());
+            let mut best = fit_best_of(&starts, rec, range, fit_mass, iterations);
+            // The exponent's candidate holds the base model itself (ν = 1): also fit it from
+            // there, on the whole range where the base is already at its optimum, so that the
+            // candidate never scores worse than the model it extends (from the far starts
+            // alone a ν = 1 element's candidate ended 0.3 % above it, at ν = 1 + 4e-12).
+            if let (Effect::HysteresisExponent, Restoring::BoucWen(b)) = (e, o.restoring) {
+                let mut near = *o;
+                near.restoring = Restoring::BoucWen(BoucWen {
+                    nu: 1.0 + 1e-9,
+                    ..b
+                });
+                if let Some(f) = fit_window(&near, rec, range, fit_mass, CONVERGED_ITERATIONS)
+                    && best.as_ref().is_none_or(|b| f.1 < b.1)
+                {
+                    best = Some(f);
+                }
+            }
+            let best = best.filter(|(_, c1)| c1.is_finite());
             match best {
                 Some((m, c1)) => {
                     let dp = (free(&m, fit_mass).len() - p0) as f64;
