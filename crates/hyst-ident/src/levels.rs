@@ -52,7 +52,7 @@ pub fn bouc_wen_from_levels(fits: &[&ZenerSpectralFit]) -> Result<LevelsBoucWen,
             moments,
         });
     }
-    let fit = statistical::bouc_wen_from_levels(&levels)?;
+    let fit = statistical::bouc_wen_from_levels(&levels, 1.0)?;
     let (c, c_se) = weighted_mean(fits.iter().map(|f| (f.c, c_standard_error(f))));
     let (k, k_se) = weighted_mean(fits.iter().map(|f| (f.k, f.se[1])));
     if !(c.is_finite() && k.is_finite()) {

@@ -100,6 +100,12 @@ pub enum LinearizeError {
         /// Levels given.
         levels: usize,
     },
+    /// Fewer force levels than fitting ν beside α, βγ and βδ needs.
+    #[error("{levels} level(s) given: three or more are needed to fit the exponent ν too")]
+    TooFewLevelsForExponent {
+        /// Levels given.
+        levels: usize,
+    },
     /// The levels' equations do not separate α, βγ and βδ (the same moments twice, say).
     #[error(
         "the levels do not determine α, βγ and βδ: their scaled normal matrix has smallest eigenvalue {smallest_eigenvalue:.3e}"
@@ -355,7 +361,7 @@ pub fn describing_function(bw: &BoucWen, a: f64) -> Result<DescribingFunction, L
 
 /// ln Γ(x) for x ≥ 1/2 by Lanczos' approximation (g = 7, nine terms; relative error
 /// below 1e-14 there).
-fn ln_gamma(x: f64) -> f64 {
+pub(crate) fn ln_gamma(x: f64) -> f64 {
     const G: f64 = 7.0;
     const C: [f64; 9] = [
         0.999_999_999_999_809_9,
