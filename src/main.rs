@@ -121,6 +121,10 @@ struct LevelsArgs {
     /// samples on two cores: about 7 s, 30 s with --data-periodic).
     #[arg(long)]
     by_simulation: bool,
+    /// Fit the Bouc-Wen exponent ν too (three or more --data records), instead of ν = 1;
+    /// with --by-simulation, there as well (slower: ν < 1 or > 1 costs a power per step).
+    #[arg(long)]
+    fit_exponent: bool,
 }
 
 #[derive(Clone, Copy, ValueEnum, PartialEq, Eq, Debug)]
@@ -1762,7 +1766,12 @@ fn levels(a: &LevelsArgs) -> Result<(), Error> {
         fits.push(f);
     }
     let refs: Vec<_> = fits.iter().collect();
-    let model = ident::levels::bouc_wen_from_levels(&refs).map_err(|e| fail(e.to_string()))?;
+    let model = if a.fit_exponent {
+        ident::levels::bouc_wen_and_exponent_from_levels(&refs)
+    } else {
+        ident::levels::bouc_wen_from_levels(&refs)
+    }
+    .map_err(|e| fail(e.to_string()))?;
     let o = &model.oscillator;
     let hyst::model::Restoring::BoucWen(bw) = &o.restoring else {
         return Err(fail("the levels' model has no Bouc-Wen element"));
@@ -1782,6 +1791,12 @@ fn levels(a: &LevelsArgs) -> Result<(), Error> {
         se[4],
         model.chi2_per_dof
     );
+    if a.fit_exponent {
+        println!(
+            "  exponent ν {:.3} ± {:.3} (the products βγ, βδ are in units of 1/(m·N^(ν−1)))",
+            bw.nu, model.nu_se
+        );
+    }
     let values = [bw.alpha, bw.beta_gamma(), bw.beta_delta()];
     if values
         .iter()
@@ -1898,6 +1913,7 @@ fn levels(a: &LevelsArgs) -> Result<(), Error> {
             o,
             &ident::levels::SimulationOptions {
                 periodic: a.data_periodic,
+                fit_exponent: a.fit_exponent,
                 ..Default::default()
             },
             &report,
@@ -1922,6 +1938,9 @@ fn levels(a: &LevelsArgs) -> Result<(), Error> {
             s.residual_rms,
             s.iterations
         );
+        if a.fit_exponent {
+            println!("  exponent ν {:.3} ± {:.3}", b.nu, s.nu_se);
+        }
         Some(s)
     } else {
         None
@@ -1949,11 +1968,13 @@ fn levels(a: &LevelsArgs) -> Result<(), Error> {
         let doc = json!({
             "levels": rows,
             "model": osc_json(o),
-            "se": {"c": se[0], "k": se[1], "alpha": se[2], "beta_gamma": se[3], "beta_delta": se[4]},
+            "se": {"c": se[0], "k": se[1], "alpha": se[2], "beta_gamma": se[3], "beta_delta": se[4],
+                   "nu": a.fit_exponent.then_some(model.nu_se)},
             "chi2_per_dof": model.chi2_per_dof,
             "by_simulation": by_sim.as_ref().map(|s| json!({
                 "model": osc_json(&s.oscillator),
-                "se": {"c": s.se[0], "k": s.se[1], "alpha": s.se[2], "beta_gamma": s.se[3], "beta_delta": s.se[4]},
+                "se": {"c": s.se[0], "k": s.se[1], "alpha": s.se[2], "beta_gamma": s.se[3], "beta_delta": s.se[4],
+                       "nu": a.fit_exponent.then_some(s.nu_se)},
                 "residual_rms": s.residual_rms,
                 "iterations": s.iterations,
                 "simulated": s.simulated,

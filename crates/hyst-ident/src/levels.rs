@@ -8,12 +8,15 @@
 //! (σ_v, σ_z, ρ) of the fitted Zener oscillator under q. These are linear in (α, βγ, βδ), so
 //! two or more levels give all three by weighted least squares, where one level cannot (the
 //! paper's mapping needs eq. 37's α, which does not hold). The linearization leaves c and k
-//! as they are: the model's c and k are the levels' inverse-variance weighted means.
+//! as they are: the model's c and k are the levels' inverse-variance weighted means. The
+//! relations hold for any exponent ν (with other Gaussian moments), so three or more levels
+//! give ν too ([`bouc_wen_and_exponent_from_levels`], and [`SimulationOptions::fit_exponent`]
+//! by simulation).
 
 use hyst_linearize::LinearizeError;
 use hyst_linearize::statistical::{self, LevelEquivalent, ResponseMoments};
 use hyst_model::{BoucWen, Oscillator, ZenerParams};
-use nalgebra::{Matrix4, Matrix5, Vector4, Vector5};
+use nalgebra::{DMatrix, DVector, Matrix4, Vector4};
 
 use crate::IdentError;
 use crate::zener_spectrum::ZenerSpectralFit;
@@ -22,10 +25,14 @@ use crate::zener_spectrum::ZenerSpectralFit;
 #[derive(Debug, Clone, PartialEq)]
 pub struct LevelsBoucWen {
     /// The oscillator: the fits' mass, c and k their weighted means, the Bouc-Wen element
-    /// (ν = 1, β = 1) from the least squares.
+    /// (β = 1; ν = 1 unless fitted) from the least squares.
     pub oscillator: Oscillator,
-    /// Standard errors of (c, k, α, βγ, βδ), from the fits' standard errors.
+    /// Standard errors of (c, k, α, βγ, βδ), from the fits' standard errors (those of α, βγ,
+    /// βδ at the fitted ν).
     pub se: [f64; 5],
+    /// Standard error of ν from its profile χ² (NaN when ν is held at 1, or when the χ² + 1
+    /// interval reaches an end of the range searched).
+    pub nu_se: f64,
     /// χ² per degree of freedom of (α, βγ, βδ) against the levels' (k∞, Ω): near 1 when the
     /// levels agree with one Bouc-Wen element within their standard errors; NaN for two levels.
     pub chi2_per_dof: f64,
@@ -33,9 +40,24 @@ pub struct LevelsBoucWen {
     pub moments: Vec<ResponseMoments>,
 }
 
-/// One Bouc-Wen model from the Zener spectral fits of records at two or more force levels of
-/// the same structure (same mass).
+/// One Bouc-Wen model (ν = 1) from the Zener spectral fits of records at two or more force
+/// levels of the same structure (same mass).
 pub fn bouc_wen_from_levels(fits: &[&ZenerSpectralFit]) -> Result<LevelsBoucWen, IdentError> {
+    from_levels(fits, false)
+}
+
+/// [`bouc_wen_from_levels`] with the exponent ν fitted too, from three or more levels
+/// ([`statistical::exponent_from_levels`]).
+pub fn bouc_wen_and_exponent_from_levels(
+    fits: &[&ZenerSpectralFit],
+) -> Result<LevelsBoucWen, IdentError> {
+    from_levels(fits, true)
+}
+
+fn from_levels(
+    fits: &[&ZenerSpectralFit],
+    fit_exponent: bool,
+) -> Result<LevelsBoucWen, IdentError> {
     let mass = shared_mass(fits)?;
     let mut levels = Vec::with_capacity(fits.len());
     for f in fits {
@@ -52,7 +74,12 @@ pub fn bouc_wen_from_levels(fits: &[&ZenerSpectralFit]) -> Result<LevelsBoucWen,
             moments,
         });
     }
-    let fit = statistical::bouc_wen_from_levels(&levels, 1.0)?;
+    let (fit, nu_se) = if fit_exponent {
+        let e = statistical::exponent_from_levels(&levels)?;
+        (e.fit, e.nu_se)
+    } else {
+        (statistical::bouc_wen_from_levels(&levels, 1.0)?, f64::NAN)
+    };
     let (c, c_se) = weighted_mean(fits.iter().map(|f| (f.c, c_standard_error(f))));
     let (k, k_se) = weighted_mean(fits.iter().map(|f| (f.k, f.se[1])));
     if !(c.is_finite() && k.is_finite()) {
@@ -66,6 +93,7 @@ pub fn bouc_wen_from_levels(fits: &[&ZenerSpectralFit]) -> Result<LevelsBoucWen,
     Ok(LevelsBoucWen {
         oscillator,
         se: [c_se, k_se, fit.se[0], fit.se[1], fit.se[2]],
+        nu_se,
         chi2_per_dof: fit.chi2_per_dof,
         moments: levels.iter().map(|l| l.moments).collect(),
     })
@@ -88,6 +116,8 @@ pub struct SimulationOptions {
     /// first 30 time constants of its fit's slowest pole are dropped: the simulated
     /// periodogram then leaks as the record's does.
     pub periodic: bool,
+    /// Fit the exponent ν too (started from the start's). Default false: ν is the start's.
+    pub fit_exponent: bool,
 }
 
 impl Default for SimulationOptions {
@@ -97,6 +127,7 @@ impl Default for SimulationOptions {
             tolerance: 1e-4,
             seed: 9000,
             periodic: false,
+            fit_exponent: false,
         }
     }
 }
@@ -104,7 +135,7 @@ impl Default for SimulationOptions {
 /// What [`bouc_wen_by_simulation`] finds.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SimulatedBoucWen {
-    /// The oscillator (ν = 1, β = 1).
+    /// The oscillator (β = 1; ν the start's unless fitted).
     pub oscillator: Oscillator,
     /// Each level's (c, k, k∞, Ω) fitted to the model's simulated record, beside the measured
     /// fit's.
@@ -119,6 +150,8 @@ pub struct SimulatedBoucWen {
     /// the whitened residuals, the 2 for the simulated records' own noise (one simulation per
     /// measured record); NaN without an iteration.
     pub se: [f64; 5],
+    /// Standard error of ν, the same way (NaN when ν is not fitted).
+    pub nu_se: f64,
 }
 
 /// The Bouc-Wen model whose simulated responses give the same Zener fits as the records
@@ -154,16 +187,17 @@ pub fn bouc_wen_by_simulation(
         .into());
     };
     let mass = start.mass;
-    let osc = |p: &[f64; 5]| {
+    // (c, k, α, βγ, βδ), then ν when it is fitted.
+    let osc = |p: &[f64]| {
         Oscillator::bouc_wen(
             mass,
             p[0],
             p[1],
-            BoucWen::from_products(p[2], p[3], p[4], 1.0),
+            BoucWen::from_products(p[2], p[3], p[4], p.get(5).copied().unwrap_or(bw.nu)),
         )
     };
     // The auxiliary statistics of the model p: one simulated record per level.
-    let aux = |p: &[f64; 5]| -> Result<Vec<[f64; 4]>, IdentError> {
+    let aux = |p: &[f64]| -> Result<Vec<[f64; 4]>, IdentError> {
         let model = osc(p);
         model.validate().map_err(|e| IdentError::Sim(e.into()))?;
         fits.par_iter()
@@ -238,13 +272,17 @@ pub fn bouc_wen_by_simulation(
             .collect()
     };
     let sum_sq = |r: &[f64]| r.iter().map(|v| v * v).sum::<f64>();
-    let mut p = [
+    let mut p = vec![
         start.damping,
         start.stiffness,
         bw.alpha,
         bw.beta_gamma(),
         bw.beta_delta(),
     ];
+    if opts.fit_exponent {
+        p.push(bw.nu);
+    }
+    let np = p.len();
     let mut sim = aux(&p)?;
     let mut r = resid(&sim);
     let mut cost = sum_sq(&r);
@@ -260,19 +298,19 @@ pub fn bouc_wen_by_simulation(
             .enumerate()
             .map(|(k, v)| (0.01 * v.abs()).max(if k == 0 { 0.1 } else { 1e-3 }))
             .collect();
-        let columns: Vec<Vec<f64>> = (0..5)
+        let columns: Vec<Vec<f64>> = (0..np)
             .map(|k| {
-                let mut q = p;
+                let mut q = p.clone();
                 q[k] += steps[k];
                 let rq = resid(&aux(&q)?);
                 Ok(rq.iter().zip(&r).map(|(a, b)| (a - b) / steps[k]).collect())
             })
             .collect::<Result<_, IdentError>>()?;
-        let mut jtj = Matrix5::<f64>::zeros();
-        let mut jtr = Vector5::<f64>::zeros();
-        for a in 0..5 {
+        let mut jtj = DMatrix::<f64>::zeros(np, np);
+        let mut jtr = DVector::<f64>::zeros(np);
+        for a in 0..np {
             jtr[a] = columns[a].iter().zip(&r).map(|(j, v)| j * v).sum::<f64>();
-            for b in 0..5 {
+            for b in 0..np {
                 jtj[(a, b)] = columns[a]
                     .iter()
                     .zip(&columns[b])
@@ -280,16 +318,16 @@ pub fn bouc_wen_by_simulation(
                     .sum::<f64>();
             }
         }
-        last_jtj = Some(jtj);
+        last_jtj = Some(jtj.clone());
         let before = cost;
         loop {
-            let mut m = jtj;
-            for a in 0..5 {
+            let mut m = jtj.clone();
+            for a in 0..np {
                 m[(a, a)] *= 1.0 + lambda;
             }
             let accepted = m.lu().solve(&jtr).and_then(|step| {
-                let mut q = p;
-                for k in 0..5 {
+                let mut q = p.clone();
+                for k in 0..np {
                     q[k] -= step[k];
                 }
                 q[0] = q[0].max(0.0);
@@ -314,13 +352,18 @@ pub fn bouc_wen_by_simulation(
         }
     }
     let cov = last_jtj.and_then(|m| m.try_inverse());
-    let se = std::array::from_fn(|k| cov.map_or(f64::NAN, |c| (2.0 * c[(k, k)]).max(0.0).sqrt()));
+    let se_of = |k: usize| {
+        cov.as_ref()
+            .filter(|c| k < c.nrows())
+            .map_or(f64::NAN, |c| (2.0 * c[(k, k)]).max(0.0).sqrt())
+    };
     Ok(SimulatedBoucWen {
         oscillator: osc(&p),
         simulated: sim,
         residual_rms: (cost / r.len() as f64).sqrt(),
         iterations,
-        se,
+        se: std::array::from_fn(se_of),
+        nu_se: se_of(5),
     })
 }
 
