@@ -23,7 +23,7 @@
 //!
 //! $E|g|^\nu = 2^{\nu/2}\Gamma(\tfrac{\nu+1}{2})/\sqrt\pi$; the two mixed moments are
 //! $E[r^\nu]$ of the Rayleigh radius times an integral over the angle, computed by
-//! double-exponential quadrature ([`GaussianMoments`]). At ν = 1 they are $\sqrt{2/\pi}\,\rho$
+//! double-exponential quadrature. At ν = 1 they are $\sqrt{2/\pi}\,\rho$
 //! and $\sqrt{2/\pi}$, the formulas above. The moments are those of the linear Zener
 //! oscillator under a white force of two-sided density q (N²/Hz, $E[u(t)u(t+\tau)] =
 //! q\,\delta(\tau)$), from its Lyapunov equation ([`zener_response_moments`]); iterating the
@@ -107,7 +107,7 @@ fn tanh_sinh(a: f64, b: f64, f: impl Fn(f64, f64) -> f64) -> f64 {
 /// The Gaussian moments the statistical linearization of a Bouc-Wen element with exponent ν
 /// needs, for standard normals $g_v$, $g_z$ of correlation ρ.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct GaussianMoments {
+pub(crate) struct GaussianMoments {
     /// $E|g_z|^\nu$.
     pub abs_z: f64,
     /// $E[\operatorname{sgn}g_v\operatorname{sgn}g_z|g_z|^\nu]$.
@@ -121,7 +121,7 @@ impl GaussianMoments {
     /// $g_v = r\cos(\theta - \psi)$ with cos ψ = ρ and r Rayleigh: each moment is
     /// $E r^\nu = 2^{\nu/2}\Gamma(1 + \nu/2)$ times an angular mean over θ ∈ (−π/2, π/2)
     /// (the other half turn repeats it), split where cos(θ − ψ) changes sign.
-    pub fn new(nu: f64, rho: f64) -> Self {
+    pub(crate) fn new(nu: f64, rho: f64) -> Self {
         let pi = std::f64::consts::PI;
         let half = std::f64::consts::FRAC_PI_2;
         let abs_z = (0.5 * nu * std::f64::consts::LN_2 + crate::ln_gamma(0.5 * (nu + 1.0))).exp()
