@@ -912,17 +912,21 @@ pub fn diagnose(
                 60
             };
             let mut best = fit_best_of(&starts, rec, range, fit_mass, iterations);
-            // The exponent's candidate holds the base model itself (ν = 1): also fit it from
-            // there, on the whole range where the base is already at its optimum, so that the
-            // candidate never scores worse than the model it extends (from the far starts
-            // alone a ν = 1 element's candidate ended 0.3 % above it, at ν = 1 + 4e-12).
-            if let (Effect::HysteresisExponent, Restoring::BoucWen(b)) = (e, o.restoring) {
+            // The exponent's candidate holds the base model itself (ν = 1): when the far
+            // starts do not beat the base, also fit it from there, on the whole range where
+            // the base is already at its optimum, so that the candidate never scores worse than
+            // the model it extends (from the far starts alone a ν = 1 element's candidate ended
+            // 0.3 % above it, at ν = 1 + 4e-12).
+            let beaten = best.as_ref().is_some_and(|b| b.1 < c0);
+            if let (Effect::HysteresisExponent, Restoring::BoucWen(b), false) =
+                (e, o.restoring, beaten)
+            {
                 let mut near = *o;
                 near.restoring = Restoring::BoucWen(BoucWen {
                     nu: 1.0 + 1e-9,
                     ..b
                 });
-                if let Some(f) = fit_window(&near, rec, range, fit_mass, CONVERGED_ITERATIONS)
+                if let Some(f) = fit_window(&near, rec, range, fit_mass, iterations)
                     && best.as_ref().is_none_or(|b| f.1 < b.1)
                 {
                     best = Some(f);
