@@ -37,7 +37,8 @@
 //!
 //! Across records: [`levels::bouc_wen_from_levels`] takes the step-3b fits of records at two
 //! or more force levels and gives one Bouc-Wen model for all, through the statistical
-//! linearization of [`hyst_linearize::statistical`].
+//! linearization of [`hyst_linearize::statistical`] ([`levels::bouc_wen_and_exponent_from_levels`]
+//! its exponent ν too, from three or more).
 
 #![warn(missing_docs)]
 
