@@ -826,5 +826,14 @@ mod tests {
                 ..
             })
         ));
+        // The exponent: positive, and three levels to fit it.
+        assert!(matches!(
+            bouc_wen_from_levels(&[one, one], -1.0),
+            Err(LinearizeError::Invalid { name: "nu", .. })
+        ));
+        assert!(matches!(
+            exponent_from_levels(&[one, one]),
+            Err(LinearizeError::TooFewLevelsForExponent { levels: 2 })
+        ));
     }
 }
