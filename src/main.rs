@@ -1777,8 +1777,17 @@ fn levels(a: &LevelsArgs) -> Result<(), Error> {
         return Err(fail("the levels' model has no Bouc-Wen element"));
     };
     let se = model.se;
+    // βγ and βδ multiply |z|^ν: their unit is 1/m only at ν = 1.
+    let product_unit = |nu: f64| {
+        if nu == 1.0 {
+            "1/m".to_string()
+        } else {
+            format!("1/(m·N^{:.3})", nu - 1.0)
+        }
+    };
+    let unit = product_unit(bw.nu);
     println!(
-        "Bouc-Wen of all levels: c {:.2} ± {:.2} N s/m, k {:.0} ± {:.0} N/m, α {:.0} ± {:.0} N/m, βγ {:.1} ± {:.1} 1/m, βδ {:.1} ± {:.1} 1/m (χ² per degree of freedom {:.2})",
+        "Bouc-Wen of all levels: c {:.2} ± {:.2} N s/m, k {:.0} ± {:.0} N/m, α {:.0} ± {:.0} N/m, βγ {:.1} ± {:.1} {unit}, βδ {:.1} ± {:.1} {unit} (χ² per degree of freedom {:.2})",
         o.damping,
         se[0],
         o.stiffness,
@@ -1792,10 +1801,7 @@ fn levels(a: &LevelsArgs) -> Result<(), Error> {
         model.chi2_per_dof
     );
     if a.fit_exponent {
-        println!(
-            "  exponent ν {:.3} ± {:.3} (the products βγ, βδ are in units of 1/(m·N^(ν−1)))",
-            bw.nu, model.nu_se
-        );
+        println!("  exponent ν {:.3} ± {:.3}", bw.nu, model.nu_se);
     }
     let values = [bw.alpha, bw.beta_gamma(), bw.beta_delta()];
     if values
@@ -1923,8 +1929,9 @@ fn levels(a: &LevelsArgs) -> Result<(), Error> {
             return Err(fail("the fit by simulation has no Bouc-Wen element"));
         };
         let e = s.se;
+        let unit = product_unit(b.nu);
         println!(
-            "Bouc-Wen by simulation: c {:.2} ± {:.2} N s/m, k {:.0} ± {:.0} N/m, α {:.0} ± {:.0} N/m, βγ {:.1} ± {:.1} 1/m, βδ {:.1} ± {:.1} 1/m (whitened residual RMS {:.2}, {} iterations)",
+            "Bouc-Wen by simulation: c {:.2} ± {:.2} N s/m, k {:.0} ± {:.0} N/m, α {:.0} ± {:.0} N/m, βγ {:.1} ± {:.1} {unit}, βδ {:.1} ± {:.1} {unit} (whitened residual RMS {:.2}, {} iterations)",
             s.oscillator.damping,
             e[0],
             s.oscillator.stiffness,
