@@ -160,6 +160,15 @@ fn check_bouc_wen(bw: &BoucWen) -> Result<(), LinearizeError> {
     })
 }
 
+/// `value` checked finite and positive, the error naming it.
+pub(crate) fn positive(name: &'static str, value: f64) -> Result<(), LinearizeError> {
+    if value.is_finite() && value > 0.0 {
+        Ok(())
+    } else {
+        Err(LinearizeError::Invalid { name, value })
+    }
+}
+
 fn check_amplitude(a: f64) -> Result<(), LinearizeError> {
     if a.is_finite() && a > 0.0 {
         Ok(())
@@ -458,11 +467,8 @@ pub fn bouc_wen_first_order(
     df: &DescribingFunction,
 ) -> Result<BoucWen, LinearizeError> {
     check_amplitude(df.amplitude)?;
-    for (name, value) in [("alpha", alpha), ("nu", nu)] {
-        if !(value.is_finite() && value > 0.0) {
-            return Err(LinearizeError::Invalid { name, value });
-        }
-    }
+    positive("alpha", alpha)?;
+    positive("nu", nu)?;
     let (s, l) = first_order_coefficients(nu);
     let q = (alpha * df.amplitude).powf(nu);
     Ok(BoucWen::from_products(

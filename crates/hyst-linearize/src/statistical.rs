@@ -41,7 +41,7 @@
 use hyst_model::{BoucWen, ZenerParams};
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
-use crate::LinearizeError;
+use crate::{LinearizeError, check_bouc_wen, positive};
 
 /// √(2/π): E|g| for a standard normal g.
 const SQRT_2_OVER_PI: f64 = 0.797_884_560_802_865_4;
@@ -57,14 +57,6 @@ pub struct ResponseMoments {
     pub sigma_z: f64,
     /// Correlation of velocity and z, E[ẋ z]/(σ_v σ_z).
     pub rho: f64,
-}
-
-fn positive(name: &'static str, value: f64) -> Result<(), LinearizeError> {
-    if value.is_finite() && value > 0.0 {
-        Ok(())
-    } else {
-        Err(LinearizeError::Invalid { name, value })
-    }
 }
 
 fn check_moments(m: &ResponseMoments) -> Result<(), LinearizeError> {
@@ -140,10 +132,9 @@ impl GaussianMoments {
                 g(theta, cos_at(a, fa, b, fb))
             })
         };
-        let pow = |c: f64, e: f64| c.powf(e);
         let sign_sign = radial / pi
-            * (piece(kink, half, &|_, c| pow(c, nu)) - piece(-half, kink, &|_, c| pow(c, nu)));
-        let mixed = |th: f64, c: f64| (th - psi).cos().abs() * pow(c, nu - 1.0);
+            * (piece(kink, half, &|_, c| c.powf(nu)) - piece(-half, kink, &|_, c| c.powf(nu)));
+        let mixed = |th: f64, c: f64| (th - psi).cos().abs() * c.powf(nu - 1.0);
         let abs_v_abs_z = radial / pi * (piece(-half, kink, &mixed) + piece(kink, half, &mixed));
         GaussianMoments {
             abs_z,
@@ -151,10 +142,6 @@ impl GaussianMoments {
             abs_v_abs_z,
         }
     }
-}
-
-fn check_nu(bw: &BoucWen) -> Result<(), LinearizeError> {
-    crate::check_bouc_wen(bw)
 }
 
 /// The Zener element that replaces a Bouc-Wen element (any ν) whose velocity and force have
@@ -165,7 +152,7 @@ pub fn zener_from_bouc_wen(
     bw: &BoucWen,
     moments: &ResponseMoments,
 ) -> Result<ZenerParams, LinearizeError> {
-    check_nu(bw)?;
+    check_bouc_wen(bw)?;
     check_moments(moments)?;
     let (bg, bd) = (bw.beta_gamma(), bw.beta * bw.delta);
     let (a, b) = coefficients(bw.nu, moments);
@@ -277,7 +264,7 @@ pub fn equivalent_zener(
     bw: &BoucWen,
     q: f64,
 ) -> Result<(ZenerParams, ResponseMoments), LinearizeError> {
-    check_nu(bw)?;
+    check_bouc_wen(bw)?;
     positive("mass", mass)?;
     if !(c.is_finite() && c >= 0.0) {
         return Err(LinearizeError::Invalid {
