@@ -80,14 +80,7 @@ fn level(n: u32) -> Option<Level> {
     let fit = MODES.map(|(_, band)| {
         let r = frf::modes_from_frf(&rec, band, 1).unwrap();
         assert_eq!(r.modes.len(), 1, "level {n}, band {band:?}: {:?}", r.modes);
-        // A line of amplitude |H|·|F| has mean square |H|²|F|²/2.
-        rms.extend(r.response.iter().map(|h| {
-            h.iter()
-                .zip(&r.input_amplitude)
-                .map(|(h, f)| (h.norm() * f).powi(2) / 2.0)
-                .sum::<f64>()
-                .sqrt()
-        }));
+        rms.extend(r.response_rms());
         (r.modes[0].frequency_hz, r.modes[0].damping_ratio)
     });
     let l = Level {

@@ -183,20 +183,7 @@ pub fn analyse(dir: &Path, level: u32) -> Result<Vec<Row>, String> {
                 .zip(&narrow.response[1])
                 .map(|(f, h)| (*f, h.norm()))
                 .collect(),
-            // Each line's response amplitude is |H| times the force's there; a sine of
-            // amplitude a has RMS a/√2.
-            band_rms: narrow
-                .response
-                .iter()
-                .map(|h| {
-                    let ms: f64 = h
-                        .iter()
-                        .zip(&narrow.input_amplitude)
-                        .map(|(h, a)| (h.norm() * a).powi(2) / 2.0)
-                        .sum();
-                    ms.sqrt()
-                })
-                .collect(),
+            band_rms: narrow.response_rms(),
             total_rms: total_rms.clone(),
         });
     }
@@ -214,18 +201,23 @@ pub fn run(dir: &Path) -> Result<Vec<Row>, String> {
     Ok(rows)
 }
 
-/// A mode's loss stiffness per unit modal mass, 2ζω² (rad²/s²).
+/// Loss stiffness per unit modal mass, 2ζω² (rad²/s²), of a mode of this frequency (Hz) and
+/// damping ratio.
+fn loss_of(frequency_hz: f64, damping_ratio: f64) -> f64 {
+    let w = std::f64::consts::TAU * frequency_hz;
+    2.0 * damping_ratio * w * w
+}
+
+/// [`loss_of`] a fitted mode.
 fn loss(m: &FrfMode) -> f64 {
-    let w = std::f64::consts::TAU * m.frequency_hz;
-    2.0 * m.damping_ratio * w * w
+    loss_of(m.frequency_hz, m.damping_ratio)
 }
 
 /// A mode's loss 2ζω² at one level by the estimates free of the force's colour (the fit
 /// alone, the fit with neighbours, SSI under the flat force), then by SSI on the measured
 /// accelerations, which the force's drop at the resonance biases (docs/results.md).
 fn losses(r: &Row) -> (Vec<f64>, Option<f64>) {
-    let ssi =
-        |c: Option<Cluster>| c.map(|(f, _, z, _, _)| 2.0 * z * (std::f64::consts::TAU * f).powi(2));
+    let ssi = |c: Option<Cluster>| c.map(|(f, _, z, _, _)| loss_of(f, z));
     let clean = [
         r.narrow.0.map(|m| loss(&m)),
         r.wide.0.map(|m| loss(&m)),
@@ -494,19 +486,16 @@ pub fn figures(rows: &[Row], out: &Path) -> Result<Vec<PathBuf>, String> {
             .iter()
             .filter_map(|r| Some((r.force_rms, loss(&r.narrow.0?))))
             .collect();
-        let bound: Vec<(f64, f64)> = match (mine.get(1), mine.get(1).and_then(|r| r.narrow.0)) {
-            (Some(r2), Some(m2)) => mine[1..]
+        let second = mine
+            .get(1)
+            .and_then(|r| Some((r.level, loss(&r.narrow.0?))));
+        let bound: Vec<(f64, f64)> = match second {
+            // At the second level itself the growth is 1.
+            Some((l2, l2_loss)) => mine[1..]
                 .iter()
-                .map(|r| {
-                    let g = if r.level == r2.level {
-                        1.0
-                    } else {
-                        largest_growth(rows, r2.level, r.level)
-                    };
-                    (r.force_rms, loss(&m2) * g)
-                })
+                .map(|r| (r.force_rms, l2_loss * largest_growth(rows, l2, r.level)))
                 .collect(),
-            _ => Vec::new(),
+            None => Vec::new(),
         };
         let p = out.join(format!("f16_{slug}_loss.svg"));
         hyst::plot::chart(

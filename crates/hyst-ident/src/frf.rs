@@ -76,6 +76,23 @@ pub struct FrfFit {
     pub misfit: f64,
 }
 
+impl FrfFit {
+    /// Each channel's RMS within the band, from its measured lines: a line of amplitude
+    /// |H|·|U| has mean square |H|²|U|²/2.
+    pub fn response_rms(&self) -> Vec<f64> {
+        self.response
+            .iter()
+            .map(|h| {
+                h.iter()
+                    .zip(&self.input_amplitude)
+                    .map(|(h, u)| (h.norm() * u).powi(2) / 2.0)
+                    .sum::<f64>()
+                    .sqrt()
+            })
+            .collect()
+    }
+}
+
 /// Lines whose input amplitude is below this fraction of the largest line's are not excited.
 const EXCITED: f64 = 1e-2;
 /// An input whose period-to-period differences hold more than this share of its variance is
