@@ -1727,6 +1727,40 @@ fn refine(a: &RefineArgs) -> Result<(), Error> {
     Ok(())
 }
 
+/// One line of a Bouc-Wen model: c, k, α, βγ, βδ with their standard errors `se`, βγ and
+/// βδ in their unit (they multiply |z|^ν: 1/m only at ν = 1), then `tail` in parentheses;
+/// and a line with ν ± `nu_se` when ν was fitted.
+fn print_bouc_wen(
+    label: &str,
+    o: &hyst::model::Oscillator,
+    bw: &hyst::model::BoucWen,
+    se: &[f64; 5],
+    tail: &str,
+    nu_se: Option<f64>,
+) {
+    let unit = if bw.nu == 1.0 {
+        "1/m".to_string()
+    } else {
+        format!("1/(m·N^{:.3})", bw.nu - 1.0)
+    };
+    println!(
+        "{label}: c {:.2} ± {:.2} N s/m, k {:.0} ± {:.0} N/m, α {:.0} ± {:.0} N/m, βγ {:.1} ± {:.1} {unit}, βδ {:.1} ± {:.1} {unit} ({tail})",
+        o.damping,
+        se[0],
+        o.stiffness,
+        se[1],
+        bw.alpha,
+        se[2],
+        bw.beta_gamma(),
+        se[3],
+        bw.beta_delta(),
+        se[4],
+    );
+    if let Some(nu_se) = nu_se {
+        println!("  exponent ν {:.3} ± {nu_se:.3}", bw.nu);
+    }
+}
+
 fn levels(a: &LevelsArgs) -> Result<(), Error> {
     use hyst::ident::{self, IdentOptions};
     use serde_json::json;
@@ -1777,32 +1811,14 @@ fn levels(a: &LevelsArgs) -> Result<(), Error> {
         return Err(fail("the levels' model has no Bouc-Wen element"));
     };
     let se = model.se;
-    // βγ and βδ multiply |z|^ν: their unit is 1/m only at ν = 1.
-    let product_unit = |nu: f64| {
-        if nu == 1.0 {
-            "1/m".to_string()
-        } else {
-            format!("1/(m·N^{:.3})", nu - 1.0)
-        }
-    };
-    let unit = product_unit(bw.nu);
-    println!(
-        "Bouc-Wen of all levels: c {:.2} ± {:.2} N s/m, k {:.0} ± {:.0} N/m, α {:.0} ± {:.0} N/m, βγ {:.1} ± {:.1} {unit}, βδ {:.1} ± {:.1} {unit} (χ² per degree of freedom {:.2})",
-        o.damping,
-        se[0],
-        o.stiffness,
-        se[1],
-        bw.alpha,
-        se[2],
-        bw.beta_gamma(),
-        se[3],
-        bw.beta_delta(),
-        se[4],
-        model.chi2_per_dof
+    print_bouc_wen(
+        "Bouc-Wen of all levels",
+        o,
+        bw,
+        &se,
+        &format!("χ² per degree of freedom {:.2}", model.chi2_per_dof),
+        a.fit_exponent.then_some(model.nu_se),
     );
-    if a.fit_exponent {
-        println!("  exponent ν {:.3} ± {:.3}", bw.nu, model.nu_se);
-    }
     let values = [bw.alpha, bw.beta_gamma(), bw.beta_delta()];
     if values
         .iter()
@@ -1928,26 +1944,17 @@ fn levels(a: &LevelsArgs) -> Result<(), Error> {
         let hyst::model::Restoring::BoucWen(b) = &s.oscillator.restoring else {
             return Err(fail("the fit by simulation has no Bouc-Wen element"));
         };
-        let e = s.se;
-        let unit = product_unit(b.nu);
-        println!(
-            "Bouc-Wen by simulation: c {:.2} ± {:.2} N s/m, k {:.0} ± {:.0} N/m, α {:.0} ± {:.0} N/m, βγ {:.1} ± {:.1} {unit}, βδ {:.1} ± {:.1} {unit} (whitened residual RMS {:.2}, {} iterations)",
-            s.oscillator.damping,
-            e[0],
-            s.oscillator.stiffness,
-            e[1],
-            b.alpha,
-            e[2],
-            b.beta_gamma(),
-            e[3],
-            b.beta_delta(),
-            e[4],
-            s.residual_rms,
-            s.iterations
+        print_bouc_wen(
+            "Bouc-Wen by simulation",
+            &s.oscillator,
+            b,
+            &s.se,
+            &format!(
+                "whitened residual RMS {:.2}, {} iterations",
+                s.residual_rms, s.iterations
+            ),
+            a.fit_exponent.then_some(s.nu_se),
         );
-        if a.fit_exponent {
-            println!("  exponent ν {:.3} ± {:.3}", b.nu, s.nu_se);
-        }
         Some(s)
     } else {
         None
