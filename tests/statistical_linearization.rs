@@ -16,17 +16,15 @@ const FS: f64 = 750.0;
 /// One steady-state period of the benchmark's response to a periodic white force of RMS
 /// `level` (N): input and output.
 fn steady(level: f64, samples: usize, seed: u64) -> (Vec<f64>, Vec<f64>) {
+    steady_of(&Oscillator::benchmark(), level, samples, seed)
+}
+
+/// [`steady`] of any oscillator.
+fn steady_of(o: &Oscillator, level: f64, samples: usize, seed: u64) -> (Vec<f64>, Vec<f64>) {
     let u = white_noise(samples, level, seed).unwrap();
-    let y = hyst::sim::steady_state_period(
-        &Oscillator::benchmark(),
-        &u,
-        FS,
-        &SimOptions::default(),
-        1e-10,
-        200,
-    )
-    .unwrap()
-    .y;
+    let y = hyst::sim::steady_state_period(o, &u, FS, &SimOptions::default(), 1e-10, 200)
+        .unwrap()
+        .y;
     (u, y)
 }
 
@@ -173,11 +171,7 @@ fn levels_tell_the_exponent() {
         .iter()
         .enumerate()
         .map(|(i, &level)| {
-            let u = white_noise(1 << 17, level, 100 + i as u64).unwrap();
-            let mut y =
-                hyst::sim::steady_state_period(&truth, &u, FS, &SimOptions::default(), 1e-10, 200)
-                    .unwrap()
-                    .y;
+            let (_, mut y) = steady_of(&truth, level, 1 << 17, 100 + i as u64);
             add_noise(&mut y, 7.4e-6, 200 + i as u64).unwrap();
             let id = ident::identify(&y, FS, &opts).unwrap();
             id.zener_spectrum.expect("a white force: step 3b runs")
