@@ -168,7 +168,8 @@ struct RefineArgs {
     /// Estimation rows A:B (0-based, B excluded); default the first 75 %.
     #[arg(long)]
     estimate: Option<String>,
-    /// Test rows C:D (repeatable); default the last 25 %.
+    /// Test rows C:D (repeatable); default the last 25 %. An effect is added only if it
+    /// does not raise the held-out error on any of them.
     #[arg(long)]
     test: Vec<String>,
     /// Write the report as JSON here.

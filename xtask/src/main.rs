@@ -507,17 +507,47 @@ fn bench_refine() {
         fs: 200.0,
         interpolation: refine::InputInterpolation::Linear,
     };
+    let mut r = None;
     let t = best_of(1, || {
-        refine::refine_record(
-            &rec,
-            Some(1.0),
-            Start::Linear,
-            (0, 3 * n / 4),
-            &[(3 * n / 4, n)],
-        )
-        .expect("refines")
+        r = Some(
+            refine::refine_record(
+                &rec,
+                Some(1.0),
+                Start::Linear,
+                (0, 3 * n / 4),
+                &[(3 * n / 4, n)],
+            )
+            .expect("refines"),
+        );
     });
-    println!("refine_s_32768 {t:.2} s");
+    // What the loop did, so that a change of time can be told from a change of path.
+    let steps: Vec<String> = r
+        .iter()
+        .flat_map(|r| &r.steps)
+        .map(|s| {
+            let refused = s
+                .evidence
+                .iter()
+                .filter(|e| {
+                    e.rejected
+                        .as_deref()
+                        .is_some_and(|w| w.starts_with("held out"))
+                })
+                .count();
+            format!(
+                "{} (held-out eps {:.4} -> {:.4} %{})",
+                s.effect.map_or("none", |e| e.name()),
+                100.0 * s.before[0].epsilon,
+                100.0 * s.after[0].epsilon,
+                if refused > 0 {
+                    format!(", {refused} refused by it")
+                } else {
+                    String::new()
+                }
+            )
+        })
+        .collect();
+    println!("refine_s_32768 {t:.2} s (steps: {})", steps.join(", "));
 }
 
 /// `hyst ident`'s identification step on its built-in record (the benchmark at 50 N, four

@@ -999,6 +999,11 @@ const CONVERGED_ITERATIONS: usize = 300;
 pub const SIGNIFICANT_BIC: f64 = -10.0;
 
 /// Refine `start` on the estimation rows and report on the test rows.
+///
+/// Each step adds the candidate with the lowest ΔBIC below [`SIGNIFICANT_BIC`] that does not
+/// make the held-out error worse on any test range; a significant candidate that does is
+/// reported as rejected with the two errors, and the next one is tried. Without test ranges
+/// the estimation rows alone decide.
 pub fn refine(
     start: &Oscillator,
     rec: &Record<'_>,
@@ -1052,21 +1057,31 @@ pub fn refine(
     let baseline = model;
     let mut steps = Vec::new();
     for _ in 0..3 {
-        let (evidence, spectrum) = diagnose(&model, c, rec, estimate, fit_mass);
+        let (mut evidence, spectrum) = diagnose(&model, c, rec, estimate, fit_mass);
         let before = errs(&model);
-        let best = evidence
-            .iter()
-            .filter(|e| e.model.is_some())
-            .min_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic));
-        match best {
-            Some(b) if b.delta_bic < SIGNIFICANT_BIC => {
-                // The candidate's fit stopped after a few iterations; the model it adds is
-                // fitted to convergence before the next step judges candidates against it.
-                let m = b.model.expect("filtered on Some");
-                let (m, c1) = fit(&m, rec, estimate, fit_mass, CONVERGED_ITERATIONS)
-                    .unwrap_or((m, c * (1.0 - b.variance_explained)));
-                let after = errs(&m);
-                let e = b.effect;
+        // Significant candidates, strongest first. Each is fitted to convergence (its fit in
+        // `diagnose` stopped after a few iterations) and must then pass the held-out check;
+        // the first that does is added.
+        let mut order: Vec<usize> = (0..evidence.len())
+            .filter(|&i| evidence[i].model.is_some() && evidence[i].delta_bic < SIGNIFICANT_BIC)
+            .collect();
+        order.sort_by(|&a, &b| evidence[a].delta_bic.total_cmp(&evidence[b].delta_bic));
+        let mut added = None;
+        for i in order {
+            let Some(m) = evidence[i].model else { continue };
+            let (m, c1) = fit(&m, rec, estimate, fit_mass, CONVERGED_ITERATIONS)
+                .unwrap_or((m, c * (1.0 - evidence[i].variance_explained)));
+            let after = errs(&m);
+            if let Some(why) = held_out_worse(tests, &before, &after) {
+                evidence[i].model = None;
+                evidence[i].rejected = Some(why);
+                continue;
+            }
+            added = Some((evidence[i].effect, m, c1, after));
+            break;
+        }
+        match added {
+            Some((e, m, c1, after)) => {
                 c = c1;
                 model = m;
                 steps.push(Step {
@@ -1077,7 +1092,7 @@ pub fn refine(
                     after,
                 });
             }
-            _ => {
+            None => {
                 let after = before.clone();
                 steps.push(Step {
                     effect: None,
@@ -1099,6 +1114,31 @@ pub fn refine(
         tests: tests_err,
         estimates,
     })
+}
+
+/// The held-out check a significant candidate must pass before it is added: its model,
+/// fitted to convergence on the estimation rows, may not simulate worse than the current
+/// model on any test range (a larger ε, eq. 39, or a simulation that diverges there). The
+/// estimation rows alone cannot tell an effect that is there from one that fits their noise
+/// or their particular trajectory; rows the fit never saw can. `Some(reason)` when it fails.
+fn held_out_worse(
+    tests: &[(usize, usize)],
+    before: &[Validation],
+    after: &[Validation],
+) -> Option<String> {
+    tests
+        .iter()
+        .zip(before.iter().zip(after))
+        .find(|(_, (b, a))| a.epsilon > b.epsilon || (a.epsilon.is_nan() && !b.epsilon.is_nan()))
+        .map(|(r, (b, a))| {
+            format!(
+                "held out: ε rose from {:.4} % to {:.4} % on rows {}:{}",
+                100.0 * b.epsilon,
+                100.0 * a.epsilon,
+                r.0,
+                r.1
+            )
+        })
 }
 
 /// Which model the loop starts from.
@@ -1195,6 +1235,31 @@ mod tests {
             "{quad:?}"
         );
         assert!(quad.model.is_none());
+    }
+
+    /// The held-out check fails on the first test range where the candidate is worse or
+    /// diverges, and says where and by how much; equal errors, or a range where both
+    /// diverge, pass.
+    #[test]
+    fn the_held_out_check_names_the_range_that_got_worse() {
+        let v = |e: f64| Validation { epsilon: e, rms: e };
+        let tests = [(10, 20), (30, 40)];
+        assert_eq!(held_out_worse(&[], &[], &[]), None);
+        assert_eq!(
+            held_out_worse(&tests, &[v(0.02), v(0.03)], &[v(0.01), v(0.03)]),
+            None
+        );
+        assert_eq!(
+            held_out_worse(&tests, &[v(0.02), v(0.03)], &[v(0.01), v(0.031)]).as_deref(),
+            Some("held out: ε rose from 3.0000 % to 3.1000 % on rows 30:40")
+        );
+        let inf = f64::INFINITY;
+        assert!(held_out_worse(&tests, &[v(0.02), v(0.03)], &[v(inf), v(0.01)]).is_some());
+        assert!(held_out_worse(&tests, &[v(0.02), v(0.03)], &[v(f64::NAN), v(0.01)]).is_some());
+        assert_eq!(
+            held_out_worse(&tests, &[v(inf), v(0.03)], &[v(inf), v(0.02)]),
+            None
+        );
     }
 
     /// The loop names an effect only if the fitted model has it: a dissipative effect fitted
