@@ -681,6 +681,7 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
                 "members": m.members,
                 "shape": m.shape.iter().map(|v| c64(*v)).collect::<Vec<_>>(),
                 "shape_std": m.shape_std,
+                "mpc": covssi::mpc(&m.shape),
                 "lambda": c64(m.lambda),
             })
         })
@@ -747,6 +748,47 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
             m.damping_std,
             m.members.len()
         );
+    }
+    // Shapes say something with several channels only (a one-channel shape is a number).
+    let mac: Vec<Vec<f64>> = res
+        .modes
+        .iter()
+        .map(|a| {
+            res.modes
+                .iter()
+                .map(|b| covssi::mac(&a.shape, &b.shape))
+                .collect()
+        })
+        .collect();
+    if views.len() > 1 && !res.modes.is_empty() {
+        println!(
+            "shapes (channels {}; magnitude∠phase, the largest entry 1; MPC 1 for a real mode):",
+            names.join(", ")
+        );
+        for m in &res.modes {
+            let entries: Vec<String> = m
+                .shape
+                .iter()
+                .map(|v| {
+                    // + 0.0 turns a rounded −0 into 0.
+                    let deg = v.arg().to_degrees().round() + 0.0;
+                    format!("{:.3}∠{deg:.0}°", v.norm())
+                })
+                .collect();
+            println!(
+                "  {:>9.4} Hz  {}  MPC {:.3}",
+                m.frequency_hz,
+                entries.join("  "),
+                covssi::mpc(&m.shape)
+            );
+        }
+        println!(
+            "MAC between the modes (1 on the diagonal; near 0 where the channels tell two modes apart):"
+        );
+        for (m, row) in res.modes.iter().zip(&mac) {
+            let cells: Vec<String> = row.iter().map(|v| format!("{v:.3}")).collect();
+            println!("  {:>9.4} Hz  {}", m.frequency_hz, cells.join("  "));
+        }
     }
     for r in &res.real_poles {
         println!(
@@ -828,6 +870,7 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
         "fs_hz": fs_used,
         "block_rows": res.block_rows,
         "modes": modes,
+        "mac": mac,
         "refined": refined_json,
         "real_poles": real,
         "notes": res.notes,

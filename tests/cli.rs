@@ -384,6 +384,86 @@ fn ssi_without_refinement() {
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     assert!(v["refined"].is_null() && !v["modes"].as_array().unwrap().is_empty());
+    // One channel: its shapes are numbers, so neither shapes nor MACs are printed.
+    assert!(!out.contains("MAC between"), "{out}");
+}
+
+/// With several channels `hyst ssi` prints each mode's shape with its MPC and the MAC
+/// between the modes, and writes both to the JSON. Checked here against the formulas
+/// computed from the JSON's own shapes: MAC = |aᴴb|²/(|a|²|b|²), MPC from the scatter of
+/// the entries' real and imaginary parts (rounding: 1e-12).
+#[test]
+fn ssi_reports_shapes_mpc_and_mac() {
+    let Some(path) = common::data_file("oma/data_3dof.csv") else {
+        return;
+    };
+    let json = tmp("3dof_mac.json");
+    let (ok, out, err) = hyst(&[
+        "ssi",
+        "--input",
+        s(&path),
+        "--fs",
+        "20",
+        "--columns",
+        "y1,y2,y3",
+        "--block-rows",
+        "20",
+        "--json",
+        s(&json),
+        "--no-refine",
+    ]);
+    assert!(ok, "{err}");
+    assert!(
+        out.contains("MAC between the modes") && out.contains("MPC"),
+        "{out}"
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let shapes: Vec<Vec<(f64, f64)>> = v["modes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| {
+            m["shape"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|c| (c[0].as_f64().unwrap(), c[1].as_f64().unwrap()))
+                .collect()
+        })
+        .collect();
+    let mac = v["mac"].as_array().unwrap();
+    assert_eq!(mac.len(), shapes.len());
+    for (i, a) in shapes.iter().enumerate() {
+        // aᴴb = Σ (ar − i ai)(br + i bi).
+        for (j, b) in shapes.iter().enumerate() {
+            let (mut re, mut im, mut na, mut nb) = (0.0, 0.0, 0.0, 0.0);
+            for (&(ar, ai), &(br, bi)) in a.iter().zip(b) {
+                re += ar * br + ai * bi;
+                im += ar * bi - ai * br;
+                na += ar * ar + ai * ai;
+                nb += br * br + bi * bi;
+            }
+            let expected = (re * re + im * im) / (na * nb);
+            let got = mac[i][j].as_f64().unwrap();
+            assert!(
+                (got - expected).abs() < 1e-12,
+                "MAC[{i}][{j}] {got} vs {expected}"
+            );
+        }
+        let (sxx, syy, sxy) = a.iter().fold((0.0, 0.0, 0.0), |(xx, yy, xy), &(x, y)| {
+            (xx + x * x, yy + y * y, xy + x * y)
+        });
+        // The scatter matrix's eigenvalues: MPC = ((σ₁ − σ₂)/(σ₁ + σ₂))².
+        let half = ((sxx - syy).powi(2) / 4.0 + sxy * sxy).sqrt();
+        let (s1, s2) = ((sxx + syy) / 2.0 + half, (sxx + syy) / 2.0 - half);
+        let expected = ((s1 - s2) / (s1 + s2)).powi(2);
+        let got = v["modes"][i]["mpc"].as_f64().unwrap();
+        assert!(
+            (got - expected).abs() < 1e-12,
+            "MPC of mode {i}: {got} vs {expected}"
+        );
+    }
 }
 
 /// Three channels are refined jointly by default and each alone with `--no-joint`; the JSON

@@ -20,7 +20,8 @@
 //! 5. Fully stable poles are clustered into [`Mode`]s (mean ± standard deviation) by their
 //!    distance in the complex plane, $|\lambda_i-\lambda_j|/\max(|\lambda_i|,|\lambda_j|)$, so that
 //!    poles of one frequency but different damping stay apart; stable real poles into
-//!    [`RealPoleCluster`]s.
+//!    [`RealPoleCluster`]s. Shapes compare by [`mac`]; [`mpc`] tells how close a shape is to
+//!    a real (normal) mode.
 //! 6. Optionally, [`refine()`]: the modes (with [`refine_with_real_poles`], the real poles too)
 //!    fitted to the whole record by maximum likelihood
 //!    (Whittle; several channels jointly, cross-spectra included, above 4 channels through 4
@@ -61,7 +62,7 @@ pub use refine::{
     DroppedMode, DroppedRealPole, RefineOptions, RefinedMode, RefinedRealPole, Refinement, refine,
     refine_with_real_poles,
 };
-pub use stabilize::{Mode, Pole, PoleStatus, RealPoleCluster, Rejection, Stability};
+pub use stabilize::{Mode, Pole, PoleStatus, RealPoleCluster, Rejection, Stability, mac, mpc};
 
 use linalg::{C64, Dense};
 use rayon::prelude::*;

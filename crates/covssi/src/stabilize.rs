@@ -137,8 +137,11 @@ fn rel(a: f64, b: f64) -> f64 {
     if m == 0.0 { 0.0 } else { (a - b).abs() / m }
 }
 
-/// Modal assurance criterion of two complex shapes.
-pub(crate) fn mac(a: &[C64], b: &[C64]) -> f64 {
+/// Modal assurance criterion of two complex shapes,
+/// $\text{MAC}(a, b) = |a^{\mathsf H} b|^2 / (a^{\mathsf H} a \; b^{\mathsf H} b)$: 1 when one
+/// is a complex multiple of the other, 0 when they are orthogonal; 0 if either is zero.
+/// Shapes of one channel are numbers, so their MAC is always 1.
+pub fn mac(a: &[C64], b: &[C64]) -> f64 {
     let num: C64 = a.iter().zip(b).map(|(x, y)| x.conj() * y).sum();
     let da: f64 = a.iter().map(|x| x.norm_sqr()).sum();
     let db: f64 = b.iter().map(|x| x.norm_sqr()).sum();
@@ -147,6 +150,26 @@ pub(crate) fn mac(a: &[C64], b: &[C64]) -> f64 {
     } else {
         num.norm_sqr() / (da * db)
     }
+}
+
+/// Modal phase collinearity of a complex shape $\varphi = x + \mathrm i y$: how close its
+/// entries lie to one line through the origin of the complex plane, as they do for a real
+/// (normal) mode under any complex scale. With $S_{xx} = x^\top x$, $S_{yy} = y^\top y$,
+/// $S_{xy} = x^\top y$, the eigenvalues $\sigma_1 \ge \sigma_2$ of
+/// $\begin{pmatrix} S_{xx} & S_{xy} \\ S_{xy} & S_{yy} \end{pmatrix}$ give
+/// $\text{MPC} = ((\sigma_1 - \sigma_2)/(\sigma_1 + \sigma_2))^2
+/// = ((S_{xx} - S_{yy})^2 + 4 S_{xy}^2)/(S_{xx} + S_{yy})^2$: 1 for a normal mode, 0 when the
+/// entries spread evenly in phase (e.g. $(1, \mathrm i)$). A shape of one channel always has
+/// MPC 1, so it tells nothing there; 0 for a zero shape.
+pub fn mpc(shape: &[C64]) -> f64 {
+    let (sxx, syy, sxy) = shape.iter().fold((0.0, 0.0, 0.0), |(xx, yy, xy), v| {
+        (xx + v.re * v.re, yy + v.im * v.im, xy + v.re * v.im)
+    });
+    let total = sxx + syy;
+    if total == 0.0 {
+        return 0.0;
+    }
+    ((sxx - syy).powi(2) + 4.0 * sxy * sxy) / (total * total)
 }
 
 fn hard_rejection(p: &Pole, opts: &SsiOptions) -> Option<Rejection> {

@@ -1,7 +1,7 @@
 //! Exact recovery: fed the exact correlations of known linear systems, SSI-COV returns their
-//! poles to 1e-8 relative.
+//! poles to 1e-8 relative, and their shapes C·ψ as well.
 
-use covssi::{Complex64, Correlations, SsiOptions, identify_from_correlations};
+use covssi::{Complex64, Correlations, SsiOptions, identify_from_correlations, mac, mpc};
 
 /// Real modal form of a discrete system with the given continuous poles (pairs given once,
 /// with Im > 0; real poles with Im = 0) at sampling interval dt. Returns A_d (column-major).
@@ -25,8 +25,14 @@ fn modal_a(poles: &[Complex64], dt: f64) -> (usize, Vec<f64>) {
     (n, a)
 }
 
-/// R_k = C A^k G for k < lags, with fixed pseudo-random C (l × n) and G (n × l).
-fn exact_correlations(poles: &[Complex64], dt: f64, l: usize, lags: usize) -> Correlations {
+/// R_k = C A^k G for k < lags, with fixed pseudo-random C (l × n) and G (n × l); also C
+/// (column-major, `c[a + j·l]`).
+fn exact_correlations(
+    poles: &[Complex64],
+    dt: f64,
+    l: usize,
+    lags: usize,
+) -> (Correlations, Vec<f64>) {
     let (n, a) = modal_a(poles, dt);
     let mut seed = 12345u64;
     let mut rnd = || {
@@ -54,16 +60,43 @@ fn exact_correlations(poles: &[Complex64], dt: f64, l: usize, lags: usize) -> Co
         }
         ag = next;
     }
-    Correlations {
-        channels: l,
-        references: l,
-        r,
-    }
+    (
+        Correlations {
+            channels: l,
+            references: l,
+            r,
+        },
+        c,
+    )
+}
+
+/// The true shapes C·ψ of `poles` in `modal_a`'s form: a pair's block [[Re μ, −Im μ],
+/// [Im μ, Re μ]] at states (k, k+1) has the eigenvector e_k − i e_{k+1} for μ (Im > 0),
+/// a real pole the unit vector of its state.
+fn true_shapes(poles: &[Complex64], c: &[f64], l: usize) -> Vec<Vec<Complex64>> {
+    let mut k = 0;
+    poles
+        .iter()
+        .map(|p| {
+            let col = |j: usize| &c[j * l..(j + 1) * l];
+            let shape = if p.im == 0.0 {
+                col(k).iter().map(|&v| Complex64::new(v, 0.0)).collect()
+            } else {
+                col(k)
+                    .iter()
+                    .zip(col(k + 1))
+                    .map(|(&re, &im)| Complex64::new(re, -im))
+                    .collect()
+            };
+            k += if p.im == 0.0 { 1 } else { 2 };
+            shape
+        })
+        .collect()
 }
 
 fn recover(poles: &[Complex64], fs: f64, l: usize, block_rows: usize) {
     let order: usize = poles.iter().map(|p| if p.im == 0.0 { 1 } else { 2 }).sum();
-    let corr = exact_correlations(poles, 1.0 / fs, l, 2 * block_rows);
+    let (corr, c) = exact_correlations(poles, 1.0 / fs, l, 2 * block_rows);
     let opts = SsiOptions {
         max_order: Some(order),
         ..SsiOptions::default()
@@ -71,13 +104,25 @@ fn recover(poles: &[Complex64], fs: f64, l: usize, block_rows: usize) {
     let res = identify_from_correlations(&corr, fs, block_rows, &opts).unwrap();
     let last = res.diagram.orders.last().unwrap();
     assert_eq!(last.order, order);
-    for p in poles {
-        let best = last
+    for (p, shape) in poles.iter().zip(true_shapes(poles, &c, l)) {
+        let (best, q) = last
             .poles
             .iter()
-            .map(|q| (q.lambda - p).norm() / p.norm())
-            .fold(f64::INFINITY, f64::min);
+            .map(|q| ((q.lambda - p).norm() / p.norm(), q))
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .expect("poles at the system's order");
         assert!(best <= 1e-8, "pole {p}: relative error {best:e}");
+        // The identified (A, C) is (T⁻¹AT, CT) for some T, so C·ψ is the true shape up to a
+        // complex scale; its error is of the poles' order, so 1 − MAC of its square, ~1e-16
+        // (allowed: 1e-12). MPC compares the shape with itself: identified and true agree.
+        let miss = 1.0 - mac(&q.shape, &shape);
+        eprintln!(
+            "pole {p}: 1 - MAC {miss:.1e}, MPC {:.6} (true {:.6})",
+            mpc(&q.shape),
+            mpc(&shape)
+        );
+        assert!(miss <= 1e-12, "pole {p}: 1 - MAC = {miss:e}");
+        assert!((mpc(&q.shape) - mpc(&shape)).abs() <= 1e-10);
     }
     assert_eq!(last.poles.len(), poles.len());
 }

@@ -1,7 +1,7 @@
 //! Property tests: invariances of the identified poles, the FFT correlation against the direct
-//! sum, and the estimator tightening with more data.
+//! sum, the estimator tightening with more data, and what MAC and MPC mean.
 
-use covssi::{BlockRows, SsiOptions, SsiResult, corr, identify};
+use covssi::{BlockRows, Complex64, SsiOptions, SsiResult, corr, identify, mac, mpc};
 use proptest::prelude::*;
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
@@ -178,6 +178,68 @@ proptest! {
             }
         }
     }
+}
+
+/// A complex shape of 1–6 entries, none of them zero everywhere.
+fn shape() -> impl Strategy<Value = Vec<Complex64>> {
+    prop::collection::vec((-1.0f64..1.0, -1.0f64..1.0), 1..7).prop_filter_map(
+        "a zero shape has no direction",
+        |v| {
+            let s: Vec<Complex64> = v.into_iter().map(|(a, b)| Complex64::new(a, b)).collect();
+            (s.iter().map(|z| z.norm_sqr()).sum::<f64>() > 1e-6).then_some(s)
+        },
+    )
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(200))]
+
+    /// MAC compares directions: symmetric, within [0, 1], 1 against any complex multiple of
+    /// itself, and unchanged when either shape is so scaled (rounding: 1e-12).
+    #[test]
+    fn mac_compares_directions(a in shape(), b in shape(), r in 0.01f64..100.0, th in -3.2f64..3.2) {
+        let n = a.len().min(b.len());
+        let (a, b) = (&a[..n], &b[..n]);
+        let scale = Complex64::from_polar(r, th);
+        let b2: Vec<Complex64> = b.iter().map(|z| z * scale).collect();
+        let a2: Vec<Complex64> = a.iter().map(|z| z * scale).collect();
+        let m = mac(a, b);
+        prop_assert!((-1e-12..=1.0 + 1e-12).contains(&m));
+        prop_assert!((m - mac(b, a)).abs() <= 1e-12);
+        prop_assert!((m - mac(a, &b2)).abs() <= 1e-12);
+        prop_assert!((mac(a, &a2) - 1.0).abs() <= 1e-12);
+    }
+
+    /// MPC is a property of the shape's direction (unchanged by a complex scale), within
+    /// [0, 1], 1 for every real shape rotated by any phase and for any one-entry shape.
+    #[test]
+    fn mpc_measures_how_real_a_shape_is(a in shape(), r in 0.01f64..100.0, th in -3.2f64..3.2) {
+        let scale = Complex64::from_polar(r, th);
+        let scaled: Vec<Complex64> = a.iter().map(|z| z * scale).collect();
+        let m = mpc(&a);
+        prop_assert!((-1e-12..=1.0 + 1e-12).contains(&m));
+        prop_assert!((m - mpc(&scaled)).abs() <= 1e-12);
+        let real: Vec<Complex64> = a.iter().map(|z| Complex64::new(z.re, 0.0) * scale).collect();
+        if real.iter().any(|z| z.norm() > 0.0) {
+            prop_assert!((mpc(&real) - 1.0).abs() <= 1e-12);
+        }
+        prop_assert!((mpc(&a[..1]) - 1.0).abs() <= 1e-12);
+    }
+}
+
+/// MPC's two ends: a real mode and entries spread evenly in phase.
+#[test]
+fn mpc_of_a_normal_mode_is_one_and_of_a_travelling_wave_zero() {
+    let i = Complex64::new(0.0, 1.0);
+    let one = Complex64::new(1.0, 0.0);
+    assert!((mpc(&[one, -2.0 * one, 0.5 * one]) - 1.0).abs() < 1e-15);
+    assert!(mpc(&[one, i]).abs() < 1e-15);
+    // Three entries 120° apart: no line through the origin fits them better than another.
+    let w = Complex64::from_polar(1.0, 2.0 * std::f64::consts::PI / 3.0);
+    assert!(mpc(&[one, w, w * w]).abs() < 1e-15);
+    assert_eq!(mpc(&[Complex64::new(0.0, 0.0)]), 0.0);
+    assert_eq!(mac(&[one, i], &[one, i]), 1.0);
+    assert!(mac(&[one, one], &[one, -one]).abs() < 1e-15);
 }
 
 /// More data, tighter estimates: over 8 seeds, the mean absolute frequency error of the
