@@ -833,6 +833,8 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
                 "frequency_se_hz": m.frequency_se_hz,
                 "damping_se": m.damping_se,
                 "lambda": c64(m.lambda),
+                "shape": m.shape.as_ref().map(|v| v.iter().map(|c| c64(*c)).collect::<Vec<_>>()),
+                "mpc": m.shape.as_ref().map(|v| covssi::mpc(v)),
                 "evidence": m.evidence,
                 "ssi_mode": m.source,
             })).collect::<Vec<_>>(),

@@ -467,7 +467,8 @@ fn ssi_reports_shapes_mpc_and_mac() {
 }
 
 /// Three channels are refined jointly by default and each alone with `--no-joint`; the JSON
-/// and the printed header say which, and both find the three modes.
+/// and the printed header say which, and both find the three modes (with their shapes when
+/// joint).
 #[test]
 fn ssi_joint_and_per_channel_refinement() {
     let Some(path) = common::data_file("oma/data_3dof.csv") else {
@@ -502,6 +503,15 @@ fn ssi_joint_and_per_channel_refinement() {
         assert!(r["combinations"].is_null(), "{r}");
         assert_eq!(r["bands"], 1, "{r}");
         assert_eq!(r["modes"].as_array().unwrap().len(), 3, "{r}");
+        // The joint likelihood gives each mode's shape; each channel alone gives none.
+        for m in r["modes"].as_array().unwrap() {
+            if joint {
+                assert_eq!(m["shape"].as_array().map(Vec::len), Some(3), "{m}");
+                assert!(m["mpc"].as_f64().is_some_and(|v| (0.0..=1.0).contains(&v)));
+            } else {
+                assert!(m["shape"].is_null() && m["mpc"].is_null(), "{m}");
+            }
+        }
     }
 }
 

@@ -315,7 +315,7 @@ fn mean_std(v: &[f64]) -> (f64, f64) {
     (m, var.sqrt())
 }
 
-fn normalise(shape: &[C64]) -> Vec<C64> {
+pub(crate) fn normalise(shape: &[C64]) -> Vec<C64> {
     let big = shape
         .iter()
         .copied()

@@ -269,6 +269,12 @@ impl<'a> Joint<'a> {
         self.eval(th, false, true).map(|e| e.ratios)
     }
 
+    /// The shapes c_r of every mode, in the model's order, given θ of the fitted modes and Λ
+    /// (a [`Fit`]'s).
+    pub(super) fn fitted_shapes(&self, th: &[f64]) -> Vec<Vec<C64>> {
+        self.shapes(&self.full(th)).0
+    }
+
     /// c_r and k_r of θ (k_r with its reference component 1).
     fn shapes(&self, th: &[f64]) -> (Vec<Vec<C64>>, Vec<Vec<C64>>) {
         let l = self.l();

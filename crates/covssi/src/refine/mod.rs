@@ -142,6 +142,11 @@ pub struct RefinedMode {
     pub damping_se: Option<f64>,
     /// Continuous-time pole (rad/s).
     pub lambda: C64,
+    /// The mode's shape from the joint likelihood (its $c_r$), scaled so that its largest
+    /// entry is 1; `None` when the channels were fitted each alone (one channel, `joint`
+    /// off, or a record the joint fit did not take) or through combinations of them (more
+    /// than [`JOINT_MAX_CHANNELS`]).
+    pub shape: Option<Vec<C64>>,
     /// Rise of `L` (negative log-likelihood) when this mode is removed, the other poles held
     /// and the numerators refitted: what this mode explains that the others, where they are,
     /// do not. At least [`Refinement::penalty`] when selecting.
@@ -533,6 +538,7 @@ fn refine_up_to(
                         (lam, cov.as_ref().map(|c| -lam * c.at(t, t).max(0.0).sqrt()))
                     })
                     .collect(),
+                shapes: vec![None; fit.lambdas.len()],
                 lambdas: fit.lambdas,
                 l: fit.l,
                 misfit: per_channel_misfit,
@@ -546,8 +552,9 @@ fn refine_up_to(
         .lambdas
         .iter()
         .zip(&est.se)
+        .zip(&est.shapes)
         .enumerate()
-        .map(|(j, (&lam, se))| {
+        .map(|(j, ((&lam, se), shape))| {
             let w = lam.norm();
             RefinedMode {
                 source: None,
@@ -556,6 +563,7 @@ fn refine_up_to(
                 frequency_se_hz: se.map(|s| s.0),
                 damping_se: se.map(|s| s.1),
                 lambda: lam,
+                shape: shape.clone(),
                 evidence: evidence[j],
             }
         })
@@ -750,6 +758,9 @@ fn bic_penalty(l: usize, k: usize) -> f64 {
 struct Estimates {
     lambdas: Vec<C64>,
     se: Vec<Option<(f64, f64)>>,
+    /// The modes' shapes c_r from the joint likelihood on the channels themselves (not on
+    /// combinations of them), largest entry 1; `None` otherwise.
+    shapes: Vec<Option<Vec<C64>>>,
     /// Real poles λ and their standard errors (rad/s), in the order of the per-channel fit.
     reals: Vec<(f64, Option<f64>)>,
     l: f64,
@@ -917,6 +928,7 @@ fn joint_by_bands(
         reals: Vec::new(),
         lambdas: fit.lambdas.clone(),
         se: vec![None; mk],
+        shapes: vec![None; mk],
         l: 0.0,
         misfit: 0.0,
         iterations: 0,
@@ -991,9 +1003,13 @@ fn joint_by_bands(
         {
             return None;
         }
+        // The group's shapes, in channel space only when the channels were fitted
+        // themselves.
+        let shapes = jm.fitted_shapes(&jf.theta);
         for (i, &j) in group.iter().enumerate() {
             est.lambdas[j] = jf.lambdas[i];
             est.se[j] = Some(pole_se(&cov, i, mf, jf.lambdas[i]));
+            est.shapes[j] = (!combine).then(|| crate::stabilize::normalise(&shapes[i]));
         }
         est.l += jf.l;
         est.iterations += jf.iterations;
@@ -2126,6 +2142,7 @@ pub(super) mod tests {
             frequency_se_hz: None,
             damping_se: None,
             lambda: pole(f, zeta),
+            shape: None,
             evidence: 100.0,
         };
         // Two near 7.35 Hz (the farther 3 % away), one near 2 Hz, one heavily damped near
