@@ -7,7 +7,7 @@ use hyst::ident::frf::{self, PeriodicRecord};
 use hyst::io::{read_csv, write_csv};
 use hyst::plot::colors;
 
-use crate::{Error, channel_names, check_fs, fail};
+use crate::{Error, channel_names, check_fs, fail, shape_text};
 
 #[derive(Args, Debug)]
 pub struct FrfArgs {
@@ -140,6 +140,17 @@ pub fn run(a: &FrfArgs) -> Result<(), Error> {
             d.damping
         );
     }
+    if names.len() > 1 {
+        for m in &fit.modes {
+            println!(
+                "shape at {:.4} Hz ({}): {}  MPC {:.4}",
+                m.frequency_hz,
+                names.join(", "),
+                shape_text(&m.shape),
+                hyst::covssi::mpc(&m.shape)
+            );
+        }
+    }
     if !fit.modes.is_empty() {
         println!(
             "± one standard error (the noise); band: the largest move of the mode when the band is \
@@ -174,6 +185,8 @@ pub fn run(a: &FrfArgs) -> Result<(), Error> {
                 "damping_band_spread": num(d.damping),
                 "frequency_se_hz": num(m.frequency_se_hz),
                 "damping_se": num(m.damping_se),
+                "shape": m.shape.iter().map(|c| json!([c.re, c.im])).collect::<Vec<_>>(),
+                "mpc": hyst::covssi::mpc(&m.shape),
             })).collect::<Vec<_>>(),
         });
         std::fs::write(path, serde_json::to_string_pretty(&doc)?)

@@ -1413,6 +1413,13 @@ fn frf_fits_the_f16_torsion_mode_and_writes_flattened_outputs() {
         "{f} {z}"
     );
     assert!(modes[0]["frequency_se_hz"].as_f64().unwrap() > 0.0);
+    // The shape over the three channels, largest entry 1 (acc2, the wing next to the
+    // interface; measured 0.497, 1, 0.969), printed with its MPC.
+    let shape = modes[0]["shape"].as_array().unwrap();
+    assert_eq!(shape.len(), 3, "{v}");
+    assert_eq!(shape[1], serde_json::json!([1.0, 0.0]), "{v}");
+    assert!(modes[0]["mpc"].as_f64().is_some_and(|m| m > 0.99), "{v}");
+    assert!(out.contains("shape at 7.3") && out.contains("MPC"), "{out}");
     // The band's share of the uncertainty, from the fits over 6.9–7.7 and 6.7–7.9 Hz.
     let spread = modes[0]["frequency_band_spread_hz"].as_f64().unwrap();
     assert!((0.0..0.01).contains(&spread), "{v}");

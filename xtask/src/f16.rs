@@ -2,7 +2,8 @@
 //! (covssi on the three accelerations) beside the input-output fit of the force-to-acceleration
 //! response (`hyst_ident::frf`), and output-only again on the accelerations as they would be
 //! under a force of flat spectrum; figures of frequency and damping over force, and of the
-//! force's spectrum around each mode; and the smallest Bouc-Wen exponent ν each mode's loss
+//! force's spectrum around each mode; each mode's shape over the three accelerations both
+//! ways, with their MAC and MPC; and the smallest Bouc-Wen exponent ν each mode's loss
 //! growth between levels allows ([`NuBound`]).
 
 use std::path::{Path, PathBuf};
@@ -67,6 +68,8 @@ pub struct Row {
     pub target: usize,
     /// Output-only SSI on the measured accelerations.
     pub ssi: Option<Cluster>,
+    /// That cluster's mean shape over acc1, acc2, acc3 (largest entry 1).
+    pub ssi_shape: Option<Vec<covssi::Complex64>>,
     /// The same on the accelerations under a force of flat spectrum.
     pub ssi_flat: Option<Cluster>,
     /// The response fit of the narrow band (this mode alone) and its misfit.
@@ -84,20 +87,24 @@ pub struct Row {
     pub total_rms: Vec<f64>,
 }
 
-fn cluster(res: &covssi::SsiResult, tg: &Target) -> Option<Cluster> {
+/// The SSI mode taken for a target: the one with most poles within its search band.
+fn ssi_mode<'a>(res: &'a covssi::SsiResult, tg: &Target) -> Option<&'a covssi::Mode> {
     res.modes
         .iter()
         .filter(|m| (m.frequency_hz - tg.nominal_hz).abs() <= tg.search)
         .max_by_key(|m| m.members.len())
-        .map(|m| {
-            (
-                m.frequency_hz,
-                m.frequency_std_hz,
-                m.damping_ratio,
-                m.damping_std,
-                m.members.len(),
-            )
-        })
+}
+
+fn cluster(res: &covssi::SsiResult, tg: &Target) -> Option<Cluster> {
+    ssi_mode(res, tg).map(|m| {
+        (
+            m.frequency_hz,
+            m.frequency_std_hz,
+            m.damping_ratio,
+            m.damping_std,
+            m.members.len(),
+        )
+    })
 }
 
 fn nearest(fit: &FrfFit, f: f64) -> Option<FrfMode> {
@@ -108,7 +115,7 @@ fn nearest(fit: &FrfFit, f: f64) -> Option<FrfMode> {
                 .abs()
                 .total_cmp(&(b.frequency_hz - f).abs())
         })
-        .copied()
+        .cloned()
 }
 
 /// Every analysis of one level's file.
@@ -168,6 +175,7 @@ pub fn analyse(dir: &Path, level: u32) -> Result<Vec<Row>, String> {
             force_rms,
             target: i,
             ssi: s,
+            ssi_shape: ssi_mode(&res, tg).map(|m| m.shape.clone()),
             ssi_flat: cluster(&res_flat, tg),
             narrow: (nearest(&narrow, near), narrow.misfit),
             wide: (nearest(&wide, near), wide.misfit),
@@ -219,8 +227,8 @@ fn loss(m: &FrfMode) -> f64 {
 fn losses(r: &Row) -> (Vec<f64>, Option<f64>) {
     let ssi = |c: Option<Cluster>| c.map(|(f, _, z, _, _)| loss_of(f, z));
     let clean = [
-        r.narrow.0.map(|m| loss(&m)),
-        r.wide.0.map(|m| loss(&m)),
+        r.narrow.0.as_ref().map(loss),
+        r.wide.0.as_ref().map(loss),
         ssi(r.ssi_flat),
     ];
     (clean.into_iter().flatten().collect(), ssi(r.ssi))
@@ -284,7 +292,7 @@ pub fn nu_bounds(rows: &[Row]) -> Vec<NuBound> {
         let mine: Vec<&Row> = rows.iter().filter(|r| r.target == i).collect();
         for w in mine.windows(2) {
             let (a, b) = (w[0], w[1]);
-            let (Some(fa), Some(fb)) = (a.narrow.0, b.narrow.0) else {
+            let (Some(fa), Some(fb)) = (&a.narrow.0, &b.narrow.0) else {
                 continue;
             };
             let growth = largest_growth(rows, a.level, b.level);
@@ -295,7 +303,7 @@ pub fn nu_bounds(rows: &[Row]) -> Vec<NuBound> {
                 target: i,
                 levels: (a.level, b.level),
                 growth,
-                loss_fit: (loss(&fa), loss(&fb)),
+                loss_fit: (loss(fa), loss(fb)),
                 least_ratio: least(&ca, &cb),
                 least_ratio_raw: least(&with_raw(&ca, ra), &with_raw(&cb, rb)),
             });
@@ -315,7 +323,7 @@ fn fmt_cluster(c: Option<Cluster>) -> String {
     }
 }
 
-fn fmt_fit(m: Option<FrfMode>, misfit: f64) -> String {
+fn fmt_fit(m: Option<&FrfMode>, misfit: f64) -> String {
     match m {
         Some(m) => format!(
             "{:.3} ± {:.3} | {:.2} ± {:.2} | {misfit:.0}",
@@ -342,8 +350,8 @@ pub fn markdown(rows: &[Row]) -> String {
             r.force_rms,
             fmt_cluster(r.ssi),
             fmt_cluster(r.ssi_flat),
-            fmt_fit(r.narrow.0, r.narrow.1),
-            fmt_fit(r.wide.0, r.wide.1),
+            fmt_fit(r.narrow.0.as_ref(), r.narrow.1),
+            fmt_fit(r.wide.0.as_ref(), r.wide.1),
         );
     }
     s += "\n| mode | level | force per line across the band: mean (N) | lowest (N, at Hz) | highest (N, at Hz) |\n|---|---|---|---|---|\n";
@@ -367,7 +375,7 @@ pub fn markdown(rows: &[Row]) -> String {
             .join(", ")
     };
     for r in rows {
-        let loss = r.narrow.0.map_or(f64::NAN, |m| loss(&m));
+        let loss = r.narrow.0.as_ref().map_or(f64::NAN, loss);
         // No fit at all: the largest measured response in the band.
         let peak = r
             .response_lines
@@ -385,6 +393,7 @@ pub fn markdown(rows: &[Row]) -> String {
             peak.0
         );
     }
+    s += &shapes_markdown(rows);
     s += "\n| mode | levels | largest response growth | loss 2ζω² of the fit, mode alone | smallest ν | least loss ratio, estimates free of the force's colour | smallest ν | least loss ratio, SSI on the measured accelerations too | smallest ν |\n|---|---|---|---|---|---|---|---|---|\n";
     let nu = |v: Option<f64>| v.map_or("any (no growth)".into(), |v| format!("{v:.2}"));
     for b in nu_bounds(rows) {
@@ -402,6 +411,48 @@ pub fn markdown(rows: &[Row]) -> String {
             nu(b.nu(b.least_ratio)),
             b.least_ratio_raw,
             nu(b.nu(b.least_ratio_raw)),
+        );
+    }
+    s
+}
+
+/// A shape as magnitude∠phase (degrees) per acceleration.
+fn fmt_shape(v: &[covssi::Complex64]) -> String {
+    v.iter()
+        .map(|c| format!("{:.3}∠{:.0}°", c.norm(), c.arg().to_degrees().round() + 0.0))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Per mode and level, its shape over acc1, acc2, acc3 two ways: output-only (the SSI
+/// cluster's mean) and input-output (the residues of the fit of the mode alone), their MAC,
+/// each one's MPC, and the MAC of the fit's shape with its shape at the lowest level.
+fn shapes_markdown(rows: &[Row]) -> String {
+    let mut s = String::from(
+        "\n| mode | level | shape, SSI (acc1, acc2, acc3) | MPC | shape, fit of the mode alone | MPC | MAC SSI–fit | MAC of the fit with level 1's |\n|---|---|---|---|---|---|---|---|\n",
+    );
+    for r in rows {
+        let first = rows
+            .iter()
+            .find(|q| q.target == r.target && q.level == LEVELS[0])
+            .and_then(|q| q.narrow.0.as_ref());
+        let fit = r.narrow.0.as_ref();
+        let cell = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v:.4}"));
+        s += &format!(
+            "| {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            TARGETS[r.target].name,
+            r.level,
+            r.ssi_shape.as_deref().map_or(String::new(), fmt_shape),
+            cell(r.ssi_shape.as_deref().map(covssi::mpc)),
+            fit.map_or(String::new(), |m| fmt_shape(&m.shape)),
+            cell(fit.map(|m| covssi::mpc(&m.shape))),
+            cell(
+                r.ssi_shape
+                    .as_deref()
+                    .zip(fit)
+                    .map(|(a, m)| covssi::mac(a, &m.shape))
+            ),
+            cell(first.zip(fit).map(|(a, b)| covssi::mac(&a.shape, &b.shape))),
         );
     }
     s
@@ -434,12 +485,12 @@ pub fn figures(rows: &[Row], out: &Path) -> Result<Vec<PathBuf>, String> {
             ),
             (
                 "fit of the response, mode alone".into(),
-                series(&|r| r.narrow.0.map(|m| m.frequency_hz)),
+                series(&|r| r.narrow.0.as_ref().map(|m| m.frequency_hz)),
                 colors::RED,
             ),
             (
                 "fit of the response, with neighbours".into(),
-                series(&|r| r.wide.0.map(|m| m.frequency_hz)),
+                series(&|r| r.wide.0.as_ref().map(|m| m.frequency_hz)),
                 colors::ORANGE,
             ),
         ];
@@ -456,12 +507,12 @@ pub fn figures(rows: &[Row], out: &Path) -> Result<Vec<PathBuf>, String> {
             ),
             (
                 freq[2].0.clone(),
-                series(&|r| r.narrow.0.map(|m| 100.0 * m.damping_ratio)),
+                series(&|r| r.narrow.0.as_ref().map(|m| 100.0 * m.damping_ratio)),
                 colors::RED,
             ),
             (
                 freq[3].0.clone(),
-                series(&|r| r.wide.0.map(|m| 100.0 * m.damping_ratio)),
+                series(&|r| r.wide.0.as_ref().map(|m| 100.0 * m.damping_ratio)),
                 colors::ORANGE,
             ),
         ];
@@ -484,11 +535,11 @@ pub fn figures(rows: &[Row], out: &Path) -> Result<Vec<PathBuf>, String> {
         // grow as the fastest-growing response measure ([`NuBound`]).
         let loss_fit: Vec<(f64, f64)> = mine
             .iter()
-            .filter_map(|r| Some((r.force_rms, loss(&r.narrow.0?))))
+            .filter_map(|r| Some((r.force_rms, loss(r.narrow.0.as_ref()?))))
             .collect();
         let second = mine
             .get(1)
-            .and_then(|r| Some((r.level, loss(&r.narrow.0?))));
+            .and_then(|r| Some((r.level, loss(r.narrow.0.as_ref()?))));
         let bound: Vec<(f64, f64)> = match second {
             // At the second level itself the growth is 1.
             Some((l2, l2_loss)) => mine[1..]

@@ -16,7 +16,10 @@
 //! responses are not strictly proper), in $s = i\omega/\omega_0$ scaled by the band's centre.
 //! $\sum_{c,k} |N_c - H_c D|^2 / (\sigma_c^2 |D_{\text{prev}}|^2)$ is minimized by
 //! Sanathanan–Koerner iterations (a linear least-squares problem each). The poles are the
-//! roots of $D$; frequency $|\lambda|/2\pi$, damping $-\operatorname{Re}\lambda/|\lambda|$. Their
+//! roots of $D$; frequency $|\lambda|/2\pi$, damping $-\operatorname{Re}\lambda/|\lambda|$;
+//! the mode's shape is the channels' residues there, $N_c(\lambda)/D'(\lambda)$, whose
+//! common factor leaves $N_c(\lambda)$ across the channels (input-output shapes, to compare
+//! with output-only SSI's by MAC). Their
 //! standard errors come from the jackknife over periods (each period left out in turn). The
 //! misfit is the weighted residual's mean square per real equation: near 1 when the model
 //! explains the response to its noise. Far above 1 (the periodic distortions of a nonlinear
@@ -43,7 +46,7 @@ pub struct PeriodicRecord<'a> {
 }
 
 /// One mode of the fitted response.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct FrfMode {
     /// Natural frequency $|\lambda|/2\pi$ (Hz).
     pub frequency_hz: f64,
@@ -54,6 +57,9 @@ pub struct FrfMode {
     pub frequency_se_hz: f64,
     /// Jackknife standard error of the damping ratio; NaN with one period.
     pub damping_se: f64,
+    /// Each output's residue at the pole, scaled so that the largest is 1: the mode's shape
+    /// as the outputs see it.
+    pub shape: Vec<Complex64>,
 }
 
 /// The fit of a band of the frequency response.
@@ -154,11 +160,28 @@ fn fit_band(spectra: &Spectra, band: (f64, f64), modes: usize) -> Result<FrfFit,
         .collect();
     let mut out: Vec<FrfMode> = poles
         .iter()
-        .map(|l| FrfMode {
-            frequency_hz: l.norm() / std::f64::consts::TAU,
-            damping_ratio: -l.re / l.norm(),
-            frequency_se_hz: f64::NAN,
-            damping_se: f64::NAN,
+        .map(|l| {
+            // Residues N_c(r)/D'(r) at the scaled root r share D'(r): the shape is N_c(r).
+            let residues: Vec<C> = fit.num.iter().map(|b| horner(b, l / centre)).collect();
+            let big = residues
+                .iter()
+                .copied()
+                .max_by(|a, b| a.norm().total_cmp(&b.norm()))
+                .filter(|v| v.norm() > 0.0)
+                .unwrap_or(C::new(1.0, 0.0));
+            FrfMode {
+                frequency_hz: l.norm() / std::f64::consts::TAU,
+                damping_ratio: -l.re / l.norm(),
+                frequency_se_hz: f64::NAN,
+                damping_se: f64::NAN,
+                shape: residues
+                    .iter()
+                    .map(|v| {
+                        let c = v / big;
+                        Complex64::new(c.re, c.im)
+                    })
+                    .collect(),
+            }
         })
         .collect();
     if p >= 2 {
@@ -723,8 +746,12 @@ mod tests {
     }
 
     /// Two modes of exact responses over `periods` periods: the fit over 4.5–8 Hz must give
-    /// them back to rounding, whatever the band within 10 % of its width. Returns the misfit.
-    fn two_exact_modes(periods: usize, hs: &[&dyn Fn(C) -> C], truth: &[(f64, f64, f64)]) -> f64 {
+    /// them back to rounding, whatever the band within 10 % of its width. Returns the fit.
+    fn two_exact_modes(
+        periods: usize,
+        hs: &[&dyn Fn(C) -> C],
+        truth: &[(f64, f64, f64)],
+    ) -> FrfFit {
         let (u, ys) = periodic_record(4096, 100.0, periods, (2.0, 15.0), &|_| 1.0, hs);
         let outs: Vec<&[f64]> = ys.iter().map(|v| v.as_slice()).collect();
         let rec = PeriodicRecord {
@@ -739,12 +766,13 @@ mod tests {
             // Exact data: only rounding separates the fit from the truth.
             approx::assert_relative_eq!(m.frequency_hz, f, max_relative = 1e-8);
             approx::assert_relative_eq!(m.damping_ratio, z, max_relative = 1e-6);
+            assert_eq!(m.shape.len(), hs.len());
         }
         // Exact data: the band does not matter.
         for d in band_spread(&rec, (4.5, 8.0), 2, &fit) {
             assert!(d.frequency_hz < 1e-8 && d.damping < 1e-8, "{d:?}");
         }
-        fit.misfit
+        fit
     }
 
     #[test]
@@ -752,9 +780,21 @@ mod tests {
         let truth = [(5.2, 0.008, 1.0), (7.3, 0.005, 0.6)];
         let h1 = |s: C| accel(s, &truth);
         let h2 = |s: C| accel(s, &[(5.2, 0.008, -0.4), (7.3, 0.005, 1.3)]);
-        let misfit = two_exact_modes(1, &[&h1, &h2], &truth);
+        let fit = two_exact_modes(1, &[&h1, &h2], &truth);
         // With one period the misfit has unit weights: the rounding of the transforms.
-        assert!(misfit < 1e-20, "{misfit}");
+        assert!(fit.misfit < 1e-20, "{}", fit.misfit);
+        // Each output's residue at mode r is λ²φ_r/(λ − λ̄): the shape is (φ at output 1,
+        // φ at output 2), here (1, −0.4) and (0.6, 1.3), the largest entry 1.
+        for (m, want) in fit.modes.iter().zip([[1.0, -0.4], [0.6 / 1.3, 1.0]]) {
+            for (got, w) in m.shape.iter().zip(want) {
+                // Exact data: rounding, as the poles (1e-8).
+                assert!(
+                    (got - Complex64::new(w, 0.0)).norm() < 1e-8,
+                    "{:?}",
+                    m.shape
+                );
+            }
+        }
     }
 
     #[test]
@@ -798,7 +838,7 @@ mod tests {
             };
             let fit = modes_from_frf(&rec, (6.5, 8.0), 1).unwrap();
             assert_eq!(fit.modes.len(), 1);
-            let m = fit.modes[0];
+            let m = &fit.modes[0];
             zf.push((m.frequency_hz - truth.0) / m.frequency_se_hz);
             zz.push((m.damping_ratio - truth.1) / m.damping_se);
             // Fitted to the noise: the misfit's expectation is 1.
