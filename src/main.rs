@@ -838,6 +838,7 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
                 "damping_se": m.damping_se,
                 "lambda": c64(m.lambda),
                 "shape": m.shape.as_ref().map(|v| v.iter().map(|c| c64(*c)).collect::<Vec<_>>()),
+                "shape_se": m.shape_se,
                 "mpc": m.shape.as_ref().map(|v| covssi::mpc(v)),
                 "evidence": m.evidence,
                 "ssi_mode": m.source,

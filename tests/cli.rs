@@ -507,9 +507,21 @@ fn ssi_joint_and_per_channel_refinement() {
         for m in r["modes"].as_array().unwrap() {
             if joint {
                 assert_eq!(m["shape"].as_array().map(Vec::len), Some(3), "{m}");
+                let se: Vec<f64> = m["shape_se"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .map(|v| v.as_f64().unwrap())
+                    .collect();
+                // The entry scaled to 1 has none; the others have one.
+                assert_eq!(se.iter().filter(|&&v| v == 0.0).count(), 1, "{m}");
+                assert!(se.iter().all(|v| v.is_finite() && *v >= 0.0), "{m}");
                 assert!(m["mpc"].as_f64().is_some_and(|v| (0.0..=1.0).contains(&v)));
             } else {
-                assert!(m["shape"].is_null() && m["mpc"].is_null(), "{m}");
+                assert!(
+                    m["shape"].is_null() && m["shape_se"].is_null() && m["mpc"].is_null(),
+                    "{m}"
+                );
             }
         }
     }

@@ -147,6 +147,11 @@ pub struct RefinedMode {
     /// off, or a record the joint fit did not take) or through combinations of them (more
     /// than [`JOINT_MAX_CHANNELS`]).
     pub shape: Option<Vec<C64>>,
+    /// Standard error of each entry of `shape` from the Fisher information, √(E|δ|²) of the
+    /// complex entry (0 for the entry scaled to 1); `None` with `shape`. When two entries are
+    /// about equally large, which one is scaled to 1 depends on the noise, and the other's
+    /// ratio to it is pulled below 1 by that choice, which these standard errors do not hold.
+    pub shape_se: Option<Vec<f64>>,
     /// Rise of `L` (negative log-likelihood) when this mode is removed, the other poles held
     /// and the numerators refitted: what this mode explains that the others, where they are,
     /// do not. At least [`Refinement::penalty`] when selecting.
@@ -554,7 +559,7 @@ fn refine_up_to(
         .zip(&est.se)
         .zip(&est.shapes)
         .enumerate()
-        .map(|(j, ((&lam, se), shape))| {
+        .map(|(j, ((&lam, se), shape_and_se))| {
             let w = lam.norm();
             RefinedMode {
                 source: None,
@@ -563,7 +568,8 @@ fn refine_up_to(
                 frequency_se_hz: se.map(|s| s.0),
                 damping_se: se.map(|s| s.1),
                 lambda: lam,
-                shape: shape.clone(),
+                shape: shape_and_se.as_ref().map(|s| s.0.clone()),
+                shape_se: shape_and_se.as_ref().map(|s| s.1.clone()),
                 evidence: evidence[j],
             }
         })
@@ -759,8 +765,9 @@ struct Estimates {
     lambdas: Vec<C64>,
     se: Vec<Option<(f64, f64)>>,
     /// The modes' shapes c_r from the joint likelihood on the channels themselves (not on
-    /// combinations of them), largest entry 1; `None` otherwise.
-    shapes: Vec<Option<Vec<C64>>>,
+    /// combinations of them), largest entry 1, with each entry's standard error; `None`
+    /// otherwise.
+    shapes: Vec<Option<(Vec<C64>, Vec<f64>)>>,
     /// Real poles λ and their standard errors (rad/s), in the order of the per-channel fit.
     reals: Vec<(f64, Option<f64>)>,
     l: f64,
@@ -768,6 +775,47 @@ struct Estimates {
     iterations: usize,
     combinations: Option<usize>,
     bands: usize,
+}
+
+/// A shape `c` scaled so that its largest entry is 1, s_a = c_a/c_b, with each entry's
+/// standard error by the delta method, √(E|δs_a|²) (0 for the entry b itself), from the
+/// covariance `cov` of θ, whose entries `offset..offset + l` hold Re c and the next l Im c:
+/// δs_a = δc_a/c_b − c_a δc_b/c_b².
+fn shape_se(c: &[C64], cov: &Dense, offset: usize) -> (Vec<C64>, Vec<f64>) {
+    let l = c.len();
+    let b = (0..l)
+        .max_by(|&x, &y| c[x].norm().total_cmp(&c[y].norm()))
+        .unwrap_or(0);
+    let cb = c[b];
+    if cb.norm() == 0.0 {
+        return (c.to_vec(), vec![f64::NAN; l]);
+    }
+    // Complex multiplication by w as a real 2 × 2 matrix acting on (Re, Im).
+    let mat = |w: C64| [[w.re, -w.im], [w.im, w.re]];
+    let se = (0..l)
+        .map(|a| {
+            if a == b {
+                return 0.0;
+            }
+            // δs_a (Re, Im) = J (δRe c_a, δIm c_a, δRe c_b, δIm c_b).
+            let (p, q) = (mat(1.0 / cb), mat(-c[a] / (cb * cb)));
+            let jac = [
+                [p[0][0], p[0][1], q[0][0], q[0][1]],
+                [p[1][0], p[1][1], q[1][0], q[1][1]],
+            ];
+            let idx = [offset + a, offset + l + a, offset + b, offset + l + b];
+            let mut var = 0.0;
+            for row in &jac {
+                for (u, &iu) in idx.iter().enumerate() {
+                    for (v, &iv) in idx.iter().enumerate() {
+                        var += row[u] * cov.at(iu, iv) * row[v];
+                    }
+                }
+            }
+            var.max(0.0).sqrt()
+        })
+        .collect();
+    (c.iter().map(|v| v / cb).collect(), se)
 }
 
 /// Standard errors of mode j's frequency (Hz) and damping ratio from the covariance `cov` of
@@ -1009,7 +1057,8 @@ fn joint_by_bands(
         for (i, &j) in group.iter().enumerate() {
             est.lambdas[j] = jf.lambdas[i];
             est.se[j] = Some(pole_se(&cov, i, mf, jf.lambdas[i]));
-            est.shapes[j] = (!combine).then(|| crate::stabilize::normalise(&shapes[i]));
+            est.shapes[j] =
+                (!combine).then(|| shape_se(&shapes[i], &cov, joint::shape_offset(i, mf, lj)));
         }
         est.l += jf.l;
         est.iterations += jf.iterations;
@@ -2143,6 +2192,7 @@ pub(super) mod tests {
             damping_se: None,
             lambda: pole(f, zeta),
             shape: None,
+            shape_se: None,
             evidence: 100.0,
         };
         // Two near 7.35 Hz (the farther 3 % away), one near 2 Hz, one heavily damped near
