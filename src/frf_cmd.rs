@@ -186,6 +186,7 @@ pub fn run(a: &FrfArgs) -> Result<(), Error> {
                 "frequency_se_hz": num(m.frequency_se_hz),
                 "damping_se": num(m.damping_se),
                 "shape": m.shape.iter().map(|c| json!([c.re, c.im])).collect::<Vec<_>>(),
+                "shape_se": m.shape_se.iter().map(|&v| num(v)).collect::<Vec<_>>(),
                 "mpc": hyst::covssi::mpc(&m.shape),
             })).collect::<Vec<_>>(),
         });

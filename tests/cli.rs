@@ -1430,6 +1430,12 @@ fn frf_fits_the_f16_torsion_mode_and_writes_flattened_outputs() {
     let shape = modes[0]["shape"].as_array().unwrap();
     assert_eq!(shape.len(), 3, "{v}");
     assert_eq!(shape[1], serde_json::json!([1.0, 0.0]), "{v}");
+    let se = modes[0]["shape_se"].as_array().unwrap();
+    assert_eq!(se[1], 0.0, "{v}");
+    assert!(
+        se[0].as_f64().unwrap() > 0.0 && se[2].as_f64().unwrap() > 0.0,
+        "{v}"
+    );
     assert!(modes[0]["mpc"].as_f64().is_some_and(|m| m > 0.99), "{v}");
     assert!(out.contains("shape at 7.3") && out.contains("MPC"), "{out}");
     // The band's share of the uncertainty, from the fits over 6.9–7.7 and 6.7–7.9 Hz.

@@ -429,7 +429,7 @@ fn fmt_shape(v: &[covssi::Complex64]) -> String {
 /// each one's MPC, and the MAC of the fit's shape with its shape at the lowest level.
 fn shapes_markdown(rows: &[Row]) -> String {
     let mut s = String::from(
-        "\n| mode | level | shape, SSI (acc1, acc2, acc3) | MPC | shape, fit of the mode alone | MPC | MAC SSI–fit | MAC of the fit with level 1's |\n|---|---|---|---|---|---|---|---|\n",
+        "\n| mode | level | shape, SSI (acc1, acc2, acc3) | MPC | shape, fit of the mode alone | its standard errors (jackknife) | MPC | MAC SSI–fit | MAC of the fit with level 1's |\n|---|---|---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         let first = rows
@@ -438,13 +438,21 @@ fn shapes_markdown(rows: &[Row]) -> String {
             .and_then(|q| q.narrow.0.as_ref());
         let fit = r.narrow.0.as_ref();
         let cell = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v:.4}"));
+        let se = |m: &FrfMode| {
+            m.shape_se
+                .iter()
+                .map(|v| format!("{v:.4}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
         s += &format!(
-            "| {} | {} | {} | {} | {} | {} | {} | {} |\n",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
             TARGETS[r.target].name,
             r.level,
             r.ssi_shape.as_deref().map_or(String::new(), fmt_shape),
             cell(r.ssi_shape.as_deref().map(covssi::mpc)),
             fit.map_or(String::new(), |m| fmt_shape(&m.shape)),
+            fit.map_or(String::new(), se),
             cell(fit.map(|m| covssi::mpc(&m.shape))),
             cell(
                 r.ssi_shape

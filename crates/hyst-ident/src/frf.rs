@@ -60,6 +60,10 @@ pub struct FrfMode {
     /// Each output's residue at the pole, scaled so that the largest is 1: the mode's shape
     /// as the outputs see it.
     pub shape: Vec<Complex64>,
+    /// Jackknife standard error of each entry of `shape` over periods, √(E|δ|²) of the
+    /// complex entry (each left-out fit's shape scaled by the same entry; 0 for that entry);
+    /// NaN with one period.
+    pub shape_se: Vec<f64>,
 }
 
 /// The fit of a band of the frequency response.
@@ -161,26 +165,14 @@ fn fit_band(spectra: &Spectra, band: (f64, f64), modes: usize) -> Result<FrfFit,
     let mut out: Vec<FrfMode> = poles
         .iter()
         .map(|l| {
-            // Residues N_c(r)/D'(r) at the scaled root r share D'(r): the shape is N_c(r).
-            let residues: Vec<C> = fit.num.iter().map(|b| horner(b, l / centre)).collect();
-            let big = residues
-                .iter()
-                .copied()
-                .max_by(|a, b| a.norm().total_cmp(&b.norm()))
-                .filter(|v| v.norm() > 0.0)
-                .unwrap_or(C::new(1.0, 0.0));
+            let shape = residues_at(&fit, *l / centre, None);
             FrfMode {
                 frequency_hz: l.norm() / std::f64::consts::TAU,
                 damping_ratio: -l.re / l.norm(),
                 frequency_se_hz: f64::NAN,
                 damping_se: f64::NAN,
-                shape: residues
-                    .iter()
-                    .map(|v| {
-                        let c = v / big;
-                        Complex64::new(c.re, c.im)
-                    })
-                    .collect(),
+                shape_se: vec![f64::NAN; shape.len()],
+                shape,
             }
         })
         .collect();
@@ -188,6 +180,7 @@ fn fit_band(spectra: &Spectra, band: (f64, f64), modes: usize) -> Result<FrfFit,
         // Leave one period out; match each mode to the nearest pole of that fit.
         let mut f_j = vec![Vec::with_capacity(p); out.len()];
         let mut z_j = vec![Vec::with_capacity(p); out.len()];
+        let mut s_j = vec![Vec::with_capacity(p); out.len()];
         for leave in 0..p {
             let keep: Vec<usize> = (0..p).filter(|&i| i != leave).collect();
             let (hj, sj) = spectra.response(&keep);
@@ -203,12 +196,22 @@ fn fit_band(spectra: &Spectra, band: (f64, f64), modes: usize) -> Result<FrfFit,
                 {
                     f_j[m].push(best.norm() / std::f64::consts::TAU);
                     z_j[m].push(-best.re / best.norm());
+                    // Scaled by the entry the whole fit's shape has at 1.
+                    let at = reference_entry(&out[m].shape);
+                    s_j[m].push(residues_at(&fj, *best / centre, Some(at)));
                 }
             }
         }
         for (m, mode) in out.iter_mut().enumerate() {
             mode.frequency_se_hz = jackknife_se(&f_j[m]);
             mode.damping_se = jackknife_se(&z_j[m]);
+            mode.shape_se = (0..mode.shape.len())
+                .map(|c| {
+                    let re: Vec<f64> = s_j[m].iter().map(|s| s[c].re).collect();
+                    let im: Vec<f64> = s_j[m].iter().map(|s| s[c].im).collect();
+                    jackknife_se(&re).hypot(jackknife_se(&im))
+                })
+                .collect();
         }
     }
     out.sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
@@ -359,6 +362,31 @@ fn aperiodic_fraction(u: &[f64], m: usize) -> f64 {
         }
     }
     if den > 0.0 { num / den } else { 0.0 }
+}
+
+/// The index of a shape's largest entry.
+fn reference_entry(shape: &[Complex64]) -> usize {
+    (0..shape.len())
+        .max_by(|&a, &b| shape[a].norm().total_cmp(&shape[b].norm()))
+        .unwrap_or(0)
+}
+
+/// The channels' residues at the scaled root `r` of a fit, scaled so that entry `at` (by
+/// default the largest) is 1. The residues N_c(r)/D'(r) share D'(r), so the shape is N_c(r).
+fn residues_at(fit: &Rational, r: C, at: Option<usize>) -> Vec<Complex64> {
+    let residues: Vec<Complex64> = fit
+        .num
+        .iter()
+        .map(|b| {
+            let v = horner(b, r);
+            Complex64::new(v.re, v.im)
+        })
+        .collect();
+    let scale = residues[at.unwrap_or_else(|| reference_entry(&residues))];
+    if scale.norm() == 0.0 {
+        return residues;
+    }
+    residues.iter().map(|v| v / scale).collect()
 }
 
 fn jackknife_se(v: &[f64]) -> f64 {
@@ -805,6 +833,70 @@ mod tests {
         two_exact_modes(4, &[&h], &truth);
     }
 
+    /// [`modes_from_frf`] of `modes` modes over `band` on a record of whole periods.
+    fn fit_of(
+        u: &[f64],
+        ys: &[Vec<f64>],
+        (fs, period): (f64, usize),
+        band: (f64, f64),
+        modes: usize,
+    ) -> FrfFit {
+        let outs: Vec<&[f64]> = ys.iter().map(|v| v.as_slice()).collect();
+        let rec = PeriodicRecord {
+            input: u,
+            outputs: &outs,
+            fs,
+            period,
+        };
+        modes_from_frf(&rec, band, modes).unwrap()
+    }
+
+    /// Standard normal draws: Box-Muller on a small LCG, deterministic and adequate for a
+    /// test.
+    fn gaussians(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
+            let mut next = || {
+                seed = seed
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                ((seed >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+            };
+            let (a, b) = (next(), next());
+            (-2.0 * a.ln()).sqrt() * (TAU * b).cos()
+        }
+    }
+
+    /// One mode seen by two outputs (shape (1, 0.6)), eight noisy periods: the jackknife
+    /// standard error of the shape's second entry describes its spread over 40 noise draws.
+    #[test]
+    fn shape_standard_errors_are_calibrated() {
+        let h1 = |s: C| accel(s, &[(7.3, 0.006, 1.0)]);
+        let h2 = |s: C| accel(s, &[(7.3, 0.006, 0.6)]);
+        let (u, ys) = periodic_record(2048, 50.0, 8, (2.0, 15.0), &|_| 1.0, &[&h1, &h2]);
+        let rms: Vec<f64> = ys
+            .iter()
+            .map(|y| (y.iter().map(|v| v * v).sum::<f64>() / y.len() as f64).sqrt())
+            .collect();
+        let mut gauss = gaussians(11);
+        let mut z2 = Vec::new();
+        for _ in 0..40 {
+            let noisy: Vec<Vec<f64>> = ys
+                .iter()
+                .zip(&rms)
+                .map(|(y, r)| y.iter().map(|v| v + 0.05 * r * gauss()).collect())
+                .collect();
+            let fit = fit_of(&u, &noisy, (50.0, 2048), (6.5, 8.0), 1);
+            let m = &fit.modes[0];
+            assert_eq!(m.shape_se[0], 0.0, "{m:?}");
+            z2.push((m.shape[1] - Complex64::new(0.6, 0.0)).norm_sqr() / m.shape_se[1].powi(2));
+        }
+        // The complex error over its standard error, RMS: t-like with 7 degrees of freedom
+        // per component, √(7/5) ≈ 1.18 (as for the poles, below); 0.7–1.6 as there.
+        let z = (z2.iter().sum::<f64>() / z2.len() as f64).sqrt();
+        eprintln!("shape z RMS over 40 draws: {z:.3}");
+        assert!(z > 0.7 && z < 1.6, "shape z RMS {z}");
+    }
+
     #[test]
     fn noise_gives_calibrated_standard_errors() {
         // One mode, eight noisy periods: the jackknife standard errors must describe the
@@ -815,28 +907,10 @@ mod tests {
         let rms = (ys[0].iter().map(|v| v * v).sum::<f64>() / ys[0].len() as f64).sqrt();
         let mut zf = Vec::new();
         let mut zz = Vec::new();
-        let mut seed = 7_u64;
-        let mut gauss = || {
-            // Box-Muller on a small LCG: deterministic and adequate for a test.
-            let mut next = || {
-                seed = seed
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                ((seed >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-            };
-            let (a, b) = (next(), next());
-            (-2.0 * a.ln()).sqrt() * (TAU * b).cos()
-        };
+        let mut gauss = gaussians(7);
         for _ in 0..40 {
             let y: Vec<f64> = ys[0].iter().map(|v| v + 0.05 * rms * gauss()).collect();
-            let outs = [y.as_slice()];
-            let rec = PeriodicRecord {
-                input: &u,
-                outputs: &outs,
-                fs: 50.0,
-                period: 2048,
-            };
-            let fit = modes_from_frf(&rec, (6.5, 8.0), 1).unwrap();
+            let fit = fit_of(&u, &[y], (50.0, 2048), (6.5, 8.0), 1);
             assert_eq!(fit.modes.len(), 1);
             let m = &fit.modes[0];
             zf.push((m.frequency_hz - truth.0) / m.frequency_se_hz);
