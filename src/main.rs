@@ -929,6 +929,25 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
                 se(m.damping_se),
                 m.evidence,
             );
+            if let (Some(shape), Some(sd)) = (&m.shape, &m.shape_se) {
+                // Two digits whatever the size; the entry scaled to 1 has none.
+                let se: Vec<String> = sd
+                    .iter()
+                    .map(|&v| {
+                        if v == 0.0 {
+                            "0".into()
+                        } else {
+                            format!("{v:.1e}")
+                        }
+                    })
+                    .collect();
+                println!(
+                    "     shape {}  (standard errors {}; MPC {:.3})",
+                    shape_text(shape),
+                    se.join(", "),
+                    covssi::mpc(shape)
+                );
+            }
         }
         for d in &r.dropped {
             println!(
