@@ -34,7 +34,9 @@ enum Command {
     Simulate(SimulateArgs),
     /// Generate an excitation record and write it as a one-column CSV `u`.
     Excite(ExcitationArgs),
-    /// Output-only modal analysis (covariance-driven SSI) of one or more channels.
+    /// Output-only modal analysis (covariance-driven SSI) of one or more channels: modes with
+    /// their spread, then refined by maximum likelihood with standard errors; with several
+    /// channels, each mode's shape with its MPC and the MAC between the modes.
     ///
     /// Example:
     ///   hyst ssi --input data_3dof.csv --fs 20 --columns y1,y2,y3 --max-order 40 --json modes.json --svg diagram.svg
@@ -67,8 +69,8 @@ enum Command {
     #[command(verbatim_doc_comment)]
     Levels(LevelsArgs),
     /// With the input: the modes of a periodic record's frequency response over a band (an
-    /// input-output second opinion on `hyst ssi`), and optionally the outputs under a force
-    /// of flat spectrum.
+    /// input-output second opinion on `hyst ssi`), with several outputs each mode's shape,
+    /// and optionally the outputs under a force of flat spectrum.
     ///
     /// Example (the F-16 at its lowest level, the wing torsion mode):
     ///   hyst frf --input msine_level1.csv --fs 400 --force force --period 8192 --skip 8192 --band 6.8:7.8 --json torsion.json --svg torsion.svg
