@@ -77,18 +77,7 @@ fn the_zener_start_lacks_hysteresis_and_the_loop_finds_it() {
         ("beta_gamma", 800.0),
         ("beta_delta", -1100.0),
     ];
-    assert_eq!(r.estimates.len(), table1.len(), "{:?}", r.estimates);
-    for (e, (name, value)) in r.estimates.iter().zip(table1) {
-        assert_eq!(e.name, name);
-        let z = (e.value - value) / e.se;
-        eprintln!("{name}: {:.4} ± {:.4} (z = {z:+.2})", e.value, e.se);
-        assert!(
-            z.abs() < 4.0,
-            "{name}: {} ± {} against {value}",
-            e.value,
-            e.se
-        );
-    }
+    common::assert_estimates_near("", &r.estimates, &table1, 4.0);
 }
 
 /// The benchmark's element has ν = 1. Freed, the exponent goes back there on the measured

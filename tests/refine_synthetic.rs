@@ -3,6 +3,8 @@
 //! halves; with no effect, `none`; with a Bouc-Wen element of exponent 2, hysteresis and then
 //! its exponent; on a noise-free record, an effect the held-out rows do not support is refused.
 
+mod common;
+
 use hyst::ident::refine::{self, Effect, InputInterpolation, Record, Start};
 use hyst::model::{BoucWen, Coulomb, Oscillator, SecondMass};
 use hyst::sim::excitation::{add_noise, white_noise};
@@ -198,21 +200,7 @@ fn finds_a_sharper_hysteresis_exponent() {
         ("beta_delta", -0.4 * bg),
         ("nu", 2.0),
     ];
-    assert_eq!(r.estimates.len(), expected.len(), "{:?}", r.estimates);
-    for (e, (name, value)) in r.estimates.iter().zip(expected) {
-        assert_eq!(e.name, name);
-        let z = (e.value - value) / e.se;
-        eprintln!(
-            "exponent: {name}: {:.5} ± {:.5} (z = {z:+.2})",
-            e.value, e.se
-        );
-        assert!(
-            z.abs() < 4.0,
-            "{name}: {} ± {} against {value}",
-            e.value,
-            e.se
-        );
-    }
+    common::assert_estimates_near("exponent: ", &r.estimates, &expected, 4.0);
 }
 
 /// The held-out check: on a noise-free record of the cubic spring, 16384 samples, the loop

@@ -44,3 +44,25 @@ pub fn rel_rms(a: &[f64], b: &[f64]) -> f64 {
     let den: f64 = b.iter().map(|y| y * y).sum();
     (num / den).sqrt()
 }
+
+/// Each of a fit's free parameters, in order, is the named one and lies within `max_z` of its
+/// standard errors of the expected value; prints every z, each line after `label`.
+pub fn assert_estimates_near(
+    label: &str,
+    estimates: &[hyst::ident::refine::Estimate],
+    expected: &[(&str, f64)],
+    max_z: f64,
+) {
+    assert_eq!(estimates.len(), expected.len(), "{estimates:?}");
+    for (e, &(name, value)) in estimates.iter().zip(expected) {
+        assert_eq!(e.name, name);
+        let z = (e.value - value) / e.se;
+        eprintln!("{label}{name}: {:.5} ± {:.5} (z = {z:+.2})", e.value, e.se);
+        assert!(
+            z.abs() < max_z,
+            "{name}: {} ± {} against {value}",
+            e.value,
+            e.se
+        );
+    }
+}
