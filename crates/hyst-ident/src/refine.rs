@@ -780,8 +780,9 @@ fn exponent_starts(o: &Oscillator, b: &BoucWen, sx: f64) -> Vec<Oscillator> {
     let Ok(df) = hyst_linearize::describing_function(b, sx) else {
         return Vec::new();
     };
+    // Each inversion is independent (as in `bouc_wen_replacing`); the order is kept.
     EXPONENT_STARTS
-        .iter()
+        .par_iter()
         .filter_map(|&nu| {
             let bw = hyst_linearize::bouc_wen_exact(b.alpha, nu, &df).ok()?;
             let mut m = *o;
