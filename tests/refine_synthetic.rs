@@ -208,7 +208,8 @@ fn finds_a_sharper_hysteresis_exponent() {
 /// significant on the estimation rows (measured: ΔBIC −826) but simulates worse on the
 /// held-out rows (8.75 % → 9.43 %), so it is refused with that reason; before the check it
 /// was added. (Its fit was no step towards the truth: it took k₃ further below the true
-/// value, 1.655e7 against 1.671e7 without it and 1.742e7 true, and made up with q = 0.19.
+/// value, 1.655e7 against 1.671e7 without it and 1.742e7 true, and made up with q = 0.19,
+/// as a temporary probe that kept the refused model showed.
 /// The truth itself scores 9.43 % here, printed below: the free-run simulation of this
 /// hardening oscillator does not lock onto the record, so a lower held-out ε is no proof of
 /// a closer model; the check only refuses a candidate that does not pay on rows its fit
