@@ -7,7 +7,7 @@ use hyst::ident::frf::{self, PeriodicRecord};
 use hyst::io::{read_csv, write_csv};
 use hyst::plot::colors;
 
-use crate::{Error, channel_names, check_fs, fail, shape_text};
+use crate::{Error, channel_names, check_fs, fail};
 
 #[derive(Args, Debug)]
 pub struct FrfArgs {
@@ -146,7 +146,7 @@ pub fn run(a: &FrfArgs) -> Result<(), Error> {
                 "shape at {:.4} Hz ({}): {}  MPC {:.4}",
                 m.frequency_hz,
                 names.join(", "),
-                shape_text(&m.shape),
+                hyst::shape_text(&m.shape, "  "),
                 hyst::covssi::mpc(&m.shape)
             );
         }

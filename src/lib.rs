@@ -14,3 +14,17 @@ pub use hyst_sim as sim;
 pub mod io;
 pub mod params;
 pub mod plot;
+
+/// A mode shape as "magnitude∠phase°" per entry (phase rounded to a degree), entries joined
+/// by `sep`: how `hyst ssi`, `hyst frf` and `cargo xtask f16` print shapes.
+pub fn shape_text(shape: &[covssi::Complex64], sep: &str) -> String {
+    shape
+        .iter()
+        .map(|v| {
+            // + 0.0 turns a rounded −0 into 0.
+            let deg = v.arg().to_degrees().round() + 0.0;
+            format!("{:.3}∠{deg:.0}°", v.norm())
+        })
+        .collect::<Vec<_>>()
+        .join(sep)
+}

@@ -596,19 +596,6 @@ fn simulate(a: &SimulateArgs) -> Result<(), Error> {
     Ok(())
 }
 
-/// A shape as "magnitude∠phase°" per entry.
-fn shape_text(shape: &[hyst::covssi::Complex64]) -> String {
-    shape
-        .iter()
-        .map(|v| {
-            // + 0.0 turns a rounded −0 into 0.
-            let deg = v.arg().to_degrees().round() + 0.0;
-            format!("{:.3}∠{deg:.0}°", v.norm())
-        })
-        .collect::<Vec<_>>()
-        .join("  ")
-}
-
 fn c64(v: hyst::covssi::Complex64) -> serde_json::Value {
     serde_json::json!([v.re, v.im])
 }
@@ -784,7 +771,7 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
             println!(
                 "  {:>9.4} Hz  {}  MPC {:.3}",
                 m.frequency_hz,
-                shape_text(&m.shape),
+                hyst::shape_text(&m.shape, "  "),
                 covssi::mpc(&m.shape)
             );
         }
@@ -945,7 +932,7 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
                     .collect();
                 println!(
                     "     shape {}  (standard errors {}; MPC {:.3})",
-                    shape_text(shape),
+                    hyst::shape_text(shape, "  "),
                     se.join(", "),
                     covssi::mpc(shape)
                 );

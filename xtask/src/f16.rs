@@ -416,14 +416,6 @@ pub fn markdown(rows: &[Row]) -> String {
     s
 }
 
-/// A shape as magnitude∠phase (degrees) per acceleration.
-fn fmt_shape(v: &[covssi::Complex64]) -> String {
-    v.iter()
-        .map(|c| format!("{:.3}∠{:.0}°", c.norm(), c.arg().to_degrees().round() + 0.0))
-        .collect::<Vec<_>>()
-        .join(", ")
-}
-
 /// Per mode and level, its shape over acc1, acc2, acc3 two ways: output-only (the SSI
 /// cluster's mean) and input-output (the residues of the fit of the mode alone), their MAC,
 /// each one's MPC, and the MAC of the fit's shape with its shape at the lowest level.
@@ -449,9 +441,11 @@ fn shapes_markdown(rows: &[Row]) -> String {
             "| {} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
             TARGETS[r.target].name,
             r.level,
-            r.ssi_shape.as_deref().map_or(String::new(), fmt_shape),
+            r.ssi_shape
+                .as_deref()
+                .map_or(String::new(), |v| hyst::shape_text(v, ", ")),
             cell(r.ssi_shape.as_deref().map(covssi::mpc)),
-            fit.map_or(String::new(), |m| fmt_shape(&m.shape)),
+            fit.map_or(String::new(), |m| hyst::shape_text(&m.shape, ", ")),
             fit.map_or(String::new(), se),
             cell(fit.map(|m| covssi::mpc(&m.shape))),
             cell(
