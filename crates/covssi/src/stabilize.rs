@@ -315,11 +315,17 @@ fn mean_std(v: &[f64]) -> (f64, f64) {
     (m, var.sqrt())
 }
 
-pub(crate) fn normalise(shape: &[C64]) -> Vec<C64> {
+/// Index of a shape's largest entry (the last of equals; 0 for an empty shape).
+pub(crate) fn largest_entry(shape: &[C64]) -> usize {
+    (0..shape.len())
+        .max_by(|&a, &b| shape[a].norm().total_cmp(&shape[b].norm()))
+        .unwrap_or(0)
+}
+
+fn normalise(shape: &[C64]) -> Vec<C64> {
     let big = shape
-        .iter()
+        .get(largest_entry(shape))
         .copied()
-        .max_by(|a, b| a.norm().total_cmp(&b.norm()))
         .unwrap_or(C64::new(1.0, 0.0));
     if big.norm() == 0.0 {
         return shape.to_vec();

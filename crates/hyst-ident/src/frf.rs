@@ -181,6 +181,8 @@ fn fit_band(spectra: &Spectra, band: (f64, f64), modes: usize) -> Result<FrfFit,
         let mut f_j = vec![Vec::with_capacity(p); out.len()];
         let mut z_j = vec![Vec::with_capacity(p); out.len()];
         let mut s_j = vec![Vec::with_capacity(p); out.len()];
+        // Each left-out fit's shape is scaled by the entry the whole fit's has at 1.
+        let at: Vec<usize> = out.iter().map(|m| reference_entry(&m.shape)).collect();
         for leave in 0..p {
             let keep: Vec<usize> = (0..p).filter(|&i| i != leave).collect();
             let (hj, sj) = spectra.response(&keep);
@@ -196,9 +198,7 @@ fn fit_band(spectra: &Spectra, band: (f64, f64), modes: usize) -> Result<FrfFit,
                 {
                     f_j[m].push(best.norm() / std::f64::consts::TAU);
                     z_j[m].push(-best.re / best.norm());
-                    // Scaled by the entry the whole fit's shape has at 1.
-                    let at = reference_entry(&out[m].shape);
-                    s_j[m].push(residues_at(&fj, *best / centre, Some(at)));
+                    s_j[m].push(residues_at(&fj, *best / centre, Some(at[m])));
                 }
             }
         }

@@ -783,9 +783,7 @@ struct Estimates {
 /// δs_a = δc_a/c_b − c_a δc_b/c_b².
 fn shape_se(c: &[C64], cov: &Dense, offset: usize) -> (Vec<C64>, Vec<f64>) {
     let l = c.len();
-    let b = (0..l)
-        .max_by(|&x, &y| c[x].norm().total_cmp(&c[y].norm()))
-        .unwrap_or(0);
+    let b = crate::stabilize::largest_entry(c);
     let cb = c[b];
     if cb.norm() == 0.0 {
         return (c.to_vec(), vec![f64::NAN; l]);
