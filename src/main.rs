@@ -273,6 +273,26 @@ struct SsiArgs {
     /// Block rows of the Toeplitz matrix (lags up to 2·N−1).
     #[arg(long, default_value_t = 20)]
     block_rows: usize,
+    /// Instead of --block-rows: as many block rows as make the largest lag cover this many
+    /// seconds (after --decimate).
+    #[arg(
+        long,
+        value_name = "SECONDS",
+        allow_negative_numbers = true,
+        conflicts_with_all = ["block_rows", "lag_periods"]
+    )]
+    lag_seconds: Option<f64>,
+    /// Instead of --block-rows: as many block rows as make the largest lag cover COUNT periods
+    /// of HZ, e.g. `--lag-periods 10 1.5` for ten periods of a 1.5 Hz mode (the paper's
+    /// choice: ten periods of the dominant mode).
+    #[arg(
+        long,
+        num_args = 2,
+        value_names = ["COUNT", "HZ"],
+        allow_negative_numbers = true,
+        conflicts_with = "block_rows"
+    )]
+    lag_periods: Option<Vec<f64>>,
     /// Largest model order (default: the Toeplitz rank, at most 40).
     #[arg(long)]
     max_order: Option<usize>,
@@ -632,8 +652,16 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
     }
     let fs_used = fs / a.decimate as f64;
     let views: Vec<&[f64]> = channels.iter().map(|c| c.as_slice()).collect();
+    let block_rows = match (a.lag_seconds, a.lag_periods.as_deref()) {
+        (Some(t), _) => BlockRows::Seconds(t),
+        (None, Some(&[count, frequency_hz])) => BlockRows::Periods {
+            count,
+            frequency_hz,
+        },
+        _ => BlockRows::Count(a.block_rows),
+    };
     let opts = SsiOptions {
-        block_rows: BlockRows::Count(a.block_rows),
+        block_rows,
         max_order: a.max_order,
         order_step: a.order_step,
         criteria: StabilityCriteria {
@@ -650,7 +678,23 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
     let context = |e: covssi::SsiError| {
         if let covssi::SsiError::InvalidOption { name, value } = &e {
             let flag = match *name {
-                "block_rows" => Some(("--block-rows", "at least 2")),
+                "block_rows" => match block_rows {
+                    BlockRows::Count(_) => Some(("--block-rows", "at least 2")),
+                    // A lag given as a time is too short for the rate: say what it gave.
+                    _ => {
+                        let flag = if a.lag_seconds.is_some() {
+                            "--lag-seconds"
+                        } else {
+                            "--lag-periods"
+                        };
+                        return fail(format!(
+                            "{flag} gives {value} block row(s) at {fs_used} Hz; SSI needs at least 2: give a longer lag"
+                        ));
+                    }
+                },
+                "block_rows (seconds)" => Some(("--lag-seconds", "positive")),
+                "block_rows (periods: count)" => Some(("--lag-periods COUNT", "positive")),
+                "block_rows (periods: frequency_hz)" => Some(("--lag-periods HZ", "positive")),
                 "max_order" => Some(("--max-order", "at least 1")),
                 "order_step" => Some(("--order-step", "at least 1")),
                 "criteria.frequency" => Some(("--df", "positive")),
@@ -732,6 +776,13 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
             json!({"order": o.order, "poles": poles})
         })
         .collect();
+    // The block rows first: given as a lag time or periods they are worked out here.
+    let largest_lag = 2 * res.block_rows - 1;
+    println!(
+        "{} block rows: correlations up to lag {largest_lag} ({:.4} s at {fs_used} Hz)",
+        res.block_rows,
+        largest_lag as f64 / fs_used
+    );
     // The SSI result first: the refinement can take a minute on many channels and modes.
     if !res.modes.is_empty() || !res.real_poles.is_empty() {
         println!("SSI (± is the spread over each cluster's poles, not a standard error):");

@@ -739,9 +739,9 @@ fn ssi_fails_on_columns(columns: &str) -> String {
     ssi_fails(&p, &["--columns", columns])
 }
 
-#[test]
-fn ssi_option_out_of_range_names_its_flag() {
-    let p = write(
+/// A one-column record `y` of 400 samples: two sines.
+fn write_two_sines() -> PathBuf {
+    write(
         "sine.csv",
         &format!(
             "y\n{}",
@@ -752,7 +752,12 @@ fn ssi_option_out_of_range_names_its_flag() {
                 ))
                 .collect::<String>()
         ),
-    );
+    )
+}
+
+#[test]
+fn ssi_option_out_of_range_names_its_flag() {
+    let p = write_two_sines();
     for (flag, value, said) in [
         ("--df", "-1", "--df must be positive, got -1"),
         ("--dzeta", "0", "--dzeta must be positive, got 0"),
@@ -766,6 +771,64 @@ fn ssi_option_out_of_range_names_its_flag() {
         let arg = format!("{flag}={value}");
         let err = ssi_fails(&p, &[&arg]);
         assert!(err.contains(said), "{arg}: {err}");
+    }
+}
+
+#[test]
+fn ssi_lags_as_a_time_or_as_periods() {
+    let p = write_two_sines();
+    // At 10 Hz, ten periods of 0.5 Hz and 20 s both ask the largest lag 2i − 1 to cover 200
+    // samples: i = 101, and the program says so.
+    for lag in [
+        &["--lag-periods", "10", "0.5"][..],
+        &["--lag-seconds", "20"],
+    ] {
+        let json = tmp("lags.json");
+        let mut args = vec!["ssi", "--input", s(&p), "--fs", "10", "--no-refine"];
+        args.extend_from_slice(lag);
+        args.extend_from_slice(&["--json", s(&json)]);
+        let (ok, out, err) = hyst(&args);
+        assert!(ok, "{lag:?}: {err}");
+        assert!(
+            out.starts_with("101 block rows: correlations up to lag 201 (20.1000 s at 10 Hz)"),
+            "{lag:?}: {out}"
+        );
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        assert_eq!(v["block_rows"], 101, "{lag:?}");
+    }
+    for (args, said) in [
+        (
+            &["--lag-seconds", "0.1"][..],
+            "--lag-seconds gives 1 block row(s) at 10 Hz; SSI needs at least 2",
+        ),
+        (
+            &["--lag-seconds", "-1"],
+            "--lag-seconds must be positive, got -1",
+        ),
+        (
+            &["--lag-periods", "0", "2"],
+            "--lag-periods COUNT must be positive, got 0",
+        ),
+        (
+            &["--lag-periods", "10", "0"],
+            "--lag-periods HZ must be positive, got 0",
+        ),
+        // Beyond any record: too short, not an overflow.
+        (&["--lag-seconds", "1e18"], "400 samples are too few"),
+        // One way of giving the lags at a time.
+        (
+            &["--lag-seconds", "2", "--block-rows", "30"],
+            "cannot be used with",
+        ),
+        (
+            &["--lag-periods", "10", "1", "--lag-seconds", "2"],
+            "cannot be used with",
+        ),
+        (&["--lag-periods", "10"], "2 values required"),
+    ] {
+        let err = ssi_fails(&p, args);
+        assert!(err.contains(said), "{args:?}: {err}");
     }
 }
 

@@ -218,16 +218,17 @@ impl BlockRows {
                 count,
                 frequency_hz,
             } => {
-                if !(count.is_finite()
-                    && count > 0.0
-                    && frequency_hz.is_finite()
-                    && frequency_hz > 0.0)
-                {
-                    return Err(SsiError::InvalidOption {
-                        name: "block_rows (periods)",
-                        value: count / frequency_hz,
-                    });
+                // Each checked on its own, so that the error names the value at fault.
+                for (name, value) in [
+                    ("block_rows (periods: count)", count),
+                    ("block_rows (periods: frequency_hz)", frequency_hz),
+                ] {
+                    if !(value.is_finite() && value > 0.0) {
+                        return Err(SsiError::InvalidOption { name, value });
+                    }
                 }
+                // `as` saturates: a lag beyond any record becomes usize::MAX block rows, which
+                // `identify` reports as too short.
                 ((count / frequency_hz * fs + 1.0) / 2.0).ceil() as usize
             }
         };
@@ -493,13 +494,15 @@ pub fn identify(y: &[&[f64]], fs: f64, opts: &SsiOptions) -> Result<SsiResult, S
     check_fs(fs)?;
     let (n, means) = check_channels(y)?;
     let i = opts.block_rows.resolve(fs)?;
-    let lags = 2 * i;
-    if n < lags + 1 {
+    // 2i lags (0 … 2i − 1) need 2i + 1 samples; saturating, so that a count too large for
+    // any record (a lag time of years) is reported as too short rather than wrapping round.
+    let lags = i.saturating_mul(2);
+    if n < lags.saturating_add(1) {
         return Err(SsiError::TooShort {
             samples: n,
             block_rows: i,
             lags: lags - 1,
-            needed: lags + 1,
+            needed: lags.saturating_add(1),
         });
     }
     let refs = references(opts, y.len())?;
@@ -517,7 +520,7 @@ pub fn identify_from_correlations(
     check_fs(fs)?;
     let i = block_rows;
     let (l, r) = (corr.channels, corr.references);
-    if i < 2 || corr.r.len() < 2 * i {
+    if i < 2 || corr.r.len() < i.saturating_mul(2) {
         return Err(SsiError::InvalidOption {
             name: "block_rows (needs 2·block_rows correlation lags)",
             value: i as f64,

@@ -258,3 +258,80 @@ fn any_units_give_the_same_poles_or_say_they_are_out_of_range() {
         assert!(e.to_string().contains("rescale the record"), "{e}");
     }
 }
+
+#[test]
+fn lags_as_a_time_or_as_periods_are_checked() {
+    let y = sine(2000);
+    let fs = 10.0;
+    // A count, a time or a number of periods too large for any record is "too short", not an
+    // overflow of 2·block_rows: 1e18 s at 10 Hz asks for 5e18 block rows, and a count of 2^63
+    // has 2·i = 2^64, one past usize::MAX.
+    for block_rows in [
+        BlockRows::Count(1 << 63),
+        BlockRows::Count(usize::MAX),
+        BlockRows::Seconds(1e18),
+        BlockRows::Seconds(1e300),
+        BlockRows::Periods {
+            count: 1e20,
+            frequency_hz: 1.0,
+        },
+    ] {
+        let opts = SsiOptions {
+            block_rows,
+            ..SsiOptions::default()
+        };
+        let e = identify(&[&y], fs, &opts).unwrap_err();
+        assert!(
+            matches!(e, SsiError::TooShort { samples: 2000, .. }),
+            "{block_rows:?}: {e}"
+        );
+    }
+    // A bad time, count of periods or frequency is named with the value that is wrong, not
+    // a ratio of the two.
+    let cases = [
+        (BlockRows::Seconds(-1.0), "block_rows (seconds)", -1.0),
+        (
+            BlockRows::Periods {
+                count: 0.0,
+                frequency_hz: 1.5,
+            },
+            "block_rows (periods: count)",
+            0.0,
+        ),
+        (
+            BlockRows::Periods {
+                count: 10.0,
+                frequency_hz: 0.0,
+            },
+            "block_rows (periods: frequency_hz)",
+            0.0,
+        ),
+        (
+            BlockRows::Periods {
+                count: 10.0,
+                frequency_hz: -2.0,
+            },
+            "block_rows (periods: frequency_hz)",
+            -2.0,
+        ),
+    ];
+    for (block_rows, name, value) in cases {
+        let opts = SsiOptions {
+            block_rows,
+            ..SsiOptions::default()
+        };
+        let e = identify(&[&y], fs, &opts).unwrap_err();
+        assert_eq!(e, SsiError::InvalidOption { name, value }, "{e}");
+    }
+    // Ten periods of 0.5 Hz at 10 Hz: the largest lag 2i − 1 must cover 200 samples, so
+    // i = 101 (ceil of 100.5); 10 s likewise.
+    for block_rows in [
+        BlockRows::Seconds(20.0),
+        BlockRows::Periods {
+            count: 10.0,
+            frequency_hz: 0.5,
+        },
+    ] {
+        assert_eq!(block_rows.resolve(fs), Ok(101), "{block_rows:?}");
+    }
+}
