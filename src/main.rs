@@ -692,23 +692,48 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
                         ));
                     }
                 },
-                "block_rows (seconds)" => Some(("--lag-seconds", "positive")),
-                "block_rows (periods: count)" => Some(("--lag-periods COUNT", "positive")),
-                "block_rows (periods: frequency_hz)" => Some(("--lag-periods HZ", "positive")),
+                "block_rows (seconds)" => Some(("--lag-seconds", "positive and finite")),
+                "block_rows (periods: count)" => {
+                    Some(("--lag-periods COUNT", "positive and finite"))
+                }
+                "block_rows (periods: frequency_hz)" => {
+                    Some(("--lag-periods HZ", "positive and finite"))
+                }
+                "references (index out of range)" => {
+                    return fail(format!(
+                        "--references {value} is out of range: {} channel(s), numbered from 0",
+                        names.len()
+                    ));
+                }
+                "references (index repeated)" => {
+                    return fail(format!("--references names channel {value} twice"));
+                }
                 "max_order" => Some(("--max-order", "at least 1")),
                 "order_step" => Some(("--order-step", "at least 1")),
-                "criteria.frequency" => Some(("--df", "positive")),
-                "criteria.damping" => Some(("--dzeta", "positive")),
-                "criteria.mac" => Some(("--dmac", "positive")),
-                "criteria.real" => Some(("--dreal", "positive")),
+                "criteria.frequency" => Some(("--df", "positive and finite")),
+                "criteria.damping" => Some(("--dzeta", "positive and finite")),
+                "criteria.mac" => Some(("--dmac", "positive and finite")),
+                "criteria.real" => Some(("--dreal", "positive and finite")),
                 _ => None,
             };
             if let Some((flag, needed)) = flag {
                 return fail(format!("{flag} must be {needed}, got {value}"));
             }
         }
+        // An error about the record after decimation says so: "too short" or "constant"
+        // may be the decimation's doing, not the file's.
+        let decimated = if a.decimate > 1 {
+            format!(
+                ", decimated by {} to {} of {} rows",
+                a.decimate,
+                views.first().map_or(0, |c| c.len()),
+                t.len() - a.skip
+            )
+        } else {
+            String::new()
+        };
         fail(format!(
-            "{}: columns {}: {e}",
+            "{}: columns {}{decimated}: {e}",
             a.input.display(),
             names.join(",")
         ))

@@ -759,8 +759,24 @@ fn write_two_sines() -> PathBuf {
 fn ssi_option_out_of_range_names_its_flag() {
     let p = write_two_sines();
     for (flag, value, said) in [
-        ("--df", "-1", "--df must be positive, got -1"),
-        ("--dzeta", "0", "--dzeta must be positive, got 0"),
+        (
+            "--dreal",
+            "inf",
+            "--dreal must be positive and finite, got inf",
+        ),
+        ("--references", "0,0", "--references names channel 0 twice"),
+        (
+            "--references",
+            "1",
+            "--references 1 is out of range: 1 channel(s), numbered from 0",
+        ),
+        (
+            "--decimate",
+            "20",
+            "sine.csv: columns y, decimated by 20 to 20 of 400 rows: 20 samples are too few",
+        ),
+        ("--df", "-1", "--df must be positive and finite, got -1"),
+        ("--dzeta", "0", "--dzeta must be positive and finite, got 0"),
         ("--max-order", "0", "--max-order must be at least 1, got 0"),
         (
             "--block-rows",
@@ -804,15 +820,15 @@ fn ssi_lags_as_a_time_or_as_periods() {
         ),
         (
             &["--lag-seconds", "-1"],
-            "--lag-seconds must be positive, got -1",
+            "--lag-seconds must be positive and finite, got -1",
         ),
         (
             &["--lag-periods", "0", "2"],
-            "--lag-periods COUNT must be positive, got 0",
+            "--lag-periods COUNT must be positive and finite, got 0",
         ),
         (
-            &["--lag-periods", "10", "0"],
-            "--lag-periods HZ must be positive, got 0",
+            &["--lag-periods", "10", "inf"],
+            "--lag-periods HZ must be positive and finite, got inf",
         ),
         // Beyond any record: too short, not an overflow.
         (&["--lag-seconds", "1e18"], "400 samples are too few"),

@@ -447,6 +447,12 @@ fn references(opts: &SsiOptions, l: usize) -> Result<Vec<usize>, SsiError> {
                     value: bad as f64,
                 });
             }
+            if let Some((_, &twice)) = r.iter().enumerate().find(|(k, b)| r[..*k].contains(b)) {
+                return Err(SsiError::InvalidOption {
+                    name: "references (index repeated)",
+                    value: twice as f64,
+                });
+            }
             Ok(r.clone())
         }
     }

@@ -335,3 +335,25 @@ fn lags_as_a_time_or_as_periods_are_checked() {
         assert_eq!(block_rows.resolve(fs), Ok(101), "{block_rows:?}");
     }
 }
+
+#[test]
+fn reference_channels_are_checked() {
+    let (a, b) = (
+        sine(500),
+        sine(500).iter().map(|v| v * v).collect::<Vec<_>>(),
+    );
+    let with = |r: Vec<usize>| SsiOptions {
+        references: Some(r),
+        ..SsiOptions::default()
+    };
+    for (refs, name, value) in [
+        (vec![], "references (empty)", 0.0),
+        (vec![0, 2], "references (index out of range)", 2.0),
+        // The same channel twice repeats a block column of the Toeplitz matrix: a slip of the
+        // user's, named, not passed over.
+        (vec![1, 0, 1], "references (index repeated)", 1.0),
+    ] {
+        let e = identify(&[&a, &b], 10.0, &with(refs.clone())).unwrap_err();
+        assert_eq!(e, SsiError::InvalidOption { name, value }, "{refs:?}: {e}");
+    }
+}

@@ -191,6 +191,29 @@ pub enum IdentError {
         /// Half the sampling rate (Hz).
         nyquist_hz: f64,
     },
+    /// Rows given for estimation or testing are not a range `start < end` within the record.
+    #[error(
+        "rows {start}:{end} are not a range A:B with A < B <= {samples} (the record's samples)"
+    )]
+    BadRows {
+        /// First row.
+        start: usize,
+        /// One past the last row.
+        end: usize,
+        /// Samples in the record.
+        samples: usize,
+    },
+    /// The residual loop's starting model cannot be simulated over the estimation rows, and
+    /// no fit from it (or from the equation-error start) converged.
+    #[error(
+        "the starting model diverges on the estimation rows {start}:{end}, and no fit from it converged: start from a model that follows the record"
+    )]
+    StartDiverges {
+        /// First estimation row.
+        start: usize,
+        /// One past the last estimation row.
+        end: usize,
+    },
     /// A sample of a record is too large to be squared and summed in double precision.
     #[error(
         "record {channel} (0 = input, then the outputs), sample {index}: value {value:e} is too large to compute spectra with in double precision (above 1e150): rescale the record, e.g. to other units"

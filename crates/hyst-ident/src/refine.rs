@@ -999,6 +999,19 @@ const CONVERGED_ITERATIONS: usize = 300;
 /// ΔBIC below which an effect counts as significant (strong evidence).
 pub const SIGNIFICANT_BIC: f64 = -10.0;
 
+/// `start < end <= samples`, or the error that names the rows.
+fn check_rows((start, end): (usize, usize), samples: usize) -> Result<(), IdentError> {
+    if start < end && end <= samples {
+        Ok(())
+    } else {
+        Err(IdentError::BadRows {
+            start,
+            end,
+            samples,
+        })
+    }
+}
+
 /// Refine `start` on the estimation rows and report on the test rows.
 ///
 /// Each step adds the candidate with the lowest ΔBIC below [`SIGNIFICANT_BIC`] that does not
@@ -1012,19 +1025,14 @@ pub fn refine(
     tests: &[(usize, usize)],
     fit_mass: bool,
 ) -> Result<Refinement, IdentError> {
-    for &(a, b) in std::iter::once(&estimate).chain(tests) {
-        if a >= b || b > rec.u.len() || b > rec.y.len() {
-            return Err(IdentError::TooShort {
-                samples: rec.u.len().min(rec.y.len()),
-                needed: b,
-            });
-        }
-    }
     if rec.u.len() != rec.y.len() {
         return Err(IdentError::LengthMismatch {
             input: rec.u.len(),
             output: rec.y.len(),
         });
+    }
+    for &range in std::iter::once(&estimate).chain(tests) {
+        check_rows(range, rec.y.len())?;
     }
     let errs = |m: &Oscillator| -> Vec<Validation> {
         tests
@@ -1050,10 +1058,10 @@ pub fn refine(
         None => *start,
     };
     let (mut model, mut c) = fit(&start, rec, estimate, fit_mass, CONVERGED_ITERATIONS).ok_or(
-        IdentError::Sim(hyst_sim::SimError::InvalidSignal {
-            what: "starting model diverges on the estimation record",
-            value: f64::NAN,
-        }),
+        IdentError::StartDiverges {
+            start: estimate.0,
+            end: estimate.1,
+        },
     )?;
     let baseline = model;
     let mut steps = Vec::new();
@@ -1169,12 +1177,7 @@ pub fn refine_record(
             output: rec.y.len(),
         });
     }
-    if estimate.0 >= estimate.1 || estimate.1 > rec.y.len() {
-        return Err(IdentError::TooShort {
-            samples: rec.y.len(),
-            needed: estimate.1,
-        });
-    }
+    check_rows(estimate, rec.y.len())?;
     let opts = crate::IdentOptions {
         mass: mass.unwrap_or(1.0),
         ..crate::IdentOptions::default()
@@ -1236,6 +1239,50 @@ mod tests {
             "{quad:?}"
         );
         assert!(quad.model.is_none());
+    }
+
+    /// Rows that are no range within the record are named, whichever of the estimation or
+    /// test ranges they are; so is a start that no fit can follow.
+    #[test]
+    fn bad_rows_and_a_diverging_start_are_named() {
+        let fs = 100.0;
+        let n = 400;
+        let u: Vec<f64> = (0..n).map(|i| (0.3 * i as f64).sin()).collect();
+        let y: Vec<f64> = (0..n).map(|i| 1e-3 * (0.3 * i as f64).cos()).collect();
+        let rec = Record {
+            u: &u,
+            y: &y,
+            fs,
+            interpolation: InputInterpolation::Linear,
+        };
+        let base = Oscillator::linear(1.0, 1.0, 100.0);
+        for (estimate, tests, bad) in [
+            ((50, 10), &[][..], (50, 10)),
+            ((0, 401), &[], (0, 401)),
+            ((0, 200), &[(300, 300)], (300, 300)),
+        ] {
+            assert_eq!(
+                refine(&base, &rec, estimate, tests, false).unwrap_err(),
+                IdentError::BadRows {
+                    start: bad.0,
+                    end: bad.1,
+                    samples: n
+                }
+            );
+        }
+        // Hysteresis with γ, δ < 0 feeds energy in: ż grows with |z|·z and the simulation
+        // blows up within the record, from the start and from every step of the fit.
+        let wild = Oscillator::bouc_wen(
+            1.0,
+            1.0,
+            100.0,
+            hyst_model::BoucWen::from_products(100.0, -1e9, -1e9, 1.0),
+        );
+        assert!(residual(&wild, &rec, (0, n)).is_none());
+        assert_eq!(
+            refine(&wild, &rec, (0, n), &[], false).unwrap_err(),
+            IdentError::StartDiverges { start: 0, end: n }
+        );
     }
 
     /// The held-out check fails on the first test range where the candidate is worse or

@@ -14,15 +14,28 @@ fn rng(seed: u64) -> Xoshiro256PlusPlus {
     Xoshiro256PlusPlus::seed_from_u64(seed)
 }
 
-fn check_rms(rms: f64) -> Result<(), SimError> {
-    if rms.is_finite() && rms >= 0.0 {
+/// `value` (of the parameter `what`) must be finite and not negative.
+fn check_level(what: &'static str, value: f64) -> Result<(), SimError> {
+    if value.is_finite() && value >= 0.0 {
         Ok(())
     } else {
-        Err(SimError::InvalidSignal {
-            what: "rms",
-            value: rms,
-        })
+        Err(SimError::InvalidSignal { what, value })
     }
+}
+
+/// An empty buffer with room for `n` samples: `n` = 0 and more than memory holds are errors
+/// (a signal to simulate has samples; a failed allocation would abort the program).
+fn signal_buffer(n: usize) -> Result<Vec<f64>, SimError> {
+    if n == 0 {
+        return Err(SimError::InvalidSignal {
+            what: "samples",
+            value: 0.0,
+        });
+    }
+    let mut v = Vec::new();
+    v.try_reserve_exact(n)
+        .map_err(|_| SimError::TooLong { samples: n })?;
+    Ok(v)
 }
 
 fn scale_to_rms(x: &mut [f64], rms: f64) {
@@ -37,16 +50,17 @@ fn scale_to_rms(x: &mut [f64], rms: f64) {
 
 /// Gaussian white noise of `n` samples, scaled so that its sample RMS is exactly `rms`.
 pub fn white_noise(n: usize, rms: f64, seed: u64) -> Result<Vec<f64>, SimError> {
-    check_rms(rms)?;
+    check_level("rms", rms)?;
     let mut r = rng(seed);
-    let mut x: Vec<f64> = (0..n).map(|_| r.sample(StandardNormal)).collect();
+    let mut x = signal_buffer(n)?;
+    x.extend((0..n).map(|_| r.sample::<f64, _>(StandardNormal)));
     scale_to_rms(&mut x, rms);
     Ok(x)
 }
 
 /// Add Gaussian white measurement noise of standard deviation `std` to `y`.
 pub fn add_noise(y: &mut [f64], std: f64, seed: u64) -> Result<(), SimError> {
-    check_rms(std)?;
+    check_level("noise std", std)?;
     let mut r = rng(seed);
     for v in y.iter_mut() {
         let e: f64 = r.sample(StandardNormal);
@@ -89,6 +103,17 @@ impl Multisine {
         }
         let first = (f_lo * period as f64 / fs).ceil().max(1.0) as usize;
         let last = (f_hi * period as f64 / fs).floor() as usize;
+        // An edge that is NaN, or edges the wrong way round, make no band; every empty band
+        // is one error.
+        let unordered = f_lo.is_nan() || f_hi.is_nan() || f_lo > f_hi;
+        if unordered || first > last || last.saturating_mul(2) >= period {
+            return Err(SimError::EmptyBand {
+                low_hz: f_lo,
+                high_hz: f_hi,
+                fs,
+                period,
+            });
+        }
         let m = Multisine {
             period,
             first_bin: first,
@@ -100,7 +125,7 @@ impl Multisine {
     }
 
     fn check(&self) -> Result<(), SimError> {
-        check_rms(self.rms)?;
+        check_level("rms", self.rms)?;
         if self.first_bin == 0 || self.first_bin > self.last_bin || 2 * self.last_bin >= self.period
         {
             return Err(SimError::InvalidSignal {
@@ -114,6 +139,9 @@ impl Multisine {
     /// One period of a realization with the given seed.
     pub fn generate(&self, seed: u64) -> Result<Vec<f64>, SimError> {
         self.check()?;
+        // The inverse FFT's buffers are allocated by realfft, which panics on a size beyond
+        // memory: ask for the output's room first.
+        drop(signal_buffer(self.period)?);
         let mut r = rng(seed);
         let n = self.period;
         let mut planner = RealFftPlanner::<f64>::new();
@@ -169,7 +197,9 @@ impl Sweep {
         if !(fs.is_finite() && fs > 0.0) {
             return Err(SimError::NonPositiveRate { fs });
         }
-        Ok((0..n).map(|k| self.at(k as f64 / fs)).collect())
+        let mut x = signal_buffer(n)?;
+        x.extend((0..n).map(|k| self.at(k as f64 / fs)));
+        Ok(x)
     }
 }
 
@@ -213,6 +243,56 @@ mod tests {
         }
         let band = Multisine::band(8192, 750.0, 5.0, 150.0, 1.0).unwrap();
         assert_eq!((band.first_bin, band.last_bin), (55, 1638));
+    }
+
+    #[test]
+    fn bad_signal_requests_are_named() {
+        // The noise's standard deviation is named as such, not as an RMS.
+        let mut y = vec![0.0; 10];
+        assert_eq!(
+            add_noise(&mut y, f64::NAN, 1).unwrap_err().to_string(),
+            "invalid signal parameter `noise std`: NaN"
+        );
+        assert!(matches!(
+            white_noise(10, -1.0, 1),
+            Err(SimError::InvalidSignal { what: "rms", .. })
+        ));
+        // An empty signal is refused rather than simulated into an empty record.
+        let none = SimError::InvalidSignal {
+            what: "samples",
+            value: 0.0,
+        };
+        assert_eq!(white_noise(0, 1.0, 1), Err(none.clone()));
+        assert_eq!(Sweep::benchmark().sample(0, 750.0), Err(none));
+        // More samples than memory can hold are an error, not an allocation panic.
+        let too_long = SimError::TooLong {
+            samples: usize::MAX,
+        };
+        assert_eq!(white_noise(usize::MAX, 1.0, 1), Err(too_long.clone()));
+        assert_eq!(
+            Sweep::benchmark().sample(usize::MAX, 750.0),
+            Err(too_long.clone())
+        );
+        let huge = Multisine {
+            period: usize::MAX,
+            first_bin: 1,
+            last_bin: 2,
+            rms: 1.0,
+        };
+        assert_eq!(huge.generate(1), Err(too_long));
+        // A band with no DFT bin below Nyquist says so in Hz.
+        for (lo, hi) in [(400.0, 500.0), (50.0, 10.0), (1.0, 1.2), (f64::NAN, 10.0)] {
+            let e = Multisine::band(1000, 750.0, lo, hi, 1.0).unwrap_err();
+            assert!(
+                matches!(e, SimError::EmptyBand { period: 1000, .. }),
+                "{lo}..{hi}: {e}"
+            );
+        }
+        let e = Multisine::band(1000, 750.0, 400.0, 500.0, 1.0).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "no DFT bin of a 1000-sample period at 750 Hz (spacing 0.75 Hz) lies in the band 400–500 Hz below the Nyquist frequency 375 Hz"
+        );
     }
 
     #[test]

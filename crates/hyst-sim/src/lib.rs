@@ -99,6 +99,28 @@ pub enum SimError {
         /// The offending value.
         value: f64,
     },
+    /// More samples were asked for than memory can hold.
+    #[error("{samples} samples do not fit in memory")]
+    TooLong {
+        /// Samples asked for.
+        samples: usize,
+    },
+    /// A multisine's band holds no DFT bin of its period below the Nyquist frequency.
+    #[error(
+        "no DFT bin of a {period}-sample period at {fs} Hz (spacing {} Hz) lies in the band {low_hz}–{high_hz} Hz below the Nyquist frequency {} Hz",
+        fs / *period as f64,
+        fs / 2.0
+    )]
+    EmptyBand {
+        /// Lower edge (Hz).
+        low_hz: f64,
+        /// Upper edge (Hz).
+        high_hz: f64,
+        /// Sampling rate (Hz).
+        fs: f64,
+        /// Samples per period.
+        period: usize,
+    },
     /// The periodic steady state was not reached.
     #[error("no periodic steady state after {periods} periods (change between periods {change})")]
     NoSteadyState {
