@@ -30,9 +30,10 @@ enum Command {
     /// Examples:
     ///   hyst simulate --input multisine_val.csv --fs 750 --periodic --integrator newmark --decimation fir --out y.csv
     ///   hyst simulate --excitation multisine --rms 50 --samples 8192 --seed 1 --out y.csv
-    #[command(verbatim_doc_comment)]
+    #[command(verbatim_doc_comment, allow_negative_numbers = true)]
     Simulate(SimulateArgs),
     /// Generate an excitation record and write it as a one-column CSV `u`.
+    #[command(allow_negative_numbers = true)]
     Excite(ExcitationArgs),
     /// Output-only modal analysis (covariance-driven SSI) of one or more channels: modes with
     /// their spread, then refined by maximum likelihood with standard errors; with several
@@ -40,7 +41,7 @@ enum Command {
     ///
     /// Example:
     ///   hyst ssi --input data_3dof.csv --fs 20 --columns y1,y2,y3 --max-order 40 --json modes.json --svg diagram.svg
-    #[command(verbatim_doc_comment)]
+    #[command(verbatim_doc_comment, allow_negative_numbers = true)]
     Ssi(SsiArgs),
     /// Output-only identification of linear, Zener and Bouc-Wen models (the paper's pipeline).
     ///
@@ -50,7 +51,7 @@ enum Command {
     ///
     /// Example:
     ///   hyst ident --data multisine_train.csv --fs 750 --mass 2 --skip 8192 --validate multisine_val.csv --json id.json
-    #[command(verbatim_doc_comment)]
+    #[command(verbatim_doc_comment, allow_negative_numbers = true)]
     Ident(IdentArgs),
     /// Close the loop with input and output: refine a model by output error, trace the
     /// residual to the effect the model lacks, add it, refit, and report the held-out error
@@ -58,7 +59,7 @@ enum Command {
     ///
     /// Example (Silverbox: estimate on the multisine part, test on the arrow head):
     ///   hyst refine --data SNLS80mV.csv --fs 610.3515625 --start linear --estimate 40650:105712 --test 100:40575 --test 100:32100 --json refine.json
-    #[command(verbatim_doc_comment)]
+    #[command(verbatim_doc_comment, allow_negative_numbers = true)]
     Refine(RefineArgs),
     /// One Bouc-Wen model from records of the same structure at several force levels, each
     /// under a random (white) force: the Zener oscillator fitted to each record's spectrum,
@@ -66,7 +67,7 @@ enum Command {
     ///
     /// Example:
     ///   hyst levels --data bw10.csv bw50.csv bw90.csv --fs 750 --mass 2 --data-periodic --validate bw50v.csv --periodic --json levels.json
-    #[command(verbatim_doc_comment)]
+    #[command(verbatim_doc_comment, allow_negative_numbers = true)]
     Levels(LevelsArgs),
     /// With the input: the modes of a periodic record's frequency response over a band (an
     /// input-output second opinion on `hyst ssi`), with several outputs each mode's shape,
@@ -74,7 +75,7 @@ enum Command {
     ///
     /// Example (the F-16 at its lowest level, the wing torsion mode):
     ///   hyst frf --input msine_level1.csv --fs 400 --force force --period 8192 --skip 8192 --band 6.8:7.8 --json torsion.json --svg torsion.svg
-    #[command(verbatim_doc_comment)]
+    #[command(verbatim_doc_comment, allow_negative_numbers = true)]
     Frf(frf_cmd::FrfArgs),
 }
 
@@ -278,7 +279,6 @@ struct SsiArgs {
     #[arg(
         long,
         value_name = "SECONDS",
-        allow_negative_numbers = true,
         conflicts_with_all = ["block_rows", "lag_periods"]
     )]
     lag_seconds: Option<f64>,
@@ -289,7 +289,6 @@ struct SsiArgs {
         long,
         num_args = 2,
         value_names = ["COUNT", "HZ"],
-        allow_negative_numbers = true,
         conflicts_with = "block_rows"
     )]
     lag_periods: Option<Vec<f64>>,
@@ -1294,6 +1293,21 @@ fn excitation_band(a: &IdentArgs) -> Result<Option<hyst::ident::flatness::Excita
             );
             if !(lo.is_finite() && hi.is_finite() && lo >= 0.0 && lo < hi) {
                 return Err(bad());
+            }
+            // Options that can never give a flatness fit are refused before the pipeline
+            // runs, not reported in a note after it.
+            if period < 2 {
+                return Err(fail(format!(
+                    "--period must be at least 2 samples, got {period}"
+                )));
+            }
+            if let Some(fs) = a.fs.filter(|f| f.is_finite() && *f > 0.0)
+                && hi > fs / 2.0
+            {
+                return Err(fail(format!(
+                    "--excitation-band {b}: {hi} Hz is above the Nyquist frequency {} Hz of --fs {fs}",
+                    fs / 2.0
+                )));
             }
             Ok(Some(ExcitationBand {
                 low_hz: lo,

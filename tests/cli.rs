@@ -36,6 +36,14 @@ fn write_white_noise(name: &str, seed: u64) -> PathBuf {
     write(name, &format!("y\n{text}"))
 }
 
+/// A record `u,y` of `n` rows: two sines.
+fn write_input_output(name: &str, n: usize) -> PathBuf {
+    let rows: String = (0..n)
+        .map(|k| format!("{},{}\n", (0.1 * k as f64).cos(), (0.3 * k as f64).sin()))
+        .collect();
+    write(name, &format!("u,y\n{rows}"))
+}
+
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
@@ -242,6 +250,78 @@ fn invalid_parameters() {
     let p = write("bad2.json", r#"{"mass": 1, "damping": 1}"#);
     let err = simulate_fails(&["--input", s(&u), "--fs", "750", "--params", s(&p)]);
     assert!(err.contains("stiffness"), "{err}");
+}
+
+/// Values that can never work are refused with the program's own words before any work:
+/// negative numbers reach its checks (not the parser's "unexpected argument"), a sweep that
+/// would be NaN is not written, and a flatness band above Nyquist or an empty period are not
+/// left to a note after the whole pipeline.
+#[test]
+fn impossible_values_are_refused_up_front() {
+    let rec = write_input_output("uy600.csv", 600);
+    let out = tmp("never.csv");
+    let ident = |extra: &[&str]| {
+        let mut args = vec!["ident", "--data", s(&rec), "--fs", "750"];
+        args.extend_from_slice(extra);
+        hyst(&args)
+    };
+    for (run, said) in [
+        (ident(&["--mass", "-1"]), "mass must be > 0 kg, got -1"),
+        (
+            ident(&["--mass", "2", "--c", "-0.5"]),
+            "--c must be a number >= 0 N s/m, got -0.5",
+        ),
+        (
+            ident(&[
+                "--mass",
+                "2",
+                "--excitation-band",
+                "500:600",
+                "--period",
+                "600",
+            ]),
+            "--excitation-band 500:600: 600 Hz is above the Nyquist frequency 375 Hz of --fs 750",
+        ),
+        (
+            ident(&["--mass", "2", "--excitation-band", "5:150", "--period", "0"]),
+            "--period must be at least 2 samples, got 0",
+        ),
+        (
+            hyst(&[
+                "excite",
+                "--excitation",
+                "sweep",
+                "--rms",
+                "1",
+                "--samples",
+                "100",
+                "--fs",
+                "750",
+                "--f-min",
+                "nan",
+                "--out",
+                s(&out),
+            ]),
+            "invalid signal parameter `sweep start frequency`: NaN",
+        ),
+        (
+            hyst(&[
+                "simulate",
+                "--excitation",
+                "white",
+                "--rms",
+                "-3",
+                "--samples",
+                "100",
+                "--out",
+                s(&out),
+            ]),
+            "invalid signal parameter `rms`: -3",
+        ),
+    ] {
+        let (ok, _, err) = run;
+        assert!(!ok && err.contains(said), "expected `{said}`, got: {err}");
+    }
 }
 
 #[test]
@@ -1207,15 +1287,7 @@ fn refine_needs_an_input_column() {
 
 #[test]
 fn refine_rejects_bad_row_ranges() {
-    let p = write(
-        "uy.csv",
-        &format!(
-            "u,y\n{}",
-            (0..200)
-                .map(|k| format!("{},{}\n", (0.1 * k as f64).cos(), (0.3 * k as f64).sin()))
-                .collect::<String>()
-        ),
-    );
+    let p = write_input_output("uy.csv", 200);
     let (ok, _, err) = hyst(&[
         "refine",
         "--data",

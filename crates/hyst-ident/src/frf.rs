@@ -132,16 +132,21 @@ pub fn modes_from_frf(
 
 /// [`modes_from_frf`] on the record's spectra at the band's lines.
 fn fit_band(spectra: &Spectra, band: (f64, f64), modes: usize) -> Result<FrfFit, IdentError> {
-    let q = 2 * modes;
-    let needed = q + spectra.outputs.len() * (q + 1);
+    // Saturating: a count of modes beyond any record is "too few lines", not a wrapped number.
+    let q = modes.saturating_mul(2);
+    let needed = spectra
+        .outputs
+        .len()
+        .saturating_mul(q.saturating_add(1))
+        .saturating_add(q);
     // Two real equations per line and channel.
     let equations = 2 * spectra.lines.len() * spectra.outputs.len();
-    if equations < needed + 2 {
+    if equations < needed.saturating_add(2) {
         return Err(IdentError::FewLines {
             low_hz: band.0,
             high_hz: band.1,
             lines: spectra.lines.len(),
-            needed: (needed + 2).div_ceil(2 * spectra.outputs.len()),
+            needed: needed.saturating_add(2).div_ceil(2 * spectra.outputs.len()),
         });
     }
     let p = spectra.periods;
@@ -1028,6 +1033,14 @@ mod tests {
                 .contains("band 1..6 Hz is not an interval within 0..5 Hz"),
             "{e}"
         );
+        // More modes than any band holds: too few lines, with the count saturated rather
+        // than wrapped round (it read 2^63 before).
+        match modes_from_frf(&good, (1.0, 4.0), usize::MAX) {
+            Err(IdentError::FewLines { needed, .. }) => {
+                assert_eq!(needed, usize::MAX.div_ceil(2), "{needed}")
+            }
+            other => panic!("{other:?}"),
+        }
         // A wrong period: the multisine repeats every 256 samples, not 200.
         let short = PeriodicRecord {
             period: 200,

@@ -197,6 +197,16 @@ impl Sweep {
         if !(fs.is_finite() && fs > 0.0) {
             return Err(SimError::NonPositiveRate { fs });
         }
+        // A NaN or infinite parameter would give a record of NaN, written without complaint.
+        check_level("sweep amplitude", self.amplitude)?;
+        check_level("sweep start frequency", self.f0)?;
+        check_level("sweep end frequency", self.f1)?;
+        if !(self.duration.is_finite() && self.duration > 0.0) {
+            return Err(SimError::InvalidSignal {
+                what: "sweep duration",
+                value: self.duration,
+            });
+        }
         let mut x = signal_buffer(n)?;
         x.extend((0..n).map(|k| self.at(k as f64 / fs)));
         Ok(x)
@@ -280,6 +290,50 @@ mod tests {
             rms: 1.0,
         };
         assert_eq!(huge.generate(1), Err(too_long));
+        // A sweep's parameters must give numbers.
+        let sweep = Sweep::benchmark();
+        for (bad, what, value) in [
+            (
+                Sweep {
+                    f0: f64::NAN,
+                    ..sweep
+                },
+                "sweep start frequency",
+                f64::NAN,
+            ),
+            (
+                Sweep {
+                    f1: f64::INFINITY,
+                    ..sweep
+                },
+                "sweep end frequency",
+                f64::INFINITY,
+            ),
+            (
+                Sweep {
+                    amplitude: -1.0,
+                    ..sweep
+                },
+                "sweep amplitude",
+                -1.0,
+            ),
+            (
+                Sweep {
+                    duration: 0.0,
+                    ..sweep
+                },
+                "sweep duration",
+                0.0,
+            ),
+        ] {
+            match bad.sample(10, 750.0) {
+                Err(SimError::InvalidSignal { what: w, value: v }) => {
+                    assert_eq!(w, what);
+                    assert!(v == value || (v.is_nan() && value.is_nan()), "{what}: {v}");
+                }
+                other => panic!("{what}: {other:?}"),
+            }
+        }
         // A band with no DFT bin below Nyquist says so in Hz.
         for (lo, hi) in [(400.0, 500.0), (50.0, 10.0), (1.0, 1.2), (f64::NAN, 10.0)] {
             let e = Multisine::band(1000, 750.0, lo, hi, 1.0).unwrap_err();
