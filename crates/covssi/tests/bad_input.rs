@@ -357,3 +357,39 @@ fn reference_channels_are_checked() {
         assert_eq!(e, SsiError::InvalidOption { name, value }, "{refs:?}: {e}");
     }
 }
+
+#[test]
+fn refinement_options_are_checked() {
+    let y = sine(4000);
+    let res = identify(&[&y], 10.0, &SsiOptions::default()).unwrap();
+    assert!(!res.modes.is_empty());
+    for (opts, name, value) in [
+        (
+            covssi::RefineOptions {
+                max_iterations: 0,
+                ..Default::default()
+            },
+            "max_iterations",
+            0.0,
+        ),
+        (
+            covssi::RefineOptions {
+                tolerance: -1e-6,
+                ..Default::default()
+            },
+            "tolerance",
+            -1e-6,
+        ),
+    ] {
+        let e = covssi::refine(&[&y], 10.0, &res.modes, &opts).unwrap_err();
+        assert_eq!(e, SsiError::InvalidOption { name, value }, "{e}");
+    }
+    let nan = covssi::RefineOptions {
+        tolerance: f64::NAN,
+        ..Default::default()
+    };
+    assert!(matches!(
+        covssi::refine(&[&y], 10.0, &res.modes, &nan),
+        Err(SsiError::InvalidOption { name: "tolerance", value }) if value.is_nan()
+    ));
+}

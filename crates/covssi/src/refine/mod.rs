@@ -306,6 +306,20 @@ fn refine_up_to(
 ) -> Result<Refinement, SsiError> {
     crate::check_fs(fs)?;
     let (n, means) = crate::check_channels(y)?;
+    // No iterations would report the starts as estimates; a tolerance that is not a positive
+    // number never (or always) ends a fit.
+    if opts.max_iterations == 0 {
+        return Err(SsiError::InvalidOption {
+            name: "max_iterations",
+            value: 0.0,
+        });
+    }
+    if !(opts.tolerance.is_finite() && opts.tolerance > 0.0) {
+        return Err(SsiError::InvalidOption {
+            name: "tolerance",
+            value: opts.tolerance,
+        });
+    }
     if let Some(bad) = real_poles
         .iter()
         .find(|p| !(p.lambda < 0.0 && p.lambda.is_finite()))
