@@ -56,6 +56,17 @@ fn parse_band(s: &str) -> Result<(f64, f64), Error> {
     Ok((lo, hi))
 }
 
+impl FrfArgs {
+    /// The files this command will write, with the flag that names each.
+    pub(crate) fn output_files(&self) -> Vec<(&'static str, Option<&std::path::Path>)> {
+        vec![
+            ("--json", self.json.as_deref()),
+            ("--svg", self.svg.as_deref()),
+            ("--write-flat", self.write_flat.as_deref()),
+        ]
+    }
+}
+
 pub fn run(a: &FrfArgs) -> Result<(), Error> {
     use serde_json::json;
     let fs = check_fs(a.fs)?;

@@ -2150,8 +2150,46 @@ fn levels(a: &LevelsArgs) -> Result<(), Error> {
     Ok(())
 }
 
+/// The files a command will write, with the flag that names each.
+fn output_files(c: &Command) -> Vec<(&'static str, &std::path::Path)> {
+    let v: Vec<(&'static str, Option<&std::path::Path>)> = match c {
+        Command::Simulate(a) => vec![("--out", Some(&a.out))],
+        Command::Excite(a) => vec![("--out", Some(&a.out))],
+        Command::Ssi(a) => vec![("--json", Some(&a.json)), ("--svg", a.svg.as_deref())],
+        Command::Ident(a) => vec![("--json", a.json.as_deref())],
+        Command::Refine(a) => vec![("--json", a.json.as_deref())],
+        Command::Levels(a) => vec![("--json", a.json.as_deref())],
+        Command::Frf(a) => a.output_files(),
+    };
+    v.into_iter().filter_map(|(f, p)| Some((f, p?))).collect()
+}
+
+/// An output file whose folder does not exist is refused before any work: writing it would
+/// otherwise fail only after a refinement or a simulation that can take minutes. (Folders
+/// given by `--svg-dir` are made.)
+fn check_output_folders(c: &Command) -> Result<(), Error> {
+    for (flag, path) in output_files(c) {
+        let folder = match path.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => std::path::Path::new("."),
+        };
+        if !folder.is_dir() {
+            return Err(fail(format!(
+                "{flag} {}: the folder {} does not exist",
+                path.display(),
+                folder.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if let Err(e) = check_output_folders(&cli.command) {
+        eprintln!("error: {e}");
+        return ExitCode::FAILURE;
+    }
     let result = match &cli.command {
         Command::Simulate(a) => simulate(a),
         Command::Excite(a) => excite(a),

@@ -324,6 +324,80 @@ fn impossible_values_are_refused_up_front() {
     }
 }
 
+/// An output file in a folder that does not exist is refused before any work (`hyst ssi`
+/// used to run its refinement first), with the flag and the folder named.
+#[test]
+fn an_output_in_a_missing_folder_is_refused_before_any_work() {
+    let rec = write_input_output("uy_out.csv", 600);
+    let missing = tmp("no-such-folder").join("x.json");
+    let m = s(&missing);
+    for (args, flag) in [
+        (
+            vec!["ssi", "--input", s(&rec), "--fs", "10", "--json", m],
+            "--json",
+        ),
+        (
+            vec![
+                "ssi",
+                "--input",
+                s(&rec),
+                "--fs",
+                "10",
+                "--json",
+                s(&tmp("fine.json")),
+                "--svg",
+                m,
+            ],
+            "--svg",
+        ),
+        (
+            vec![
+                "simulate",
+                "--excitation",
+                "white",
+                "--rms",
+                "1",
+                "--samples",
+                "100",
+                "--out",
+                m,
+            ],
+            "--out",
+        ),
+        (
+            vec!["ident", "--data", s(&rec), "--fs", "750", "--json", m],
+            "--json",
+        ),
+        (
+            vec![
+                "frf",
+                "--input",
+                s(&rec),
+                "--fs",
+                "750",
+                "--force",
+                "u",
+                "--period",
+                "100",
+                "--band",
+                "5:100",
+                "--write-flat",
+                m,
+            ],
+            "--write-flat",
+        ),
+    ] {
+        let (ok, out, err) = hyst(&args);
+        let said = format!("{flag} {m}: the folder ");
+        assert!(
+            !ok && err.contains(&said) && err.contains("does not exist"),
+            "{args:?}: {err}"
+        );
+        // Nothing was computed: no line of results was printed.
+        assert!(out.is_empty(), "{args:?}: {out}");
+    }
+}
+
 #[test]
 fn diverging_simulation_names_the_sample() {
     let u = write("ones.csv", &format!("u\n{}", "1\n".repeat(2000)));
