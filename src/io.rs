@@ -79,6 +79,18 @@ pub enum IoError {
         /// The repeated name.
         column: String,
     },
+    /// The header has no comma but another separator: the file is not comma-separated.
+    #[error(
+        "{path}: the header `{header}` has no comma but {separator}: hyst reads comma-separated values (save the file as CSV with commas)"
+    )]
+    NotCommaSeparated {
+        /// The file.
+        path: PathBuf,
+        /// The header line.
+        header: String,
+        /// The separator it seems to use.
+        separator: &'static str,
+    },
     /// The file has a header but no data rows.
     #[error("{path}: the record is empty (a header but no rows)")]
     Empty {
@@ -123,12 +135,16 @@ impl Table {
 }
 
 /// Read a CSV file with a header line. Empty lines are skipped; every row must have one cell
-/// per column of the header, and every cell must be a finite number.
+/// per column of the header, and every cell must be a finite number. A byte-order mark, CRLF
+/// line ends and double quotes around the names are accepted; a file separated by `;` or tabs
+/// is an error that says so.
 pub fn read_csv(path: &Path) -> Result<Table, IoError> {
     let text = std::fs::read_to_string(path).map_err(|source| IoError::File {
         path: path.to_path_buf(),
         source,
     })?;
+    // A byte-order mark (spreadsheets write one) would become part of the first name.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
     let mut lines = text
         .lines()
         .enumerate()
@@ -138,7 +154,33 @@ pub fn read_csv(path: &Path) -> Result<Table, IoError> {
             path: path.to_path_buf(),
         });
     };
-    let names: Vec<String> = header.split(',').map(|s| s.trim().to_string()).collect();
+    if !header.contains(',') {
+        let separator = if header.contains(';') {
+            Some("`;`")
+        } else if header.contains('\t') {
+            Some("tabs")
+        } else {
+            None
+        };
+        if let Some(separator) = separator {
+            return Err(IoError::NotCommaSeparated {
+                path: path.to_path_buf(),
+                header: header.to_string(),
+                separator,
+            });
+        }
+    }
+    // Names may be quoted ("y"); the quotes are not part of them.
+    let names: Vec<String> = header
+        .split(',')
+        .map(|s| {
+            let s = s.trim();
+            s.strip_prefix('"')
+                .and_then(|q| q.strip_suffix('"'))
+                .unwrap_or(s)
+                .to_string()
+        })
+        .collect();
     if let Some(column) = repeated(&names) {
         return Err(IoError::DuplicateColumn {
             path: path.to_path_buf(),
@@ -226,4 +268,59 @@ pub fn data_dir() -> Option<PathBuf> {
         Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data"),
     ];
     candidates.into_iter().find(|p| p.is_dir())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn file(name: &str, text: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("hyst-io-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    }
+
+    /// What spreadsheets and other tools write reads as the plain file does: a byte-order
+    /// mark (invisible in an error, so `--columns y` failed against a header that printed as
+    /// `y`), quoted names, CRLF line ends, spaces after the commas.
+    #[test]
+    fn spreadsheet_exports_read_as_plain_files() {
+        let plain = read_csv(&file("plain.csv", "t,y\n0,1.5\n1,-2\n")).unwrap();
+        for (name, text) in [
+            ("bom.csv", "\u{feff}t,y\n0,1.5\n1,-2\n"),
+            ("quoted.csv", "\"t\",\"y\"\n0,1.5\n1,-2\n"),
+            ("crlf.csv", "t,y\r\n0,1.5\r\n1,-2\r\n"),
+            ("spaces.csv", "t, y\n0, 1.5\n1, -2\n\n"),
+        ] {
+            let t = read_csv(&file(name, text)).unwrap();
+            assert_eq!(t.names, plain.names, "{name}");
+            assert_eq!(t.columns, plain.columns, "{name}");
+        }
+    }
+
+    /// A file separated by semicolons or tabs is named as such, not as a cell that is not a
+    /// number.
+    #[test]
+    fn another_separator_is_named() {
+        for (name, text, sep) in [
+            ("semi.csv", "t;y\n0;1.5\n", "`;`"),
+            ("tab.csv", "t\ty\n0\t1.5\n", "tabs"),
+        ] {
+            let e = read_csv(&file(name, text)).unwrap_err();
+            assert!(
+                matches!(e, IoError::NotCommaSeparated { .. }),
+                "{name}: {e}"
+            );
+            let said = e.to_string();
+            assert!(
+                said.contains(name) && said.contains(sep) && said.contains("comma-separated"),
+                "{said}"
+            );
+        }
+        // One column whose name has no separator in it is still a one-column file.
+        let t = read_csv(&file("one.csv", "y\n1\n2\n")).unwrap();
+        assert_eq!(t.names, ["y"]);
+    }
 }
