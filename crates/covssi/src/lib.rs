@@ -145,6 +145,22 @@ pub enum SsiError {
         /// Toeplitz columns.
         cols: usize,
     },
+    /// A correlation matrix given to [`identify_from_correlations`] does not have
+    /// channels × references entries.
+    #[error(
+        "the correlation matrix at lag {lag} has {len} entries; {channels} channels × {references} references need {}",
+        channels.saturating_mul(*references)
+    )]
+    CorrelationShape {
+        /// The lag whose matrix is wrong.
+        lag: usize,
+        /// Entries it has.
+        len: usize,
+        /// Channels l.
+        channels: usize,
+        /// References r.
+        references: usize,
+    },
     /// An option is out of range.
     #[error("option `{name}` is invalid: {value}")]
     InvalidOption {
@@ -526,6 +542,22 @@ pub fn identify_from_correlations(
     check_fs(fs)?;
     let i = block_rows;
     let (l, r) = (corr.channels, corr.references);
+    if l == 0 || r == 0 {
+        return Err(SsiError::NoChannels);
+    }
+    if let Some((lag, m)) = corr
+        .r
+        .iter()
+        .enumerate()
+        .find(|(_, m)| m.len() != l.saturating_mul(r))
+    {
+        return Err(SsiError::CorrelationShape {
+            lag,
+            len: m.len(),
+            channels: l,
+            references: r,
+        });
+    }
     if i < 2 || corr.r.len() < i.saturating_mul(2) {
         return Err(SsiError::InvalidOption {
             name: "block_rows (needs 2·block_rows correlation lags)",

@@ -393,3 +393,32 @@ fn refinement_options_are_checked() {
         Err(SsiError::InvalidOption { name: "tolerance", value }) if value.is_nan()
     ));
 }
+
+#[test]
+fn correlations_of_the_wrong_shape_are_named() {
+    // Correlations built by hand (from another tool, say) must have l·r entries per lag.
+    let good = covssi::corr::direct(&[&sine(500), &sine(500)], &[0, 1], 40);
+    let mut short = good.clone();
+    short.r[7].pop();
+    let e =
+        covssi::identify_from_correlations(&short, 10.0, 20, &SsiOptions::default()).unwrap_err();
+    assert_eq!(
+        e,
+        SsiError::CorrelationShape {
+            lag: 7,
+            len: 3,
+            channels: 2,
+            references: 2
+        }
+    );
+    assert!(e.to_string().contains("lag 7 has 3 entries"), "{e}");
+    let none = covssi::Correlations {
+        channels: 0,
+        references: 0,
+        r: vec![vec![]; 40],
+    };
+    assert_eq!(
+        covssi::identify_from_correlations(&none, 10.0, 20, &SsiOptions::default()),
+        Err(SsiError::NoChannels)
+    );
+}
