@@ -126,7 +126,10 @@ impl Multisine {
 
     fn check(&self) -> Result<(), SimError> {
         check_level("rms", self.rms)?;
-        if self.first_bin == 0 || self.first_bin > self.last_bin || 2 * self.last_bin >= self.period
+        // Saturating: a last bin past usize::MAX / 2 must fail, not wrap round and pass.
+        if self.first_bin == 0
+            || self.first_bin > self.last_bin
+            || self.last_bin.saturating_mul(2) >= self.period
         {
             return Err(SimError::InvalidSignal {
                 what: "multisine band (bins)",
@@ -290,6 +293,21 @@ mod tests {
             rms: 1.0,
         };
         assert_eq!(huge.generate(1), Err(too_long));
+        // A band's last bin past half of usize::MAX is no band below Nyquist: 2·last_bin
+        // must not wrap round into a small number that passes.
+        let wrapped = Multisine {
+            period: 8192,
+            first_bin: 1,
+            last_bin: usize::MAX / 2 + 2,
+            rms: 1.0,
+        };
+        assert!(matches!(
+            wrapped.generate(1),
+            Err(SimError::InvalidSignal {
+                what: "multisine band (bins)",
+                ..
+            })
+        ));
         // A sweep's parameters must give numbers.
         let sweep = Sweep::benchmark();
         for (bad, what, value) in [
