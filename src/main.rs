@@ -674,22 +674,19 @@ fn ssi(a: &SsiArgs) -> Result<(), Error> {
     };
     // Errors of covssi name the file and the columns they came from; an option out of
     // range is named by the flag that set it.
+    let lag_too_short = |flag: &str, rows: f64| {
+        fail(format!(
+            "{flag} gives {rows} block row(s) at {fs_used} Hz; SSI needs at least 2: give a longer lag"
+        ))
+    };
     let context = |e: covssi::SsiError| {
         if let covssi::SsiError::InvalidOption { name, value } = &e {
             let flag = match *name {
+                // A lag given as a time is too short for the rate: say what it gave.
                 "block_rows" => match block_rows {
                     BlockRows::Count(_) => Some(("--block-rows", "at least 2")),
-                    // A lag given as a time is too short for the rate: say what it gave.
-                    _ => {
-                        let flag = if a.lag_seconds.is_some() {
-                            "--lag-seconds"
-                        } else {
-                            "--lag-periods"
-                        };
-                        return fail(format!(
-                            "{flag} gives {value} block row(s) at {fs_used} Hz; SSI needs at least 2: give a longer lag"
-                        ));
-                    }
+                    BlockRows::Seconds(_) => return lag_too_short("--lag-seconds", *value),
+                    BlockRows::Periods { .. } => return lag_too_short("--lag-periods", *value),
                 },
                 "block_rows (seconds)" => Some(("--lag-seconds", "positive and finite")),
                 "block_rows (periods: count)" => {
