@@ -3,15 +3,21 @@
 //! ```json
 //! {"mass": 2, "damping": 10, "stiffness": 5e4,
 //!  "bouc_wen": {"alpha": 5e4, "beta_gamma": 800, "beta_delta": -1100, "nu": 1},
-//!  "cubic_stiffness": 0, "quadratic_damping": 0,
+//!  "cubic_stiffness": 0, "quadratic_stiffness": 0, "quadratic_damping": 0, "offset": 0,
+//!  "clearance": {"stiffness": 3e4, "gap": 1e-3},
 //!  "coulomb": {"force": 1, "smoothing_velocity": 1e-3},
+//!  "surface": {"x_scale": 1e-3, "v_scale": 0.2, "terms": {"xi^3": 4.5, "xi^2 eta": -1}},
 //!  "second_mass": {"mass": 0.5, "stiffness": 2e4, "damping": 3}}
 //! ```
 //! `bouc_wen` may instead give `beta`, `gamma`, `delta`; `zener: {"k_inf", "omega"}` replaces it
-//! for a relaxation element; with neither the oscillator is linear. Only `mass`, `damping` and
-//! `stiffness` are required.
+//! for a relaxation element; with neither the oscillator is linear. A surface's terms are
+//! named as in [`hyst_model::ForceSurface::TERMS`] (ξ = x/x_scale, η = ẋ/v_scale, force in
+//! N); terms not named are 0. Only `mass`, `damping` and `stiffness` are required.
 
-use hyst_model::{BoucWen, Coulomb, ExtraForces, Oscillator, Restoring, SecondMass, ZenerParams};
+use hyst_model::{
+    BoucWen, Clearance, Coulomb, ExtraForces, ForceSurface, Oscillator, Restoring, SURFACE_TERMS,
+    SecondMass, ZenerParams,
+};
 use serde_json::{Map, Value, json};
 
 /// Errors of reading parameters from JSON.
@@ -91,9 +97,37 @@ pub fn oscillator_from_json(text: &str) -> Result<Oscillator, ParamsError> {
     }
     let mut extras = ExtraForces {
         cubic_stiffness: opt_num(o, "", "cubic_stiffness", 0.0)?,
+        quadratic_stiffness: opt_num(o, "", "quadratic_stiffness", 0.0)?,
         quadratic_damping: opt_num(o, "", "quadratic_damping", 0.0)?,
+        offset: opt_num(o, "", "offset", 0.0)?,
         ..ExtraForces::default()
     };
+    if let Some(g) = o.get("clearance") {
+        let g = object(g, "clearance")?;
+        extras.clearance = Some(Clearance {
+            stiffness: num(g, "clearance.", "stiffness")?,
+            gap: num(g, "clearance.", "gap")?,
+        });
+    }
+    if let Some(sf) = o.get("surface") {
+        let sf = object(sf, "surface")?;
+        let mut coefficients = [0.0; SURFACE_TERMS];
+        if let Some(t) = sf.get("terms") {
+            let t = object(t, "surface.terms")?;
+            for name in t.keys() {
+                let i = ForceSurface::TERMS
+                    .iter()
+                    .position(|n| n == name)
+                    .ok_or_else(|| ParamsError::Field(format!("surface.terms.{name}")))?;
+                coefficients[i] = num(t, "surface.terms.", name)?;
+            }
+        }
+        extras.surface = Some(ForceSurface {
+            x_scale: num(sf, "surface.", "x_scale")?,
+            v_scale: num(sf, "surface.", "v_scale")?,
+            coefficients,
+        });
+    }
     if let Some(c) = o.get("coulomb") {
         let c = object(c, "coulomb")?;
         extras.coulomb = Some(Coulomb {
@@ -140,8 +174,32 @@ pub fn insert_extras(m: &mut Map<String, Value>, e: &ExtraForces) {
     if e.cubic_stiffness != 0.0 {
         m.insert("cubic_stiffness".into(), json!(e.cubic_stiffness));
     }
+    if e.quadratic_stiffness != 0.0 {
+        m.insert("quadratic_stiffness".into(), json!(e.quadratic_stiffness));
+    }
+    if e.offset != 0.0 {
+        m.insert("offset".into(), json!(e.offset));
+    }
+    if let Some(g) = &e.clearance {
+        m.insert(
+            "clearance".into(),
+            json!({"stiffness": g.stiffness, "gap": g.gap}),
+        );
+    }
     if e.quadratic_damping != 0.0 {
         m.insert("quadratic_damping".into(), json!(e.quadratic_damping));
+    }
+    if let Some(sf) = &e.surface {
+        let terms: Map<String, Value> = ForceSurface::TERMS
+            .iter()
+            .zip(&sf.coefficients)
+            .filter(|(_, c)| **c != 0.0)
+            .map(|(n, c)| (n.to_string(), json!(c)))
+            .collect();
+        m.insert(
+            "surface".into(),
+            json!({"x_scale": sf.x_scale, "v_scale": sf.v_scale, "terms": terms}),
+        );
     }
     if let Some(c) = &e.coulomb {
         m.insert(
@@ -170,6 +228,20 @@ mod tests {
             damping: 3.0,
         });
         o.extras.cubic_stiffness = 1e8;
+        o.extras.quadratic_stiffness = -2e6;
+        o.extras.offset = 0.25;
+        o.extras.clearance = Some(Clearance {
+            stiffness: 3e4,
+            gap: 1e-3,
+        });
+        let mut coefficients = [0.0; SURFACE_TERMS];
+        coefficients[3] = 0.25;
+        coefficients[8] = -1.5;
+        o.extras.surface = Some(ForceSurface {
+            x_scale: 1e-3,
+            v_scale: 0.2,
+            coefficients,
+        });
         let text = oscillator_to_json(&o).to_string();
         let back = oscillator_from_json(&text).unwrap();
         // β is normalised to 1 by the products form; the dynamics are identical.
@@ -196,5 +268,13 @@ mod tests {
         )
         .unwrap_err();
         assert!(e.to_string().contains("zener.omega"), "{e}");
+        let e = oscillator_from_json(
+            r#"{"mass": 2, "damping": 1, "stiffness": 3, "surface": {"x_scale": 1, "v_scale": 1, "terms": {"xi^7": 1}}}"#,
+        )
+        .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "field `surface.terms.xi^7` is missing or not a number"
+        );
     }
 }

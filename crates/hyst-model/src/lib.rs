@@ -17,10 +17,14 @@
 //!   whose linear state-space form is eq. (25) and characteristic polynomial eq. (32).
 //!
 //! and the extra forces, each off by default:
-//! cubic spring $k_3 x^3$, quadratic damping $c_2\dot x|\dot x|$, Coulomb friction
+//! cubic spring $k_3 x^3$, quadratic (asymmetric) spring $k_q x^2$, a clearance spring
+//! $k_g\,\mathrm{dz}_g(x)$ that engages beyond $\pm g$ ($\mathrm{dz}_g(x) = x - g\,\mathrm{sgn}\,x$
+//! for $|x| > g$, else 0), quadratic damping $c_2\dot x|\dot x|$, Coulomb friction
 //! $F_c\tanh(\dot x/v_\varepsilon)$ (sign function smoothed over the velocity scale
-//! $v_\varepsilon$ so that fixed-step integrators stay accurate), and a second mass $m_2$ attached
-//! to the main mass by a spring $k_2$ and damper $c_2$:
+//! $v_\varepsilon$ so that fixed-step integrators stay accurate), a force surface
+//! $\sum_i\theta_i\phi_i(x/x_s, \dot x/v_s)$ on a fixed polynomial basis ([`ForceSurface`]),
+//! a constant force $f_0$ (a preload, or an offset of the measured input), and a second mass
+//! $m_2$ attached to the main mass by a spring $k_2$ and damper $c_2$:
 //! $m_2\ddot x_2 = k_2(x - x_2) + c_2(\dot x - \dot x_2)$. The measured output is always $x$.
 //!
 //! Parameters are checked by [`Oscillator::validate`], which returns a [`ModelError`] naming
@@ -245,26 +249,224 @@ pub struct SecondMass {
     pub damping: f64,
 }
 
+/// A spring that engages only beyond a clearance: force $k_g(x - g\,\mathrm{sgn}\,x)$ for
+/// $|x| > g$, none within $\pm g$ (a gap, a stop, a loose joint).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Clearance {
+    /// Stiffness $k_g$ of the spring once engaged (N/m).
+    pub stiffness: f64,
+    /// Half-width $g$ of the clearance (m), > 0.
+    pub gap: f64,
+}
+
+impl Clearance {
+    /// The force at displacement `x`.
+    #[inline(always)]
+    pub fn force(&self, x: f64) -> f64 {
+        if x > self.gap {
+            self.stiffness * (x - self.gap)
+        } else if x < -self.gap {
+            self.stiffness * (x + self.gap)
+        } else {
+            0.0
+        }
+    }
+
+    /// d(force)/dx.
+    pub fn slope(&self, x: f64) -> f64 {
+        if x.abs() > self.gap {
+            self.stiffness
+        } else {
+            0.0
+        }
+    }
+}
+
+/// Terms of a [`ForceSurface`].
+pub const SURFACE_TERMS: usize = 10;
+
+/// A force over the phase plane $(x, \dot x)$ on a fixed basis in the scaled coordinates
+/// $\xi = x/x_s$, $\eta = \dot x/v_s$ (the scales are the record's RMS displacement and
+/// velocity, so every term is of order one): even and odd parts in $x$ apart
+/// ($\xi^2, \xi^3, \xi^4, \xi^5$), in $\dot x$ ($\eta^2, \eta|\eta|, \eta^3$, and a jump
+/// at $\dot x = 0$, $\tanh(\eta/0.05)$), and two mixed terms ($\xi^2\eta$, $\xi\eta^2$). The
+/// linear terms $\xi$, $\eta$ are the oscillator's own $k$ and $c$. Force
+/// $\sum_i\theta_i\phi_i(\xi, \eta)$ with $\theta_i$ in newtons.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ForceSurface {
+    /// Displacement scale $x_s$ (m), > 0.
+    pub x_scale: f64,
+    /// Velocity scale $v_s$ (m/s), > 0.
+    pub v_scale: f64,
+    /// Coefficient $\theta_i$ (N) of each term of [`ForceSurface::TERMS`]; 0 leaves a term out.
+    pub coefficients: [f64; SURFACE_TERMS],
+}
+
+/// Smoothing of the surface's jump term, in units of the velocity scale.
+const SURFACE_JUMP_WIDTH: f64 = 0.05;
+
+impl ForceSurface {
+    /// The terms' names, in the order of [`ForceSurface::coefficients`] (ξ = x/x_s,
+    /// η = ẋ/v_s).
+    pub const TERMS: [&'static str; SURFACE_TERMS] = [
+        "xi^2",
+        "xi^3",
+        "xi^4",
+        "xi^5",
+        "eta^2",
+        "eta|eta|",
+        "eta^3",
+        "jump(eta)",
+        "xi^2 eta",
+        "xi eta^2",
+    ];
+
+    /// The basis functions at scaled displacement `xi` and velocity `eta`.
+    #[inline(always)]
+    pub fn basis(xi: f64, eta: f64) -> [f64; SURFACE_TERMS] {
+        let (x2, e2) = (xi * xi, eta * eta);
+        [
+            x2,
+            x2 * xi,
+            x2 * x2,
+            x2 * x2 * xi,
+            e2,
+            eta * eta.abs(),
+            e2 * eta,
+            (eta / SURFACE_JUMP_WIDTH).tanh(),
+            x2 * eta,
+            xi * e2,
+        ]
+    }
+
+    /// Partial derivatives of each basis function with respect to `xi` and to `eta`.
+    fn basis_gradient(xi: f64, eta: f64) -> ([f64; SURFACE_TERMS], [f64; SURFACE_TERMS]) {
+        let (x2, e2) = (xi * xi, eta * eta);
+        let t = (eta / SURFACE_JUMP_WIDTH).tanh();
+        (
+            [
+                2.0 * xi,
+                3.0 * x2,
+                4.0 * x2 * xi,
+                5.0 * x2 * x2,
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                2.0 * xi * eta,
+                e2,
+            ],
+            [
+                0.0,
+                0.0,
+                0.0,
+                0.0,
+                2.0 * eta,
+                2.0 * eta.abs(),
+                3.0 * e2,
+                (1.0 - t * t) / SURFACE_JUMP_WIDTH,
+                x2,
+                2.0 * xi * eta,
+            ],
+        )
+    }
+
+    /// The force at displacement `x` and velocity `v`.
+    #[inline(always)]
+    pub fn force(&self, x: f64, v: f64) -> f64 {
+        let b = Self::basis(x / self.x_scale, v / self.v_scale);
+        b.iter().zip(&self.coefficients).map(|(p, c)| p * c).sum()
+    }
+
+    /// Partial derivatives of the force with respect to `x` and `v`.
+    pub fn gradient(&self, x: f64, v: f64) -> (f64, f64) {
+        let (gx, gv) = Self::basis_gradient(x / self.x_scale, v / self.v_scale);
+        let dot = |g: &[f64; SURFACE_TERMS]| -> f64 {
+            g.iter().zip(&self.coefficients).map(|(p, c)| p * c).sum()
+        };
+        (dot(&gx) / self.x_scale, dot(&gv) / self.v_scale)
+    }
+}
+
 /// Extra force terms that can be added to any oscillator. All off by default.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct ExtraForces {
     /// Cubic spring coefficient $k_3$ (N/m³): force $k_3x^3$.
     pub cubic_stiffness: f64,
+    /// Quadratic spring coefficient $k_q$ (N/m²): force $k_qx^2$, an asymmetric stiffness.
+    pub quadratic_stiffness: f64,
+    /// A spring beyond a clearance.
+    pub clearance: Option<Clearance>,
     /// Quadratic damping coefficient (N s²/m²): force $c_q\dot x|\dot x|$.
     pub quadratic_damping: f64,
     /// Smoothed Coulomb friction.
     pub coulomb: Option<Coulomb>,
+    /// A force surface over $(x, \dot x)$.
+    pub surface: Option<ForceSurface>,
     /// A second mass (second mode).
     pub second_mass: Option<SecondMass>,
+    /// A constant force $f_0$ (N): a static preload, or an offset of the measured input
+    /// against the output. It shifts the equilibrium and leaves the dynamics (the poles) as
+    /// they are.
+    pub offset: f64,
 }
 
 impl ExtraForces {
     /// Whether every extra term is off.
     pub fn is_empty(&self) -> bool {
         self.cubic_stiffness == 0.0
+            && self.quadratic_stiffness == 0.0
+            && self.clearance.is_none()
             && self.quadratic_damping == 0.0
             && self.coulomb.is_none()
+            && self.surface.is_none()
             && self.second_mass.is_none()
+            && self.offset == 0.0
+    }
+
+    /// The force of every term that is a function of the main mass's $(x, \dot x)$ alone
+    /// (all but the second mass).
+    #[inline(always)]
+    pub fn static_force(&self, x: f64, v: f64) -> f64 {
+        let mut f = self.offset;
+        if self.cubic_stiffness != 0.0 {
+            f += self.cubic_stiffness * x * x * x;
+        }
+        if self.quadratic_stiffness != 0.0 {
+            f += self.quadratic_stiffness * x * x;
+        }
+        if let Some(g) = &self.clearance {
+            f += g.force(x);
+        }
+        if self.quadratic_damping != 0.0 {
+            f += self.quadratic_damping * v * v.abs();
+        }
+        if let Some(cf) = &self.coulomb {
+            f += cf.force * (v / cf.smoothing_velocity).tanh();
+        }
+        if let Some(s) = &self.surface {
+            f += s.force(x, v);
+        }
+        f
+    }
+
+    /// Partial derivatives of [`ExtraForces::static_force`] with respect to `x` and `v`.
+    pub fn static_gradient(&self, x: f64, v: f64) -> (f64, f64) {
+        let mut dx = 3.0 * self.cubic_stiffness * x * x + 2.0 * self.quadratic_stiffness * x;
+        let mut dv = 2.0 * self.quadratic_damping * v.abs();
+        if let Some(g) = &self.clearance {
+            dx += g.slope(x);
+        }
+        if let Some(cf) = &self.coulomb {
+            let t = (v / cf.smoothing_velocity).tanh();
+            dv += cf.force * (1.0 - t * t) / cf.smoothing_velocity;
+        }
+        if let Some(s) = &self.surface {
+            let (a, b) = s.gradient(x, v);
+            dx += a;
+            dv += b;
+        }
+        (dx, dv)
     }
 }
 
@@ -364,7 +566,20 @@ impl Oscillator {
         }
         let e = &self.extras;
         finite("cubic_stiffness", e.cubic_stiffness)?;
+        finite("quadratic_stiffness", e.quadratic_stiffness)?;
+        finite("offset", e.offset)?;
+        if let Some(g) = &e.clearance {
+            finite("clearance.stiffness", g.stiffness)?;
+            positive("clearance.gap", g.gap)?;
+        }
         finite("quadratic_damping", e.quadratic_damping)?;
+        if let Some(sf) = &e.surface {
+            positive("surface.x_scale", sf.x_scale)?;
+            positive("surface.v_scale", sf.v_scale)?;
+            for c in &sf.coefficients {
+                finite("surface.coefficients", *c)?;
+            }
+        }
         if let Some(cf) = &e.coulomb {
             finite("coulomb.force", cf.force)?;
             positive("coulomb.smoothing_velocity", cf.smoothing_velocity)?;
@@ -381,17 +596,8 @@ impl Oscillator {
     #[inline(always)]
     pub fn derivative(&self, s: &State, u: f64) -> State {
         let (x, v, z) = (s[0], s[1], s[2]);
-        let mut force = u - self.damping * v - self.stiffness * x - z;
         let e = &self.extras;
-        if e.cubic_stiffness != 0.0 {
-            force -= e.cubic_stiffness * x * x * x;
-        }
-        if e.quadratic_damping != 0.0 {
-            force -= e.quadratic_damping * v * v.abs();
-        }
-        if let Some(cf) = &e.coulomb {
-            force -= cf.force * (v / cf.smoothing_velocity).tanh();
-        }
+        let mut force = u - self.damping * v - self.stiffness * x - z - e.static_force(x, v);
         let (mut dx2, mut dv2) = (0.0, 0.0);
         if let Some(sm) = &e.second_mass {
             let coupling = sm.stiffness * (x - s[3]) + sm.damping * (v - s[4]);
@@ -416,12 +622,9 @@ impl Oscillator {
         let mut dfdx = -self.stiffness;
         let mut dfdv = -self.damping;
         let e = &self.extras;
-        dfdx -= 3.0 * e.cubic_stiffness * x * x;
-        dfdv -= 2.0 * e.quadratic_damping * v.abs();
-        if let Some(cf) = &e.coulomb {
-            let t = (v / cf.smoothing_velocity).tanh();
-            dfdv -= cf.force * (1.0 - t * t) / cf.smoothing_velocity;
-        }
+        let (gx, gv) = e.static_gradient(x, v);
+        dfdx -= gx;
+        dfdv -= gv;
         if let Some(sm) = &e.second_mass {
             dfdx -= sm.stiffness;
             dfdv -= sm.damping;
@@ -487,6 +690,21 @@ impl Oscillator {
         if e.coulomb.is_some() {
             return Err(ModelError::NotLinear {
                 what: "Coulomb friction",
+            });
+        }
+        if e.quadratic_stiffness != 0.0 {
+            return Err(ModelError::NotLinear {
+                what: "a quadratic spring",
+            });
+        }
+        if e.clearance.is_some() {
+            return Err(ModelError::NotLinear {
+                what: "a clearance spring",
+            });
+        }
+        if e.surface.is_some() {
+            return Err(ModelError::NotLinear {
+                what: "a force surface",
             });
         }
         // Select the used rows/columns of the full 5-state Jacobian, which is exact for a
@@ -628,16 +846,28 @@ mod tests {
         let mut o = Oscillator::benchmark();
         o.extras = ExtraForces {
             cubic_stiffness: 1e9,
+            quadratic_stiffness: -3e6,
+            // Engaged at the state below (x = 1e-3): the force's slope is the spring's there.
+            clearance: Some(Clearance {
+                stiffness: 2e4,
+                gap: 5e-4,
+            }),
             quadratic_damping: 3.0,
             coulomb: Some(Coulomb {
                 force: 2.0,
                 smoothing_velocity: 0.05,
+            }),
+            surface: Some(ForceSurface {
+                x_scale: 8e-4,
+                v_scale: 0.1,
+                coefficients: [1.0, -2.0, 0.5, 0.3, -0.7, 1.1, 0.2, 0.4, -0.9, 0.6],
             }),
             second_mass: Some(SecondMass {
                 mass: 0.5,
                 stiffness: 2e4,
                 damping: 3.0,
             }),
+            offset: 0.4,
         };
         let s = State::new(1e-3, 0.07, 20.0, -2e-4, 0.01);
         let j = o.jacobian(&s);
@@ -653,6 +883,51 @@ mod tests {
                 assert_relative_eq!(j[(r, c)], d[r], epsilon = 1e-6, max_relative = 1e-6);
             }
         }
+    }
+
+    /// The clearance spring is off within its gap and continuous where it engages; the
+    /// surface's force is its coefficients times its basis at the scaled state; a model with
+    /// either is not linear, and their bad values are named.
+    #[test]
+    fn clearance_and_surface_forces_are_what_they_say() {
+        let g = Clearance {
+            stiffness: 3e4,
+            gap: 1e-3,
+        };
+        assert_eq!(g.force(0.5e-3), 0.0);
+        assert_eq!(g.force(-1e-3), 0.0);
+        assert_relative_eq!(g.force(1.5e-3), 15.0, max_relative = 1e-12);
+        assert_relative_eq!(g.force(-3e-3), -60.0, max_relative = 1e-12);
+        let mut c = [0.0; SURFACE_TERMS];
+        c[1] = 2.0; // ξ³
+        c[5] = -1.0; // η|η|
+        let sf = ForceSurface {
+            x_scale: 1e-3,
+            v_scale: 0.2,
+            coefficients: c,
+        };
+        // ξ = 2, η = −0.5: 2·8 − (−0.5·0.5) = 16.25 N.
+        assert_relative_eq!(sf.force(2e-3, -0.1), 16.25, max_relative = 1e-12);
+        let mut o = Oscillator::linear(1.0, 1.0, 1.0);
+        o.extras.surface = Some(sf);
+        assert!(matches!(
+            o.state_space(),
+            Err(ModelError::NotLinear {
+                what: "a force surface"
+            })
+        ));
+        o.extras.surface = None;
+        o.extras.clearance = Some(Clearance {
+            stiffness: 1.0,
+            gap: 0.0,
+        });
+        assert_eq!(
+            o.validate(),
+            Err(ModelError::NonPositive {
+                name: "clearance.gap",
+                value: 0.0
+            })
+        );
     }
 
     #[test]

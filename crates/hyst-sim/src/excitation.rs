@@ -162,6 +162,40 @@ impl Multisine {
     }
 }
 
+/// Band-limited Gaussian noise: `n` samples at `fs` whose spectrum is flat on average on
+/// [`f_lo`, `f_hi`] Hz and zero elsewhere, scaled so that its sample RMS is exactly `rms`.
+/// Made as the first half of a period of 2n samples with independent complex Gaussian DFT
+/// coefficients on the band, so that the record is random, not periodic (a random force
+/// behind a band-pass filter), and band-limited between its samples too.
+pub fn band_limited_noise(
+    n: usize,
+    fs: f64,
+    f_lo: f64,
+    f_hi: f64,
+    rms: f64,
+    seed: u64,
+) -> Result<Vec<f64>, SimError> {
+    let period = n.checked_mul(2).ok_or(SimError::TooLong { samples: n })?;
+    drop(signal_buffer(period)?);
+    let band = Multisine::band(period, fs, f_lo, f_hi, rms)?;
+    let mut r = rng(seed);
+    let mut planner = RealFftPlanner::<f64>::new();
+    let inv = planner.plan_fft_inverse(period);
+    let mut spec = inv.make_input_vec();
+    for bin in spec.iter_mut().take(band.last_bin + 1).skip(band.first_bin) {
+        *bin = realfft::num_complex::Complex::new(
+            r.sample::<f64, _>(StandardNormal),
+            r.sample::<f64, _>(StandardNormal),
+        );
+    }
+    let mut out = inv.make_output_vec();
+    inv.process(&mut spec, &mut out)
+        .expect("buffer sizes come from the plan");
+    out.truncate(n);
+    scale_to_rms(&mut out, rms);
+    Ok(out)
+}
+
 /// Linear sine sweep $u(t) = a\sin(2\pi(f_0 t + (f_1 - f_0)t^2/(2T)))$ from `f0` to `f1` Hz
 /// over `duration` seconds, evaluated at time `t`.
 ///
@@ -365,6 +399,41 @@ mod tests {
             e.to_string(),
             "no DFT bin of a 1000-sample period at 750 Hz (spacing 0.75 Hz) lies in the band 400–500 Hz below the Nyquist frequency 375 Hz"
         );
+    }
+
+    /// The noise's power lies in its band (up to the leakage of cutting a period in half),
+    /// its RMS is the one asked for, it is not periodic in the record, and seeds differ.
+    #[test]
+    fn band_limited_noise_stays_in_its_band() {
+        let n = 16384;
+        let x = band_limited_noise(n, 750.0, 5.0, 150.0, 20.0, 9).unwrap();
+        let rms = (x.iter().map(|v| v * v).sum::<f64>() / n as f64).sqrt();
+        assert_relative_eq!(rms, 20.0, epsilon = 1e-9);
+        assert_ne!(
+            x,
+            band_limited_noise(n, 750.0, 5.0, 150.0, 20.0, 10).unwrap()
+        );
+        let mut planner = RealFftPlanner::<f64>::new();
+        let f = planner.plan_fft_forward(n);
+        let mut buf = x.clone();
+        let mut spec = f.make_output_vec();
+        f.process(&mut buf, &mut spec).unwrap();
+        let power = |lo: f64, hi: f64| -> f64 {
+            spec.iter()
+                .enumerate()
+                .filter(|(k, _)| (lo..hi).contains(&(*k as f64 * 750.0 / n as f64)))
+                .map(|(_, s)| s.norm_sqr())
+                .sum()
+        };
+        let total = power(0.0, 376.0);
+        // Half a period has the leakage of a rectangular window: its sidelobes fall as
+        // 1/f², so a few per mille of the power lands outside the band, not more.
+        assert!(power(5.0, 150.5) > 0.99 * total);
+        assert!(power(200.0, 376.0) < 1e-3 * total);
+        // Not periodic in the record: its two halves are unrelated.
+        let c: f64 = x[..n / 2].iter().zip(&x[n / 2..]).map(|(a, b)| a * b).sum();
+        assert!(c.abs() < 0.1 * 400.0 * (n / 2) as f64);
+        assert!(band_limited_noise(n, 750.0, 400.0, 500.0, 1.0, 1).is_err());
     }
 
     #[test]

@@ -19,8 +19,11 @@
 
 use hyst_model::{ModelError, Oscillator, State};
 
+mod drift;
 pub mod excitation;
 mod kernel;
+
+pub use drift::simulate_drifting;
 pub mod resample;
 
 /// Errors of simulation and signal generation.
@@ -60,6 +63,14 @@ pub enum SimError {
         requested: usize,
         /// Samples available.
         available: usize,
+    },
+    /// A function asks for an input it cannot take.
+    #[error(
+        "{what} is not an input this simulation takes (it needs a periodic or band-limited record)"
+    )]
+    UnsupportedInput {
+        /// The kind of input given.
+        what: &'static str,
     },
     /// The FIR decimation stages do not multiply to the oversampling factor.
     #[error("decimation stages multiply to {product}, but the oversampling factor is {oversample}")]
@@ -189,6 +200,16 @@ pub enum Input<'a> {
     Periodic(&'a [f64]),
     /// The force as a function of time (s), evaluated at every sub-step.
     Function(&'a (dyn Fn(f64) -> f64 + Sync)),
+    /// A band-limited record already interpolated to `2·oversample` points per sample
+    /// (its samples every `2·oversample`-th, as [`resample::interpolate_band_limited`]
+    /// gives): the RK4 stages read it directly. For many simulations of one record, which
+    /// [`Input::BandLimited`] would interpolate again each time.
+    Interpolated {
+        /// The fine samples; sample k of the record is `samples[k · per_sample]`.
+        samples: &'a [f64],
+        /// Fine points per sample: twice the oversampling factor.
+        per_sample: usize,
+    },
 }
 
 impl std::fmt::Debug for Input<'_> {
@@ -198,6 +219,14 @@ impl std::fmt::Debug for Input<'_> {
             Input::BandLimited(u) => write!(f, "BandLimited({} samples)", u.len()),
             Input::Periodic(u) => write!(f, "Periodic({} samples)", u.len()),
             Input::Function(_) => write!(f, "Function"),
+            Input::Interpolated {
+                samples,
+                per_sample,
+            } => write!(
+                f,
+                "Interpolated({} points, {per_sample} a sample)",
+                samples.len()
+            ),
         }
     }
 }
@@ -300,7 +329,8 @@ where
             Choice::Linear(k) => drive_rk4(&k, s, run, &mut input, sink),
             Choice::BoucWen1(k) => drive_rk4(&k, s, run, &mut input, sink),
             Choice::Zener(k) => drive_rk4(&k, s, run, &mut input, sink),
-            Choice::General(k) => drive_rk4(&k, s, run, &mut input, sink),
+            Choice::Static(k) => drive_rk4(&k, s, run, &mut input, sink),
+            Choice::WithMass(k) => drive_rk4(&k, s, run, &mut input, sink),
         },
     }
 }
@@ -512,6 +542,28 @@ pub fn simulate_from(
                 &mut sink,
             )?
         }
+        Input::Interpolated {
+            samples,
+            per_sample,
+        } => {
+            if per_sample != 2 * r {
+                return Err(SimError::UnsupportedInput {
+                    what: "an interpolated record whose points per sample are not twice the oversampling",
+                });
+            }
+            check_length(samples, (n_samples - 1) * per_sample + 1)?;
+            drive(
+                model,
+                s0,
+                integ,
+                &run,
+                |k, i| {
+                    let base = k * per_sample + 2 * i;
+                    (samples[base], samples[base + 1], samples[base + 2])
+                },
+                &mut sink,
+            )?
+        }
         Input::Function(f) => {
             let dt = 1.0 / fs;
             drive(
@@ -647,6 +699,33 @@ mod tests {
     /// agrees with the run on the exact force (Input::Function) to 1e-4 of its RMS past the
     /// first 100 samples (6.4e-6 when written), where linear interpolation errs by 5.7e-3
     /// (the benchmark's README: 1.1e-2 for its multisine).
+    /// A record interpolated once and given as such simulates exactly as the band-limited
+    /// record it came from (which interpolates it on every call).
+    #[test]
+    fn an_interpolated_record_is_the_band_limited_one() {
+        let u = crate::excitation::band_limited_noise(3000, 750.0, 5.0, 150.0, 50.0, 2).unwrap();
+        let opts = SimOptions {
+            oversample: 4,
+            ..SimOptions::default()
+        };
+        let o = Oscillator::benchmark();
+        let a = simulate(&o, Input::BandLimited(&u), 750.0, u.len(), &opts).unwrap();
+        let fine = resample::interpolate_band_limited(&u, 8);
+        let input = Input::Interpolated {
+            samples: &fine,
+            per_sample: 8,
+        };
+        assert_eq!(simulate(&o, input, 750.0, u.len(), &opts).unwrap(), a);
+        let wrong = Input::Interpolated {
+            samples: &fine,
+            per_sample: 4,
+        };
+        assert!(matches!(
+            simulate(&o, wrong, 750.0, u.len(), &opts),
+            Err(SimError::UnsupportedInput { .. })
+        ));
+    }
+
     #[test]
     fn band_limited_input_matches_the_continuous_force() {
         let o = Oscillator::benchmark();
