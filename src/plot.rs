@@ -121,3 +121,69 @@ fn draw(
         .map_err(|e| e.to_string())?;
     root.present().map_err(|e| e.to_string())
 }
+
+/// A map of values over a grid of cells (`mean[i][j]` over x edges `i..i+1` and y edges
+/// `j..j+1`; `None` cells left blank), blue for negative through white to red for positive,
+/// scaled to the largest magnitude.
+pub fn cell_map(
+    path: &Path,
+    title: &str,
+    xl: &str,
+    yl: &str,
+    x_edges: &[f64],
+    y_edges: &[f64],
+    mean: &[Vec<Option<f64>>],
+) -> Result<(), String> {
+    let (Some(&x0), Some(&x1), Some(&y0), Some(&y1)) = (
+        x_edges.first(),
+        x_edges.last(),
+        y_edges.first(),
+        y_edges.last(),
+    ) else {
+        return Ok(());
+    };
+    let top = mean
+        .iter()
+        .flatten()
+        .flatten()
+        .fold(0.0f64, |a, v| a.max(v.abs()))
+        .max(1e-300);
+    let root = SVGBackend::new(path, (640, 520)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    let mut c = ChartBuilder::on(&root)
+        .caption(
+            format!("{title} (red +, blue −, ±{top:.3e} at full colour)"),
+            ("sans-serif", 16),
+        )
+        .margin(10)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d(x0..x1, y0..y1)
+        .map_err(|e| e.to_string())?;
+    c.configure_mesh()
+        .x_desc(xl)
+        .y_desc(yl)
+        .disable_mesh()
+        .draw()
+        .map_err(|e| e.to_string())?;
+    let shade = |v: f64| {
+        let t = (v / top).clamp(-1.0, 1.0);
+        let fade = |a: u8| (255.0 - (255.0 - a as f64) * t.abs()) as u8;
+        if t >= 0.0 {
+            RGBColor(fade(200), fade(40), fade(40))
+        } else {
+            RGBColor(fade(40), fade(100), fade(200))
+        }
+    };
+    let cells = mean.iter().enumerate().flat_map(|(i, row)| {
+        row.iter().enumerate().filter_map(move |(j, v)| {
+            let v = (*v)?;
+            Some(Rectangle::new(
+                [(x_edges[i], y_edges[j]), (x_edges[i + 1], y_edges[j + 1])],
+                shade(v).filled(),
+            ))
+        })
+    });
+    c.draw_series(cells).map_err(|e| e.to_string())?;
+    root.present().map_err(|e| e.to_string())
+}

@@ -1290,6 +1290,7 @@ fn refine_frees_the_exponent_of_a_sharper_element() {
         s(&rec),
     ]);
     assert!(ok, "{err}");
+    let json = tmp("nu2_refine.json");
     let (ok, out, err) = hyst(&[
         "refine",
         "--data",
@@ -1306,8 +1307,29 @@ fn refine_frees_the_exponent_of_a_sharper_element() {
         "0:6144",
         "--test",
         "6144:8192",
+        "--json",
+        s(&json),
     ]);
     assert!(ok, "{err}");
+    // The report says which start it used, each step's held-out test, the noise level and
+    // whether anything is left; the JSON carries the same.
+    assert!(out.contains("start: linear (asked for linear)"), "{out}");
+    assert!(out.contains("noise level: "), "{out}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(v["start"]["used"], "linear");
+    let p = v["steps"][0]["p_value"]
+        .as_f64()
+        .expect("the first step's p-value");
+    assert!(p < 0.01, "{p}");
+    assert!(v["steps"][0]["trace_signature"].is_string());
+    // White force up to Nyquist (not periodic): the noise cannot be told, and the JSON says
+    // why rather than guessing.
+    assert!(
+        v["noise_level"].is_null() && v["noise_unknown"].is_string(),
+        "{v}"
+    );
+    assert!(v["unexplained"].is_null());
     let steps: Vec<&str> = out
         .lines()
         .filter_map(|l| l.strip_prefix("step: "))
@@ -1355,6 +1377,27 @@ fn refine_needs_an_input_column() {
     assert!(!ok);
     assert!(
         err.contains("no column `u`") && err.contains("refine needs the input"),
+        "{err}"
+    );
+}
+
+/// A test range shorter than the held-out test needs is refused before any work, naming
+/// the rows and how many are needed.
+#[test]
+fn refine_refuses_a_test_range_too_short_for_its_test() {
+    let p = write_input_output("uy_short_test.csv", 1000);
+    let (ok, _, err) = hyst(&[
+        "refine",
+        "--data",
+        s(&p),
+        "--fs",
+        "100",
+        "--test",
+        "800:1000",
+    ]);
+    assert!(!ok);
+    assert!(
+        err.contains("test rows 800:1000 are 200 rows; the held-out test needs at least 512"),
         "{err}"
     );
 }

@@ -1,7 +1,8 @@
 //! The residual loop on data the project's own simulator makes with an effect the
 //! identification is not told about: the right effect is named and the held-out error at least
 //! halves; with no effect, `none`; with a Bouc-Wen element of exponent 2, hysteresis and then
-//! its exponent; on a noise-free record, an effect the held-out rows do not support is refused.
+//! its exponent; on a noise-free record where the held-out rows do not clearly support even
+//! the true effect, nothing is added.
 
 mod common;
 
@@ -70,10 +71,16 @@ fn report(name: &str, r: &refine::Refinement) {
         );
         for e in &s.evidence {
             eprintln!(
-                "    {}: dBIC {:.1}, explained {:.3}",
+                "    {}: dBIC {:.1}, explained {:.3}{}",
                 e.effect.name(),
                 e.delta_bic,
-                e.variance_explained
+                e.variance_explained,
+                e.held_out.map_or(String::new(), |g| format!(
+                    ", held out {:+.2} % (p {:.2e}), {}",
+                    -100.0 * g.relative_gain(),
+                    g.p_value,
+                    e.rejected.as_deref().unwrap_or("")
+                ))
             );
         }
     }
@@ -203,19 +210,18 @@ fn finds_a_sharper_hysteresis_exponent() {
     common::assert_estimates_near("exponent: ", &r.estimates, &expected, 4.0);
 }
 
-/// The held-out check: on a noise-free record of the cubic spring, 16384 samples, the loop
-/// adds the cubic spring and then stops. Quadratic damping, which the truth lacks, is
-/// significant on the estimation rows (measured: ΔBIC −826) but simulates worse on the
-/// held-out rows (8.75 % → 9.43 %), so it is refused with that reason; before the check it
-/// was added. (Its fit was no step towards the truth: it took k₃ further below the true
-/// value, 1.655e7 against 1.671e7 without it and 1.742e7 true, and made up with q = 0.19,
-/// as a temporary probe that kept the refused model showed.
-/// The truth itself scores 9.43 % here, printed below: the free-run simulation of this
-/// hardening oscillator does not lock onto the record, so a lower held-out ε is no proof of
-/// a closer model; the check only refuses a candidate that does not pay on rows its fit
-/// never saw.)
+/// The held-out test asks for a gain that holds block after block, not for a large one. On
+/// a noise-free record of the cubic spring, 16384 samples, the free-run simulation of this
+/// hardening oscillator does not lock onto the record (the true model itself scores 9.43 %
+/// on the held-out rows, printed below), and the cubic spring's candidate, though it lowers
+/// the held-out squared error by about half, does so unevenly over the blocks (measured:
+/// −51.6 %, p = 0.012 over 8 blocks): the loop declines it and stops, saying why, rather than
+/// add what the rows it never saw do not clearly support. (Before the paired test, the
+/// check compared the held-out ε alone: the cubic spring was added, 12.60 → 8.75 %, and
+/// quadratic damping refused after it, 8.75 → 9.43 %.) On the same system with 0.2 % of
+/// noise the cubic spring is found (`finds_a_cubic_spring`).
 #[test]
-fn an_effect_the_held_out_rows_do_not_support_is_refused() {
+fn the_held_out_test_asks_for_a_consistent_gain() {
     let n = 2 * N;
     let mut t = base();
     let u = white_noise(n, 10.0, 31).unwrap();
@@ -236,28 +242,21 @@ fn an_effect_the_held_out_rows_do_not_support_is_refused() {
     report("held-out check", &r);
     let truth = refine::test_error(&t, &rec, held_out).unwrap();
     eprintln!(
-        "held-out check: true model {:.4} %, k3 {:.4e} fitted {:.4e}",
+        "held-out check: true model {:.4} %, loop's model {:.4} %",
         100.0 * truth.epsilon,
-        t.extras.cubic_stiffness,
-        r.model.extras.cubic_stiffness
+        100.0 * r.tests[0].epsilon
     );
     let effects: Vec<Option<Effect>> = r.steps.iter().map(|s| s.effect).collect();
-    assert_eq!(effects, [Some(Effect::CubicStiffness), None]);
-    let last = &r.steps[1];
-    let quad = last
+    assert_eq!(effects, [None]);
+    let cubic = r.steps[0]
         .evidence
         .iter()
-        .find(|e| e.effect == Effect::QuadraticDamping)
+        .find(|e| e.effect == Effect::CubicStiffness)
         .expect("every candidate is reported");
-    eprintln!("held-out check: quadratic damping {quad:?}");
-    assert!(quad.delta_bic < refine::SIGNIFICANT_BIC, "{quad:?}");
-    assert!(quad.model.is_none());
-    // The reason quotes the current model's held-out error as the one it would have raised.
-    let from = format!("from {:.4} %", 100.0 * r.tests[0].epsilon);
-    let why = quad.rejected.as_deref().unwrap_or_default();
-    assert!(
-        why.starts_with("held out: ε rose") && why.contains(&from),
-        "{why}"
-    );
-    assert_eq!(r.model.extras.quadratic_damping, 0.0);
+    let gain = cubic
+        .held_out
+        .expect("the cubic spring is tried on the test rows");
+    assert!(gain.relative_gain() > 0.3 && !gain.accepts(), "{gain:?}");
+    let why = cubic.rejected.as_deref().unwrap_or_default();
+    assert!(why.starts_with("held out: mean squared error -"), "{why}");
 }

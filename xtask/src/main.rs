@@ -8,9 +8,12 @@
 //!   (see `random_sweep.rs`).
 //! - `cargo xtask compare-tools [--seeds N] [--first-seed S] [--timing] [--clusters] [--crb] [--cases NAMES]`
 //!   runs covssi beside pyOMA2 and koma (see `compare.rs`).
+//! - `cargo xtask loop-battery --seed S [--cases NAMES] [--forces periodic,random] [--out FILE]`
+//!   runs the residual loop on records with undeclared effects (see `loop_battery.rs`).
 
 mod compare;
 mod f16;
+mod loop_battery;
 mod random_sweep;
 mod sweep;
 
@@ -22,7 +25,7 @@ use hyst_sim::{Input, SimOptions, simulate};
 
 fn usage() -> ! {
     eprintln!(
-        "usage: cargo xtask bench [rk4] [covssi] [ident] [refine]\n       cargo xtask sweep [--levels FROM:TO:STEP] [--samples N] [--seed S] [--out DIR]\n       cargo xtask sweep-random [--levels FROM:TO:STEP] [--samples N] [--seed S] [--out DIR]\n       cargo xtask f16 [--out DIR]\n       cargo xtask compare-tools [--seeds N] [--first-seed S] [--timing] [--clusters] [--covssi-only] [--crb] [--cases NAMES]"
+        "usage: cargo xtask bench [rk4] [covssi] [ident] [refine]\n       cargo xtask sweep [--levels FROM:TO:STEP] [--samples N] [--seed S] [--out DIR]\n       cargo xtask sweep-random [--levels FROM:TO:STEP] [--samples N] [--seed S] [--out DIR]\n       cargo xtask f16 [--out DIR]\n       cargo xtask compare-tools [--seeds N] [--first-seed S] [--timing] [--clusters] [--covssi-only] [--crb] [--cases NAMES]\n       cargo xtask loop-battery --seed S [--cases NAMES] [--forces periodic,random] [--out FILE]"
     );
     std::process::exit(2)
 }
@@ -656,6 +659,20 @@ fn main() {
             },
         ),
         Some("f16") => f16_cmd(&args[1..]),
+        Some("loop-battery") => {
+            use clap::Parser;
+            #[derive(clap::Parser)]
+            #[command(name = "cargo xtask loop-battery")]
+            struct Cli {
+                #[command(flatten)]
+                args: loop_battery::BatteryArgs,
+            }
+            let cli = Cli::parse_from(&args);
+            if let Err(e) = loop_battery::run(&cli.args) {
+                eprintln!("error: {e}");
+                std::process::exit(1);
+            }
+        }
         Some("compare-tools") => {
             if let Err(e) = compare::run(&args[1..]) {
                 eprintln!("error: {e}");

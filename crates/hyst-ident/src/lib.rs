@@ -214,6 +214,19 @@ pub enum IdentError {
         /// One past the last estimation row.
         end: usize,
     },
+    /// A test range of the residual loop is too short for its held-out test.
+    #[error(
+        "test rows {start}:{end} are {} rows; the held-out test needs at least {needed} (8 blocks of 64)",
+        end - start
+    )]
+    TestTooShort {
+        /// First row.
+        start: usize,
+        /// One past the last row.
+        end: usize,
+        /// Rows needed.
+        needed: usize,
+    },
     /// A sample of a record is too large to be squared and summed in double precision.
     #[error(
         "record {channel} (0 = input, then the outputs), sample {index}: value {value:e} is too large to compute spectra with in double precision (above 1e150): rescale the record, e.g. to other units"
