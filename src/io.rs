@@ -1,10 +1,10 @@
 //! Reading and writing the CSV records the command line works on.
 //!
-//! A record is a header line of column names followed by rows of numbers separated by commas.
+//! A record is a header line of column names followed by rows of numbers separated by `,`,
+//! `;` or tabs (detected from the header, or given), read by the `csv` crate.
 //! Every error names the file, and where it applies the column, the row (1-based, counting the
 //! header as row 1, as a spreadsheet does) and the offending text.
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// Errors of reading or writing CSV records.
@@ -79,17 +79,34 @@ pub enum IoError {
         /// The repeated name.
         column: String,
     },
-    /// The header has no comma but another separator: the file is not comma-separated.
-    #[error(
-        "{path}: the header `{header}` has no comma but {separator}: hyst reads comma-separated values (save the file as CSV with commas)"
-    )]
-    NotCommaSeparated {
+    /// The file is not well-formed delimited text (a quote left open, bytes that are not
+    /// UTF-8).
+    #[error("{path}: row {row}: {what}")]
+    Malformed {
         /// The file.
         path: PathBuf,
-        /// The header line.
-        header: String,
-        /// The separator it seems to use.
-        separator: &'static str,
+        /// 1-based line number.
+        row: usize,
+        /// What the CSV reader found.
+        what: String,
+    },
+    /// A parameters file that is not an oscillator in the schema.
+    #[error("{path}: {what}")]
+    Params {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, naming the key.
+        what: String,
+    },
+    /// Columns of different lengths given to be written side by side.
+    #[error("{path}: columns {names} have lengths {lengths:?}; a table needs them equal")]
+    UnequalColumns {
+        /// The file.
+        path: PathBuf,
+        /// The columns' names.
+        names: String,
+        /// Their lengths.
+        lengths: Vec<usize>,
     },
     /// The file has a header but no data rows.
     #[error("{path}: the record is empty (a header but no rows)")]
@@ -134,53 +151,119 @@ impl Table {
     }
 }
 
-/// Read a CSV file with a header line. Empty lines are skipped; every row must have one cell
-/// per column of the header, and every cell must be a finite number. A byte-order mark, CRLF
-/// line ends and double quotes around the names are accepted; a file separated by `;` or tabs
-/// is an error that says so.
+/// The separator between a record's cells.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
+pub enum Delimiter {
+    /// Whichever of `,` `;` and tab the header line uses most (outside quotes); a header with
+    /// none of them is one column.
+    #[default]
+    Auto,
+    /// `,`
+    Comma,
+    /// `;` (where a comma is the decimal mark, `1,5` reads as 1.5)
+    Semicolon,
+    /// A tab.
+    Tab,
+}
+
+impl Delimiter {
+    fn byte(self) -> Option<u8> {
+        match self {
+            Delimiter::Auto => None,
+            Delimiter::Comma => Some(b','),
+            Delimiter::Semicolon => Some(b';'),
+            Delimiter::Tab => Some(b'\t'),
+        }
+    }
+
+    /// The delimiter the header line uses most, outside double quotes.
+    fn detect(header: &[u8]) -> u8 {
+        let mut counts = [0usize; 3];
+        let mut quoted = false;
+        for &b in header {
+            match b {
+                b'"' => quoted = !quoted,
+                b',' if !quoted => counts[0] += 1,
+                b';' if !quoted => counts[1] += 1,
+                b'\t' if !quoted => counts[2] += 1,
+                _ => {}
+            }
+        }
+        let best = (0..3).max_by_key(|&i| (counts[i], 3 - i)).unwrap_or(0);
+        if counts[best] == 0 {
+            b','
+        } else {
+            [b',', b';', b'\t'][best]
+        }
+    }
+}
+
+/// A cell as a number: a plain float, or with `;` separating cells, a decimal comma.
+fn number(text: &str, delimiter: u8) -> Option<f64> {
+    text.parse().ok().or_else(|| {
+        (delimiter != b',' && text.matches(',').count() == 1)
+            .then(|| text.replace(',', ".").parse().ok())
+            .flatten()
+    })
+}
+
+/// [`read_csv_with`] with the delimiter detected.
 pub fn read_csv(path: &Path) -> Result<Table, IoError> {
-    let text = std::fs::read_to_string(path).map_err(|source| IoError::File {
+    read_csv_with(path, Delimiter::Auto)
+}
+
+/// Read a delimited file with a header line (RFC 4180, by the `csv` crate): cells separated by
+/// `delimiter`, any of them quoted, CRLF or LF line ends, a byte-order mark, spaces around the
+/// cells; empty lines are skipped. Every row must have one cell per column of the header, and
+/// every cell must be a finite number.
+pub fn read_csv_with(path: &Path, delimiter: Delimiter) -> Result<Table, IoError> {
+    let bytes = std::fs::read(path).map_err(|source| IoError::File {
         path: path.to_path_buf(),
         source,
     })?;
     // A byte-order mark (spreadsheets write one) would become part of the first name.
-    let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
-    let mut lines = text
-        .lines()
-        .enumerate()
-        .filter(|(_, l)| !l.trim().is_empty());
-    let Some((_, header)) = lines.next() else {
-        return Err(IoError::NoHeader {
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
+    let first_line = bytes
+        .split(|&b| b == b'\n')
+        .find(|l| !l.iter().all(u8::is_ascii_whitespace))
+        .ok_or_else(|| IoError::NoHeader {
             path: path.to_path_buf(),
-        });
-    };
-    if !header.contains(',') {
-        let separator = if header.contains(';') {
-            Some("`;`")
-        } else if header.contains('\t') {
-            Some("tabs")
-        } else {
-            None
-        };
-        if let Some(separator) = separator {
-            return Err(IoError::NotCommaSeparated {
-                path: path.to_path_buf(),
-                header: header.to_string(),
-                separator,
-            });
+        })?;
+    let sep = delimiter
+        .byte()
+        .unwrap_or_else(|| Delimiter::detect(first_line));
+    let mut reader = csv::ReaderBuilder::new()
+        .delimiter(sep)
+        .has_headers(false)
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .from_reader(bytes);
+    let mut records = reader.records();
+    let csv_error = |e: csv::Error| {
+        let row = e.position().map_or(0, |p| p.line() as usize);
+        IoError::Malformed {
+            path: path.to_path_buf(),
+            row,
+            what: e.to_string(),
         }
-    }
-    // Names may be quoted ("y"); the quotes are not part of them.
-    let names: Vec<String> = header
-        .split(',')
-        .map(|s| {
-            let s = s.trim();
-            s.strip_prefix('"')
-                .and_then(|q| q.strip_suffix('"'))
-                .unwrap_or(s)
-                .to_string()
-        })
-        .collect();
+    };
+    let header = loop {
+        match records.next() {
+            None => {
+                return Err(IoError::NoHeader {
+                    path: path.to_path_buf(),
+                });
+            }
+            Some(r) => {
+                let r = r.map_err(csv_error)?;
+                if !(r.len() == 1 && r[0].is_empty()) {
+                    break r;
+                }
+            }
+        }
+    };
+    let names: Vec<String> = header.iter().map(str::to_string).collect();
     if let Some(column) = repeated(&names) {
         return Err(IoError::DuplicateColumn {
             path: path.to_path_buf(),
@@ -188,20 +271,22 @@ pub fn read_csv(path: &Path) -> Result<Table, IoError> {
         });
     }
     let mut columns: Vec<Vec<f64>> = vec![Vec::new(); names.len()];
-    for (i, line) in lines {
-        let row = i + 1;
-        let found = line.matches(',').count() + 1;
-        if found != names.len() {
+    for r in records {
+        let r = r.map_err(csv_error)?;
+        let row = r.position().map_or(0, |p| p.line() as usize);
+        if r.len() == 1 && r[0].is_empty() {
+            continue;
+        }
+        if r.len() != names.len() {
             return Err(IoError::CellCount {
                 path: path.to_path_buf(),
                 row,
-                found,
+                found: r.len(),
                 expected: names.len(),
             });
         }
-        for (c, cell) in line.split(',').enumerate() {
-            let t = cell.trim();
-            let v: f64 = t.parse().map_err(|_| IoError::NotANumber {
+        for (c, t) in r.iter().enumerate() {
+            let v = number(t, sep).ok_or_else(|| IoError::NotANumber {
                 path: path.to_path_buf(),
                 row,
                 column: names[c].clone(),
@@ -239,22 +324,64 @@ pub fn repeated(names: &[String]) -> Option<&str> {
         .map(|(_, n)| n.as_str())
 }
 
-/// Write columns of equal length under a header, numbers with 17 significant digits
-/// (they read back bit-identical).
+/// Write columns of equal length under a header, comma-separated, numbers with 17
+/// significant digits (they read back bit-identical). Columns of different lengths are an
+/// error, not a file cut to the shortest.
 pub fn write_csv(path: &Path, names: &[&str], columns: &[&[f64]]) -> Result<(), IoError> {
+    let lengths: Vec<usize> = columns.iter().map(|c| c.len()).collect();
+    if names.len() != columns.len() || lengths.windows(2).any(|w| w[0] != w[1]) {
+        return Err(IoError::UnequalColumns {
+            path: path.to_path_buf(),
+            names: names.join(","),
+            lengths,
+        });
+    }
     let err = |source| IoError::File {
         path: path.to_path_buf(),
         source,
     };
+    let csv_err = |e: csv::Error| match e.into_kind() {
+        csv::ErrorKind::Io(source) => err(source),
+        other => err(std::io::Error::other(format!("{other:?}"))),
+    };
     let file = std::fs::File::create(path).map_err(err)?;
-    let mut w = std::io::BufWriter::new(file);
-    writeln!(w, "{}", names.join(",")).map_err(err)?;
-    let n = columns.iter().map(|c| c.len()).min().unwrap_or(0);
-    for i in 0..n {
-        let row: Vec<String> = columns.iter().map(|c| format!("{:e}", c[i])).collect();
-        writeln!(w, "{}", row.join(",")).map_err(err)?;
+    let mut w = csv::Writer::from_writer(std::io::BufWriter::new(file));
+    w.write_record(names).map_err(csv_err)?;
+    let mut row = Vec::with_capacity(columns.len());
+    for i in 0..lengths.first().copied().unwrap_or(0) {
+        row.clear();
+        row.extend(columns.iter().map(|c| format!("{:e}", c[i])));
+        w.write_record(&row).map_err(csv_err)?;
     }
     w.flush().map_err(err)
+}
+
+/// Read an oscillator from a JSON file in the schema every report writes
+/// ([`hyst_model::schema`]). `FILE#/POINTER` reads the model at that JSON pointer inside the
+/// file, e.g. `ident.json#/bouc_wen` or `refine.json#/model`.
+pub fn read_oscillator(spec: &Path) -> Result<hyst_model::Oscillator, IoError> {
+    let text = spec.to_string_lossy();
+    let (path, pointer) = match text.rsplit_once("#/") {
+        Some((p, ptr)) => (PathBuf::from(p), Some(format!("/{ptr}"))),
+        None => (spec.to_path_buf(), None),
+    };
+    let params = |what: String| IoError::Params {
+        path: path.clone(),
+        what,
+    };
+    let body = std::fs::read_to_string(&path).map_err(|source| IoError::File {
+        path: path.clone(),
+        source,
+    })?;
+    let value: serde_json::Value =
+        serde_json::from_str(&body).map_err(|e| params(format!("not valid JSON: {e}")))?;
+    let value = match &pointer {
+        None => &value,
+        Some(ptr) => value
+            .pointer(ptr)
+            .ok_or_else(|| params(format!("nothing at `#{ptr}`")))?,
+    };
+    serde_json::from_value(value.clone()).map_err(|e| params(e.to_string()))
 }
 
 /// The folder of the shared data sets: `HYST_DATA_DIR` if set, else `../shared/data` from the
@@ -274,10 +401,14 @@ pub fn data_dir() -> Option<PathBuf> {
 mod tests {
     use super::*;
 
-    fn file(name: &str, text: &str) -> PathBuf {
+    fn file_path(name: &str) -> PathBuf {
         let dir = std::env::temp_dir().join(format!("hyst-io-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        let p = dir.join(name);
+        dir.join(name)
+    }
+
+    fn file(name: &str, text: &str) -> PathBuf {
+        let p = file_path(name);
         std::fs::write(&p, text).unwrap();
         p
     }
@@ -300,27 +431,91 @@ mod tests {
         }
     }
 
-    /// A file separated by semicolons or tabs is named as such, not as a cell that is not a
-    /// number.
+    /// `;` and tab files, quoted numbers, a BOM and CRLF read as the plain file does; a
+    /// semicolon file may use a decimal comma.
     #[test]
-    fn another_separator_is_named() {
-        for (name, text, sep) in [
-            ("semi.csv", "t;y\n0;1.5\n", "`;`"),
-            ("tab.csv", "t\ty\n0\t1.5\n", "tabs"),
+    fn every_delimiter_and_quoting_reads_alike() {
+        let plain = read_csv(&file("plain2.csv", "t,y\n0,1.5\n1,-2\n")).unwrap();
+        for (name, text) in [
+            ("semi.csv", "t;y\n0;1.5\n1;-2\n"),
+            ("semi_decimal_comma.csv", "t;y\n0;1,5\n1;-2\n"),
+            ("tab.csv", "t\ty\n0\t1.5\n1\t-2\n"),
+            (
+                "quoted_numbers.csv",
+                "\"t\",\"y\"\n\"0\",\"1.5\"\n\"1\",\"-2\"\n",
+            ),
+            (
+                "all.csv",
+                "\u{feff}\"t\";\"y\"\r\n0;\"1,5\"\r\n\r\n1;-2\r\n",
+            ),
         ] {
-            let e = read_csv(&file(name, text)).unwrap_err();
-            assert!(
-                matches!(e, IoError::NotCommaSeparated { .. }),
-                "{name}: {e}"
-            );
-            let said = e.to_string();
-            assert!(
-                said.contains(name) && said.contains(sep) && said.contains("comma-separated"),
-                "{said}"
-            );
+            let t = read_csv(&file(name, text)).unwrap();
+            assert_eq!(t.names, plain.names, "{name}");
+            assert_eq!(t.columns, plain.columns, "{name}");
         }
+        // Given explicitly, a delimiter the file does not use makes one column per line.
+        let e = read_csv_with(&file("semi2.csv", "t;y\n0;1.5\n"), Delimiter::Comma).unwrap_err();
+        assert!(e.to_string().contains("`0;1.5` is not a number"), "{e}");
         // One column whose name has no separator in it is still a one-column file.
         let t = read_csv(&file("one.csv", "y\n1\n2\n")).unwrap();
         assert_eq!(t.names, ["y"]);
+        // A comma-separated file keeps a comma a separator, never a decimal mark.
+        let e = read_csv(&file("bad.csv", "t,y\n0,\"1,5\"\n")).unwrap_err();
+        assert!(e.to_string().contains("`1,5` is not a number"), "{e}");
+    }
+
+    /// Errors name the file, the row and what is wrong.
+    #[test]
+    fn malformed_files_are_named() {
+        let e = read_csv(&file("short_row.csv", "t,y\n0,1\n2\n")).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("row 3 has 1 cells, the header has 2"),
+            "{e}"
+        );
+        let e = read_csv(&file("nan.csv", "t,y\n0,NaN\n")).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("row 2, column `y`: value NaN is not finite"),
+            "{e}"
+        );
+        let e = read_csv(&file("bytes.csv", "t,y\n0,1\n")).map(|_| ());
+        assert!(e.is_ok());
+        std::fs::write(file("latin1.csv", ""), b"t,y\n0,\xff\n").unwrap();
+        let e = read_csv(&file_path("latin1.csv")).unwrap_err();
+        assert!(e.to_string().contains("latin1.csv: row 2"), "{e}");
+        let e = read_csv(&file("blank.csv", "\n \n")).unwrap_err();
+        assert!(matches!(e, IoError::NoHeader { .. }), "{e}");
+    }
+
+    /// Columns of different lengths are refused, not cut to the shortest.
+    #[test]
+    fn unequal_columns_are_not_written() {
+        let p = file_path("unequal.csv");
+        let e = write_csv(&p, &["a", "b"], &[&[1.0, 2.0], &[1.0]]).unwrap_err();
+        assert!(e.to_string().contains("lengths [2, 1]"), "{e}");
+        write_csv(&p, &["a", "b,c"], &[&[1.0, 0.1], &[2.0, 1e-300]]).unwrap();
+        let t = read_csv(&p).unwrap();
+        assert_eq!(t.names, ["a", "b,c"]);
+        assert_eq!(t.columns, [vec![1.0, 0.1], vec![2.0, 1e-300]]);
+    }
+
+    /// Arbitrary bytes never panic the reader.
+    mod fuzz {
+        use super::*;
+        use proptest::prelude::*;
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(512))]
+            #[test]
+            fn any_bytes_read_or_fail_cleanly(bytes in proptest::collection::vec(any::<u8>(), 0..200)) {
+                let p = file_path(&format!("fuzz-{}.csv", std::thread::current().name().unwrap_or("t").replace("::", "_")));
+                std::fs::write(&p, &bytes).unwrap();
+                if let Ok(t) = read_csv(&p) {
+                    prop_assert!(t.columns.iter().all(|c| c.len() == t.len()));
+                    prop_assert!(t.columns.iter().flatten().all(|v| v.is_finite()));
+                }
+            }
+        }
     }
 }

@@ -12,7 +12,6 @@ pub use hyst_model as model;
 pub use hyst_sim as sim;
 
 pub mod io;
-pub mod params;
 pub mod plot;
 
 /// A mode shape as "magnitude∠phase°" per entry (phase rounded to a degree), entries joined

@@ -5,6 +5,21 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+/// A parameter of a model in the schema reports write, by its short name: `m`, `c`, `k`, the
+/// Bouc-Wen element's `alpha`, `beta_gamma`, `beta_delta`, `nu` and the Zener's `k_inf`,
+/// `omega`.
+fn param(model: &serde_json::Value, key: &str) -> Option<f64> {
+    let v = match key {
+        "m" => &model["mass"],
+        "c" => &model["damping"],
+        "k" => &model["stiffness"],
+        "alpha" | "beta_gamma" | "beta_delta" | "nu" => &model["bouc_wen"][key],
+        "k_inf" | "omega" => &model["zener"][key],
+        other => &model[other],
+    };
+    v.as_f64()
+}
+
 fn hyst(args: &[&str]) -> (bool, String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_hyst"))
         .args(args)
@@ -395,6 +410,72 @@ fn an_output_in_a_missing_folder_is_refused_before_any_work() {
         );
         // Nothing was computed: no line of results was printed.
         assert!(out.is_empty(), "{args:?}: {out}");
+    }
+}
+
+/// A misspelled key is an error naming it and the keys allowed, not a model without it.
+#[test]
+fn a_misspelled_parameter_is_refused() {
+    let u = write("ok4.csv", "u\n1\n2\n");
+    let p = write(
+        "typo.json",
+        r#"{"mass": 1, "damping": 1, "stiffness": 1, "cubic_stifness": 5}"#,
+    );
+    let err = simulate_fails(&["--input", s(&u), "--fs", "750", "--params", s(&p)]);
+    assert!(
+        err.contains("typo.json")
+            && err.contains("unknown field `cubic_stifness`")
+            && err.contains("`cubic_stiffness`"),
+        "{err}"
+    );
+    let err = simulate_fails(&[
+        "--input",
+        s(&u),
+        "--fs",
+        "750",
+        "--params",
+        &format!("{}#/model", p.display()),
+    ]);
+    assert!(err.contains("nothing at `#/model`"), "{err}");
+}
+
+/// `,` `;` and tab records, quoted numbers, a byte-order mark and CRLF simulate alike;
+/// `--delimiter` names the separator when detection is not wanted.
+#[test]
+fn every_delimiter_simulates_alike() {
+    let run = |name: &str, text: &str, more: &[&str]| {
+        let input = write(name, text);
+        let out = tmp(&format!("out_{name}"));
+        let mut args = vec![
+            "simulate",
+            "--input",
+            s(&input),
+            "--fs",
+            "750",
+            "--out",
+            s(&out),
+        ];
+        args.extend(more);
+        let (ok, _, err) = hyst(&args);
+        assert!(ok, "{name}: {err}");
+        std::fs::read_to_string(out).unwrap()
+    };
+    let plain = run("d_plain.csv", "t,u\n0,1.5\n1,-2\n2,0.25\n", &[]);
+    for (name, text, more) in [
+        ("d_semi.csv", "t;u\n0;1,5\n1;-2\n2;0,25\n", &[][..]),
+        ("d_tab.csv", "t\tu\n0\t1.5\n1\t-2\n2\t0.25\n", &[]),
+        (
+            "d_quoted.csv",
+            "\u{feff}\"t\",\"u\"\r\n\"0\",\"1.5\"\r\n1,-2\r\n2,\"0.25\"\r\n",
+            &[],
+        ),
+        (
+            "d_given.csv",
+            "t;u\n0;1.5\n1;-2\n2;0.25\n",
+            &["--delimiter", "semicolon"],
+        ),
+    ] {
+        assert_eq!(run(name, text, more), plain, "{name}");
     }
 }
 
@@ -1122,9 +1203,7 @@ fn ident_finds_c_from_a_record_under_a_white_force() {
             "{key}: {got} ± {se} against {truth}"
         );
         assert_eq!(
-            v["zener"][key]
-                .as_f64()
-                .map(|x| (x / got - 1.0).abs() < 1e-9),
+            param(&v["zener"], key).map(|x| (x / got - 1.0).abs() < 1e-9),
             Some(true),
             "{key}"
         );
@@ -1159,14 +1238,20 @@ fn ident_default_job_writes_the_json_the_issue_asks_for() {
     assert!(out.contains("validation"), "{out}");
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-    for key in ["m", "c", "k"] {
-        assert!(v["linear"][key].is_number(), "linear.{key}");
+    // Every model in the one schema `--params` reads (issue 31: the short keys are aliases).
+    for model in ["linear", "zener", "bouc_wen"] {
+        for key in ["mass", "damping", "stiffness"] {
+            assert!(v[model][key].is_number(), "{model}.{key}");
+        }
     }
-    for key in ["m", "c", "k", "k_inf", "omega"] {
-        assert!(v["zener"][key].is_number(), "zener.{key}");
+    for key in ["k_inf", "omega"] {
+        assert!(v["zener"]["zener"][key].is_number(), "zener.zener.{key}");
     }
-    for key in ["m", "c", "k", "alpha", "beta_gamma", "beta_delta", "nu"] {
-        assert!(v["bouc_wen"][key].is_number(), "bouc_wen.{key}");
+    for key in ["alpha", "beta_gamma", "beta_delta", "nu"] {
+        assert!(
+            v["bouc_wen"]["bouc_wen"][key].is_number(),
+            "bouc_wen.bouc_wen.{key}"
+        );
     }
     assert!(v["poles"]["pair"].is_array() && v["poles"]["real"].is_number());
     let val = &v["validation"][0];
@@ -1182,6 +1267,52 @@ fn ident_default_job_writes_the_json_the_issue_asks_for() {
     assert!((v["flatness"]["input_rms"].as_f64().unwrap() - 50.0).abs() < 0.5);
     assert!(dir.join("stabilization.svg").is_file());
     assert!(dir.join("implied_input_spectrum.svg").is_file());
+}
+
+/// Every model `hyst ident --json` writes goes straight into `hyst simulate --params` (a JSON
+/// pointer picks it out of the report), and simulates as the library does with the same
+/// model read from the same JSON.
+#[test]
+fn ident_models_feed_simulate() {
+    let json = tmp("ident_round_trip.json");
+    let (ok, _, err) = hyst(&["ident", "--json", s(&json)]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let u = hyst::sim::excitation::white_noise(3000, 20.0, 5).unwrap();
+    let input = tmp("round_trip_u.csv");
+    hyst::io::write_csv(&input, &["u"], &[&u]).unwrap();
+    for model in ["linear", "zener", "bouc_wen"] {
+        let out = tmp(&format!("round_trip_{model}.csv"));
+        let spec = format!("{}#/{model}", json.display());
+        let (ok, _, err) = hyst(&[
+            "simulate",
+            "--input",
+            s(&input),
+            "--fs",
+            "750",
+            "--params",
+            &spec,
+            "--input-interpolation",
+            "linear",
+            "--out",
+            s(&out),
+        ]);
+        assert!(ok, "{model}: {err}");
+        let o: hyst::model::Oscillator = serde_json::from_value(v[model].clone()).unwrap();
+        let opts = hyst::sim::SimOptions::default();
+        let y =
+            hyst::sim::simulate(&o, hyst::sim::Input::Sampled(&u), 750.0, u.len(), &opts).unwrap();
+        let t = hyst::io::read_csv(&out).unwrap();
+        // The CSV holds the shortest decimal that reads back bit-identical.
+        let got = t.column("y").unwrap();
+        let worst = got
+            .iter()
+            .zip(&y)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(got.len() == y.len() && worst == 0.0, "{model}: {worst}");
+    }
 }
 
 #[test]
@@ -1530,7 +1661,7 @@ fn levels_gives_one_bouc_wen_model_of_several_records() {
         ("beta_gamma", 800.0, 0.10),
         ("beta_delta", -1100.0, 0.25),
     ] {
-        let (got, se) = (m[key].as_f64().unwrap(), v["se"][key].as_f64().unwrap());
+        let (got, se) = (param(m, key).unwrap(), v["se"][key].as_f64().unwrap());
         assert!(
             (got - truth).abs() < 4.0 * se + bias * truth.abs(),
             "{key}: {got} ± {se} against {truth}"
@@ -1544,7 +1675,7 @@ fn levels_gives_one_bouc_wen_model_of_several_records() {
     // nine-level sweeps and the three-level test: 0.0-0.8 % against 0.9-3.4 %).
     assert!(out.contains("Bouc-Wen by simulation: c "), "{out}");
     assert!(
-        v["by_simulation"]["model"]["alpha"].as_f64().is_some(),
+        param(&v["by_simulation"]["model"], "alpha").is_some(),
         "{v}"
     );
     let eps_sim = v["validation"][0]["epsilon_by_simulation"]
@@ -1563,7 +1694,7 @@ fn levels_gives_one_bouc_wen_model_of_several_records() {
         ("beta_delta", -1100.0),
     ] {
         let (got, se) = (
-            sim["model"][key].as_f64().unwrap(),
+            param(&sim["model"], key).unwrap(),
             sim["se"][key].as_f64().unwrap(),
         );
         assert!(
@@ -1595,7 +1726,7 @@ fn levels_gives_one_bouc_wen_model_of_several_records() {
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json_nu).unwrap()).unwrap();
     let (nu, nu_se) = (
-        v["model"]["nu"].as_f64().unwrap(),
+        param(&v["model"], "nu").unwrap(),
         v["se"]["nu"].as_f64().unwrap(),
     );
     eprintln!("levels --fit-exponent: ν = {nu} ± {nu_se}");
@@ -1823,4 +1954,54 @@ fn ssi_warns_when_the_default_channels_take_in_the_force() {
     );
     let (_, _, err) = run(&["--columns", "y"]);
     assert!(!err.contains("looks like the input"), "{err}");
+}
+
+/// Whether a validation record is one steady-state period is told from its input, never from
+/// its name: the benchmark's multisine validation period under another name validates alike,
+/// the sine sweep is simulated from rest, and `--validation-kind` overrides.
+#[test]
+fn a_validation_record_named_anything_is_periodic_when_it_is() {
+    let (Some(train), Some(val), Some(sweep)) = (
+        common::data_file("boucwen/multisine_train.csv"),
+        common::data_file("boucwen/multisine_val.csv"),
+        common::data_file("boucwen/sinesweep_val.csv"),
+    ) else {
+        return;
+    };
+    let renamed = tmp("record_a.csv");
+    std::fs::copy(&val, &renamed).unwrap();
+    let run = |more: &[&str]| {
+        let json = tmp("validation_kind.json");
+        let mut args = vec![
+            "ident",
+            "--data",
+            s(&train),
+            "--fs",
+            "750",
+            "--mass",
+            "2",
+            "--skip",
+            "8192",
+            "--json",
+            s(&json),
+            "--validate",
+            s(&renamed),
+            s(&val),
+            s(&sweep),
+        ];
+        args.extend(more);
+        let (ok, _, err) = hyst(&args);
+        assert!(ok, "{err}");
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        v["validation"].as_array().unwrap().clone()
+    };
+    let rows = run(&[]);
+    let kinds: Vec<_> = rows.iter().map(|r| r["periodic"].clone()).collect();
+    assert_eq!(kinds, [true, true, false].map(serde_json::Value::from));
+    assert_eq!(rows[0]["zener"]["epsilon"], rows[1]["zener"]["epsilon"]);
+    let forced = run(&["--validation-kind", "from-rest"]);
+    assert!(forced.iter().all(|r| r["periodic"] == false));
+    // From rest, the period's start-up transient is counted: the error differs.
+    assert_ne!(forced[0]["zener"]["epsilon"], rows[0]["zener"]["epsilon"]);
 }

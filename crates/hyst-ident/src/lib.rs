@@ -47,6 +47,7 @@ pub mod flatness;
 pub mod floor;
 pub mod frf;
 pub mod levels;
+pub mod periodic;
 pub mod refine;
 pub mod zener_spectrum;
 

@@ -28,13 +28,16 @@
 //! $m_2\ddot x_2 = k_2(x - x_2) + c_2(\dot x - \dot x_2)$. The measured output is always $x$.
 //!
 //! Parameters are checked by [`Oscillator::validate`], which returns a [`ModelError`] naming
-//! the offending value.
+//! the offending value. With the `serde` feature the oscillator and its parts read and write
+//! one JSON schema ([`schema`]).
 
 #![warn(missing_docs)]
 
 use nalgebra::{Complex, DMatrix, SMatrix, SVector};
 
 pub mod poly;
+#[cfg(feature = "serde")]
+pub mod schema;
 
 /// State vector $(x, \dot x, z, x_2, \dot x_2)$: displacement, velocity, restoring-element force,
 /// and the second mass's displacement and velocity (zero when there is none).
@@ -92,6 +95,11 @@ fn positive(name: &'static str, value: f64) -> Result<(), ModelError> {
 ///
 /// Only the products $\beta\gamma$ and $\beta\delta$ enter the equation; both forms are offered.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(try_from = "schema::BoucWenFile", into = "schema::BoucWenFile")
+)]
 pub struct BoucWen {
     /// Initial stiffness of the hysteretic element, α (N/m).
     pub alpha: f64,
@@ -202,6 +210,11 @@ fn sign(x: f64) -> f64 {
 
 /// Zener relaxation element, eq. (3) with $k_0 = 0$: $\dot z + \Omega z = k_\infty\dot x$.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(deny_unknown_fields)
+)]
 pub struct ZenerParams {
     /// High-frequency stiffness $k_\infty$ (N/m).
     pub k_inf: f64,
@@ -231,6 +244,11 @@ pub enum Restoring {
 
 /// Coulomb friction $F_c\tanh(\dot x / v_\varepsilon)$.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(deny_unknown_fields)
+)]
 pub struct Coulomb {
     /// Friction force level $F_c$ (N).
     pub force: f64,
@@ -240,6 +258,11 @@ pub struct Coulomb {
 
 /// A second mass attached to the main one by a spring and a damper.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(deny_unknown_fields)
+)]
 pub struct SecondMass {
     /// Mass $m_2$ (kg), > 0.
     pub mass: f64,
@@ -252,6 +275,11 @@ pub struct SecondMass {
 /// A spring that engages only beyond a clearance: force $k_g(x - g\,\mathrm{sgn}\,x)$ for
 /// $|x| > g$, none within $\pm g$ (a gap, a stop, a loose joint).
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(deny_unknown_fields)
+)]
 pub struct Clearance {
     /// Stiffness $k_g$ of the spring once engaged (N/m).
     pub stiffness: f64,
@@ -293,6 +321,11 @@ pub const SURFACE_TERMS: usize = 10;
 /// linear terms $\xi$, $\eta$ are the oscillator's own $k$ and $c$. Force
 /// $\sum_i\theta_i\phi_i(\xi, \eta)$ with $\theta_i$ in newtons.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(try_from = "schema::SurfaceFile", into = "schema::SurfaceFile")
+)]
 pub struct ForceSurface {
     /// Displacement scale $x_s$ (m), > 0.
     pub x_scale: f64,
@@ -472,6 +505,11 @@ impl ExtraForces {
 
 /// The oscillator $m\ddot x + c\dot x + kx + z + f_{\text{extra}} = u$.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(try_from = "schema::OscillatorFile", into = "schema::OscillatorFile")
+)]
 pub struct Oscillator {
     /// Mass m (kg), > 0.
     pub mass: f64,

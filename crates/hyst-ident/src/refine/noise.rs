@@ -11,6 +11,8 @@
 //! The level is reported as ε (eq. 39): σ over the range of the measured output on a test
 //! range, so that it reads beside the held-out errors.
 
+use crate::periodic::input_period;
+
 /// Which way the noise level was found.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum NoiseMethod {
@@ -42,43 +44,6 @@ pub struct NoiseLevel {
     pub std: f64,
     /// How it was found.
     pub method: NoiseMethod,
-}
-
-/// Lowest correlation of the input with itself one period later for it to count as periodic.
-pub const PERIODIC_CORRELATION: f64 = 0.99;
-
-/// The input's period in samples, if it repeats: the shortest lag (at least 16 samples, at
-/// most a third of the record, so that three periods are there) at which its correlation
-/// with itself is at least [`PERIODIC_CORRELATION`].
-pub fn input_period(u: &[f64]) -> Option<usize> {
-    let n = u.len();
-    if n < 48 {
-        return None;
-    }
-    let mean = u.iter().sum::<f64>() / n as f64;
-    let x: Vec<f64> = u.iter().map(|v| v - mean).collect();
-    // Autocorrelation by FFT, zero-padded against wrap-around.
-    let mut padded = x.clone();
-    padded.resize(2 * n, 0.0);
-    let spec: Vec<_> = crate::fft::rfft(&padded)
-        .into_iter()
-        .map(|c| crate::fft::C::new(c.norm_sqr(), 0.0))
-        .collect();
-    let r = crate::fft::irfft(&spec, 2 * n);
-    // Energies of the leading and trailing parts, for the normalised correlation.
-    let mut head = vec![0.0; n + 1];
-    for i in 0..n {
-        head[i + 1] = head[i] + x[i] * x[i];
-    }
-    let total = head[n];
-    if total <= 0.0 {
-        return None;
-    }
-    (16..=n / 3).find(|&lag| {
-        let a = head[n - lag];
-        let b = total - head[lag];
-        a > 0.0 && b > 0.0 && r[lag] / (a * b).sqrt() >= PERIODIC_CORRELATION
-    })
 }
 
 /// The noise level of the output `y` with input `u`, given the current model's residual on

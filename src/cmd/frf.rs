@@ -4,10 +4,12 @@ use std::path::PathBuf;
 
 use clap::Args;
 use hyst::ident::frf::{self, PeriodicRecord};
-use hyst::io::{read_csv, write_csv};
+use hyst::io::write_csv;
+
+use super::read_csv;
 use hyst::plot::colors;
 
-use crate::{Error, channel_names, check_fs, fail};
+use super::{Error, channel_names, check_fs, fail};
 
 #[derive(Args, Debug)]
 pub struct FrfArgs {

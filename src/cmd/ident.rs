@@ -1,0 +1,645 @@
+//! `hyst ident`: the paper's output-only pipeline to linear, Zener and Bouc-Wen models.
+
+use std::path::PathBuf;
+
+use clap::{Args, ValueEnum};
+use hyst::model::Oscillator;
+use hyst::sim::excitation::Multisine;
+use hyst::sim::{self, Input, SimOptions};
+
+use super::*;
+
+#[derive(Clone, Copy, ValueEnum, PartialEq, Eq, Debug)]
+pub(crate) enum DampingArg {
+    /// From the Zener oscillator fitted to the record's spectrum (white force assumed) when
+    /// the record follows the stationary model; else as `cluster`.
+    Spectrum,
+    /// The paper's guess: a cluster of lightly damped poles near the pair.
+    Cluster,
+}
+
+#[derive(Clone, Copy, ValueEnum, PartialEq, Eq, Debug)]
+pub(crate) enum LinearizationArg {
+    /// Eqs. (37)-(38) as printed.
+    Paper,
+    /// Alpha from eq. (37), then exact inversion of the describing function.
+    Harmonic,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, ValueEnum)]
+pub(crate) enum ValidationKindArg {
+    /// Periodic when the input is, from rest otherwise.
+    Auto,
+    /// One steady-state period.
+    Periodic,
+    /// Simulated from rest.
+    FromRest,
+}
+
+#[derive(Args, Debug)]
+pub(crate) struct IdentArgs {
+    /// Record with the measured output (CSV with a header). Without it: the built-in default.
+    #[arg(long)]
+    pub(crate) data: Option<PathBuf>,
+    /// Sampling rate of --data (Hz).
+    #[arg(long)]
+    pub(crate) fs: Option<f64>,
+    /// Mass of the oscillator (kg), assumed known.
+    #[arg(long)]
+    pub(crate) mass: Option<f64>,
+    /// Column of the output (displacement).
+    #[arg(long, default_value = "y")]
+    pub(crate) output_column: String,
+    /// Column of the input force (only used by --validate files).
+    #[arg(long, default_value = "u")]
+    pub(crate) input_column: String,
+    /// Skip this many leading rows of --data (e.g. a start-up transient).
+    #[arg(long, default_value_t = 0)]
+    pub(crate) skip: usize,
+    /// Validation records (input and output columns): each identified model is simulated with
+    /// the input and compared with the output, to its steady state when the record's input
+    /// is periodic over it, else from rest (see --validation-kind).
+    #[arg(long, num_args = 1..)]
+    pub(crate) validate: Vec<PathBuf>,
+    /// How the --validate records are simulated: told from each record's input by default
+    /// (`hyst_ident::periodic`: a whole number of periods, or one period of a band-limited
+    /// signal), or given.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub(crate) validation_kind: ValidationKindArg,
+    /// Mapping from the poles to Bouc-Wen parameters (default: whichever validates better;
+    /// harmonic without validation data).
+    #[arg(long, value_enum)]
+    pub(crate) linearization: Option<LinearizationArg>,
+    /// Where the viscous damping c of the Zener and Bouc-Wen models comes from.
+    #[arg(long, value_enum, default_value = "spectrum", conflicts_with = "c")]
+    pub(crate) damping: DampingArg,
+    /// A known viscous damping c (N s/m), in place of --damping.
+    #[arg(long)]
+    pub(crate) c: Option<f64>,
+    /// The band LO:HI (Hz) on which the excitation's amplitude spectrum was flat (a
+    /// multisine's design; needs --period). The Bouc-Wen model is then fitted by flatness of
+    /// its implied input, and kept when it validates better than the mapped one (or when
+    /// there is nothing to validate on). The built-in default job uses 5:150.1.
+    #[arg(long)]
+    pub(crate) excitation_band: Option<String>,
+    /// Samples per period of the excitation (with --excitation-band); --data must hold whole
+    /// periods of the steady state (use --skip to drop a start-up transient).
+    #[arg(long)]
+    pub(crate) period: Option<usize>,
+    /// Write the results as JSON here.
+    #[arg(long)]
+    pub(crate) json: Option<PathBuf>,
+    /// Write figures (SVG) into this folder.
+    #[arg(long)]
+    pub(crate) svg_dir: Option<PathBuf>,
+}
+
+/// The built-in default record: the benchmark system driven by its 50 N multisine over five
+/// periods from rest (the first dropped), with white measurement noise of 7.4e-6 m (the level
+/// measured between the periods of the benchmark's own training record); and a validation
+/// period of a fresh realization.
+/// The default job's records: training output, validation input and output.
+pub(crate) struct DefaultRecords {
+    pub(crate) y: Vec<f64>,
+    pub(crate) val_u: Vec<f64>,
+    pub(crate) val_y: Vec<f64>,
+}
+
+pub(crate) fn default_records() -> Result<DefaultRecords, Error> {
+    let ms = Multisine::benchmark(50.0);
+    let train_u = ms.generate(11)?;
+    let model = Oscillator::benchmark();
+    let opts = SimOptions::default();
+    let n = train_u.len();
+    let mut y = sim::simulate(&model, Input::Periodic(&train_u), 750.0, 5 * n, &opts)?;
+    let mut y = y.split_off(n);
+    sim::excitation::add_noise(&mut y, 7.4e-6, 12)?;
+    let val_u = ms.generate(13)?;
+    let val_y = sim::steady_state_period(&model, &val_u, 750.0, &opts, 1e-10, 50)?.y;
+    Ok(DefaultRecords { y, val_u, val_y })
+}
+
+/// The amplitude spectrum of the force each Bouc-Wen candidate implies, over the
+/// excitation's band (dB re 1 N): the flatness fit is flat where the mapped models are not.
+pub(crate) fn implied_input_figure(
+    dir: &std::path::Path,
+    candidates: &[(String, Oscillator)],
+    y: &[f64],
+    fs: f64,
+    band: &hyst::ident::flatness::ExcitationBand,
+) -> Result<(), Error> {
+    use hyst::plot::{chart, colors};
+    let palette = [colors::RED, colors::BLUE, colors::GREEN, colors::BLACK];
+    // Drawn in reverse so that the first candidate (the flatness fit) lies on top.
+    let series: Vec<_> = candidates
+        .iter()
+        .enumerate()
+        .rev()
+        .filter_map(|(i, (name, m))| {
+            let col = &palette[i % palette.len()];
+            let spec = hyst::ident::flatness::implied_spectrum(m, y, fs, band).ok()?;
+            let db = spec
+                .iter()
+                .map(|&(f, a)| (f, 20.0 * a.max(1e-300).log10()))
+                .collect();
+            Some((name.clone(), db, *col))
+        })
+        .collect();
+    chart(
+        &dir.join("implied_input_spectrum.svg"),
+        "Implied input over the excitation band (output only)",
+        "f (Hz)",
+        "|Û| per line (dB re 1 N)",
+        &series,
+    )?;
+    Ok(())
+}
+
+/// Figures like the paper's 3(a) (the correlation function) and 5 (time and PSD overlays of
+/// the identified models on the first validation record).
+/// The record's PSD (Welch, 4096-sample segments) beside the Zener spectral fit's, over the
+/// fitted band, with the fit's noise floor.
+pub(crate) fn zener_spectrum_figure(
+    path: &std::path::Path,
+    y: &[f64],
+    fs: f64,
+    fit: &hyst::ident::zener_spectrum::ZenerSpectralFit,
+) -> Result<(), Error> {
+    use hyst::plot::{chart_log_y, colors};
+    let mean = y.iter().sum::<f64>() / y.len() as f64;
+    let centred: Vec<f64> = y.iter().map(|v| v - mean).collect();
+    let (f, s) = hyst::ident::welch_psd(&centred, fs, 4096);
+    let (f, s): (Vec<f64>, Vec<f64>) = f
+        .into_iter()
+        .zip(s)
+        .skip(1)
+        .take_while(|(f, _)| *f <= fit.max_frequency_hz)
+        .unzip();
+    let model = fit.psd(&f);
+    let floor = 2.0 * fit.noise_std * fit.noise_std / fs;
+    chart_log_y(
+        path,
+        &format!(
+            "Zener spectral fit: c = {:.2} ± {:.2}, k = {:.0}, k∞ = {:.0}, Ω = {:.1}",
+            fit.c, fit.se[0], fit.k, fit.k_inf, fit.omega
+        ),
+        "f (Hz)",
+        "PSD (units²/Hz)",
+        &[
+            (
+                "record (Welch)".into(),
+                f.iter().copied().zip(s).collect(),
+                colors::BLACK,
+            ),
+            (
+                "fitted Zener + noise".into(),
+                f.iter().copied().zip(model).collect(),
+                colors::BLUE,
+            ),
+            (
+                "fitted noise floor".into(),
+                f.iter().map(|&f| (f, floor)).collect(),
+                colors::GREY,
+            ),
+        ],
+    )?;
+    Ok(())
+}
+
+pub(crate) fn ident_figures(
+    dir: &std::path::Path,
+    id: &hyst::ident::Identification,
+    bouc_wen: Option<&Oscillator>,
+    validations: &[(String, Vec<f64>, Vec<f64>, bool)],
+) -> Result<(), Error> {
+    use hyst::plot::{chart, chart_log_y, colors};
+    let p = &id.prepared;
+    let lags = ((20.0 * p.fs / p.dominant_hz).ceil() as usize)
+        .min(p.y.len() / 2)
+        .max(2);
+    let r = hyst::covssi::corr::estimate(&[&p.y], &[0], lags);
+    let corr: Vec<(f64, f64)> =
+        r.r.iter()
+            .enumerate()
+            .map(|(k, v)| (k as f64 / p.fs, v[0]))
+            .collect();
+    chart(
+        &dir.join("fig3a_correlation.svg"),
+        "Fig. 3(a): unbiased autocorrelation of the output",
+        "lag (s)",
+        "R(τ) (m²)",
+        &[("R̂xx".into(), corr, colors::BLACK)],
+    )?;
+    let Some((name, u, y, periodic)) = validations.first() else {
+        return Ok(());
+    };
+    let fs = p.fs * p.decimation as f64;
+    let mut models: Vec<(&str, &hyst::model::Oscillator, plotters::style::RGBColor)> =
+        vec![("linear", &id.models.linear, colors::BLUE)];
+    if let Some(z) = &id.models.zener {
+        models.push(("Zener", z, colors::GREEN));
+    }
+    if let Some(b) = bouc_wen {
+        models.push(("Bouc-Wen", b, colors::RED));
+    }
+    let n_time = ((0.5 * fs) as usize).min(y.len());
+    let t = |v: &[f64]| -> Vec<(f64, f64)> {
+        v.iter()
+            .take(n_time)
+            .enumerate()
+            .map(|(k, x)| (k as f64 / fs, *x))
+            .collect()
+    };
+    let psd = |v: &[f64]| -> Vec<(f64, f64)> {
+        let (f, s) = hyst::ident::welch_psd(v, fs, 512);
+        f.into_iter().zip(s).collect()
+    };
+    let mut time = vec![("measured".to_string(), t(y), colors::BLACK)];
+    let mut spec = vec![("measured".to_string(), psd(y), colors::BLACK)];
+    for (label, m, c) in models {
+        if let Ok(yhat) = hyst::ident::simulate_model(m, u, fs, *periodic) {
+            time.push((label.to_string(), t(&yhat), c));
+            spec.push((label.to_string(), psd(&yhat), c));
+        }
+    }
+    chart(
+        &dir.join("fig5a_time.svg"),
+        &format!("Fig. 5(a): response, {name}"),
+        "t (s)",
+        "x (m)",
+        &time,
+    )?;
+    chart_log_y(
+        &dir.join("fig5b_psd.svg"),
+        &format!("Fig. 5(b): PSD, {name}"),
+        "f (Hz)",
+        "PSD (m²/Hz)",
+        &spec,
+    )?;
+    Ok(())
+}
+
+/// The excitation's design from --excitation-band/--period; the built-in job's when neither
+/// --data nor a band is given.
+pub(crate) fn excitation_band(
+    a: &IdentArgs,
+) -> Result<Option<hyst::ident::flatness::ExcitationBand>, Error> {
+    use hyst::ident::flatness::ExcitationBand;
+    match (&a.excitation_band, a.period) {
+        (None, None) if a.data.is_none() => Ok(Some(ExcitationBand::benchmark())),
+        (None, None) => Ok(None),
+        (None, Some(_)) => Err(fail("--period needs --excitation-band LO:HI")),
+        (Some(_), None) => Err(fail(
+            "--excitation-band needs --period (samples per period of the excitation)",
+        )),
+        (Some(b), Some(period)) => {
+            let bad = || {
+                fail(format!(
+                    "--excitation-band `{b}` is not LO:HI with 0 <= LO < HI (Hz)"
+                ))
+            };
+            let (lo, hi) = b.split_once(':').ok_or_else(bad)?;
+            let (lo, hi): (f64, f64) = (
+                lo.trim().parse().map_err(|_| bad())?,
+                hi.trim().parse().map_err(|_| bad())?,
+            );
+            if !(lo.is_finite() && hi.is_finite() && lo >= 0.0 && lo < hi) {
+                return Err(bad());
+            }
+            // Options that can never give a flatness fit are refused before the pipeline
+            // runs, not reported in a note after it.
+            if period < 2 {
+                return Err(fail(format!(
+                    "--period must be at least 2 samples, got {period}"
+                )));
+            }
+            if let Some(fs) = a.fs.filter(|f| f.is_finite() && *f > 0.0)
+                && hi > fs / 2.0
+            {
+                return Err(fail(format!(
+                    "--excitation-band {b}: {hi} Hz is above the Nyquist frequency {} Hz of --fs {fs}",
+                    fs / 2.0
+                )));
+            }
+            Ok(Some(ExcitationBand {
+                low_hz: lo,
+                high_hz: hi,
+                period,
+            }))
+        }
+    }
+}
+
+pub(crate) fn run(a: &IdentArgs) -> Result<(), Error> {
+    use hyst::ident::{self, DampingGuess, IdentOptions, Linearization};
+    use serde_json::json;
+    let mass = a.mass.unwrap_or(2.0);
+    // (name, u, y, periodic)
+    let mut validations: Vec<(String, Vec<f64>, Vec<f64>, bool)> = Vec::new();
+    let (y, fs, source) = match &a.data {
+        Some(path) => {
+            let fs = check_fs(a.fs.ok_or_else(|| fail("--fs is required with --data"))?)?;
+            if a.mass.is_none() {
+                return Err(fail(
+                    "--mass is required with --data: the mapping from poles to stiffness needs the mass",
+                ));
+            }
+            let y = output_after_skip(path, &a.output_column, a.skip)?;
+            (y, fs, path.display().to_string())
+        }
+        None => {
+            let d = default_records()?;
+            validations.push((
+                "built-in: benchmark, fresh 50 N multisine".into(),
+                d.val_u,
+                d.val_y,
+                true,
+            ));
+            (
+                d.y,
+                750.0,
+                "built-in: benchmark, 50 N multisine, 4 periods, noise 7.4e-6 m".to_string(),
+            )
+        }
+    };
+    for v in &a.validate {
+        let t = read_csv(v)?;
+        let name = v.display().to_string();
+        let u = t.column(&a.input_column)?.to_vec();
+        let periodic = match a.validation_kind {
+            ValidationKindArg::Periodic => true,
+            ValidationKindArg::FromRest => false,
+            ValidationKindArg::Auto => matches!(
+                hyst::ident::periodic::periodicity(&u),
+                hyst::ident::periodic::Periodicity::Periodic { .. }
+            ),
+        };
+        validations.push((name, u, t.column(&a.output_column)?.to_vec(), periodic));
+    }
+    let choices: Vec<Linearization> = match a.linearization {
+        Some(LinearizationArg::Paper) => vec![Linearization::Paper],
+        Some(LinearizationArg::Harmonic) => vec![Linearization::Harmonic],
+        None if validations.is_empty() => vec![Linearization::Harmonic],
+        None => vec![Linearization::Harmonic, Linearization::Paper],
+    };
+    let excitation = excitation_band(a)?;
+    let t0 = std::time::Instant::now();
+    let damping_guess = match (a.c, a.damping) {
+        (Some(c), _) if c.is_finite() && c >= 0.0 => DampingGuess::Value(c),
+        (Some(c), _) => return Err(fail(format!("--c must be a number >= 0 N s/m, got {c}"))),
+        (None, DampingArg::Spectrum) => DampingGuess::ZenerSpectrum,
+        (None, DampingArg::Cluster) => DampingGuess::LowDampingCluster,
+    };
+    let opts = IdentOptions {
+        mass,
+        linearization: choices[0],
+        excitation,
+        damping_guess,
+        ..IdentOptions::default()
+    };
+    let id = match ident::identify(&y, fs, &opts) {
+        Ok(id) => id,
+        Err(
+            e @ (ident::IdentError::NoStablePair { .. }
+            | ident::IdentError::PairNotSupported { .. }),
+        ) => {
+            // Save the diagram the user needs to see why.
+            let path = a
+                .svg_dir
+                .clone()
+                .unwrap_or_else(|| PathBuf::from("."))
+                .join("stabilization.svg");
+            let saved = ident::prepare(&y, fs, &opts)
+                .and_then(|p| ident::run_ssi(&p, &opts).map(|r| (p, r)))
+                .ok()
+                .and_then(|(p, r)| {
+                    let svg = hyst::covssi::svg::stabilization_svg(
+                        &r.diagram,
+                        Some(4.0 * p.dominant_hz),
+                        "Stabilization diagram (no supported stable pair)",
+                    );
+                    std::fs::create_dir_all(path.parent()?).ok()?;
+                    std::fs::write(&path, svg).ok()
+                });
+            return Err(fail(match saved {
+                Some(()) => format!("{source}: {e}; diagram saved to {}", path.display()),
+                None => format!("{source}: {e}"),
+            }));
+        }
+        Err(e) => return Err(fail(format!("{source}: {e}"))),
+    };
+    // The other mappings share steps 1-3: only the models are built again.
+    let mut mapped = vec![(choices[0], id.models.bouc_wen_mapped)];
+    for lin in &choices[1..] {
+        let o = IdentOptions {
+            linearization: *lin,
+            ..opts.clone()
+        };
+        let models = ident::build_models(&id.poles, &id.prepared, &o)
+            .map_err(|e| fail(format!("{source}: {e}")))?;
+        mapped.push((*lin, models.bouc_wen_mapped));
+    }
+    let ident_seconds = t0.elapsed().as_secs_f64();
+    let lin_name = |l: &Linearization| match l {
+        Linearization::Paper => "paper",
+        Linearization::Harmonic => "harmonic",
+    };
+    // Bouc-Wen candidates: the flatness fit (if any), then each mapping.
+    let mut candidates: Vec<(String, Oscillator)> = Vec::new();
+    if let Some(f) = &id.flatness {
+        candidates.push(("flatness".into(), f.model));
+    }
+    for (lin, b) in &mapped {
+        if let Some(b) = b {
+            candidates.push((lin_name(lin).into(), *b));
+        }
+    }
+    let validate_on = |m: Option<&Oscillator>| -> Vec<serde_json::Value> {
+        validations
+            .iter()
+            .map(|(name, u, yv, periodic)| match m {
+                None => json!({"file": name, "epsilon": null}),
+                Some(m) => match ident::validate(m, u, yv, fs, *periodic) {
+                    Ok(v) => json!({"file": name, "epsilon": v.epsilon, "rms": v.rms}),
+                    Err(e) => json!({"file": name, "error": e.to_string()}),
+                },
+            })
+            .collect()
+    };
+    let cand_rows: Vec<Vec<serde_json::Value>> = candidates
+        .iter()
+        .map(|(_, m)| validate_on(Some(m)))
+        .collect();
+    // Keep the candidate that validates best on the first record; without validation data,
+    // the first (the flatness fit when the band is known, else the harmonic mapping).
+    let score = |rows: &Vec<serde_json::Value>| {
+        rows.first()
+            .and_then(|r| r["epsilon"].as_f64())
+            .unwrap_or(f64::INFINITY)
+    };
+    let best = (0..candidates.len())
+        .min_by(|&i, &j| score(&cand_rows[i]).total_cmp(&score(&cand_rows[j])))
+        .unwrap_or(0);
+    let bouc_wen = candidates.get(best).map(|c| c.1);
+    let route = candidates
+        .get(best)
+        .map_or("none".to_string(), |c| c.0.clone());
+    let lin_rows = validate_on(Some(&id.models.linear));
+    let zen_rows = validate_on(id.models.zener.as_ref());
+    let table: Vec<serde_json::Value> = validations
+        .iter()
+        .enumerate()
+        .map(|(i, (name, ..))| {
+            json!({"file": name, "periodic": validations[i].3, "linear": lin_rows[i], "zener": zen_rows[i],
+                "bouc_wen": cand_rows.get(best).map(|r| r[i].clone())})
+        })
+        .collect();
+    let eps = |v: &serde_json::Value| {
+        v["epsilon"]
+            .as_f64()
+            .map_or("-".to_string(), |e| format!("{:.3} %", 100.0 * e))
+    };
+    println!("record: {source}");
+    println!(
+        "prepared: fs {} Hz (decimation {}), dominant {:.2} Hz, sigma_x {:.3e}, skewness {:.3}, kurtosis {:.3}",
+        id.prepared.fs,
+        id.prepared.decimation,
+        id.prepared.dominant_hz,
+        id.prepared.sigma_x,
+        id.prepared.skewness,
+        id.prepared.kurtosis
+    );
+    let real = id
+        .poles
+        .real
+        .map_or("none".to_string(), |r| format!("{r:.4} rad/s"));
+    println!(
+        "pair {:.4} rad/s, real pole {real}, c = {:.3} ({})",
+        id.poles.pair, id.poles.c, id.poles.c_source
+    );
+    println!("linear: {}", osc_json(&id.models.linear));
+    if let Some(z) = &id.models.zener {
+        println!("zener: {}", osc_json(z));
+    }
+    if let Some(f) = &id.zener_spectrum {
+        println!(
+            "zener spectral fit (white force, {} frequencies up to {:.1} Hz, misfit {:.3}): c = {:.3} ± {:.3} N s/m{}, k = {:.1} ± {:.1} N/m, k_inf = {:.1} ± {:.1} N/m, omega = {:.3} ± {:.3} rad/s; force density {:.4e} ± {:.1e} N^2 s, noise std {:.3e}",
+            f.bins,
+            f.max_frequency_hz,
+            f.misfit,
+            f.c,
+            f.se[0],
+            f.unconstrained_c.map_or(String::new(), |[c, se]| format!(
+                " (held at 0: the most likely c is {c:.3} ± {se:.3})"
+            )),
+            f.k,
+            f.se[1],
+            f.k_inf,
+            f.se[2],
+            f.omega,
+            f.se[3],
+            f.force_density,
+            f.force_density_se,
+            f.noise_std
+        );
+    }
+    if let Some(f) = &id.flatness {
+        println!(
+            "flatness fit: {} periods averaged (aperiodicity {}), bins {}..={}, spread of |U| over the band {:.3} dB -> {:.3} dB in {} iterations, implied input RMS {:.3} N",
+            f.periods,
+            f.aperiodicity
+                .map_or("-".to_string(), |a| format!("{a:.3}")),
+            f.bins.0,
+            f.bins.1,
+            f.start_spread_db,
+            f.spread_db,
+            f.iterations,
+            f.input_rms
+        );
+    }
+    for ((name, m), rows) in candidates.iter().zip(&cand_rows) {
+        let tag = if name == &route { " (kept)" } else { "" };
+        println!("bouc_wen [{name}]{tag}: {}", osc_json(m));
+        for r in rows {
+            println!(
+                "  validation {}: {}",
+                r["file"].as_str().unwrap_or(""),
+                eps(r)
+            );
+        }
+    }
+    for r in &table {
+        println!(
+            "validation {} ({}): linear {}, zener {}, bouc_wen [{route}] {}",
+            r["file"].as_str().unwrap_or(""),
+            if r["periodic"] == json!(true) {
+                "one steady-state period"
+            } else {
+                "from rest"
+            },
+            eps(&r["linear"]),
+            eps(&r["zener"]),
+            eps(&r["bouc_wen"])
+        );
+    }
+    for n in id
+        .poles
+        .notes
+        .iter()
+        .chain(&id.models.notes)
+        .chain(&id.ssi.notes)
+    {
+        println!("note: {n}");
+    }
+    if id.zener_spectrum.is_some() && a.excitation_band.is_none() {
+        println!(
+            "note: one record maps to Bouc-Wen through one amplitude; records of the same \
+             structure at several force levels map to one Bouc-Wen model together: hyst levels"
+        );
+    }
+    println!("identification time: {:.3} s", ident_seconds);
+    if let Some(path) = &a.json {
+        let doc = json!({
+            "record": source,
+            "linearization": lin_name(&choices[0]),
+            "bouc_wen_route": route,
+            "prepared": {"fs_hz": id.prepared.fs, "decimation": id.prepared.decimation, "dominant_hz": id.prepared.dominant_hz,
+                "sigma_x": id.prepared.sigma_x, "skewness": id.prepared.skewness, "kurtosis": id.prepared.kurtosis},
+            "poles": {"pair": [id.poles.pair.re, id.poles.pair.im], "real": id.poles.real, "c_source": id.poles.c_source},
+            "amplitude": id.models.amplitude,
+            "linear": osc_json(&id.models.linear),
+            "zener": id.models.zener.as_ref().map(osc_json),
+            "zener_spectrum": id.zener_spectrum.as_ref().map(|f| json!({"c": f.c, "k": f.k, "k_inf": f.k_inf, "omega": f.omega,
+                "se": {"c": f.se[0], "k": f.se[1], "k_inf": f.se[2], "omega": f.se[3]}, "unconstrained_c": f.unconstrained_c,
+                "force_density": f.force_density, "force_density_se": f.force_density_se, "noise_std": f.noise_std,
+                "misfit": f.misfit, "frequencies": f.bins, "max_frequency_hz": f.max_frequency_hz})),
+            "bouc_wen": bouc_wen.as_ref().map(osc_json),
+            "bouc_wen_candidates": candidates.iter().zip(&cand_rows).map(|((n, m), r)| json!({"route": n, "model": osc_json(m), "validation": r})).collect::<Vec<_>>(),
+            "flatness": id.flatness.as_ref().map(|f| json!({"periods": f.periods, "aperiodicity": f.aperiodicity, "bins": [f.bins.0, f.bins.1],
+                "start_spread_db": f.start_spread_db, "spread_db": f.spread_db, "iterations": f.iterations, "input_rms": f.input_rms})),
+            "validation": table,
+            "notes": id.poles.notes.iter().chain(&id.models.notes).chain(&id.ssi.notes).collect::<Vec<_>>(),
+            "identification_seconds": ident_seconds,
+        });
+        std::fs::write(path, serde_json::to_string_pretty(&doc)?)
+            .map_err(|e| fail(format!("{}: {e}", path.display())))?;
+    }
+    if let Some(dir) = &a.svg_dir {
+        std::fs::create_dir_all(dir).map_err(|e| fail(format!("{}: {e}", dir.display())))?;
+        let p = dir.join("stabilization.svg");
+        let svg = hyst::covssi::svg::stabilization_svg(
+            &id.ssi.diagram,
+            Some(4.0 * id.prepared.dominant_hz),
+            "Stabilization diagram (output only)",
+        );
+        std::fs::write(&p, svg).map_err(|e| fail(format!("{}: {e}", p.display())))?;
+        ident_figures(dir, &id, bouc_wen.as_ref(), &validations)?;
+        if let Some(f) = &id.zener_spectrum {
+            zener_spectrum_figure(&dir.join("zener_spectrum.svg"), &y, fs, f)?;
+        }
+        if let Some(band) = excitation.filter(|_| id.flatness.is_some()) {
+            implied_input_figure(dir, &candidates, &y, fs, &band)?;
+        }
+    }
+    Ok(())
+}

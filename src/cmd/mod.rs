@@ -1,0 +1,267 @@
+//! The command line's commands: the arguments (clap), one module per subcommand, and the
+//! helpers they share (reading records, checking flags, the models' JSON).
+
+use clap::{Parser, Subcommand, ValueEnum};
+use hyst::model::Oscillator;
+
+pub(crate) mod frf;
+pub(crate) mod ident;
+pub(crate) mod levels;
+pub(crate) mod refine;
+pub(crate) mod simulate;
+pub(crate) mod ssi;
+
+use frf as frf_cmd;
+use ident::IdentArgs;
+use levels::LevelsArgs;
+use refine::RefineArgs;
+use simulate::{ExcitationArgs, SimulateArgs};
+use ssi::SsiArgs;
+
+/// Set the delimiter `--delimiter` gave, once, before any command runs.
+pub(crate) fn set_delimiter(d: DelimiterArg) {
+    DELIMITER.get_or_init(|| d.into());
+}
+
+#[derive(Parser)]
+#[command(
+    name = "hyst",
+    version,
+    about = "Identify stiffness and hysteretic damping of vibrating structures from their response",
+    long_about = None
+)]
+pub(crate) struct Cli {
+    #[command(subcommand)]
+    pub(crate) command: Command,
+    /// Cell separator of every CSV file read: detected from the header line by default.
+    #[arg(long, global = true, value_enum, default_value_t = DelimiterArg::Auto)]
+    pub(crate) delimiter: DelimiterArg,
+}
+
+#[derive(Clone, Copy, Debug, Default, ValueEnum)]
+pub(crate) enum DelimiterArg {
+    /// Whichever of `,` `;` tab the header uses most.
+    #[default]
+    Auto,
+    /// `,`
+    Comma,
+    /// `;` (a decimal comma is read too)
+    Semicolon,
+    /// A tab.
+    Tab,
+}
+
+impl From<DelimiterArg> for hyst::io::Delimiter {
+    fn from(d: DelimiterArg) -> Self {
+        match d {
+            DelimiterArg::Auto => Self::Auto,
+            DelimiterArg::Comma => Self::Comma,
+            DelimiterArg::Semicolon => Self::Semicolon,
+            DelimiterArg::Tab => Self::Tab,
+        }
+    }
+}
+
+/// The delimiter `--delimiter` gave, set once at start.
+pub(crate) static DELIMITER: std::sync::OnceLock<hyst::io::Delimiter> = std::sync::OnceLock::new();
+
+/// Read a CSV record with the delimiter of `--delimiter`.
+pub(crate) fn read_csv(path: &std::path::Path) -> Result<hyst::io::Table, hyst::io::IoError> {
+    hyst::io::read_csv_with(path, DELIMITER.get().copied().unwrap_or_default())
+}
+
+#[derive(Subcommand)]
+pub(crate) enum Command {
+    /// Simulate an oscillator driven by an input record or a generated excitation; write `u,y`.
+    ///
+    /// Examples:
+    ///   hyst simulate --input multisine_val.csv --fs 750 --periodic --integrator newmark --decimation fir --out y.csv
+    ///   hyst simulate --excitation multisine --rms 50 --samples 8192 --seed 1 --out y.csv
+    #[command(verbatim_doc_comment, allow_negative_numbers = true)]
+    Simulate(SimulateArgs),
+    /// Generate an excitation record and write it as a one-column CSV `u`.
+    #[command(allow_negative_numbers = true)]
+    Excite(ExcitationArgs),
+    /// Output-only modal analysis (covariance-driven SSI) of one or more channels: modes with
+    /// their spread, then refined by maximum likelihood with standard errors; with several
+    /// channels, each mode's shape with its MPC and the MAC between the modes.
+    ///
+    /// Example:
+    ///   hyst ssi --input data_3dof.csv --fs 20 --columns y1,y2,y3 --max-order 40 --json modes.json --svg diagram.svg
+    #[command(verbatim_doc_comment, allow_negative_numbers = true)]
+    Ssi(SsiArgs),
+    /// Output-only identification of linear, Zener and Bouc-Wen models (the paper's pipeline).
+    ///
+    /// Without --data, runs on a built-in default: the Bouc-Wen benchmark driven by its 50 N
+    /// multisine (5 periods, the first dropped) with the benchmark's measurement noise,
+    /// validated on a fresh multisine realization.
+    ///
+    /// Example:
+    ///   hyst ident --data multisine_train.csv --fs 750 --mass 2 --skip 8192 --validate multisine_val.csv --json id.json
+    #[command(verbatim_doc_comment, allow_negative_numbers = true)]
+    Ident(IdentArgs),
+    /// Close the loop with input and output: refine a model by output error, trace the
+    /// residual to the effect the model lacks, add it, refit, and report the held-out error
+    /// before and after, the noise level, and what is left.
+    ///
+    /// Example (Silverbox: estimate on the multisine part, test on the arrow head):
+    ///   hyst refine --data SNLS80mV.csv --fs 610.3515625 --start linear --estimate 40650:105712 --test 100:40575 --test 100:32100 --json refine.json
+    #[command(verbatim_doc_comment, allow_negative_numbers = true)]
+    Refine(RefineArgs),
+    /// One Bouc-Wen model from records of the same structure at several force levels, each
+    /// under a random (white) force: the Zener oscillator fitted to each record's spectrum,
+    /// mapped to Bouc-Wen through the statistical linearization of all levels together.
+    ///
+    /// Example:
+    ///   hyst levels --data bw10.csv bw50.csv bw90.csv --fs 750 --mass 2 --data-periodic --validate bw50v.csv --periodic --json levels.json
+    #[command(verbatim_doc_comment, allow_negative_numbers = true)]
+    Levels(LevelsArgs),
+    /// With the input: the modes of a periodic record's frequency response over a band (an
+    /// input-output second opinion on `hyst ssi`), with several outputs each mode's shape,
+    /// and optionally the outputs under a force of flat spectrum.
+    ///
+    /// Example (the F-16 at its lowest level, the wing torsion mode):
+    ///   hyst frf --input msine_level1.csv --fs 400 --force force --period 8192 --skip 8192 --band 6.8:7.8 --json torsion.json --svg torsion.svg
+    #[command(verbatim_doc_comment, allow_negative_numbers = true)]
+    Frf(frf_cmd::FrfArgs),
+}
+
+pub(crate) type Error = Box<dyn std::error::Error>;
+
+pub(crate) fn fail(msg: impl Into<String>) -> Error {
+    msg.into().into()
+}
+
+/// The channels to analyse: those given, else every column but a time column (`t`, `time`)
+/// and those in `besides`.
+pub(crate) fn channel_names(
+    t: &hyst::io::Table,
+    given: Option<&[String]>,
+    besides: &[&str],
+) -> Vec<String> {
+    match given {
+        Some(c) => c.to_vec(),
+        None => t
+            .names
+            .iter()
+            .filter(|n| {
+                !besides.contains(&n.as_str())
+                    && !matches!(n.to_ascii_lowercase().as_str(), "t" | "time")
+            })
+            .cloned()
+            .collect(),
+    }
+}
+
+/// Output only means responses only: a default channel list that takes in the force is a
+/// mistake the user should hear about (the benchmarks' files hold `u,y`).
+pub(crate) fn warn_on_force_like(names: &[String]) {
+    let looks_input = |n: &str| {
+        matches!(
+            n.to_ascii_lowercase().as_str(),
+            "u" | "force" | "input" | "excitation" | "load"
+        )
+    };
+    let (inputs, responses): (Vec<&String>, Vec<&String>) =
+        names.iter().partition(|n| looks_input(n));
+    if inputs.is_empty() {
+        return;
+    }
+    let list = |v: &[&String]| v.iter().map(|s| s.as_str()).collect::<Vec<_>>().join(",");
+    let (what, is) = if inputs.len() == 1 {
+        (
+            format!("column `{}` looks like the input (a force)", inputs[0]),
+            "it is analysed as a response",
+        )
+    } else {
+        (
+            format!("columns {} look like inputs (forces)", list(&inputs)),
+            "they are analysed as responses",
+        )
+    };
+    eprintln!(
+        "warning: {what}, and output-only analysis takes responses only; {is} because --columns was not given{}",
+        if responses.is_empty() {
+            String::new()
+        } else {
+            format!(" (for the responses alone: --columns {})", list(&responses))
+        }
+    );
+}
+
+pub(crate) fn check_fs(fs: f64) -> Result<f64, Error> {
+    if fs.is_finite() && fs > 0.0 {
+        Ok(fs)
+    } else {
+        Err(fail(format!(
+            "--fs must be a positive number of Hz, got {fs}"
+        )))
+    }
+}
+
+/// The oscillator in the reports' short form (m, c, k, the restoring element's parameters),
+/// with any extra force terms that are on.
+pub(crate) fn osc_json(o: &Oscillator) -> serde_json::Value {
+    serde_json::to_value(o).unwrap_or_default()
+}
+
+/// The column `column` of the CSV record `path` after its first `skip` rows, which must
+/// leave some.
+pub(crate) fn output_after_skip(
+    path: &std::path::Path,
+    column: &str,
+    skip: usize,
+) -> Result<Vec<f64>, Error> {
+    let t = read_csv(path)?;
+    let col = t.column(column)?;
+    if skip >= col.len() {
+        return Err(fail(format!(
+            "--skip {skip} leaves none of the {} rows of {}",
+            col.len(),
+            path.display()
+        )));
+    }
+    Ok(col[skip..].to_vec())
+}
+
+#[derive(Clone, Copy, ValueEnum, PartialEq, Eq, Debug)]
+pub(crate) enum InterpolationArg {
+    /// A measured force behind an anti-aliasing filter: windowed-sinc interpolation.
+    BandLimited,
+    /// Linear between samples, as `hyst simulate` without --periodic drives its models.
+    Linear,
+}
+
+/// The files a command will write, with the flag that names each.
+pub(crate) fn output_files(c: &Command) -> Vec<(&'static str, &std::path::Path)> {
+    let v: Vec<(&'static str, Option<&std::path::Path>)> = match c {
+        Command::Simulate(a) => vec![("--out", Some(&a.out))],
+        Command::Excite(a) => vec![("--out", Some(&a.out))],
+        Command::Ssi(a) => vec![("--json", Some(&a.json)), ("--svg", a.svg.as_deref())],
+        Command::Ident(a) => vec![("--json", a.json.as_deref())],
+        Command::Refine(a) => vec![("--json", a.json.as_deref())],
+        Command::Levels(a) => vec![("--json", a.json.as_deref())],
+        Command::Frf(a) => a.output_files(),
+    };
+    v.into_iter().filter_map(|(f, p)| Some((f, p?))).collect()
+}
+
+/// An output file whose folder does not exist is refused before any work: writing it would
+/// otherwise fail only after a refinement or a simulation that can take minutes. (Folders
+/// given by `--svg-dir` are made.)
+pub(crate) fn check_output_folders(c: &Command) -> Result<(), Error> {
+    for (flag, path) in output_files(c) {
+        let folder = match path.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d,
+            _ => std::path::Path::new("."),
+        };
+        if !folder.is_dir() {
+            return Err(fail(format!(
+                "{flag} {}: the folder {} does not exist",
+                path.display(),
+                folder.display()
+            )));
+        }
+    }
+    Ok(())
+}

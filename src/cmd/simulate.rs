@@ -1,0 +1,223 @@
+//! `hyst simulate` and `hyst excite`: records made by the simulator.
+
+use std::path::PathBuf;
+
+use clap::{Args, ValueEnum};
+use hyst::io::write_csv;
+use hyst::model::Oscillator;
+use hyst::sim::excitation::{Multisine, Sweep, white_noise};
+use hyst::sim::{self, Decimation, Input, Integrator, SimOptions};
+
+use super::*;
+
+#[derive(Clone, Copy, ValueEnum, PartialEq, Eq, Debug)]
+pub(crate) enum IntegratorArg {
+    /// Classic fourth-order Runge-Kutta.
+    Rk4,
+    /// The benchmark's Newmark (a = 1/2, b = 1/4), i.e. the implicit trapezoidal rule.
+    Newmark,
+}
+
+#[derive(Clone, Copy, ValueEnum, PartialEq, Eq, Debug)]
+pub(crate) enum DecimationArg {
+    /// Keep the state at each sample instant.
+    Sample,
+    /// MATLAB's decimate(.., 'fir') in stages (the prime factors of --oversample, ascending).
+    Fir,
+}
+
+#[derive(Clone, Copy, ValueEnum, PartialEq, Eq, Debug)]
+pub(crate) enum ExcitationKind {
+    /// Random-phase multisine, flat on [--f-min, --f-max], periodic with --samples samples.
+    Multisine,
+    /// Gaussian white noise at --fs. `simulate` interpolates it linearly between samples,
+    /// which colours the force (its spectrum falls as sinc^4(pi f/fs), 1.6 % down at fs/20);
+    /// with --periodic it is interpolated exactly and stays white up to fs/2.
+    White,
+    /// Linear sine sweep from --f-min to --f-max over the record (amplitude: sqrt(2)·rms).
+    Sweep,
+}
+
+#[derive(Clone, Copy, ValueEnum, PartialEq, Eq, Debug)]
+pub(crate) enum SystemArg {
+    /// The Bouc-Wen benchmark: m = 2, c = 10, k = 5e4, alpha = 5e4, beta*gamma = 800, beta*delta = -1100, nu = 1.
+    Benchmark,
+}
+
+#[derive(Args, Debug)]
+pub(crate) struct ExcitationArgs {
+    /// Kind of excitation to generate.
+    #[arg(long, value_enum, default_value = "multisine")]
+    pub(crate) excitation: ExcitationKind,
+    #[command(flatten)]
+    pub(crate) signal: SignalArgs,
+    /// Sampling rate (Hz).
+    #[arg(long, default_value_t = 750.0)]
+    pub(crate) fs: f64,
+    /// Output CSV file.
+    #[arg(long)]
+    pub(crate) out: PathBuf,
+}
+
+/// The parameters of a generated excitation, shared by `simulate` and `excite`.
+#[derive(Args, Debug)]
+pub(crate) struct SignalArgs {
+    /// RMS of the generated excitation (N).
+    #[arg(long, default_value_t = 50.0)]
+    pub(crate) rms: f64,
+    /// Samples of the generated excitation (a multisine: one period).
+    #[arg(long, default_value_t = 8192)]
+    pub(crate) samples: usize,
+    /// Seed of the random generator.
+    #[arg(long, default_value_t = 1)]
+    pub(crate) seed: u64,
+    /// Lowest excited frequency (Hz).
+    #[arg(long, default_value_t = 5.0)]
+    pub(crate) f_min: f64,
+    /// Highest excited frequency (Hz).
+    #[arg(long, default_value_t = 150.0)]
+    pub(crate) f_max: f64,
+}
+
+#[derive(Args, Debug)]
+pub(crate) struct SimulateArgs {
+    /// Input CSV file (with a header line). Without it, an excitation is generated.
+    #[arg(long)]
+    pub(crate) input: Option<PathBuf>,
+    /// Sampling rate of the input (Hz); required with --input, default 750 for generated input.
+    #[arg(long)]
+    pub(crate) fs: Option<f64>,
+    /// Column of the input file holding the force.
+    #[arg(long, default_value = "u")]
+    pub(crate) column: String,
+    /// The input is one period of a periodic signal: simulate to steady state and write one
+    /// steady-state period (the input is interpolated exactly between samples).
+    #[arg(long)]
+    pub(crate) periodic: bool,
+    /// How a non-periodic input is known between samples. Default: band-limited for an
+    /// --input file (a measured force, as `hyst ident --validate` and `hyst refine` take it),
+    /// linear for a generated excitation (how the project's synthetic records are made).
+    #[arg(long, value_enum)]
+    pub(crate) input_interpolation: Option<InterpolationArg>,
+    /// Integration sub-steps per sample.
+    #[arg(long, default_value_t = 20)]
+    pub(crate) oversample: usize,
+    /// Time integrator.
+    #[arg(long, value_enum, default_value = "rk4")]
+    pub(crate) integrator: IntegratorArg,
+    /// How the fine-step output returns to the sampling rate.
+    #[arg(long, value_enum, default_value = "sample")]
+    pub(crate) decimation: DecimationArg,
+    /// Built-in system to simulate (ignored with --params).
+    #[arg(long, value_enum, default_value = "benchmark")]
+    pub(crate) system: SystemArg,
+    /// Oscillator parameters as JSON, in the schema every report writes (`hyst_model::schema`),
+    /// instead of --system. `FILE#/POINTER` takes the model at a JSON pointer inside a report,
+    /// e.g. `ident.json#/bouc_wen` or `refine.json#/model`.
+    #[arg(long)]
+    pub(crate) params: Option<PathBuf>,
+    /// Generated excitation kind, when there is no --input.
+    #[arg(long, value_enum)]
+    pub(crate) excitation: Option<ExcitationKind>,
+    #[command(flatten)]
+    pub(crate) signal: SignalArgs,
+    /// Standard deviation of white measurement noise added to y (m).
+    #[arg(long, default_value_t = 0.0)]
+    pub(crate) noise: f64,
+    /// Seed of the measurement noise.
+    #[arg(long, default_value_t = 2)]
+    pub(crate) noise_seed: u64,
+    /// Output CSV file (`u,y`).
+    #[arg(long)]
+    pub(crate) out: PathBuf,
+}
+
+pub(crate) fn generate(kind: ExcitationKind, a: &SignalArgs, fs: f64) -> Result<Vec<f64>, Error> {
+    Ok(match kind {
+        ExcitationKind::Multisine => {
+            Multisine::band(a.samples, fs, a.f_min, a.f_max, a.rms)?.generate(a.seed)?
+        }
+        ExcitationKind::White => white_noise(a.samples, a.rms, a.seed)?,
+        ExcitationKind::Sweep => Sweep {
+            amplitude: a.rms * std::f64::consts::SQRT_2,
+            f0: a.f_min,
+            f1: a.f_max,
+            duration: a.samples as f64 / fs,
+        }
+        .sample(a.samples, fs)?,
+    })
+}
+
+pub(crate) fn prime_factors(mut n: usize) -> Vec<usize> {
+    let mut f = Vec::new();
+    let mut p = 2;
+    while n > 1 {
+        while n.is_multiple_of(p) {
+            f.push(p);
+            n /= p;
+        }
+        p += 1;
+    }
+    f
+}
+
+pub(crate) fn excite(a: &ExcitationArgs) -> Result<(), Error> {
+    let fs = check_fs(a.fs)?;
+    let u = generate(a.excitation, &a.signal, fs)?;
+    write_csv(&a.out, &["u"], &[&u])?;
+    Ok(())
+}
+
+pub(crate) fn run(a: &SimulateArgs) -> Result<(), Error> {
+    let model: Oscillator = match &a.params {
+        Some(p) => hyst::io::read_oscillator(p).map_err(|e| fail(e.to_string()))?,
+        None => match a.system {
+            SystemArg::Benchmark => Oscillator::benchmark(),
+        },
+    };
+    if a.oversample == 0 {
+        return Err(fail("--oversample must be at least 1, got 0"));
+    }
+    let (u, fs, periodic) = match (&a.input, a.excitation) {
+        (Some(path), None) => {
+            let fs = check_fs(a.fs.ok_or_else(|| fail("--fs is required with --input"))?)?;
+            let t = read_csv(path)?;
+            (t.column(&a.column)?.to_vec(), fs, a.periodic)
+        }
+        (None, Some(kind)) => {
+            let fs = check_fs(a.fs.unwrap_or(750.0))?;
+            let u = generate(kind, &a.signal, fs)?;
+            (u, fs, a.periodic || kind == ExcitationKind::Multisine)
+        }
+        (Some(_), Some(_)) => return Err(fail("give either --input or --excitation, not both")),
+        (None, None) => return Err(fail("give an --input file or an --excitation to generate")),
+    };
+    let opts = SimOptions {
+        oversample: a.oversample,
+        integrator: match a.integrator {
+            IntegratorArg::Rk4 => Integrator::Rk4,
+            IntegratorArg::Newmark => Integrator::Trapezoidal,
+        },
+        decimation: match a.decimation {
+            DecimationArg::Sample => Decimation::Subsample,
+            DecimationArg::Fir => Decimation::Fir(prime_factors(a.oversample)),
+        },
+        ..SimOptions::default()
+    };
+    let band_limited = match (a.input_interpolation, &a.input) {
+        (Some(i), _) => i == InterpolationArg::BandLimited,
+        (None, from_file) => from_file.is_some(),
+    };
+    let mut y = if periodic {
+        sim::steady_state_period(&model, &u, fs, &opts, 1e-10, 200)?.y
+    } else if band_limited {
+        sim::simulate(&model, Input::BandLimited(&u), fs, u.len(), &opts)?
+    } else {
+        sim::simulate(&model, Input::Sampled(&u), fs, u.len(), &opts)?
+    };
+    if a.noise != 0.0 {
+        sim::excitation::add_noise(&mut y, a.noise, a.noise_seed)?;
+    }
+    write_csv(&a.out, &["u", "y"], &[&u, &y])?;
+    Ok(())
+}
