@@ -1,0 +1,71 @@
+//! Standard errors of the poles and shapes from the inverse Fisher information.
+
+use super::*;
+
+/// The modes' estimates and standard errors (frequency Hz, damping ratio), in the order of
+/// the per-channel fit, with what [`Refinement`] reports of the fit that gave them.
+pub(super) struct Estimates {
+    pub(super) lambdas: Vec<C64>,
+    pub(super) se: Vec<Option<(f64, f64)>>,
+    /// The modes' shapes c_r from the joint likelihood on the channels themselves (not on
+    /// combinations of them), largest entry 1, with each entry's standard error; `None`
+    /// otherwise.
+    pub(super) shapes: Vec<Option<(Vec<C64>, Vec<f64>)>>,
+    /// Real poles λ and their standard errors (rad/s), in the order of the per-channel fit.
+    pub(super) reals: Vec<(f64, Option<f64>)>,
+    pub(super) l: f64,
+    pub(super) misfit: f64,
+    pub(super) iterations: usize,
+    pub(super) combinations: Option<usize>,
+    pub(super) bands: usize,
+}
+
+/// A shape `c` scaled so that its largest entry is 1, s_a = c_a/c_b, with each entry's
+/// standard error by the delta method, √(E|δs_a|²) (0 for the entry b itself), from the
+/// covariance `cov` of θ, whose entries `offset..offset + l` hold Re c and the next l Im c:
+/// δs_a = δc_a/c_b − c_a δc_b/c_b².
+pub(super) fn shape_se(c: &[C64], cov: &Dense, offset: usize) -> (Vec<C64>, Vec<f64>) {
+    let l = c.len();
+    let b = crate::stabilize::largest_entry(c);
+    let cb = c[b];
+    if cb.norm() == 0.0 {
+        return (c.to_vec(), vec![f64::NAN; l]);
+    }
+    // Complex multiplication by w as a real 2 × 2 matrix acting on (Re, Im).
+    let mat = |w: C64| [[w.re, -w.im], [w.im, w.re]];
+    let se = (0..l)
+        .map(|a| {
+            if a == b {
+                return 0.0;
+            }
+            // δs_a (Re, Im) = J (δRe c_a, δIm c_a, δRe c_b, δIm c_b).
+            let (p, q) = (mat(1.0 / cb), mat(-c[a] / (cb * cb)));
+            let jac = [
+                [p[0][0], p[0][1], q[0][0], q[0][1]],
+                [p[1][0], p[1][1], q[1][0], q[1][1]],
+            ];
+            let idx = [offset + a, offset + l + a, offset + b, offset + l + b];
+            let mut var = 0.0;
+            for row in &jac {
+                for (u, &iu) in idx.iter().enumerate() {
+                    for (v, &iv) in idx.iter().enumerate() {
+                        var += row[u] * cov.at(iu, iv) * row[v];
+                    }
+                }
+            }
+            var.max(0.0).sqrt()
+        })
+        .collect();
+    (c.iter().map(|v| v / cb).collect(), se)
+}
+
+/// Standard errors of mode j's frequency (Hz) and damping ratio from the covariance `cov` of
+/// θ (ln ω of the m modes, then their logit ζ, first), its pole being `lam`.
+pub(super) fn pole_se(cov: &Dense, j: usize, m: usize, lam: C64) -> (f64, f64) {
+    let w = lam.norm();
+    let zeta = -lam.re / w;
+    (
+        cov.at(j, j).max(0.0).sqrt() * w / (2.0 * std::f64::consts::PI),
+        cov.at(m + j, m + j).max(0.0).sqrt() * zeta * (1.0 - zeta),
+    )
+}

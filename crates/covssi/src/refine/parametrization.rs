@@ -1,0 +1,138 @@
+//! The parameters: poles by ln ω and logit ζ (ln ρ for a real pole), and the spectrum's
+//! denominator built from them.
+
+use super::*;
+
+/// A pole's parameters: ln ω and logit ζ (ζ clamped to [1e-6, 0.99] so that both are finite);
+/// [`unpack`] is the inverse.
+pub(super) fn pole_params(lam: C64) -> (f64, f64) {
+    let zeta = (-lam.re / lam.norm()).clamp(1e-6, 0.99);
+    (lam.norm().ln(), (zeta / (1.0 - zeta)).ln())
+}
+
+/// The poles λ_j of θ's first 2m entries (ln ω, then logit ζ); [`pole_params`] is the inverse.
+pub(super) fn unpack(th: &[f64], m: usize) -> Vec<C64> {
+    (0..m)
+        .map(|j| {
+            let w = th[j].exp();
+            let zeta = logistic(th[m + j]);
+            w * C64::new(-zeta, (1.0 - zeta * zeta).sqrt())
+        })
+        .collect()
+}
+
+pub(super) fn logistic(s: f64) -> f64 {
+    1.0 / (1.0 + (-s).exp())
+}
+
+/// Real coefficients (highest power first, leading 1) of ∏ (z − r).
+pub(super) fn poly(roots: &[C64]) -> Vec<f64> {
+    let mut c = vec![C64::new(1.0, 0.0)];
+    for r in roots {
+        let mut next = vec![C64::new(0.0, 0.0); c.len() + 1];
+        for (k, ck) in c.iter().enumerate() {
+            next[k] += ck;
+            next[k + 1] -= ck * r;
+        }
+        c = next;
+    }
+    c.iter().map(|v| v.re).collect()
+}
+
+/// Σ_k coef[k] w^k (coefficients lowest power first, e.g. a polynomial in z⁻¹ at w = z̄ on the
+/// unit circle).
+pub(super) fn poly_at(coef: &[f64], w: C64) -> C64 {
+    let mut acc = C64::new(0.0, 0.0);
+    let mut p = C64::new(1.0, 0.0);
+    for c in coef {
+        acc += c * p;
+        p *= w;
+    }
+    acc
+}
+
+/// The denominator |A(e^{iω})|² of the spectrum: the discrete poles of θ's modes and real
+/// poles, and their derivatives by the pole parameters.
+pub(super) struct Denominator {
+    /// μ_j, μ̄_j of each mode, then μ_i = e^{−ρ_i/f_s} of each real pole λ_i = −ρ_i.
+    pub(super) mu: Vec<C64>,
+    /// dμ_j/d(ln ω_j) and dμ_j/d(logit ζ_j).
+    pub(super) dmu: Vec<[C64; 2]>,
+    /// dμ_i/d(ln ρ_i) of each real pole.
+    pub(super) dreal: Vec<f64>,
+}
+
+impl Denominator {
+    /// The modes of θ alone. `None` when a natural frequency reaches Nyquist.
+    pub(super) fn new(th: &[f64], m: usize, fs: f64) -> Option<Self> {
+        Self::with_reals(th, m, 0, fs)
+    }
+
+    /// The `m` modes of θ's first 2m entries and the `r` real poles of the next r (ln ρ).
+    /// `None` when a natural frequency reaches Nyquist or a real pole is not finite.
+    pub(super) fn with_reals(th: &[f64], m: usize, r: usize, fs: f64) -> Option<Self> {
+        let lambdas = unpack(th, m);
+        let mut mu = discrete_poles(&lambdas, fs)?;
+        let dmu = lambdas
+            .iter()
+            .enumerate()
+            .map(|(j, lam)| {
+                let w = lam.norm();
+                let zeta = -lam.re / w;
+                let sq = (1.0 - zeta * zeta).sqrt();
+                let dl_dz = w * C64::new(-1.0, -zeta / sq) * (zeta * (1.0 - zeta));
+                [mu[2 * j] * lam / fs, mu[2 * j] * dl_dz / fs]
+            })
+            .collect();
+        let mut dreal = Vec::with_capacity(r);
+        for &ln_rho in &th[2 * m..2 * m + r] {
+            let rho = ln_rho.exp();
+            let u = (-rho / fs).exp();
+            if !(rho.is_finite() && u.is_finite()) {
+                return None;
+            }
+            mu.push(C64::new(u, 0.0));
+            dreal.push(-u * rho / fs);
+        }
+        Some(Denominator { mu, dmu, dreal })
+    }
+
+    /// ln|A(z)|² at z on the unit circle; with `derivs`, `da[t]` = ∂ ln|A|²/∂θ_t for the
+    /// 2m + r pole parameters.
+    pub(super) fn at(&self, z: C64, derivs: bool, da: &mut [f64]) -> f64 {
+        let m = self.dmu.len();
+        let mut log_a2 = 0.0;
+        for (j, dm_j) in self.dmu.iter().enumerate() {
+            let d1 = z - self.mu[2 * j];
+            let d2 = z - self.mu[2 * j + 1];
+            log_a2 += d1.norm_sqr().ln() + d2.norm_sqr().ln();
+            if derivs {
+                for (t, dm) in dm_j.iter().enumerate() {
+                    da[t * m + j] = -2.0 * (dm / d1).re - 2.0 * (dm.conj() / d2).re;
+                }
+            }
+        }
+        for (i, dm) in self.dreal.iter().enumerate() {
+            let d1 = z - self.mu[2 * m + i];
+            log_a2 += d1.norm_sqr().ln();
+            if derivs {
+                da[2 * m + i] = -2.0 * (*dm / d1).re;
+            }
+        }
+        log_a2
+    }
+}
+
+/// Discrete poles μ, μ̄ of each mode, or `None` when a natural frequency reaches Nyquist.
+pub(super) fn discrete_poles(lambdas: &[C64], fs: f64) -> Option<Vec<C64>> {
+    let mut mu = Vec::with_capacity(2 * lambdas.len());
+    for lam in lambdas {
+        if lam.norm() / fs >= std::f64::consts::PI || !lam.re.is_finite() {
+            return None;
+        }
+        let u = (lam / fs).exp();
+        mu.push(u);
+        mu.push(u.conj());
+    }
+    Some(mu)
+}
