@@ -1546,7 +1546,10 @@ fn refine_rejects_bad_row_ranges() {
         "150:100",
     ]);
     assert!(!ok);
-    assert!(err.contains("--estimate `150:100`"), "{err}");
+    assert!(
+        err.contains("for '--estimate <ESTIMATE>': `150:100` is not A:B"),
+        "{err}"
+    );
     let (ok, _, err) = hyst(&["refine", "--data", s(&p), "--fs", "100", "--test", "0:500"]);
     assert!(!ok);
     assert!(
@@ -1883,7 +1886,7 @@ fn frf_fits_the_f16_torsion_mode_and_writes_flattened_outputs() {
     for (extra, needle) in [
         (
             &["--period", "8192", "--band", "6.8-7.8"][..],
-            "--band must be LOW:HIGH in Hz, got `6.8-7.8`",
+            "for '--band <BAND>': `6.8-7.8` is not LO:HI with 0 <= LO < HI (Hz)",
         ),
         (
             &["--period", "8192", "--band", "6.8:300"][..],

@@ -34,7 +34,7 @@ pub struct FrfArgs {
     skip: usize,
     /// The band to fit, LOW:HIGH in Hz.
     #[arg(long)]
-    band: String,
+    band: super::args::Band,
     /// Modes to fit in the band together (the fit reports those inside the band).
     #[arg(long, default_value_t = 1)]
     modes: usize,
@@ -48,14 +48,6 @@ pub struct FrfArgs {
     /// column names), e.g. to compare `hyst ssi` on them with `hyst ssi` on the measured ones.
     #[arg(long)]
     write_flat: Option<PathBuf>,
-}
-
-fn parse_band(s: &str) -> Result<(f64, f64), Error> {
-    let bad = || fail(format!("--band must be LOW:HIGH in Hz, got `{s}`"));
-    let (a, b) = s.split_once(':').ok_or_else(bad)?;
-    let lo: f64 = a.trim().parse().map_err(|_| bad())?;
-    let hi: f64 = b.trim().parse().map_err(|_| bad())?;
-    Ok((lo, hi))
 }
 
 impl FrfArgs {
@@ -72,7 +64,7 @@ impl FrfArgs {
 pub fn run(a: &FrfArgs) -> Result<(), Error> {
     use serde_json::json;
     let fs = check_fs(a.fs)?;
-    let band = parse_band(&a.band)?;
+    let band = (a.band.low_hz, a.band.high_hz);
     if a.period < 4 {
         return Err(fail(format!(
             "--period must be at least 4 samples, got {}",

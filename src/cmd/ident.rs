@@ -81,7 +81,7 @@ pub(crate) struct IdentArgs {
     /// its implied input, and kept when it validates better than the mapped one (or when
     /// there is nothing to validate on). The built-in default job uses 5:150.1.
     #[arg(long)]
-    pub(crate) excitation_band: Option<String>,
+    pub(crate) excitation_band: Option<super::args::Band>,
     /// Samples per period of the excitation (with --excitation-band); --data must hold whole
     /// periods of the steady state (use --skip to drop a start-up transient).
     #[arg(long)]
@@ -293,19 +293,7 @@ pub(crate) fn excitation_band(
             "--excitation-band needs --period (samples per period of the excitation)",
         )),
         (Some(b), Some(period)) => {
-            let bad = || {
-                fail(format!(
-                    "--excitation-band `{b}` is not LO:HI with 0 <= LO < HI (Hz)"
-                ))
-            };
-            let (lo, hi) = b.split_once(':').ok_or_else(bad)?;
-            let (lo, hi): (f64, f64) = (
-                lo.trim().parse().map_err(|_| bad())?,
-                hi.trim().parse().map_err(|_| bad())?,
-            );
-            if !(lo.is_finite() && hi.is_finite() && lo >= 0.0 && lo < hi) {
-                return Err(bad());
-            }
+            let (lo, hi) = (b.low_hz, b.high_hz);
             // Options that can never give a flatness fit are refused before the pipeline
             // runs, not reported in a note after it.
             if period < 2 {

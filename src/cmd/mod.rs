@@ -4,6 +4,7 @@
 use clap::{Parser, Subcommand, ValueEnum};
 use hyst::model::Oscillator;
 
+pub(crate) mod args;
 pub(crate) mod frf;
 pub(crate) mod ident;
 pub(crate) mod levels;

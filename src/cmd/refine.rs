@@ -41,12 +41,12 @@ pub(crate) struct RefineArgs {
     pub(crate) input_interpolation: InterpolationArg,
     /// Estimation rows A:B (0-based, B excluded); default the first 75 %.
     #[arg(long)]
-    pub(crate) estimate: Option<String>,
+    pub(crate) estimate: Option<super::args::RowRange>,
     /// Test rows C:D (repeatable, at least 512 rows each); default the last 25 %. An effect
     /// is added only if it lowers the held-out mean squared error significantly (a paired
     /// test over 8 blocks of each range, p < 0.01) and by at least 1 %.
     #[arg(long)]
-    pub(crate) test: Vec<String>,
+    pub(crate) test: Vec<super::args::RowRange>,
     /// Write the report as JSON here.
     #[arg(long)]
     pub(crate) json: Option<PathBuf>,
@@ -54,23 +54,6 @@ pub(crate) struct RefineArgs {
     /// and the restoring-force surface of the baseline's residual with its two sections.
     #[arg(long)]
     pub(crate) svg_dir: Option<PathBuf>,
-}
-
-pub(crate) fn parse_rows(s: &str, what: &str, len: usize) -> Result<(usize, usize), Error> {
-    let bad = || {
-        fail(format!(
-            "{what} `{s}` is not A:B with 0 <= A < B <= {len} (the record's rows)"
-        ))
-    };
-    let (a, b) = s.split_once(':').ok_or_else(bad)?;
-    let (a, b): (usize, usize) = (
-        a.trim().parse().map_err(|_| bad())?,
-        b.trim().parse().map_err(|_| bad())?,
-    );
-    if a >= b || b > len {
-        return Err(bad());
-    }
-    Ok((a, b))
 }
 
 /// `v` to six significant digits: fixed-point for magnitudes in [1e-3, 1e6), else exponent.
@@ -233,7 +216,7 @@ pub(crate) fn run(a: &RefineArgs) -> Result<(), Error> {
     let y = t.column(&a.output_column)?;
     let n = y.len();
     let estimate = match &a.estimate {
-        Some(s) => parse_rows(s, "--estimate", n)?,
+        Some(r) => r.within("--estimate", n)?,
         None => (0, 3 * n / 4),
     };
     let tests: Vec<(usize, usize)> = if a.test.is_empty() {
@@ -241,7 +224,7 @@ pub(crate) fn run(a: &RefineArgs) -> Result<(), Error> {
     } else {
         a.test
             .iter()
-            .map(|s| parse_rows(s, "--test", n))
+            .map(|r| r.within("--test", n))
             .collect::<Result<_, _>>()?
     };
     if let Some(m) = a.mass
