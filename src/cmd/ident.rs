@@ -210,7 +210,7 @@ pub(crate) fn ident_figures(
     dir: &std::path::Path,
     id: &hyst::ident::Identification,
     bouc_wen: Option<&Oscillator>,
-    validations: &[(String, Vec<f64>, Vec<f64>, bool)],
+    validations: &[hyst::ident::ValidationRecord],
 ) -> Result<(), Error> {
     use hyst::plot::{chart, chart_log_y, colors};
     let p = &id.prepared;
@@ -230,7 +230,14 @@ pub(crate) fn ident_figures(
         "R(τ) (m²)",
         &[("R̂xx".into(), corr, colors::BLACK)],
     )?;
-    let Some((name, u, y, periodic)) = validations.first() else {
+    let Some(hyst::ident::ValidationRecord {
+        name,
+        u,
+        y,
+        periodic,
+        ..
+    }) = validations.first()
+    else {
         return Ok(());
     };
     let fs = p.fs * p.decimation as f64;
@@ -322,8 +329,7 @@ pub(crate) fn run(a: &IdentArgs) -> Result<(), Error> {
     use hyst::ident::{self, DampingGuess, IdentOptions, Linearization};
     use serde_json::json;
     let mass = a.mass.unwrap_or(2.0);
-    // (name, u, y, periodic)
-    let mut validations: Vec<(String, Vec<f64>, Vec<f64>, bool)> = Vec::new();
+    let mut validations: Vec<ident::ValidationRecord> = Vec::new();
     let (y, fs, source) = match &a.data {
         Some(path) => {
             let fs = check_fs(a.fs.ok_or_else(|| fail("--fs is required with --data"))?)?;
@@ -337,12 +343,12 @@ pub(crate) fn run(a: &IdentArgs) -> Result<(), Error> {
         }
         None => {
             let d = default_records()?;
-            validations.push((
-                "built-in: benchmark, fresh 50 N multisine".into(),
-                d.val_u,
-                d.val_y,
-                true,
-            ));
+            validations.push(ident::ValidationRecord {
+                name: "built-in: benchmark, fresh 50 N multisine".into(),
+                u: d.val_u,
+                y: d.val_y,
+                periodic: true,
+            });
             (
                 d.y,
                 750.0,
@@ -353,16 +359,17 @@ pub(crate) fn run(a: &IdentArgs) -> Result<(), Error> {
     for v in &a.validate {
         let t = read_csv(v)?;
         let name = v.display().to_string();
-        let u = t.column(&a.input_column)?.to_vec();
-        let periodic = match a.validation_kind {
-            ValidationKindArg::Periodic => true,
-            ValidationKindArg::FromRest => false,
-            ValidationKindArg::Auto => matches!(
-                hyst::ident::periodic::periodicity(&u),
-                hyst::ident::periodic::Periodicity::Periodic { .. }
-            ),
-        };
-        validations.push((name, u, t.column(&a.output_column)?.to_vec(), periodic));
+        let mut record = ident::ValidationRecord::new(
+            name,
+            t.column(&a.input_column)?.to_vec(),
+            t.column(&a.output_column)?.to_vec(),
+        );
+        match a.validation_kind {
+            ValidationKindArg::Periodic => record.periodic = true,
+            ValidationKindArg::FromRest => record.periodic = false,
+            ValidationKindArg::Auto => {}
+        }
+        validations.push(record);
     }
     let choices: Vec<Linearization> = match a.linearization {
         Some(LinearizationArg::Paper) => vec![Linearization::Paper],
@@ -442,32 +449,35 @@ pub(crate) fn run(a: &IdentArgs) -> Result<(), Error> {
             candidates.push((lin_name(lin).into(), *b));
         }
     }
-    let validate_on = |m: Option<&Oscillator>| -> Vec<serde_json::Value> {
+    // Each model's validation on every record, as JSON rows; the Bouc-Wen candidate kept is
+    // the one that validates best on the first record (the library's choice), without
+    // validation data the first (the flatness fit when the band is known, else the harmonic
+    // mapping).
+    let rows = |scores: &[Result<ident::Validation, ident::IdentError>]| -> Vec<serde_json::Value> {
         validations
             .iter()
-            .map(|(name, u, yv, periodic)| match m {
-                None => json!({"file": name, "epsilon": null}),
-                Some(m) => match ident::validate(m, u, yv, fs, *periodic) {
-                    Ok(v) => json!({"file": name, "epsilon": v.epsilon, "rms": v.rms}),
-                    Err(e) => json!({"file": name, "error": e.to_string()}),
-                },
+            .zip(scores)
+            .map(|(r, v)| match v {
+                Ok(v) => json!({"file": r.name, "epsilon": v.epsilon, "rms": v.rms}),
+                Err(e) => json!({"file": r.name, "error": e.to_string()}),
             })
             .collect()
     };
-    let cand_rows: Vec<Vec<serde_json::Value>> = candidates
-        .iter()
-        .map(|(_, m)| validate_on(Some(m)))
-        .collect();
-    // Keep the candidate that validates best on the first record; without validation data,
-    // the first (the flatness fit when the band is known, else the harmonic mapping).
-    let score = |rows: &Vec<serde_json::Value>| {
-        rows.first()
-            .and_then(|r| r["epsilon"].as_f64())
-            .unwrap_or(f64::INFINITY)
+    let validate_on = |m: Option<&Oscillator>| -> Vec<serde_json::Value> {
+        match m {
+            Some(m) => rows(&ident::validate_all(m, &validations, fs)),
+            None => validations
+                .iter()
+                .map(|r| json!({"file": r.name, "epsilon": null}))
+                .collect(),
+        }
     };
-    let best = (0..candidates.len())
-        .min_by(|&i, &j| score(&cand_rows[i]).total_cmp(&score(&cand_rows[j])))
-        .unwrap_or(0);
+    let cand_scores: Vec<_> = candidates
+        .iter()
+        .map(|(_, m)| ident::validate_all(m, &validations, fs))
+        .collect();
+    let cand_rows: Vec<Vec<serde_json::Value>> = cand_scores.iter().map(|v| rows(v)).collect();
+    let best = ident::best_by_validation(&cand_scores).unwrap_or(0);
     let bouc_wen = candidates.get(best).map(|c| c.1);
     let route = candidates
         .get(best)
@@ -477,8 +487,8 @@ pub(crate) fn run(a: &IdentArgs) -> Result<(), Error> {
     let table: Vec<serde_json::Value> = validations
         .iter()
         .enumerate()
-        .map(|(i, (name, ..))| {
-            json!({"file": name, "periodic": validations[i].3, "linear": lin_rows[i], "zener": zen_rows[i],
+        .map(|(i, r)| {
+            json!({"file": r.name, "periodic": r.periodic, "linear": lin_rows[i], "zener": zen_rows[i],
                 "bouc_wen": cand_rows.get(best).map(|r| r[i].clone())})
         })
         .collect();

@@ -70,3 +70,93 @@ pub fn validate(
     }
     Ok(epsilon(&simulate_model(model, u, fs, periodic)?, y))
 }
+
+/// A record models are validated on: the measured input and output, and how it is simulated.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ValidationRecord {
+    /// What to call it in a report (its file).
+    pub name: String,
+    /// The measured input.
+    pub u: Vec<f64>,
+    /// The measured output.
+    pub y: Vec<f64>,
+    /// One steady-state period (or a whole number of them) of a periodic input: simulated to
+    /// steady state; otherwise from rest.
+    pub periodic: bool,
+}
+
+impl ValidationRecord {
+    /// A record whose kind is told from its input ([`periodic::periodicity`]).
+    pub fn new(name: impl Into<String>, u: Vec<f64>, y: Vec<f64>) -> Self {
+        let periodic = matches!(
+            periodic::periodicity(&u),
+            periodic::Periodicity::Periodic { .. }
+        );
+        ValidationRecord {
+            name: name.into(),
+            u,
+            y,
+            periodic,
+        }
+    }
+}
+
+/// `model` validated on every record, in order: ε, or why it could not be simulated.
+pub fn validate_all(
+    model: &Oscillator,
+    records: &[ValidationRecord],
+    fs: f64,
+) -> Vec<Result<Validation, IdentError>> {
+    records
+        .iter()
+        .map(|r| validate(model, &r.u, &r.y, fs, r.periodic))
+        .collect()
+}
+
+/// Which of several candidates' validations ([`validate_all`]) is best: the lowest ε on the
+/// first record, a failed simulation worst; the first candidate when there are no records
+/// (`None` when there are no candidates).
+pub fn best_by_validation(scores: &[Vec<Result<Validation, IdentError>>]) -> Option<usize> {
+    let first = |rows: &Vec<Result<Validation, IdentError>>| match rows.first() {
+        Some(Ok(v)) => v.epsilon,
+        _ => f64::INFINITY,
+    };
+    (0..scores.len()).min_by(|&i, &j| first(&scores[i]).total_cmp(&first(&scores[j])))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_best_candidate_is_the_lowest_error_on_the_first_record() {
+        let ok = |e: f64| Ok(Validation { epsilon: e, rms: e });
+        let failed = || {
+            Err(IdentError::LengthMismatch {
+                input: 1,
+                output: 2,
+            })
+        };
+        let scores = vec![
+            vec![ok(0.03), ok(0.001)],
+            vec![ok(0.02), ok(0.5)],
+            vec![failed(), ok(0.0)],
+        ];
+        assert_eq!(best_by_validation(&scores), Some(1));
+        assert_eq!(best_by_validation(&[vec![], vec![]]), Some(0));
+        assert_eq!(best_by_validation(&[]), None);
+    }
+
+    #[test]
+    fn a_record_s_kind_is_told_from_its_input() {
+        let u = hyst_sim::excitation::Multisine::band(4096, 750.0, 5.0, 150.0, 50.0)
+            .unwrap()
+            .generate(1)
+            .unwrap();
+        let r = ValidationRecord::new("anything.csv", u.clone(), u.clone());
+        assert!(r.periodic);
+        let noise =
+            hyst_sim::excitation::band_limited_noise(4096, 750.0, 5.0, 150.0, 50.0, 2).unwrap();
+        assert!(!ValidationRecord::new("multisine.csv", noise.clone(), noise).periodic);
+    }
+}
