@@ -23,21 +23,12 @@ use hyst_model::Oscillator;
 use hyst_sim::excitation::{Multisine, white_noise};
 use hyst_sim::{Input, SimOptions, simulate};
 
-fn usage() -> ! {
-    eprintln!(
-        "usage: cargo xtask bench [rk4] [covssi] [ident] [refine]\n       cargo xtask sweep [--levels FROM:TO:STEP] [--samples N] [--seed S] [--out DIR]\n       cargo xtask sweep-random [--levels FROM:TO:STEP] [--samples N] [--seed S] [--out DIR]\n       cargo xtask f16 [--out DIR]\n       cargo xtask compare-tools [--seeds N] [--first-seed S] [--timing] [--clusters] [--covssi-only] [--crb] [--cases NAMES]\n       cargo xtask loop-battery --seed S [--cases NAMES] [--forces periodic,random] [--out FILE]"
-    );
-    std::process::exit(2)
-}
-
 /// `cargo xtask f16 [--out DIR]`: the F-16's wing modes over its four force levels.
-fn f16_cmd(args: &[String]) {
-    let mut out = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/f16");
-    match args {
-        [] => {}
-        [flag, dir] if flag == "--out" => out = dir.into(),
-        _ => usage(),
-    }
+fn f16_cmd(out: Option<&std::path::Path>) {
+    let out = out.map_or_else(
+        || std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/f16"),
+        std::path::Path::to_path_buf,
+    );
     let Some(dir) = hyst::io::data_dir() else {
         eprintln!(
             "error: no data folder (set HYST_DATA_DIR, or put the shared data in ../shared/data)"
@@ -72,46 +63,64 @@ fn f16_cmd(args: &[String]) {
     }
 }
 
-fn parse_levels(s: &str) -> Option<Vec<f64>> {
+/// `FROM:TO:STEP` (or one level) in newtons, each > 0.
+fn parse_levels(s: &str) -> Result<Levels, String> {
+    let bad = || format!("`{s}` is not FROM:TO:STEP (or one level) with levels > 0 N");
     let p: Vec<f64> = s
         .split(':')
-        .map(|v| v.parse().ok())
-        .collect::<Option<_>>()?;
-    match p.as_slice() {
-        [a] => Some(vec![*a]),
+        .map(|v| v.trim().parse().ok())
+        .collect::<Option<_>>()
+        .ok_or_else(bad)?;
+    let levels = match p.as_slice() {
+        [a] => vec![*a],
         [a, b, st] if *st > 0.0 && b >= a => {
             let n = ((b - a) / st + 1e-9).floor() as usize;
-            Some((0..=n).map(|i| a + i as f64 * st).collect())
+            (0..=n).map(|i| a + i as f64 * st).collect()
         }
-        _ => None,
+        _ => return Err(bad()),
+    };
+    if levels.iter().any(|l| !(l.is_finite() && *l > 0.0)) {
+        return Err(bad());
     }
+    Ok(Levels(levels))
 }
 
-/// The options of `sweep` and `sweep-random` from the command line, with their defaults.
-fn sweep_options(args: &[String], samples: usize, out: &str) -> sweep::SweepOptions {
-    let mut opts = sweep::SweepOptions {
-        levels: (1..=9).map(|i| 10.0 * i as f64).collect(),
-        samples,
-        seed: 1,
-        out: std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(out),
+/// Force levels in newtons.
+#[derive(Clone, Debug)]
+struct Levels(Vec<f64>);
+
+/// The options of `sweep` and `sweep-random`.
+#[derive(clap::Args, Debug)]
+struct SweepArgs {
+    /// Force levels (N RMS), FROM:TO:STEP or one level. Default 10:90:10.
+    #[arg(long, value_parser = parse_levels)]
+    levels: Option<Levels>,
+    /// Samples per record (at least 8192); default 2^20 for `sweep`, 2^17 for `sweep-random`.
+    #[arg(long, value_parser = clap::value_parser!(u64).range(8192..))]
+    samples: Option<u64>,
+    /// Seed of the first level's records.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Folder for the tables and figures; default target/sweep or target/sweep-random.
+    #[arg(long)]
+    out: Option<std::path::PathBuf>,
+}
+
+/// The sweep's options from its arguments, with the study's defaults.
+fn sweep_options(args: &SweepArgs, samples: usize, out: &str) -> sweep::SweepOptions {
+    sweep::SweepOptions {
+        levels: args
+            .levels
+            .clone()
+            .map_or_else(|| (1..=9).map(|i| 10.0 * i as f64).collect(), |l| l.0),
+        samples: args.samples.map_or(samples, |n| n as usize),
+        seed: args.seed,
+        out: args
+            .out
+            .clone()
+            .unwrap_or_else(|| std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(out)),
         progress: true,
-    };
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        let mut val = || it.next().cloned().unwrap_or_else(|| usage());
-        match a.as_str() {
-            "--levels" => opts.levels = parse_levels(&val()).unwrap_or_else(|| usage()),
-            "--samples" => opts.samples = val().parse().unwrap_or_else(|_| usage()),
-            "--seed" => opts.seed = val().parse().unwrap_or_else(|_| usage()),
-            "--out" => opts.out = val().into(),
-            _ => usage(),
-        }
     }
-    if opts.levels.iter().any(|l| !(l.is_finite() && *l > 0.0)) || opts.samples < 8192 {
-        eprintln!("error: levels must be > 0 N and --samples at least 8192");
-        std::process::exit(2);
-    }
-    opts
 }
 
 /// A sweep's study: run the levels, write the tables and figures, and the tables as Markdown.
@@ -123,7 +132,7 @@ struct Study<T> {
 
 /// Run `study` with the options `args` gives (defaults: `samples`, the folder `out`), print
 /// its tables and the wall time as `{name}_seconds`; exit 1 with the message on failure.
-fn sweep_cmd<T>(args: &[String], samples: usize, out: &str, name: &str, study: Study<T>) {
+fn sweep_cmd<T>(args: &SweepArgs, samples: usize, out: &str, name: &str, study: Study<T>) {
     let opts = sweep_options(args, samples, out);
     let done = (study.run)(&opts).and_then(|(results, secs)| {
         (study.write)(&opts.out, &results, secs, opts.samples).map(|()| (results, secs))
@@ -614,30 +623,69 @@ fn bench_ident() {
     println!("ident_zener_spectrum_ms_2e17 {:.1} ms", t * 1e3);
 }
 
+/// Project tasks: benches, studies, comparisons.
+#[derive(clap::Parser)]
+#[command(name = "cargo xtask", bin_name = "cargo xtask")]
+struct Cli {
+    #[command(subcommand)]
+    task: Task,
+}
+
+/// A group of `cargo xtask bench`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum BenchGroup {
+    Rk4,
+    Covssi,
+    Ident,
+    Refine,
+}
+
+#[derive(clap::Subcommand)]
+enum Task {
+    /// One `name value unit` line per figure: all groups, or those named.
+    Bench {
+        #[arg(value_enum)]
+        groups: Vec<BenchGroup>,
+    },
+    /// The paper's Section 5 amplitude study (`sweep.rs`).
+    Sweep(SweepArgs),
+    /// The amplitude study under a white force (`random_sweep.rs`).
+    SweepRandom(SweepArgs),
+    /// The F-16's wing modes over its four force levels (`f16.rs`).
+    F16 {
+        /// Folder for the table and figures; default target/f16.
+        #[arg(long)]
+        out: Option<std::path::PathBuf>,
+    },
+    /// covssi beside pyOMA2 and koma; the arguments go to xtask/compare/oma_tools.py
+    /// (`--seeds N`, `--first-seed S`, `--timing`, `--clusters`, `--covssi-only`, `--crb`,
+    /// `--cases NAMES`).
+    CompareTools {
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
+    /// The residual loop on records with undeclared effects (`loop_battery.rs`).
+    LoopBattery(loop_battery::BatteryArgs),
+}
+
 fn main() {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    match args.first().map(String::as_str) {
-        Some("bench") => {
-            // `cargo xtask bench [GROUP...]`: all groups, or only those named.
-            let groups: [(&str, fn()); 4] = [
-                ("rk4", bench),
-                ("covssi", bench_covssi),
-                ("ident", bench_ident),
-                ("refine", bench_refine),
+    use clap::Parser;
+    match Cli::parse().task {
+        Task::Bench { groups } => {
+            let all: [(BenchGroup, fn()); 4] = [
+                (BenchGroup::Rk4, bench),
+                (BenchGroup::Covssi, bench_covssi),
+                (BenchGroup::Ident, bench_ident),
+                (BenchGroup::Refine, bench_refine),
             ];
-            let wanted = &args[1..];
-            if let Some(bad) = wanted.iter().find(|w| groups.iter().all(|(g, _)| g != w)) {
-                eprintln!("unknown bench group `{bad}`; groups: rk4, covssi, ident, refine");
-                std::process::exit(2);
-            }
-            for (name, run) in groups {
-                if wanted.is_empty() || wanted.iter().any(|w| w == name) {
+            for (group, run) in all {
+                if groups.is_empty() || groups.contains(&group) {
                     run();
                 }
             }
         }
-        Some("sweep") => sweep_cmd(
-            &args[1..],
+        Task::Sweep(a) => sweep_cmd(
+            &a,
             1 << 20,
             "../target/sweep",
             "sweep",
@@ -647,8 +695,8 @@ fn main() {
                 markdown: sweep::markdown,
             },
         ),
-        Some("sweep-random") => sweep_cmd(
-            &args[1..],
+        Task::SweepRandom(a) => sweep_cmd(
+            &a,
             1 << 17,
             "../target/sweep-random",
             "sweep_random",
@@ -658,27 +706,18 @@ fn main() {
                 markdown: random_sweep::markdown,
             },
         ),
-        Some("f16") => f16_cmd(&args[1..]),
-        Some("loop-battery") => {
-            use clap::Parser;
-            #[derive(clap::Parser)]
-            #[command(name = "cargo xtask loop-battery")]
-            struct Cli {
-                #[command(flatten)]
-                args: loop_battery::BatteryArgs,
-            }
-            let cli = Cli::parse_from(&args);
-            if let Err(e) = loop_battery::run(&cli.args) {
+        Task::F16 { out } => f16_cmd(out.as_deref()),
+        Task::LoopBattery(a) => {
+            if let Err(e) = loop_battery::run(&a) {
                 eprintln!("error: {e}");
                 std::process::exit(1);
             }
         }
-        Some("compare-tools") => {
-            if let Err(e) = compare::run(&args[1..]) {
+        Task::CompareTools { args } => {
+            if let Err(e) = compare::run(&args) {
                 eprintln!("error: {e}");
                 std::process::exit(1);
             }
         }
-        _ => usage(),
     }
 }
