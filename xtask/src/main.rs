@@ -12,6 +12,7 @@
 //!   runs the residual loop on records with undeclared effects (see `loop_battery.rs`).
 
 mod compare;
+mod deps;
 mod f16;
 mod loop_battery;
 mod random_sweep;
@@ -666,6 +667,8 @@ enum Task {
     },
     /// The residual loop on records with undeclared effects (`loop_battery.rs`).
     LoopBattery(loop_battery::BatteryArgs),
+    /// Fail if a workspace member declares a dependency its sources do not use (`deps.rs`).
+    UnusedDeps,
 }
 
 fn main() {
@@ -709,6 +712,12 @@ fn main() {
         Task::F16 { out } => f16_cmd(out.as_deref()),
         Task::LoopBattery(a) => {
             if let Err(e) = loop_battery::run(&a) {
+                eprintln!("error: {e}");
+                std::process::exit(1);
+            }
+        }
+        Task::UnusedDeps => {
+            if let Err(e) = deps::run() {
                 eprintln!("error: {e}");
                 std::process::exit(1);
             }
