@@ -149,36 +149,37 @@ pub(crate) fn run(a: &SsiArgs) -> Result<(), Error> {
         ))
     };
     let context = |e: covssi::SsiError| {
-        if let covssi::SsiError::InvalidOption { name, value } = &e {
-            let flag = match *name {
+        if let covssi::SsiError::InvalidOption { option, value } = &e {
+            use covssi::SsiOption;
+            let flag = match option {
                 // A lag given as a time is too short for the rate: say what it gave.
-                "block_rows" => match block_rows {
+                SsiOption::BlockRows => match block_rows {
                     BlockRows::Count(_) => Some(("--block-rows", "at least 2")),
                     BlockRows::Seconds(_) => return lag_too_short("--lag-seconds", *value),
                     BlockRows::Periods { .. } => return lag_too_short("--lag-periods", *value),
                 },
-                "block_rows (seconds)" => Some(("--lag-seconds", "positive and finite")),
-                "block_rows (periods: count)" => {
+                SsiOption::BlockRowsSeconds => Some(("--lag-seconds", "positive and finite")),
+                SsiOption::BlockRowsPeriodsCount => {
                     Some(("--lag-periods COUNT", "positive and finite"))
                 }
-                "block_rows (periods: frequency_hz)" => {
+                SsiOption::BlockRowsPeriodsFrequency => {
                     Some(("--lag-periods HZ", "positive and finite"))
                 }
-                "references (index out of range)" => {
+                SsiOption::ReferenceOutOfRange => {
                     return fail(format!(
                         "--references {value} is out of range: {} channel(s), numbered from 0",
                         names.len()
                     ));
                 }
-                "references (index repeated)" => {
+                SsiOption::ReferenceRepeated => {
                     return fail(format!("--references names channel {value} twice"));
                 }
-                "max_order" => Some(("--max-order", "at least 1")),
-                "order_step" => Some(("--order-step", "at least 1")),
-                "criteria.frequency" => Some(("--df", "positive and finite")),
-                "criteria.damping" => Some(("--dzeta", "positive and finite")),
-                "criteria.mac" => Some(("--dmac", "positive and finite")),
-                "criteria.real" => Some(("--dreal", "positive and finite")),
+                SsiOption::MaxOrder => Some(("--max-order", "at least 1")),
+                SsiOption::OrderStep => Some(("--order-step", "at least 1")),
+                SsiOption::CriteriaFrequency => Some(("--df", "positive and finite")),
+                SsiOption::CriteriaDamping => Some(("--dzeta", "positive and finite")),
+                SsiOption::CriteriaMac => Some(("--dmac", "positive and finite")),
+                SsiOption::CriteriaReal => Some(("--dreal", "positive and finite")),
                 _ => None,
             };
             if let Some((flag, needed)) = flag {

@@ -67,6 +67,83 @@ pub use stabilize::{Mode, Pole, PoleStatus, RealPoleCluster, Rejection, Stabilit
 use linalg::{C64, Dense};
 use rayon::prelude::*;
 
+/// The option an [`SsiError::InvalidOption`] names.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum SsiOption {
+    /// `BlockRows::Seconds`: the lag in seconds.
+    BlockRowsSeconds,
+    /// `BlockRows::Periods`: the count of periods.
+    BlockRowsPeriodsCount,
+    /// `BlockRows::Periods`: the frequency.
+    BlockRowsPeriodsFrequency,
+    /// Block rows beyond what the given correlations' lags allow (2·block rows needed).
+    BlockRowsLags,
+    /// The block rows: fewer than 2.
+    BlockRows,
+    /// `references`: empty.
+    ReferencesEmpty,
+    /// `references`: a channel index out of range.
+    ReferenceOutOfRange,
+    /// `references`: a channel named twice.
+    ReferenceRepeated,
+    /// `order_step`.
+    OrderStep,
+    /// `max_order`.
+    MaxOrder,
+    /// `min_cluster_size`.
+    MinClusterSize,
+    /// `criteria.frequency`.
+    CriteriaFrequency,
+    /// `criteria.damping`.
+    CriteriaDamping,
+    /// `criteria.mac`.
+    CriteriaMac,
+    /// `criteria.real`.
+    CriteriaReal,
+    /// `max_damping`.
+    MaxDamping,
+    /// `cluster_tolerance`.
+    ClusterTolerance,
+    /// `RefineOptions::max_iterations`.
+    MaxIterations,
+    /// `RefineOptions::tolerance`.
+    Tolerance,
+}
+
+impl SsiOption {
+    /// The option's name as the error prints it (`criteria.damping`, `block_rows (seconds)`).
+    pub fn name(self) -> &'static str {
+        match self {
+            SsiOption::BlockRowsSeconds => "block_rows (seconds)",
+            SsiOption::BlockRowsPeriodsCount => "block_rows (periods: count)",
+            SsiOption::BlockRowsPeriodsFrequency => "block_rows (periods: frequency_hz)",
+            SsiOption::BlockRowsLags => "block_rows (needs 2·block_rows correlation lags)",
+            SsiOption::BlockRows => "block_rows",
+            SsiOption::ReferencesEmpty => "references (empty)",
+            SsiOption::ReferenceOutOfRange => "references (index out of range)",
+            SsiOption::ReferenceRepeated => "references (index repeated)",
+            SsiOption::OrderStep => "order_step",
+            SsiOption::MaxOrder => "max_order",
+            SsiOption::MinClusterSize => "min_cluster_size",
+            SsiOption::CriteriaFrequency => "criteria.frequency",
+            SsiOption::CriteriaDamping => "criteria.damping",
+            SsiOption::CriteriaMac => "criteria.mac",
+            SsiOption::CriteriaReal => "criteria.real",
+            SsiOption::MaxDamping => "max_damping",
+            SsiOption::ClusterTolerance => "cluster_tolerance",
+            SsiOption::MaxIterations => "max_iterations",
+            SsiOption::Tolerance => "tolerance",
+        }
+    }
+}
+
+impl std::fmt::Display for SsiOption {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// Errors of identification.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
@@ -162,10 +239,10 @@ pub enum SsiError {
         references: usize,
     },
     /// An option is out of range.
-    #[error("option `{name}` is invalid: {value}")]
+    #[error("option `{option}` is invalid: {value}")]
     InvalidOption {
-        /// Option name.
-        name: &'static str,
+        /// Which option.
+        option: SsiOption,
         /// Its value.
         value: f64,
     },
@@ -224,7 +301,7 @@ impl BlockRows {
             BlockRows::Seconds(t) => {
                 if !(t.is_finite() && t > 0.0) {
                     return Err(SsiError::InvalidOption {
-                        name: "block_rows (seconds)",
+                        option: SsiOption::BlockRowsSeconds,
                         value: t,
                     });
                 }
@@ -236,11 +313,14 @@ impl BlockRows {
             } => {
                 // Each checked on its own, so that the error names the value at fault.
                 for (name, value) in [
-                    ("block_rows (periods: count)", count),
-                    ("block_rows (periods: frequency_hz)", frequency_hz),
+                    (SsiOption::BlockRowsPeriodsCount, count),
+                    (SsiOption::BlockRowsPeriodsFrequency, frequency_hz),
                 ] {
                     if !(value.is_finite() && value > 0.0) {
-                        return Err(SsiError::InvalidOption { name, value });
+                        return Err(SsiError::InvalidOption {
+                            option: name,
+                            value,
+                        });
                     }
                 }
                 // `as` saturates: a lag beyond any record becomes usize::MAX block rows, which
@@ -250,7 +330,7 @@ impl BlockRows {
         };
         if i < 2 {
             return Err(SsiError::InvalidOption {
-                name: "block_rows",
+                option: SsiOption::BlockRows,
                 value: i as f64,
             });
         }
@@ -453,19 +533,19 @@ fn references(opts: &SsiOptions, l: usize) -> Result<Vec<usize>, SsiError> {
         Some(r) => {
             if r.is_empty() {
                 return Err(SsiError::InvalidOption {
-                    name: "references (empty)",
+                    option: SsiOption::ReferencesEmpty,
                     value: 0.0,
                 });
             }
             if let Some(&bad) = r.iter().find(|&&b| b >= l) {
                 return Err(SsiError::InvalidOption {
-                    name: "references (index out of range)",
+                    option: SsiOption::ReferenceOutOfRange,
                     value: bad as f64,
                 });
             }
             if let Some((_, &twice)) = r.iter().enumerate().find(|(k, b)| r[..*k].contains(b)) {
                 return Err(SsiError::InvalidOption {
-                    name: "references (index repeated)",
+                    option: SsiOption::ReferenceRepeated,
                     value: twice as f64,
                 });
             }
@@ -479,27 +559,33 @@ fn references(opts: &SsiOptions, l: usize) -> Result<Vec<usize>, SsiError> {
 /// see "no mode found" instead of the option at fault).
 fn check_options(opts: &SsiOptions) -> Result<(), SsiError> {
     let counts = [
-        ("order_step", Some(opts.order_step)),
-        ("max_order", opts.max_order),
-        ("min_cluster_size", opts.min_cluster_size),
+        (SsiOption::OrderStep, Some(opts.order_step)),
+        (SsiOption::MaxOrder, opts.max_order),
+        (SsiOption::MinClusterSize, opts.min_cluster_size),
     ];
     if let Some((name, _)) = counts.iter().find(|(_, v)| *v == Some(0)) {
-        return Err(SsiError::InvalidOption { name, value: 0.0 });
+        return Err(SsiError::InvalidOption {
+            option: *name,
+            value: 0.0,
+        });
     }
     let c = &opts.criteria;
     let thresholds = [
-        ("criteria.frequency", c.frequency),
-        ("criteria.damping", c.damping),
-        ("criteria.mac", c.mac),
-        ("criteria.real", c.real),
-        ("max_damping", opts.max_damping),
-        ("cluster_tolerance", opts.cluster_tolerance),
+        (SsiOption::CriteriaFrequency, c.frequency),
+        (SsiOption::CriteriaDamping, c.damping),
+        (SsiOption::CriteriaMac, c.mac),
+        (SsiOption::CriteriaReal, c.real),
+        (SsiOption::MaxDamping, opts.max_damping),
+        (SsiOption::ClusterTolerance, opts.cluster_tolerance),
     ];
     match thresholds
         .iter()
         .find(|(_, v)| !(v.is_finite() && *v > 0.0))
     {
-        Some(&(name, value)) => Err(SsiError::InvalidOption { name, value }),
+        Some(&(name, value)) => Err(SsiError::InvalidOption {
+            option: name,
+            value,
+        }),
         None => Ok(()),
     }
 }
@@ -560,7 +646,7 @@ pub fn identify_from_correlations(
     }
     if i < 2 || corr.r.len() < i.saturating_mul(2) {
         return Err(SsiError::InvalidOption {
-            name: "block_rows (needs 2·block_rows correlation lags)",
+            option: SsiOption::BlockRowsLags,
             value: i as f64,
         });
     }

@@ -1,6 +1,6 @@
 //! Bad input gives a clear error (or an empty result with the reason), never a panic.
 
-use covssi::{BlockRows, SsiError, SsiOptions, identify};
+use covssi::{BlockRows, SsiError, SsiOption, SsiOptions, identify};
 
 fn sine(n: usize) -> Vec<f64> {
     (0..n)
@@ -153,13 +153,13 @@ fn options_out_of_range_name_the_option() {
     // A zero count or a threshold that is zero, negative or NaN would otherwise reject every
     // pole and read as "no mode found"; each is named instead.
     let y = sine(2000);
-    let cases: [(SsiOptions, &str, f64); 6] = [
+    let cases: [(SsiOptions, SsiOption, f64); 6] = [
         (
             SsiOptions {
                 max_order: Some(0),
                 ..SsiOptions::default()
             },
-            "max_order",
+            SsiOption::MaxOrder,
             0.0,
         ),
         (
@@ -167,7 +167,7 @@ fn options_out_of_range_name_the_option() {
                 order_step: 0,
                 ..SsiOptions::default()
             },
-            "order_step",
+            SsiOption::OrderStep,
             0.0,
         ),
         (
@@ -175,7 +175,7 @@ fn options_out_of_range_name_the_option() {
                 min_cluster_size: Some(0),
                 ..SsiOptions::default()
             },
-            "min_cluster_size",
+            SsiOption::MinClusterSize,
             0.0,
         ),
         (
@@ -186,7 +186,7 @@ fn options_out_of_range_name_the_option() {
                 },
                 ..SsiOptions::default()
             },
-            "criteria.frequency",
+            SsiOption::CriteriaFrequency,
             -1.0,
         ),
         (
@@ -194,7 +194,7 @@ fn options_out_of_range_name_the_option() {
                 max_damping: 0.0,
                 ..SsiOptions::default()
             },
-            "max_damping",
+            SsiOption::MaxDamping,
             0.0,
         ),
         (
@@ -202,14 +202,21 @@ fn options_out_of_range_name_the_option() {
                 cluster_tolerance: f64::INFINITY,
                 ..SsiOptions::default()
             },
-            "cluster_tolerance",
+            SsiOption::ClusterTolerance,
             f64::INFINITY,
         ),
     ];
     for (opts, name, value) in cases {
         let e = identify(&[&y], 10.0, &opts).unwrap_err();
-        assert_eq!(e, SsiError::InvalidOption { name, value }, "{e}");
-        assert!(e.to_string().contains(name), "{e}");
+        assert_eq!(
+            e,
+            SsiError::InvalidOption {
+                option: name,
+                value
+            },
+            "{e}"
+        );
+        assert!(e.to_string().contains(name.name()), "{e}");
     }
     let nan = SsiOptions {
         criteria: covssi::StabilityCriteria {
@@ -220,7 +227,7 @@ fn options_out_of_range_name_the_option() {
     };
     let e = identify(&[&y], 10.0, &nan).unwrap_err();
     assert!(
-        matches!(e, SsiError::InvalidOption { name: "criteria.damping", value } if value.is_nan()),
+        matches!(e, SsiError::InvalidOption { option: SsiOption::CriteriaDamping, value } if value.is_nan()),
         "{e}"
     );
 }
@@ -289,13 +296,13 @@ fn lags_as_a_time_or_as_periods_are_checked() {
     // A bad time, count of periods or frequency is named with the value that is wrong, not
     // a ratio of the two.
     let cases = [
-        (BlockRows::Seconds(-1.0), "block_rows (seconds)", -1.0),
+        (BlockRows::Seconds(-1.0), SsiOption::BlockRowsSeconds, -1.0),
         (
             BlockRows::Periods {
                 count: 0.0,
                 frequency_hz: 1.5,
             },
-            "block_rows (periods: count)",
+            SsiOption::BlockRowsPeriodsCount,
             0.0,
         ),
         (
@@ -303,7 +310,7 @@ fn lags_as_a_time_or_as_periods_are_checked() {
                 count: 10.0,
                 frequency_hz: 0.0,
             },
-            "block_rows (periods: frequency_hz)",
+            SsiOption::BlockRowsPeriodsFrequency,
             0.0,
         ),
         (
@@ -311,7 +318,7 @@ fn lags_as_a_time_or_as_periods_are_checked() {
                 count: 10.0,
                 frequency_hz: -2.0,
             },
-            "block_rows (periods: frequency_hz)",
+            SsiOption::BlockRowsPeriodsFrequency,
             -2.0,
         ),
     ];
@@ -321,7 +328,14 @@ fn lags_as_a_time_or_as_periods_are_checked() {
             ..SsiOptions::default()
         };
         let e = identify(&[&y], fs, &opts).unwrap_err();
-        assert_eq!(e, SsiError::InvalidOption { name, value }, "{e}");
+        assert_eq!(
+            e,
+            SsiError::InvalidOption {
+                option: name,
+                value
+            },
+            "{e}"
+        );
     }
     // Ten periods of 0.5 Hz at 10 Hz: the largest lag 2i − 1 must cover 200 samples, so
     // i = 101 (ceil of 100.5); 10 s likewise.
@@ -347,14 +361,21 @@ fn reference_channels_are_checked() {
         ..SsiOptions::default()
     };
     for (refs, name, value) in [
-        (vec![], "references (empty)", 0.0),
-        (vec![0, 2], "references (index out of range)", 2.0),
+        (vec![], SsiOption::ReferencesEmpty, 0.0),
+        (vec![0, 2], SsiOption::ReferenceOutOfRange, 2.0),
         // The same channel twice repeats a block column of the Toeplitz matrix: a slip of the
         // user's, named, not passed over.
-        (vec![1, 0, 1], "references (index repeated)", 1.0),
+        (vec![1, 0, 1], SsiOption::ReferenceRepeated, 1.0),
     ] {
         let e = identify(&[&a, &b], 10.0, &with(refs.clone())).unwrap_err();
-        assert_eq!(e, SsiError::InvalidOption { name, value }, "{refs:?}: {e}");
+        assert_eq!(
+            e,
+            SsiError::InvalidOption {
+                option: name,
+                value
+            },
+            "{refs:?}: {e}"
+        );
     }
 }
 
@@ -369,7 +390,7 @@ fn refinement_options_are_checked() {
                 max_iterations: 0,
                 ..Default::default()
             },
-            "max_iterations",
+            SsiOption::MaxIterations,
             0.0,
         ),
         (
@@ -377,12 +398,19 @@ fn refinement_options_are_checked() {
                 tolerance: -1e-6,
                 ..Default::default()
             },
-            "tolerance",
+            SsiOption::Tolerance,
             -1e-6,
         ),
     ] {
         let e = covssi::refine(&[&y], 10.0, &res.modes, &opts).unwrap_err();
-        assert_eq!(e, SsiError::InvalidOption { name, value }, "{e}");
+        assert_eq!(
+            e,
+            SsiError::InvalidOption {
+                option: name,
+                value
+            },
+            "{e}"
+        );
     }
     let nan = covssi::RefineOptions {
         tolerance: f64::NAN,
@@ -390,7 +418,7 @@ fn refinement_options_are_checked() {
     };
     assert!(matches!(
         covssi::refine(&[&y], 10.0, &res.modes, &nan),
-        Err(SsiError::InvalidOption { name: "tolerance", value }) if value.is_nan()
+        Err(SsiError::InvalidOption { option: SsiOption::Tolerance, value }) if value.is_nan()
     ));
 }
 

@@ -65,7 +65,7 @@ use crate::linalg::{self, C64, Dense};
 
 use crate::stabilize::pole_distance;
 
-use crate::{Mode, RealPoleCluster, SsiError};
+use crate::{Mode, RealPoleCluster, SsiError, SsiOption};
 
 use rayon::prelude::*;
 
@@ -153,13 +153,13 @@ fn refine_up_to(
     // number never (or always) ends a fit.
     if opts.max_iterations == 0 {
         return Err(SsiError::InvalidOption {
-            name: "max_iterations",
+            option: SsiOption::MaxIterations,
             value: 0.0,
         });
     }
     if !(opts.tolerance.is_finite() && opts.tolerance > 0.0) {
         return Err(SsiError::InvalidOption {
-            name: "tolerance",
+            option: SsiOption::Tolerance,
             value: opts.tolerance,
         });
     }
