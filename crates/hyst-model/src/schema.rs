@@ -87,6 +87,11 @@ fn one() -> f64 {
     1.0
 }
 
+/// `v`, or the error that `field` is missing, saying what asked for it.
+fn need(v: Option<f64>, field: &'static str, why: &'static str) -> Result<f64, SchemaError> {
+    v.ok_or(SchemaError::Missing { field, why })
+}
+
 fn is_zero(v: &f64) -> bool {
     *v == 0.0
 }
@@ -106,7 +111,6 @@ impl From<BoucWen> for BoucWenFile {
 impl TryFrom<BoucWenFile> for BoucWen {
     type Error = SchemaError;
     fn try_from(f: BoucWenFile) -> Result<Self, SchemaError> {
-        let need = |v: Option<f64>, field, why| v.ok_or(SchemaError::Missing { field, why });
         let products = f.beta_gamma.is_some() || f.beta_delta.is_some();
         let separate = f.beta.is_some() || f.gamma.is_some() || f.delta.is_some();
         let b = match (products, separate) {
@@ -290,18 +294,9 @@ impl OscillatorFile {
         if short_bw {
             let why = "the short form of a Bouc-Wen element";
             let b = BoucWenFile {
-                alpha: self.alpha.ok_or(SchemaError::Missing {
-                    field: "alpha",
-                    why,
-                })?,
-                beta_gamma: Some(self.beta_gamma.ok_or(SchemaError::Missing {
-                    field: "beta_gamma",
-                    why,
-                })?),
-                beta_delta: Some(self.beta_delta.ok_or(SchemaError::Missing {
-                    field: "beta_delta",
-                    why,
-                })?),
+                alpha: need(self.alpha, "alpha", why)?,
+                beta_gamma: Some(need(self.beta_gamma, "beta_gamma", why)?),
+                beta_delta: Some(need(self.beta_delta, "beta_delta", why)?),
                 nu: self.nu.unwrap_or(1.0),
                 ..Default::default()
             };
@@ -310,14 +305,8 @@ impl OscillatorFile {
         if short_zener {
             let why = "the short form of a Zener element";
             let z = ZenerParams {
-                k_inf: self.k_inf.ok_or(SchemaError::Missing {
-                    field: "k_inf",
-                    why,
-                })?,
-                omega: self.omega.ok_or(SchemaError::Missing {
-                    field: "omega",
-                    why,
-                })?,
+                k_inf: need(self.k_inf, "k_inf", why)?,
+                omega: need(self.omega, "omega", why)?,
             };
             z.validate()?;
             return Ok(Restoring::Zener(z));
