@@ -3,7 +3,8 @@
 //!
 //! This crate is the command-line program `hyst` and a thin facade over the workspace:
 //! [`model`] (Bouc-Wen, Zener and linear oscillators), [`sim`] (simulation, excitations,
-//! resampling) and [`io`] (CSV records and the shared data folder).
+//! resampling), [`io`] (CSV records and the shared data folder) and [`report`] (a library
+//! report with the file it came from, as the command line prints and writes it).
 
 pub use covssi;
 pub use hyst_ident as ident;
@@ -14,16 +15,6 @@ pub use hyst_sim as sim;
 pub mod io;
 pub mod plot;
 
-/// A mode shape as "magnitude∠phase°" per entry (phase rounded to a degree), entries joined
-/// by `sep`: how `hyst ssi`, `hyst frf` and `cargo xtask f16` print shapes.
-pub fn shape_text(shape: &[covssi::Complex64], sep: &str) -> String {
-    shape
-        .iter()
-        .map(|v| {
-            // + 0.0 turns a rounded −0 into 0.
-            let deg = v.arg().to_degrees().round() + 0.0;
-            format!("{:.3}∠{deg:.0}°", v.norm())
-        })
-        .collect::<Vec<_>>()
-        .join(sep)
-}
+pub mod report;
+
+pub use covssi::shape_text;

@@ -190,6 +190,14 @@ pub(crate) fn warn_on_force_like(names: &[String]) {
     );
 }
 
+/// A spinner on stderr for a step that may take a while (hidden when stderr is not a
+/// terminal); its message says what runs.
+pub(crate) fn spinner() -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new_spinner();
+    bar.enable_steady_tick(std::time::Duration::from_millis(200));
+    bar
+}
+
 pub(crate) fn check_fs(fs: f64) -> Result<f64, Error> {
     if fs.is_finite() && fs > 0.0 {
         Ok(fs)

@@ -224,42 +224,22 @@ const BENCH_MODES: [(f64, f64); 8] = [
 ];
 
 /// Response of a linear system of up to 8 modes (1.1–18.6 Hz, 1–4 % damping) at 50 Hz to white
-/// noise, seen through `channels` channels with white measurement noise; only the lowest
-/// `modes` modes respond (with at most 5, the same noise drives them whatever `modes` is).
+/// noise ([`covssi::synth::ModalRecord`]), seen through `channels` channels with 5 % white
+/// measurement noise; only the lowest `modes` modes respond.
 fn linear_record(n: usize, channels: usize, modes: usize, seed: u64) -> Vec<Vec<f64>> {
-    // State entries: two per mode, at least ten.
-    let states = (2 * modes).max(10);
-    let w = white_noise(n * states + n * channels, 1.0, seed).expect("valid rms");
-    let dt = 0.02;
-    let blocks: Vec<[f64; 4]> = BENCH_MODES[..modes.min(BENCH_MODES.len())]
-        .iter()
-        .map(|&(f, z)| {
-            let om = 2.0 * std::f64::consts::PI * f;
-            let (re, im) = (-z * om * dt, om * (1.0 - z * z).sqrt() * dt);
-            let m = re.exp();
-            [m * im.cos(), -m * im.sin(), m * im.sin(), m * im.cos()]
+    let modes = &BENCH_MODES[..modes.min(BENCH_MODES.len())];
+    // Fixed, dense gains: every channel sees every mode's two states.
+    let gains = (0..channels)
+        .map(|ch| {
+            (0..2 * modes.len())
+                .map(|j| (((ch * 2 * modes.len() + j) as f64) * 0.7).sin())
+                .collect()
         })
         .collect();
-    let mut x = vec![0.0f64; states];
-    let mut nx = vec![0.0f64; states];
-    let mut out: Vec<Vec<f64>> = (0..channels).map(|_| Vec::with_capacity(n)).collect();
-    for k in 0..n {
-        for (b, blk) in blocks.iter().enumerate() {
-            let (p, q) = (x[2 * b], x[2 * b + 1]);
-            nx[2 * b] = blk[0] * p + blk[1] * q + w[states * k + 2 * b];
-            nx[2 * b + 1] = blk[2] * p + blk[3] * q + w[states * k + 2 * b + 1];
-        }
-        std::mem::swap(&mut x, &mut nx);
-        for (ch, o) in out.iter_mut().enumerate() {
-            let y: f64 = x
-                .iter()
-                .enumerate()
-                .map(|(j, v)| v * (((ch * states + j) as f64) * 0.7).sin())
-                .sum();
-            o.push(y + 0.05 * 3.0 * w[states * n + ch * n + k]);
-        }
-    }
-    out
+    covssi::synth::ModalRecord::new(50.0, modes)
+        .with_gains(gains)
+        .with_noise(0.05)
+        .generate(n, seed)
 }
 
 fn bench_covssi() {

@@ -8,10 +8,8 @@
 //! cargo run --release -p covssi --example modal_analysis -- [diagram.svg] [seed]
 //! ```
 
+use covssi::synth::ModalRecord;
 use covssi::{BlockRows, RefineOptions, SsiOptions, identify, refine};
-use rand::rngs::Xoshiro256PlusPlus;
-use rand::{RngExt, SeedableRng};
-use rand_distr::StandardNormal;
 
 /// Natural frequency (Hz) and damping ratio of each mode.
 const MODES: [(f64, f64); 3] = [(1.2, 0.015), (2.9, 0.02), (4.6, 0.03)];
@@ -28,38 +26,11 @@ const SAMPLES: usize = 65_536;
 /// Each mode an exactly sampled oscillator driven by white noise; the sensors read their
 /// states, plus white noise of 5 % of each sensor's standard deviation.
 fn record(seed: u64) -> Vec<Vec<f64>> {
-    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
-    let blocks: Vec<[f64; 4]> = MODES
-        .iter()
-        .map(|&(f, z)| {
-            let w = 2.0 * std::f64::consts::PI * f / FS;
-            let (r, th) = ((-z * w).exp(), w * (1.0 - z * z).sqrt());
-            [r * th.cos(), -r * th.sin(), r * th.sin(), r * th.cos()]
-        })
-        .collect();
-    let mut x = [0.0f64; 6];
-    let mut y = vec![Vec::with_capacity(SAMPLES); SHAPES.len()];
-    for _ in 0..SAMPLES {
-        let mut next = [0.0; 6];
-        for (b, m) in blocks.iter().enumerate() {
-            let (w0, w1): (f64, f64) = (rng.sample(StandardNormal), rng.sample(StandardNormal));
-            next[2 * b] = m[0] * x[2 * b] + m[1] * x[2 * b + 1] + w0;
-            next[2 * b + 1] = m[2] * x[2 * b] + m[3] * x[2 * b + 1] + w1;
-        }
-        x = next;
-        for (channel, row) in y.iter_mut().zip(&SHAPES) {
-            channel.push(row.iter().zip(&x).map(|(a, b)| a * b).sum());
-        }
-    }
-    for channel in &mut y {
-        let n = channel.len() as f64;
-        let mean = channel.iter().sum::<f64>() / n;
-        let sd = (channel.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n).sqrt();
-        for v in channel.iter_mut() {
-            *v += 0.05 * sd * rng.sample::<f64, _>(StandardNormal);
-        }
-    }
-    y
+    ModalRecord::new(FS, &MODES)
+        .with_gains(SHAPES.iter().map(|row| row.to_vec()).collect())
+        .with_noise(0.05)
+        .with_warm_up(0)
+        .generate(SAMPLES, seed)
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

@@ -49,13 +49,17 @@
 #[doc = include_str!("../README.md")]
 struct ReadmeDoctests;
 
+mod analysis;
 pub mod corr;
 mod linalg;
 pub mod refine;
 mod stabilize;
 #[cfg(feature = "svg")]
 pub mod svg;
+#[cfg(feature = "synth")]
+pub mod synth;
 
+pub use analysis::{AnalysisOptions, ModalAnalysis, analyze, analyze_with_progress, shape_text};
 pub use corr::Correlations;
 pub use linalg::C64 as Complex64;
 pub use refine::{
@@ -278,6 +282,8 @@ pub enum SsiError {
 
 /// How many block rows i the Toeplitz matrix has (it uses lags 1 … 2i−1).
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum BlockRows {
     /// Exactly this many.
     Count(usize),
@@ -340,6 +346,8 @@ impl BlockRows {
 
 /// Thresholds of the stabilization criteria (eqs. 30–31).
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(default, deny_unknown_fields))]
 pub struct StabilityCriteria {
     /// Largest relative change of natural frequency, dω.
     pub frequency: f64,
@@ -365,6 +373,8 @@ impl Default for StabilityCriteria {
 
 /// Options of [`identify`]. `SsiOptions::default()` suits most records.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(default, deny_unknown_fields))]
 pub struct SsiOptions {
     /// Block rows of the Toeplitz matrix. Default: 20.
     pub block_rows: BlockRows,
@@ -403,6 +413,7 @@ impl Default for SsiOptions {
 
 /// The poles of one model order.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct OrderPoles {
     /// Model order n (size of A).
     pub order: usize,
@@ -412,6 +423,7 @@ pub struct OrderPoles {
 
 /// An estimate of the output spectrum, drawn behind the stabilization diagram.
 #[derive(Debug, Clone, PartialEq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Spectrum {
     /// Frequencies (Hz).
     pub frequencies_hz: Vec<f64>,
@@ -422,6 +434,7 @@ pub struct Spectrum {
 
 /// Poles over model order with their labels, and the spectrum behind them.
 #[derive(Debug, Clone, PartialEq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct StabilizationDiagram {
     /// Orders in increasing order.
     pub orders: Vec<OrderPoles>,
@@ -447,6 +460,7 @@ impl StabilizationDiagram {
 
 /// Everything [`identify`] finds.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct SsiResult {
     /// Block rows used.
     pub block_rows: usize,

@@ -10,7 +10,7 @@ use faer::linalg::solvers::{DenseSolveCore, Solve};
 use faer::linalg::svd::{self, ComputeSvdVectors};
 use faer::{Accum, Mat, MatMut, MatRef, Par, Side};
 
-pub use realfft::num_complex::Complex64 as C64;
+pub use num_complex::Complex64 as C64;
 
 /// A dense column-major matrix.
 #[derive(Debug, Clone, PartialEq)]

@@ -5,6 +5,8 @@ use crate::{SsiOptions, StabilizationDiagram};
 
 /// How far a pole is stable.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum Stability {
     /// Stable in frequency only (dζ above its threshold).
     Frequency,
@@ -18,6 +20,8 @@ pub enum Stability {
 
 /// Why a pole is not stable.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum Rejection {
     /// No pole of the same kind at the previous order to compare with.
     NoPrevious,
@@ -51,8 +55,15 @@ pub enum Rejection {
     },
 }
 
-/// The label of a pole.
+/// The label of a pole. In JSON (feature `serde`) one flat object: `{"label": "stable_fd"}`,
+/// `{"label": "rejected_frequency", "change": 0.03, "threshold": 0.01}`, the label being
+/// [`PoleStatus::name`].
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(into = "label::Label", from = "label::Label")
+)]
 pub enum PoleStatus {
     /// Stable to this level.
     Stable(Stability),
@@ -79,8 +90,82 @@ impl PoleStatus {
     }
 }
 
+/// The flat JSON form of [`PoleStatus`].
+#[cfg(feature = "serde")]
+mod label {
+    use super::{PoleStatus, Rejection, Stability};
+
+    #[derive(serde::Serialize, serde::Deserialize)]
+    #[serde(tag = "label", rename_all = "snake_case")]
+    pub(super) enum Label {
+        StableF,
+        StableFd,
+        StableFdm,
+        StableReal,
+        RejectedNoPrevious,
+        RejectedUnstable { real_part: f64 },
+        RejectedNyquist,
+        RejectedDampingLimit { damping: f64, limit: f64 },
+        RejectedFrequency { change: f64, threshold: f64 },
+        RejectedReal { change: f64, threshold: f64 },
+    }
+
+    impl From<PoleStatus> for Label {
+        fn from(s: PoleStatus) -> Label {
+            use PoleStatus::*;
+            match s {
+                Stable(Stability::Frequency) => Label::StableF,
+                Stable(Stability::FrequencyDamping) => Label::StableFd,
+                Stable(Stability::FrequencyDampingShape) => Label::StableFdm,
+                Stable(Stability::Real) => Label::StableReal,
+                Rejected(Rejection::NoPrevious) => Label::RejectedNoPrevious,
+                Rejected(Rejection::Unstable { real_part }) => {
+                    Label::RejectedUnstable { real_part }
+                }
+                Rejected(Rejection::NegativeRealEigenvalue) => Label::RejectedNyquist,
+                Rejected(Rejection::DampingAboveLimit { damping, limit }) => {
+                    Label::RejectedDampingLimit { damping, limit }
+                }
+                Rejected(Rejection::Frequency { change, threshold }) => {
+                    Label::RejectedFrequency { change, threshold }
+                }
+                Rejected(Rejection::RealPole { change, threshold }) => {
+                    Label::RejectedReal { change, threshold }
+                }
+            }
+        }
+    }
+
+    impl From<Label> for PoleStatus {
+        fn from(l: Label) -> PoleStatus {
+            use PoleStatus::*;
+            match l {
+                Label::StableF => Stable(Stability::Frequency),
+                Label::StableFd => Stable(Stability::FrequencyDamping),
+                Label::StableFdm => Stable(Stability::FrequencyDampingShape),
+                Label::StableReal => Stable(Stability::Real),
+                Label::RejectedNoPrevious => Rejected(Rejection::NoPrevious),
+                Label::RejectedUnstable { real_part } => {
+                    Rejected(Rejection::Unstable { real_part })
+                }
+                Label::RejectedNyquist => Rejected(Rejection::NegativeRealEigenvalue),
+                Label::RejectedDampingLimit { damping, limit } => {
+                    Rejected(Rejection::DampingAboveLimit { damping, limit })
+                }
+                Label::RejectedFrequency { change, threshold } => {
+                    Rejected(Rejection::Frequency { change, threshold })
+                }
+                Label::RejectedReal { change, threshold } => {
+                    Rejected(Rejection::RealPole { change, threshold })
+                }
+            }
+        }
+    }
+}
+
 /// One pole of one model order.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Pole {
     /// Continuous-time pole λ (rad/s); for a pair, the member with Im λ > 0.
     pub lambda: C64,
@@ -100,9 +185,12 @@ pub struct Pole {
     pub d_mac: Option<f64>,
     /// Eq. (31) change for a real pole.
     pub d_real: Option<f64>,
-    /// The label.
+    /// The label (in JSON: `label`, its [`PoleStatus::name`], beside the pole's other fields,
+    /// with the values behind a rejection).
+    #[cfg_attr(feature = "serde", serde(flatten))]
     pub status: PoleStatus,
-    /// Whether the discrete eigenvalue was negative real (Nyquist).
+    /// Whether the discrete eigenvalue was negative real (Nyquist); used while labelling.
+    #[cfg_attr(feature = "serde", serde(skip))]
     negative_real: bool,
 }
 
@@ -273,6 +361,7 @@ pub(crate) fn label(d: &mut StabilizationDiagram, opts: &SsiOptions) {
 
 /// A physical mode: a cluster of fully stable oscillating poles.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Mode {
     /// Mean natural frequency (Hz).
     pub frequency_hz: f64,
@@ -291,10 +380,13 @@ pub struct Mode {
     pub members: Vec<(usize, usize)>,
     /// Mean continuous-time pole (rad/s).
     pub lambda: C64,
+    /// Modal phase collinearity of `shape` ([`mpc`]): 1 for a real (normal) mode.
+    pub mpc: f64,
 }
 
 /// A cluster of stable real poles.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct RealPoleCluster {
     /// Mean real pole λ (rad/s, negative).
     pub lambda: f64,
@@ -501,6 +593,7 @@ pub(crate) fn cluster(
                     .collect();
                 let lambda = poles.iter().map(|p| p.lambda).sum::<C64>() / k;
                 Mode {
+                    mpc: mpc(&mean),
                     frequency_hz: fm,
                     frequency_std_hz: fs,
                     damping_ratio: zm,

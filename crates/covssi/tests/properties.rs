@@ -1,48 +1,24 @@
 //! Property tests: invariances of the identified poles, the FFT correlation against the direct
 //! sum, the estimator tightening with more data, and what MAC and MPC mean.
 
+use covssi::synth::ModalRecord;
 use covssi::{BlockRows, Complex64, SsiOptions, SsiResult, corr, identify, mac, mpc};
 use proptest::prelude::*;
-use rand::rngs::Xoshiro256PlusPlus;
-use rand::{RngExt, SeedableRng};
-use rand_distr::StandardNormal;
+
+/// The state-to-channel gains of the 2-mode system's 3 channels.
+const GAINS: [[f64; 4]; 3] = [
+    [1.0, 0.3, 0.5, -0.2],
+    [0.4, -0.8, 1.0, 0.1],
+    [-0.6, 0.2, 0.3, 0.9],
+];
 
 /// Response of a 2-mode system (2.0 Hz 2 %, 3.1 Hz 3 %) at 20 Hz to white noise, seen
 /// through 3 channels, with 2 % measurement noise.
 fn record(n: usize, seed: u64) -> Vec<Vec<f64>> {
-    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
-    let dt = 0.05;
-    let modes = [(2.0f64, 0.02f64), (3.1, 0.03)];
-    let blocks: Vec<[f64; 4]> = modes
-        .iter()
-        .map(|&(f, z)| {
-            let w = 2.0 * std::f64::consts::PI * f;
-            let (re, im) = (-z * w * dt, w * (1.0 - z * z).sqrt() * dt);
-            let (m, th) = (re.exp(), im);
-            [m * th.cos(), -m * th.sin(), m * th.sin(), m * th.cos()]
-        })
-        .collect();
-    let c = [
-        [1.0, 0.3, 0.5, -0.2],
-        [0.4, -0.8, 1.0, 0.1],
-        [-0.6, 0.2, 0.3, 0.9],
-    ];
-    let mut x = [0.0f64; 4];
-    let mut out: Vec<Vec<f64>> = (0..3).map(|_| Vec::with_capacity(n)).collect();
-    for _ in 0..n {
-        let mut nx = [0.0; 4];
-        for (b, blk) in blocks.iter().enumerate() {
-            let (p, q) = (x[2 * b], x[2 * b + 1]);
-            nx[2 * b] = blk[0] * p + blk[1] * q + rng.sample::<f64, _>(StandardNormal);
-            nx[2 * b + 1] = blk[2] * p + blk[3] * q + rng.sample::<f64, _>(StandardNormal);
-        }
-        x = nx;
-        for (ch, row) in c.iter().enumerate() {
-            let y: f64 = row.iter().zip(&x).map(|(a, b)| a * b).sum();
-            out[ch].push(y + 0.02 * 5.0 * rng.sample::<f64, _>(StandardNormal));
-        }
-    }
-    out
+    ModalRecord::new(20.0, &[(2.0, 0.02), (3.1, 0.03)])
+        .with_gains(GAINS.iter().map(|r| r.to_vec()).collect())
+        .with_noise(0.02)
+        .generate(n, seed)
 }
 
 /// Exact R_k = D C A^k Cᵀ D of the 2-mode system of [`record`], 20 lags.
@@ -58,11 +34,7 @@ fn exact_correlations(d: [f64; 3]) -> covssi::Correlations {
         a[2 * b + 1][2 * b] = m * im.sin();
         a[2 * b + 1][2 * b + 1] = m * im.cos();
     }
-    let c = [
-        [1.0, 0.3, 0.5, -0.2],
-        [0.4, -0.8, 1.0, 0.1],
-        [-0.6, 0.2, 0.3, 0.9],
-    ];
+    let c = GAINS;
     let mut ak = [[0.0f64; 4]; 4];
     for (i, row) in ak.iter_mut().enumerate() {
         row[i] = 1.0;

@@ -427,6 +427,7 @@ fn refine_up_to(
                 lambda: lam,
                 shape: shape_and_se.as_ref().map(|s| s.0.clone()),
                 shape_se: shape_and_se.as_ref().map(|s| s.1.clone()),
+                mpc: shape_and_se.as_ref().map(|s| crate::mpc(&s.0)),
                 evidence: evidence[j],
             }
         })

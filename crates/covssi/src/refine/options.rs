@@ -2,6 +2,8 @@
 
 /// Options of [`refine`](super::refine).
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(default, deny_unknown_fields))]
 pub struct RefineOptions {
     /// Largest number of scoring iterations per fit. Default: 200.
     pub max_iterations: usize,

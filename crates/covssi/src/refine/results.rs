@@ -24,11 +24,13 @@ pub fn exponential_misfit(mut x: Vec<f64>) -> f64 {
 
 /// A mode after refinement.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct RefinedMode {
     /// Index of the SSI mode this one is: SSI modes and refined modes are paired nearest
     /// first, one to one, within [`SAME_MODE_DISTANCE`] (poles may trade places while
     /// fitting). `None` when the fit moved this mode away from every SSI mode not paired
-    /// with a nearer one: the likelihood put it where SSI saw none.
+    /// with a nearer one: the likelihood put it where SSI saw none. (`ssi_mode` in JSON.)
+    #[cfg_attr(feature = "serde", serde(rename = "ssi_mode"))]
     pub source: Option<usize>,
     /// Natural frequency |λ|/2π (Hz).
     pub frequency_hz: f64,
@@ -51,6 +53,8 @@ pub struct RefinedMode {
     /// about equally large, which one is scaled to 1 depends on the noise, and the other's
     /// ratio to it is pulled below 1 by that choice, which these standard errors do not hold.
     pub shape_se: Option<Vec<f64>>,
+    /// Modal phase collinearity of `shape` ([`mpc`](crate::mpc)); `None` with `shape`.
+    pub mpc: Option<f64>,
     /// Rise of `L` (negative log-likelihood) when this mode is removed, the other poles held
     /// and the numerators refitted: what this mode explains that the others, where they are,
     /// do not. At least [`Refinement::penalty`] when selecting.
@@ -59,8 +63,11 @@ pub struct RefinedMode {
 
 /// An SSI mode the likelihood does not support.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct DroppedMode {
     /// Index of the SSI mode (for one dropped from the final model: the nearest to its pole).
+    /// (`ssi_mode` in JSON.)
+    #[cfg_attr(feature = "serde", serde(rename = "ssi_mode"))]
     pub source: usize,
     /// Its SSI frequency (Hz).
     pub frequency_hz: f64,
@@ -73,8 +80,10 @@ pub struct DroppedMode {
 
 /// A real pole (a non-oscillating, exponentially decaying component) after refinement.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct RefinedRealPole {
-    /// Index of the SSI real-pole cluster it started from.
+    /// Index of the SSI real-pole cluster it started from. (`ssi_real_pole` in JSON.)
+    #[cfg_attr(feature = "serde", serde(rename = "ssi_real_pole"))]
     pub source: usize,
     /// The pole λ (rad/s, negative).
     pub lambda: f64,
@@ -87,8 +96,10 @@ pub struct RefinedRealPole {
 
 /// An SSI real pole the likelihood does not support.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct DroppedRealPole {
-    /// Index of the SSI real-pole cluster.
+    /// Index of the SSI real-pole cluster. (`ssi_real_pole` in JSON.)
+    #[cfg_attr(feature = "serde", serde(rename = "ssi_real_pole"))]
     pub source: usize,
     /// Its SSI value λ (rad/s).
     pub lambda: f64,
@@ -100,6 +111,7 @@ pub struct DroppedRealPole {
 
 /// What [`refine`] finds.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Refinement {
     /// Kept modes, by increasing frequency.
     pub modes: Vec<RefinedMode>,

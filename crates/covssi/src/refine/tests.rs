@@ -6,13 +6,12 @@ use std::f64::consts::PI;
 
 const FS: f64 = 20.0;
 
-pub(super) fn pole(f: f64, zeta: f64) -> C64 {
-    2.0 * PI * f * C64::new(-zeta, (1.0 - zeta * zeta).sqrt())
-}
+pub(super) use crate::synth::pole;
 
-/// Response at FS of oscillators (f Hz, ζ) to white noise: each a 2-state block with the
-/// exact discrete poles e^{λ/fs}, seen through `gains` (one row per channel), plus white
-/// measurement noise of `noise` times each channel's noise-free standard deviation.
+/// Response at FS of oscillators (f Hz, ζ) to white noise ([`crate::synth::ModalRecord`]),
+/// each seen through the first of its two states by `gains` (one row per channel, one entry
+/// per mode), plus white measurement noise of `noise` times each channel's noise-free
+/// standard deviation.
 pub(super) fn record(
     n: usize,
     modes: &[(f64, f64)],
@@ -20,26 +19,14 @@ pub(super) fn record(
     noise: f64,
     seed: u64,
 ) -> Vec<Vec<f64>> {
-    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
-    let mut x = vec![[0.0f64; 2]; modes.len()];
-    let warm = 2000;
-    let mut out = vec![Vec::with_capacity(n); gains.len()];
-    for t in 0..n + warm {
-        for (j, &(f, z)) in modes.iter().enumerate() {
-            let mu = (pole(f, z) / FS).exp();
-            let [p, q] = x[j];
-            let w0: f64 = rng.sample(StandardNormal);
-            let w1: f64 = rng.sample(StandardNormal);
-            x[j] = [mu.re * p - mu.im * q + w0, mu.im * p + mu.re * q + w1];
-        }
-        if t >= warm {
-            for (c, g) in gains.iter().enumerate() {
-                out[c].push(g.iter().zip(&x).map(|(a, s)| a * s[0]).sum());
-            }
-        }
-    }
-    add_noise(&mut out, &vec![noise; gains.len()], &mut rng);
-    out
+    let gains = gains
+        .iter()
+        .map(|row| row.iter().flat_map(|&g| [g, 0.0]).collect())
+        .collect();
+    crate::synth::ModalRecord::new(FS, modes)
+        .with_gains(gains)
+        .with_noise(noise)
+        .generate(n, seed)
 }
 
 /// White measurement noise added to each channel of `y`, `fractions[c]` of its standard
@@ -64,6 +51,7 @@ pub(super) fn mode(f: f64, zeta: f64, members: usize) -> Mode {
         shape_std: vec![0.0],
         members: (0..members).map(|k| (k + 1, 0)).collect(),
         lambda: pole(f, zeta),
+        mpc: 1.0,
     }
 }
 
@@ -89,6 +77,7 @@ fn refined_modes_pair_with_ssi_modes_one_to_one() {
         lambda: pole(f, zeta),
         shape: None,
         shape_se: None,
+        mpc: None,
         evidence: 100.0,
     };
     // Two near 7.35 Hz (the farther 3 % away), one near 2 Hz, one heavily damped near
