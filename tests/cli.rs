@@ -1149,14 +1149,17 @@ fn ident_finds_c_from_a_record_under_a_white_force() {
     assert!(svg.contains("Zener spectral fit: c = "), "{svg}");
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-    let fit = &v["zener_spectrum"];
-    for (key, truth) in [
+    let fit = &v["identification"]["zener_spectrum"];
+    for (i, (key, truth)) in [
         ("c", 11.7),
         ("k", 46899.0),
         ("k_inf", 81432.0),
         ("omega", 61.72),
-    ] {
-        let (got, se) = (fit[key].as_f64().unwrap(), fit["se"][key].as_f64().unwrap());
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let (got, se) = (fit[key].as_f64().unwrap(), fit["se"][i].as_f64().unwrap());
         assert!(
             (got - truth).abs() < 4.0 * se,
             "{key}: {got} ± {se} against {truth}"
@@ -1212,9 +1215,10 @@ fn ident_default_job_writes_the_json_the_issue_asks_for() {
             "bouc_wen.bouc_wen.{key}"
         );
     }
-    assert!(v["poles"]["pair"].is_array() && v["poles"]["real"].is_number());
+    let poles = &v["identification"]["poles"];
+    assert!(poles["pair"].is_array() && poles["real"].is_number());
     let val = &v["validation"][0];
-    assert!(val["file"].is_string());
+    assert!(val["record"].is_string());
     // ε as fractions: the built-in case lands at a few per cent.
     let e = val["zener"]["epsilon"].as_f64().unwrap();
     assert!(e > 0.0 && e < 0.1, "{e}");
@@ -1223,7 +1227,14 @@ fn ident_default_job_writes_the_json_the_issue_asks_for() {
     assert_eq!(v["bouc_wen_route"], "flatness");
     let b = val["bouc_wen"]["epsilon"].as_f64().unwrap();
     assert!(b < 0.1 * e, "{b} vs Zener {e}");
-    assert!((v["flatness"]["input_rms"].as_f64().unwrap() - 50.0).abs() < 0.5);
+    assert!(
+        (v["identification"]["flatness"]["input_rms"]
+            .as_f64()
+            .unwrap()
+            - 50.0)
+            .abs()
+            < 0.5
+    );
     assert!(dir.join("stabilization.svg").is_file());
     assert!(dir.join("implied_input_spectrum.svg").is_file());
 }

@@ -155,8 +155,6 @@ pub(crate) fn implied_input_figure(
     Ok(())
 }
 
-/// Figures like the paper's 3(a) (the correlation function) and 5 (time and PSD overlays of
-/// the identified models on the first validation record).
 /// The record's PSD (Welch, 4096-sample segments) beside the Zener spectral fit's, over the
 /// fitted band, with the fit's noise floor.
 pub(crate) fn zener_spectrum_figure(
@@ -206,7 +204,43 @@ pub(crate) fn zener_spectrum_figure(
     Ok(())
 }
 
+/// Every figure of `hyst ident --svg-dir`: the stabilization diagram, figures like the
+/// paper's 3(a) and 5, the Zener spectral fit, and the implied input of each Bouc-Wen
+/// candidate when the excitation's band is known.
 pub(crate) fn ident_figures(
+    dir: &std::path::Path,
+    r: &hyst::ident::IdentReport,
+    y: &[f64],
+    fs: f64,
+    validations: &[hyst::ident::ValidationRecord],
+) -> Result<(), Error> {
+    let id = &r.identification;
+    std::fs::create_dir_all(dir).map_err(|e| fail(format!("{}: {e}", dir.display())))?;
+    let p = dir.join("stabilization.svg");
+    let svg = hyst::covssi::svg::stabilization_svg(
+        &id.ssi.diagram,
+        Some(4.0 * id.prepared.dominant_hz),
+        "Stabilization diagram (output only)",
+    );
+    std::fs::write(&p, svg).map_err(|e| fail(format!("{}: {e}", p.display())))?;
+    paper_figures(dir, id, r.bouc_wen.as_ref(), validations)?;
+    if let Some(f) = &id.zener_spectrum {
+        zener_spectrum_figure(&dir.join("zener_spectrum.svg"), y, fs, f)?;
+    }
+    if let Some(band) = r.options.excitation.filter(|_| id.flatness.is_some()) {
+        let candidates: Vec<(String, Oscillator)> = r
+            .candidates
+            .iter()
+            .map(|c| (c.route.name().to_string(), c.model))
+            .collect();
+        implied_input_figure(dir, &candidates, y, fs, &band)?;
+    }
+    Ok(())
+}
+
+/// Figures like the paper's 3(a) (the correlation function) and 5 (time and PSD overlays of
+/// the identified models on the first validation record).
+fn paper_figures(
     dir: &std::path::Path,
     id: &hyst::ident::Identification,
     bouc_wen: Option<&Oscillator>,
@@ -325,12 +359,13 @@ pub(crate) fn excitation_band(
     }
 }
 
-pub(crate) fn run(a: &IdentArgs) -> Result<(), Error> {
-    use hyst::ident::{self, DampingGuess, IdentOptions, Linearization};
-    use serde_json::json;
-    let mass = a.mass.unwrap_or(2.0);
-    let mut validations: Vec<ident::ValidationRecord> = Vec::new();
-    let (y, fs, source) = match &a.data {
+/// The record to identify: `--data` after `--skip`, else the built-in default (whose fresh
+/// validation period joins the records); its name; its rate.
+fn record(
+    a: &IdentArgs,
+    validations: &mut Vec<hyst::ident::ValidationRecord>,
+) -> Result<(Vec<f64>, f64, String), Error> {
+    match &a.data {
         Some(path) => {
             let fs = check_fs(a.fs.ok_or_else(|| fail("--fs is required with --data"))?)?;
             if a.mass.is_none() {
@@ -339,28 +374,32 @@ pub(crate) fn run(a: &IdentArgs) -> Result<(), Error> {
                 ));
             }
             let y = output_after_skip(path, &a.output_column, a.skip)?;
-            (y, fs, path.display().to_string())
+            Ok((y, fs, path.display().to_string()))
         }
         None => {
             let d = default_records()?;
-            validations.push(ident::ValidationRecord {
+            validations.push(hyst::ident::ValidationRecord {
                 name: "built-in: benchmark, fresh 50 N multisine".into(),
                 u: d.val_u,
                 y: d.val_y,
                 periodic: true,
             });
-            (
+            Ok((
                 d.y,
                 750.0,
                 "built-in: benchmark, 50 N multisine, 4 periods, noise 7.4e-6 m".to_string(),
-            )
+            ))
         }
-    };
+    }
+}
+
+/// The `--validate` records, each simulated as `--validation-kind` says.
+fn validation_records(a: &IdentArgs) -> Result<Vec<hyst::ident::ValidationRecord>, Error> {
+    let mut out = Vec::new();
     for v in &a.validate {
         let t = read_csv(v)?;
-        let name = v.display().to_string();
-        let mut record = ident::ValidationRecord::new(
-            name,
+        let mut record = hyst::ident::ValidationRecord::new(
+            v.display().to_string(),
             t.column(&a.input_column)?.to_vec(),
             t.column(&a.output_column)?.to_vec(),
         );
@@ -369,275 +408,90 @@ pub(crate) fn run(a: &IdentArgs) -> Result<(), Error> {
             ValidationKindArg::FromRest => record.periodic = false,
             ValidationKindArg::Auto => {}
         }
-        validations.push(record);
+        out.push(record);
     }
-    let choices: Vec<Linearization> = match a.linearization {
-        Some(LinearizationArg::Paper) => vec![Linearization::Paper],
-        Some(LinearizationArg::Harmonic) => vec![Linearization::Harmonic],
-        None if validations.is_empty() => vec![Linearization::Harmonic],
-        None => vec![Linearization::Harmonic, Linearization::Paper],
-    };
-    let excitation = excitation_band(a)?;
-    let t0 = std::time::Instant::now();
+    Ok(out)
+}
+
+/// The pipeline's options from the flags.
+fn options(a: &IdentArgs) -> Result<hyst::ident::IdentOptions, Error> {
+    use hyst::ident::{DampingGuess, IdentOptions};
     let damping_guess = match (a.c, a.damping) {
         (Some(c), _) if c.is_finite() && c >= 0.0 => DampingGuess::Value(c),
         (Some(c), _) => return Err(fail(format!("--c must be a number >= 0 N s/m, got {c}"))),
         (None, DampingArg::Spectrum) => DampingGuess::ZenerSpectrum,
         (None, DampingArg::Cluster) => DampingGuess::LowDampingCluster,
     };
-    let opts = IdentOptions {
-        mass,
-        linearization: choices[0],
-        excitation,
+    Ok(IdentOptions {
+        mass: a.mass.unwrap_or(2.0),
+        excitation: excitation_band(a)?,
         damping_guess,
         ..IdentOptions::default()
-    };
-    let id = match ident::identify(&y, fs, &opts) {
-        Ok(id) => id,
-        Err(
-            e @ (ident::IdentError::NoStablePair { .. }
-            | ident::IdentError::PairNotSupported { .. }),
-        ) => {
-            // Save the diagram the user needs to see why.
-            let path = a
-                .svg_dir
-                .clone()
-                .unwrap_or_else(|| PathBuf::from("."))
-                .join("stabilization.svg");
-            let saved = ident::prepare(&y, fs, &opts)
-                .and_then(|p| ident::run_ssi(&p, &opts).map(|r| (p, r)))
-                .ok()
-                .and_then(|(p, r)| {
-                    let svg = hyst::covssi::svg::stabilization_svg(
-                        &r.diagram,
-                        Some(4.0 * p.dominant_hz),
-                        "Stabilization diagram (no supported stable pair)",
-                    );
-                    std::fs::create_dir_all(path.parent()?).ok()?;
-                    std::fs::write(&path, svg).ok()
-                });
-            return Err(fail(match saved {
-                Some(()) => format!("{source}: {e}; diagram saved to {}", path.display()),
-                None => format!("{source}: {e}"),
-            }));
-        }
-        Err(e) => return Err(fail(format!("{source}: {e}"))),
-    };
-    // The other mappings share steps 1-3: only the models are built again.
-    let mut mapped = vec![(choices[0], id.models.bouc_wen_mapped)];
-    for lin in &choices[1..] {
-        let o = IdentOptions {
-            linearization: *lin,
-            ..opts.clone()
-        };
-        let models = ident::build_models(&id.poles, &id.prepared, &o)
-            .map_err(|e| fail(format!("{source}: {e}")))?;
-        mapped.push((*lin, models.bouc_wen_mapped));
+    })
+}
+
+/// When no supported pair was found, the stabilization diagram that shows why, saved where
+/// the figures go (or here); the error names it.
+fn no_pair_error(
+    a: &IdentArgs,
+    e: hyst::ident::IdentError,
+    y: &[f64],
+    fs: f64,
+    opts: &hyst::ident::IdentOptions,
+    source: &str,
+) -> Error {
+    use hyst::ident::{self, IdentError};
+    if !matches!(
+        e,
+        IdentError::NoStablePair { .. } | IdentError::PairNotSupported { .. }
+    ) {
+        return fail(format!("{source}: {e}"));
     }
-    let ident_seconds = t0.elapsed().as_secs_f64();
-    let lin_name = |l: &Linearization| match l {
-        Linearization::Paper => "paper",
-        Linearization::Harmonic => "harmonic",
-    };
-    // Bouc-Wen candidates: the flatness fit (if any), then each mapping.
-    let mut candidates: Vec<(String, Oscillator)> = Vec::new();
-    if let Some(f) = &id.flatness {
-        candidates.push(("flatness".into(), f.model));
-    }
-    for (lin, b) in &mapped {
-        if let Some(b) = b {
-            candidates.push((lin_name(lin).into(), *b));
-        }
-    }
-    // Each model's validation on every record, as JSON rows; the Bouc-Wen candidate kept is
-    // the one that validates best on the first record (the library's choice), without
-    // validation data the first (the flatness fit when the band is known, else the harmonic
-    // mapping).
-    let rows = |scores: &[Result<ident::Validation, ident::IdentError>]| -> Vec<serde_json::Value> {
-        validations
-            .iter()
-            .zip(scores)
-            .map(|(r, v)| match v {
-                Ok(v) => json!({"file": r.name, "epsilon": v.epsilon, "rms": v.rms}),
-                Err(e) => json!({"file": r.name, "error": e.to_string()}),
-            })
-            .collect()
-    };
-    let validate_on = |m: Option<&Oscillator>| -> Vec<serde_json::Value> {
-        match m {
-            Some(m) => rows(&ident::validate_all(m, &validations, fs)),
-            None => validations
-                .iter()
-                .map(|r| json!({"file": r.name, "epsilon": null}))
-                .collect(),
-        }
-    };
-    let cand_scores: Vec<_> = candidates
-        .iter()
-        .map(|(_, m)| ident::validate_all(m, &validations, fs))
-        .collect();
-    let cand_rows: Vec<Vec<serde_json::Value>> = cand_scores.iter().map(|v| rows(v)).collect();
-    let best = ident::best_by_validation(&cand_scores).unwrap_or(0);
-    let bouc_wen = candidates.get(best).map(|c| c.1);
-    let route = candidates
-        .get(best)
-        .map_or("none".to_string(), |c| c.0.clone());
-    let lin_rows = validate_on(Some(&id.models.linear));
-    let zen_rows = validate_on(id.models.zener.as_ref());
-    let table: Vec<serde_json::Value> = validations
-        .iter()
-        .enumerate()
-        .map(|(i, r)| {
-            json!({"file": r.name, "periodic": r.periodic, "linear": lin_rows[i], "zener": zen_rows[i],
-                "bouc_wen": cand_rows.get(best).map(|r| r[i].clone())})
-        })
-        .collect();
-    let eps = |v: &serde_json::Value| {
-        v["epsilon"]
-            .as_f64()
-            .map_or("-".to_string(), |e| format!("{:.3} %", 100.0 * e))
-    };
-    println!("record: {source}");
-    println!(
-        "prepared: fs {} Hz (decimation {}), dominant {:.2} Hz, sigma_x {:.3e}, skewness {:.3}, kurtosis {:.3}",
-        id.prepared.fs,
-        id.prepared.decimation,
-        id.prepared.dominant_hz,
-        id.prepared.sigma_x,
-        id.prepared.skewness,
-        id.prepared.kurtosis
-    );
-    let real = id
-        .poles
-        .real
-        .map_or("none".to_string(), |r| format!("{r:.4} rad/s"));
-    println!(
-        "pair {:.4} rad/s, real pole {real}, c = {:.3} ({})",
-        id.poles.pair, id.poles.c, id.poles.c_source
-    );
-    println!("linear: {}", osc_json(&id.models.linear));
-    if let Some(z) = &id.models.zener {
-        println!("zener: {}", osc_json(z));
-    }
-    if let Some(f) = &id.zener_spectrum {
-        println!(
-            "zener spectral fit (white force, {} frequencies up to {:.1} Hz, misfit {:.3}): c = {:.3} ± {:.3} N s/m{}, k = {:.1} ± {:.1} N/m, k_inf = {:.1} ± {:.1} N/m, omega = {:.3} ± {:.3} rad/s; force density {:.4e} ± {:.1e} N^2 s, noise std {:.3e}",
-            f.bins,
-            f.max_frequency_hz,
-            f.misfit,
-            f.c,
-            f.se[0],
-            f.unconstrained_c.map_or(String::new(), |[c, se]| format!(
-                " (held at 0: the most likely c is {c:.3} ± {se:.3})"
-            )),
-            f.k,
-            f.se[1],
-            f.k_inf,
-            f.se[2],
-            f.omega,
-            f.se[3],
-            f.force_density,
-            f.force_density_se,
-            f.noise_std
-        );
-    }
-    if let Some(f) = &id.flatness {
-        println!(
-            "flatness fit: {} periods averaged (aperiodicity {}), bins {}..={}, spread of |U| over the band {:.3} dB -> {:.3} dB in {} iterations, implied input RMS {:.3} N",
-            f.periods,
-            f.aperiodicity
-                .map_or("-".to_string(), |a| format!("{a:.3}")),
-            f.bins.0,
-            f.bins.1,
-            f.start_spread_db,
-            f.spread_db,
-            f.iterations,
-            f.input_rms
-        );
-    }
-    for ((name, m), rows) in candidates.iter().zip(&cand_rows) {
-        let tag = if name == &route { " (kept)" } else { "" };
-        println!("bouc_wen [{name}]{tag}: {}", osc_json(m));
-        for r in rows {
-            println!(
-                "  validation {}: {}",
-                r["file"].as_str().unwrap_or(""),
-                eps(r)
+    let path = a
+        .svg_dir
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("."))
+        .join("stabilization.svg");
+    let saved = ident::prepare(y, fs, opts)
+        .and_then(|p| ident::run_ssi(&p, opts).map(|r| (p, r)))
+        .ok()
+        .and_then(|(p, r)| {
+            let svg = hyst::covssi::svg::stabilization_svg(
+                &r.diagram,
+                Some(4.0 * p.dominant_hz),
+                "Stabilization diagram (no supported stable pair)",
             );
-        }
-    }
-    for r in &table {
-        println!(
-            "validation {} ({}): linear {}, zener {}, bouc_wen [{route}] {}",
-            r["file"].as_str().unwrap_or(""),
-            if r["periodic"] == json!(true) {
-                "one steady-state period"
-            } else {
-                "from rest"
-            },
-            eps(&r["linear"]),
-            eps(&r["zener"]),
-            eps(&r["bouc_wen"])
-        );
-    }
-    for n in id
-        .poles
-        .notes
-        .iter()
-        .chain(&id.models.notes)
-        .chain(&id.ssi.notes)
-    {
-        println!("note: {n}");
-    }
-    if id.zener_spectrum.is_some() && a.excitation_band.is_none() {
-        println!(
-            "note: one record maps to Bouc-Wen through one amplitude; records of the same \
-             structure at several force levels map to one Bouc-Wen model together: hyst levels"
-        );
-    }
-    println!("identification time: {:.3} s", ident_seconds);
-    if let Some(path) = &a.json {
-        let doc = json!({
-            "record": source,
-            "linearization": lin_name(&choices[0]),
-            "bouc_wen_route": route,
-            "prepared": {"fs_hz": id.prepared.fs, "decimation": id.prepared.decimation, "dominant_hz": id.prepared.dominant_hz,
-                "sigma_x": id.prepared.sigma_x, "skewness": id.prepared.skewness, "kurtosis": id.prepared.kurtosis},
-            "poles": {"pair": [id.poles.pair.re, id.poles.pair.im], "real": id.poles.real, "c_source": id.poles.c_source},
-            "amplitude": id.models.amplitude,
-            "linear": osc_json(&id.models.linear),
-            "zener": id.models.zener.as_ref().map(osc_json),
-            "zener_spectrum": id.zener_spectrum.as_ref().map(|f| json!({"c": f.c, "k": f.k, "k_inf": f.k_inf, "omega": f.omega,
-                "se": {"c": f.se[0], "k": f.se[1], "k_inf": f.se[2], "omega": f.se[3]}, "unconstrained_c": f.unconstrained_c,
-                "force_density": f.force_density, "force_density_se": f.force_density_se, "noise_std": f.noise_std,
-                "misfit": f.misfit, "frequencies": f.bins, "max_frequency_hz": f.max_frequency_hz})),
-            "bouc_wen": bouc_wen.as_ref().map(osc_json),
-            "bouc_wen_candidates": candidates.iter().zip(&cand_rows).map(|((n, m), r)| json!({"route": n, "model": osc_json(m), "validation": r})).collect::<Vec<_>>(),
-            "flatness": id.flatness.as_ref().map(|f| json!({"periods": f.periods, "aperiodicity": f.aperiodicity, "bins": [f.bins.0, f.bins.1],
-                "start_spread_db": f.start_spread_db, "spread_db": f.spread_db, "iterations": f.iterations, "input_rms": f.input_rms})),
-            "validation": table,
-            "notes": id.poles.notes.iter().chain(&id.models.notes).chain(&id.ssi.notes).collect::<Vec<_>>(),
-            "identification_seconds": ident_seconds,
+            std::fs::create_dir_all(path.parent()?).ok()?;
+            std::fs::write(&path, svg).ok()
         });
-        std::fs::write(path, serde_json::to_string_pretty(&doc)?)
-            .map_err(|e| fail(format!("{}: {e}", path.display())))?;
+    fail(match saved {
+        Some(()) => format!("{source}: {e}; diagram saved to {}", path.display()),
+        None => format!("{source}: {e}"),
+    })
+}
+
+pub(crate) fn run(a: &IdentArgs) -> Result<(), Error> {
+    use hyst::ident::{self, Linearization};
+    let mut validations = Vec::new();
+    let (y, fs, source) = record(a, &mut validations)?;
+    validations.extend(validation_records(a)?);
+    let opts = options(a)?;
+    let mapping = a.linearization.map(|l| match l {
+        LinearizationArg::Paper => Linearization::Paper,
+        LinearizationArg::Harmonic => Linearization::Harmonic,
+    });
+    let bar = spinner();
+    bar.set_message("identifying");
+    let report = ident::identify_and_validate(&y, fs, &opts, mapping, &validations);
+    bar.finish_and_clear();
+    let report = report.map_err(|e| no_pair_error(a, e, &y, fs, &opts, &source))?;
+    let report = hyst::report::FileReport::new(source, report);
+    print!("{report}");
+    if let Some(path) = &a.json {
+        report.write_json(path)?;
     }
     if let Some(dir) = &a.svg_dir {
-        std::fs::create_dir_all(dir).map_err(|e| fail(format!("{}: {e}", dir.display())))?;
-        let p = dir.join("stabilization.svg");
-        let svg = hyst::covssi::svg::stabilization_svg(
-            &id.ssi.diagram,
-            Some(4.0 * id.prepared.dominant_hz),
-            "Stabilization diagram (output only)",
-        );
-        std::fs::write(&p, svg).map_err(|e| fail(format!("{}: {e}", p.display())))?;
-        ident_figures(dir, &id, bouc_wen.as_ref(), &validations)?;
-        if let Some(f) = &id.zener_spectrum {
-            zener_spectrum_figure(&dir.join("zener_spectrum.svg"), &y, fs, f)?;
-        }
-        if let Some(band) = excitation.filter(|_| id.flatness.is_some()) {
-            implied_input_figure(dir, &candidates, &y, fs, &band)?;
-        }
+        ident_figures(dir, &report.report, &y, fs, &validations)?;
     }
     Ok(())
 }

@@ -171,7 +171,7 @@ pub(crate) fn refine_figures(
         let mut series = Vec::new();
         for (label, f, c) in [
             ("baseline", first.fit.as_ref(), colors::BLUE),
-            ("after the loop", r.trace.fit.as_ref(), colors::RED),
+            ("after the loop", r.trace.as_ref(), colors::RED),
         ] {
             let Some(f) = f else { continue };
             let fitted = f.fitted_sections(41);

@@ -339,14 +339,19 @@ impl Row {
     /// The z of each estimate against the truth, when the final model has exactly the
     /// truth's terms (every estimate has a true value and the count matches the truth's
     /// free terms), else none.
-    fn z_scores(&self) -> Vec<(&'static str, f64)> {
+    fn z_scores(&self) -> Vec<(&str, f64)> {
         let Ok(r) = &self.outcome else {
             return Vec::new();
         };
-        let z: Vec<(&'static str, f64)> = r
+        let z: Vec<(&str, f64)> = r
             .estimates
             .iter()
-            .filter_map(|e| Some((e.name, (e.value - truth_value(e.name, &self.truth)?) / e.se)))
+            .filter_map(|e| {
+                Some((
+                    e.name.as_ref(),
+                    (e.value - truth_value(&e.name, &self.truth)?) / e.se,
+                ))
+            })
             .collect();
         let same_structure = z.len() == r.estimates.len()
             && r.model.extras.surface.is_none()

@@ -32,6 +32,8 @@ use crate::fft::{C, irfft, rfft};
 
 /// What is known of the excitation's design (not its record).
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct ExcitationBand {
     /// Lowest excited frequency (Hz).
     pub low_hz: f64,
@@ -62,6 +64,7 @@ impl ExcitationBand {
 
 /// The fitted Bouc-Wen oscillator and how flat its implied input is.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct FlatnessFit {
     /// The fitted model (ν = 1).
     pub model: Oscillator,

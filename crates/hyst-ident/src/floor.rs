@@ -76,6 +76,7 @@ fn lm<const P: usize>(mut p: [f64; P], r: impl Fn(&[f64; P]) -> Vec<C>) -> [f64;
 
 /// A fitted floor model and its error on the record.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Floor {
     /// The best model of the class.
     pub model: Oscillator,

@@ -47,6 +47,7 @@ pub struct PeriodicRecord<'a> {
 
 /// One mode of the fitted response.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct FrfMode {
     /// Natural frequency $|\lambda|/2\pi$ (Hz).
     pub frequency_hz: f64,
@@ -68,6 +69,7 @@ pub struct FrfMode {
 
 /// The fit of a band of the frequency response.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct FrfFit {
     /// The oscillating poles of the fit inside the band, by frequency.
     pub modes: Vec<FrfMode>,
@@ -248,6 +250,7 @@ fn fit_band(spectra: &Spectra, band: (f64, f64), modes: usize) -> Result<FrfFit,
 /// How far a mode of a fit moves with the band: the band's share of the uncertainty, which
 /// the standard errors (the noise alone) do not hold when the misfit is far above 1.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct BandSpread {
     /// The largest change of the frequency (Hz).
     pub frequency_hz: f64,

@@ -23,6 +23,7 @@ use crate::zener_spectrum::ZenerSpectralFit;
 
 /// The Bouc-Wen model of several levels.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct LevelsBoucWen {
     /// The oscillator: the fits' mass, c and k their weighted means, the Bouc-Wen element
     /// (β = 1; ν = 1 unless fitted) from the least squares.
@@ -101,6 +102,8 @@ fn from_levels(
 
 /// Options of [`bouc_wen_by_simulation`].
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(default, deny_unknown_fields))]
 pub struct SimulationOptions {
     /// Most Levenberg–Marquardt iterations. Default 10.
     pub max_iterations: usize,
@@ -134,6 +137,7 @@ impl Default for SimulationOptions {
 
 /// What [`bouc_wen_by_simulation`] finds.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct SimulatedBoucWen {
     /// The oscillator (β = 1; ν the start's unless fitted).
     pub oscillator: Oscillator,

@@ -32,6 +32,9 @@
 //! 5. [`validate`]: simulate a model with a measured input and report
 //!    $\varepsilon = \text{RMS}(\hat y - y)/(\max y - \min y)$ (eq. 39) and the RMS.
 //!
+//! The whole job on one record, with validation records to choose the Bouc-Wen candidate
+//! by, is [`identify_and_validate`]: one [`IdentReport`] that prints as text and serializes.
+//!
 //! With the input too, [`frf`] fits the modes of a periodic record's frequency response: the
 //! input-output second opinion on what output-only SSI reports.
 //!
@@ -50,6 +53,7 @@ mod options;
 mod pipeline;
 mod poles;
 mod prepare;
+mod report;
 mod validation;
 
 pub mod flatness;
@@ -82,6 +86,7 @@ pub use options::*;
 pub use pipeline::*;
 pub use poles::*;
 pub use prepare::*;
+pub use report::*;
 pub use validation::*;
 
 #[cfg(test)]

@@ -4,6 +4,7 @@ use crate::*;
 
 /// The identified models.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Models {
     /// Linear oscillator from the pair.
     pub linear: Oscillator,

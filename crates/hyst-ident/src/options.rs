@@ -4,6 +4,8 @@ use crate::*;
 
 /// Where the viscous damping c of the Zener and Bouc-Wen models comes from.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum DampingGuess {
     /// From the record, with no guess, when it follows the stationary model (a random
     /// excitation) and SSI's pair and real pole were refined: the Zener oscillator fitted to
@@ -21,6 +23,8 @@ pub enum DampingGuess {
 
 /// How the Zener element maps to Bouc-Wen parameters.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum Linearization {
     /// Eqs. (37)–(38) as printed.
     Paper,
@@ -31,6 +35,8 @@ pub enum Linearization {
 
 /// Options of the pipeline.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(default, deny_unknown_fields))]
 pub struct IdentOptions {
     /// Mass m (kg), assumed known.
     pub mass: f64,

@@ -75,6 +75,8 @@ pub fn is_one_period(u: &[f64]) -> bool {
 /// How a record repeats.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[non_exhaustive]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum Periodicity {
     /// The record is a whole number of periods of its input (one or more).
     Periodic {

@@ -5,6 +5,7 @@ use crate::*;
 
 /// Everything the pipeline found.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Identification {
     /// Step 1.
     pub prepared: Prepared,

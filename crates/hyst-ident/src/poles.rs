@@ -4,6 +4,7 @@ use crate::*;
 
 /// The poles the models are built from.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct SelectedPoles {
     /// The oscillating pair (Im > 0), rad/s: the mean of its cluster, or, when the record
     /// follows the stationary model, the pair refined by maximum likelihood together with

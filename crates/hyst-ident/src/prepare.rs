@@ -4,8 +4,10 @@ use crate::*;
 
 /// The prepared output record.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Prepared {
-    /// Centred, decimated record.
+    /// Centred, decimated record (not in JSON: the record is the caller's).
+    #[cfg_attr(feature = "serde", serde(skip))]
     pub y: Vec<f64>,
     /// Its sampling rate (Hz).
     pub fs: f64,

@@ -4,6 +4,7 @@ use crate::*;
 
 /// A model's error against a measured output.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Validation {
     /// ε of eq. (39): RMS error divided by the range of the measured output (a fraction).
     pub epsilon: f64,

@@ -36,6 +36,7 @@ use hyst_model::{Oscillator, ZenerParams};
 
 /// The fitted Zener oscillator, with standard errors from the inverse Fisher information.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct ZenerSpectralFit {
     /// Mass (kg), as given.
     pub mass: f64,

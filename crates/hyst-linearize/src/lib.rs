@@ -187,6 +187,7 @@ fn check_frequency(w: f64) -> Result<(), LinearizeError> {
 
 /// A Zener oscillator's parameters identified from poles.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct ZenerFit {
     /// Linear (static) stiffness k (N/m).
     pub k: f64,
@@ -247,6 +248,7 @@ pub fn zener_from_poles(
 /// First-harmonic equivalent of a hysteretic element at amplitude A:
 /// $z_1 = K x + C\dot x$ with loss stiffness $\omega C$ independent of ω.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct DescribingFunction {
     /// Amplitude A (m).
     pub amplitude: f64,
@@ -546,6 +548,8 @@ pub fn loop_energy_zener(z: &ZenerParams, a: f64, w: f64) -> f64 {
 
 /// The amplitude A used to linearize, relative to the record's σₓ.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum Amplitude {
     /// A = σₓ (the default, as in the paper).
     #[default]

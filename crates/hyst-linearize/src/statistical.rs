@@ -48,6 +48,7 @@ const SQRT_2_OVER_PI: f64 = 0.797_884_560_802_865_4;
 
 /// Stationary second moments of the velocity and the hysteretic (or Zener) force.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct ResponseMoments {
     /// Standard deviation of the displacement (m).
     pub sigma_x: f64,
@@ -315,6 +316,7 @@ pub fn equivalent_zener(
 /// [`zener_response_moments`] with the level's identified c, k and force density) and the
 /// standard errors of k∞ and Ω that weigh it.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct LevelEquivalent {
     /// The identified Zener element.
     pub zener: ZenerParams,
@@ -329,6 +331,7 @@ pub struct LevelEquivalent {
 /// The Bouc-Wen element (β = 1, ν as given) that best explains the Zener equivalents of
 /// several levels, with what the least squares say of it.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct BoucWenFromLevels {
     /// The element.
     pub bouc_wen: BoucWen,
@@ -409,6 +412,7 @@ pub fn bouc_wen_from_levels(
 
 /// The exponent ν fitted with (α, βγ, βδ): [`ExponentFromLevels`].
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct ExponentFromLevels {
     /// The fit at the best ν (its χ² per degree of freedom over 2·levels − 4).
     pub fit: BoucWenFromLevels,

@@ -35,6 +35,7 @@
 
 use nalgebra::{Complex, DMatrix, SMatrix, SVector};
 
+pub mod display;
 pub mod poly;
 #[cfg(feature = "serde")]
 pub mod schema;

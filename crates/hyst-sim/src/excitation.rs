@@ -72,6 +72,8 @@ pub fn add_noise(y: &mut [f64], std: f64, seed: u64) -> Result<(), SimError> {
 /// A random-phase multisine: flat amplitude on the DFT bins `first_bin..=last_bin` of a period
 /// of `period` samples, phases uniform on [0, 2π), scaled to an RMS.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct Multisine {
     /// Samples per period.
     pub period: usize,
@@ -201,6 +203,8 @@ pub fn band_limited_noise(
 ///
 /// The benchmark's `sinesweep_val` is `Sweep { amplitude: 40, f0: 18, f1: 52, duration: 204 }`.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct Sweep {
     /// Amplitude a.
     pub amplitude: f64,

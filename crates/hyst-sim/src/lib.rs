@@ -144,6 +144,8 @@ pub enum SimError {
 
 /// Time-stepping scheme.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum Integrator {
     /// Classic explicit fourth-order Runge–Kutta.
     #[default]
@@ -154,6 +156,8 @@ pub enum Integrator {
 
 /// How the fine-rate output returns to the sampling rate.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum Decimation {
     /// Keep the state at every sample instant.
     #[default]
@@ -165,6 +169,8 @@ pub enum Decimation {
 
 /// Options of a simulation.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(default, deny_unknown_fields))]
 pub struct SimOptions {
     /// Sub-steps per sample (≥ 1).
     pub oversample: usize,
@@ -588,6 +594,7 @@ pub fn simulate_from(
 
 /// One period of the periodic steady-state response to one period of a periodic input.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct SteadyState {
     /// The output over one period (same length as the input period).
     pub y: Vec<f64>,

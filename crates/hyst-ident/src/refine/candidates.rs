@@ -12,6 +12,7 @@ use crate::solve;
 
 /// Where the residual's power lies.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Spectrum {
     /// Frequency of the residual's largest spectral peak (Hz).
     pub peak_hz: f64,
@@ -97,6 +98,7 @@ pub(super) fn second_mass_starts(o: &Oscillator, scan: &[(f64, f64)]) -> Vec<Osc
 
 /// The evidence for one candidate effect.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Evidence {
     /// The candidate.
     pub effect: Effect,

@@ -18,9 +18,14 @@ const HALF_ITERATIONS: usize = 60;
 
 /// One parameter fitted on each half of the estimation rows.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct HalfChange {
     /// The parameter's name (as in [`super::Estimate::name`]).
-    pub name: &'static str,
+    #[cfg_attr(
+        feature = "serde",
+        serde(deserialize_with = "super::params::deserialize_name")
+    )]
+    pub name: std::borrow::Cow<'static, str>,
     /// Its value and standard error on the first half.
     pub first: (f64, f64),
     /// Its value and standard error on the second half.
@@ -48,7 +53,7 @@ pub(super) fn halves(
         a.iter()
             .zip(&b)
             .map(|(a, b)| HalfChange {
-                name: a.name,
+                name: a.name.clone(),
                 first: (a.value, a.se),
                 second: (b.value, b.se),
                 z: (b.value - a.value) / (a.se * a.se + b.se * b.se).sqrt(),

@@ -9,6 +9,8 @@ use crate::{Validation, epsilon};
 
 /// How the input force is known between its samples, when the models are simulated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "kebab-case"))]
 pub enum InputInterpolation {
     /// A measured force behind an anti-aliasing filter: band-limited, interpolated by a
     /// windowed sinc ([`hyst_sim::Input::BandLimited`]). Linear interpolation of such a
@@ -306,9 +308,14 @@ pub(super) fn fit_window(
 
 /// A fitted parameter with its standard error.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Estimate {
     /// The parameter's name, as in the JSON of `hyst refine` (`damping`, `alpha`, …).
-    pub name: &'static str,
+    #[cfg_attr(
+        feature = "serde",
+        serde(deserialize_with = "super::params::deserialize_name")
+    )]
+    pub name: std::borrow::Cow<'static, str>,
     /// Its fitted value.
     pub value: f64,
     /// Its standard error (NaN when the sensitivities are singular).
@@ -399,7 +406,7 @@ pub(super) fn standard_errors_on(
                         .sum()
                 });
                 Estimate {
-                    name: p.name(),
+                    name: p.name().into(),
                     value: get(o, p),
                     se: if var >= 0.0 { var.sqrt() } else { f64::NAN },
                 }

@@ -32,6 +32,7 @@ pub const MIN_RELATIVE_GAIN: f64 = 0.01;
 
 /// The held-out comparison of a candidate with the model it extends.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct HeldOutGain {
     /// Mean squared error of the current model over every test row.
     pub mse_before: f64,

@@ -56,6 +56,7 @@ pub use fit::{
 
 /// One step of the loop.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Step {
     /// The effect added, or `None` when nothing was significant.
     pub effect: Option<Effect>,
@@ -75,6 +76,7 @@ pub struct Step {
 
 /// Which start the loop used, and why, when it is not the one asked for.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct StartReport {
     /// The start asked for.
     pub requested: Start,
@@ -86,6 +88,7 @@ pub struct StartReport {
 
 /// What the final model leaves unexplained, when its residual is above the noise level.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Unexplained {
     /// The held-out ε of the first test range over the noise's ε there.
     pub residual_to_noise: f64,
@@ -96,6 +99,7 @@ pub struct Unexplained {
 
 /// The whole loop's result.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Refinement {
     /// The start used.
     pub start: StartReport,
@@ -110,12 +114,15 @@ pub struct Refinement {
     /// The final model's free parameters with their standard errors ([`standard_errors`];
     /// empty if they could not be computed).
     pub estimates: Vec<Estimate>,
-    /// The measurement noise's level, or why it cannot be told.
+    /// The measurement noise's level, or why it cannot be told (in JSON `{"level": …}` or
+    /// `{"unknown": "why"}`).
+    #[cfg_attr(feature = "serde", serde(with = "noise::as_level_or_unknown"))]
     pub noise: Result<noise::NoiseLevel, String>,
     /// The noise's ε (eq. 39) on each test range (NaN when the level is unknown).
     pub noise_epsilon: Vec<f64>,
-    /// The final model's missing force along the measured motion (estimation rows).
-    pub trace: surface::Trace,
+    /// The final model's missing force along the measured motion (estimation rows), fitted
+    /// on the surface basis (`None` when the fit could not be made).
+    pub trace: Option<surface::SurfaceFit>,
     /// The final model fitted on each half of the estimation rows (empty when a half does
     /// not simulate).
     pub halves: Vec<drift::HalfChange>,
@@ -294,7 +301,7 @@ pub fn refine_with(
     let estimates = standard_errors_on(&model, rec, estimate, fit_mass).unwrap_or_default();
     let resid = residual(&model, rec, estimate).unwrap_or_default();
     let mut noise = noise::noise_level(rec.u, rec.y, &resid, rec.fs);
-    let trace = surface::trace(&model, rec, estimate, fit_mass);
+    let trace = surface::trace(&model, rec, estimate, fit_mass).fit;
     let halves = drift::halves(&model, rec, estimate, fit_mass).unwrap_or_default();
     let moving = drift::drifting(&halves);
     let nonstationary = !moving.is_empty();
@@ -309,10 +316,7 @@ pub fn refine_with(
     {
         let level = (sse(&resid) / resid.len().max(1) as f64).sqrt();
         let (share, bias) = noise::coherent_share(&resid, &rec.u[estimate.0..estimate.1]);
-        let structured = trace
-            .fit
-            .as_ref()
-            .is_none_or(|f| f.present().next().is_some());
+        let structured = trace.as_ref().is_none_or(|f| f.present().next().is_some());
         if level > UNEXPLAINED_RATIO * nl.std && !structured && share < 3.0 * bias && !nonstationary
         {
             noise = Ok(noise::NoiseLevel {
@@ -339,7 +343,7 @@ pub fn refine_with(
     let unexplained = ratio
         .filter(|r| *r > UNEXPLAINED_RATIO || nonstationary)
         .map(|r| {
-            let mut signature = trace.fit.as_ref().map_or_else(
+            let mut signature = trace.as_ref().map_or_else(
                 || "the missing force could not be fitted".to_string(),
                 |f| f.signature(),
             );
@@ -553,6 +557,8 @@ fn held_out_reason(g: &HeldOutGain) -> String {
 
 /// Which model the loop starts from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "kebab-case"))]
 pub enum Start {
     /// The linear oscillator from the dominant pole pair.
     #[default]

@@ -15,6 +15,8 @@ use crate::periodic::input_period;
 
 /// Which way the noise level was found.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum NoiseMethod {
     /// From the output's differences one period of the input apart.
     PeriodToPeriod {
@@ -39,11 +41,47 @@ pub enum NoiseMethod {
 
 /// The measurement noise's level.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct NoiseLevel {
     /// Its standard deviation, in the output's units.
     pub std: f64,
     /// How it was found.
     pub method: NoiseMethod,
+}
+
+/// The JSON form of a noise level or why there is none: `{"level": …}` or
+/// `{"unknown": "why"}`.
+#[cfg(feature = "serde")]
+pub(crate) mod as_level_or_unknown {
+    use super::NoiseLevel;
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    #[derive(Serialize, Deserialize)]
+    #[serde(rename_all = "snake_case")]
+    enum Repr {
+        Level(NoiseLevel),
+        Unknown(String),
+    }
+
+    pub(crate) fn serialize<S: Serializer>(
+        r: &Result<NoiseLevel, String>,
+        s: S,
+    ) -> Result<S::Ok, S::Error> {
+        match r {
+            Ok(l) => Repr::Level(*l),
+            Err(why) => Repr::Unknown(why.clone()),
+        }
+        .serialize(s)
+    }
+
+    pub(crate) fn deserialize<'de, D: Deserializer<'de>>(
+        d: D,
+    ) -> Result<Result<NoiseLevel, String>, D::Error> {
+        Ok(match Repr::deserialize(d)? {
+            Repr::Level(l) => Ok(l),
+            Repr::Unknown(why) => Err(why),
+        })
+    }
 }
 
 /// The noise level of the output `y` with input `u`, given the current model's residual on

@@ -235,10 +235,58 @@ impl P {
     }
 }
 
+impl P {
+    /// Every parameter, each surface term once.
+    #[cfg(any(feature = "serde", test))]
+    fn all() -> impl Iterator<Item = P> {
+        [
+            P::Mass,
+            P::Damping,
+            P::Stiffness,
+            P::KInf,
+            P::Omega,
+            P::Alpha,
+            P::BetaGamma,
+            P::BetaDelta,
+            P::Nu,
+            P::Cubic,
+            P::QuadStiffness,
+            P::ClearanceStiffness,
+            P::ClearanceGap,
+            P::Quad,
+            P::Coulomb,
+            P::Offset,
+            P::M2,
+            P::K2,
+            P::C2,
+        ]
+        .into_iter()
+        .chain((0..SURFACE_TERMS).map(P::Surface))
+    }
+}
+
+/// A parameter's name read from JSON: one of the names [`P::name`] gives, else an error
+/// listing them.
+#[cfg(feature = "serde")]
+pub(super) fn deserialize_name<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> Result<std::borrow::Cow<'static, str>, D::Error> {
+    let s = <String as serde::Deserialize>::deserialize(d)?;
+    let found = P::all().map(P::name).find(|n| *n == s);
+    found.map(std::borrow::Cow::Borrowed).ok_or_else(|| {
+        let known: Vec<&str> = P::all().map(P::name).collect();
+        serde::de::Error::custom(format!(
+            "unknown parameter `{s}`, expected one of {}",
+            known.join(", ")
+        ))
+    })
+}
+
 /// Every name of [`SURFACE_NAMES`] is the model's own term name after `surface `.
 #[cfg(test)]
 #[test]
 fn surface_parameter_names_follow_the_model() {
+    assert_eq!(P::all().count(), 19 + SURFACE_TERMS);
     for (n, t) in SURFACE_NAMES.iter().zip(ForceSurface::TERMS) {
         assert_eq!(n.strip_prefix("surface "), Some(t));
     }

@@ -191,6 +191,8 @@ pub fn missing_force(o: &Oscillator, rec: &Record<'_>, k: &Kinematics) -> Vec<f6
 
 /// A group of the surface's terms and what it says of the structure.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum Group {
     /// ξ³, ξ⁵: a stiffness odd in x (a cubic spring, a clearance).
     OddStiffness,
@@ -249,6 +251,7 @@ impl Group {
 
 /// One group's test.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct GroupTest {
     /// The group.
     pub group: Group,
@@ -263,6 +266,7 @@ pub struct GroupTest {
 
 /// The missing force fitted on the surface basis, its sections and its signature.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct SurfaceFit {
     /// The fitted surface (every term; see [`SurfaceFit::significant_surface`]).
     pub surface: ForceSurface,
@@ -282,10 +286,13 @@ pub struct SurfaceFit {
     pub damping_section: Vec<(f64, f64)>,
     /// Rows fitted.
     pub rows: usize,
+    /// What the surface says, in words ([`SurfaceFit::signature`]).
+    pub signature: String,
 }
 
 /// The fitted surface's two sections, as (abscissa, force) points.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct FittedSections {
     /// (x, fitted force at ẋ = 0): a stiffness curve.
     pub stiffness: Vec<(f64, f64)>,
@@ -336,7 +343,16 @@ impl SurfaceFit {
     /// What the surface says, in words: its present groups, or that the missing force is
     /// no function of (x, ẋ) or of time.
     pub fn signature(&self) -> String {
-        let v: Vec<&str> = self.present().map(|g| g.group.describe()).collect();
+        self.signature.clone()
+    }
+
+    /// The signature of the groups `groups` (those present by [`GROUP_SIGNIFICANCE`]).
+    fn signature_of(groups: &[GroupTest]) -> String {
+        let v: Vec<&str> = groups
+            .iter()
+            .filter(|g| g.p_value < GROUP_SIGNIFICANCE)
+            .map(|g| g.group.describe())
+            .collect();
         if v.is_empty() {
             "no function of (x, ẋ) or of time: noise, or an effect with memory (another mode, hysteresis)".into()
         } else {
@@ -506,7 +522,9 @@ pub fn fit_surface(k: &Kinematics, r: &[f64], fit_mass: bool) -> Option<SurfaceF
             })
             .collect::<Vec<_>>()
     };
+    let signature = SurfaceFit::signature_of(&groups);
     Some(SurfaceFit {
+        signature,
         surface: ForceSurface {
             x_scale: sx,
             v_scale: sv,
@@ -577,6 +595,7 @@ pub fn trace(o: &Oscillator, rec: &Record<'_>, range: (usize, usize), fit_mass: 
 
 /// The missing force binned over the phase plane, for drawing the surface.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct SurfaceGrid {
     /// Bin edges in x (bins + 1 of them), over ±2.5 σₓ.
     pub x_edges: Vec<f64>,

@@ -1,0 +1,367 @@
+//! The whole output-only job on one record ([`identify_and_validate`]): the pipeline, each
+//! mapping's Bouc-Wen model beside the flatness fit, every model validated on the records
+//! given, the Bouc-Wen candidate kept that validates best, as one report that prints
+//! ([`std::fmt::Display`]) and serializes (feature `serde`).
+
+use std::fmt;
+
+use crate::*;
+
+/// Where a Bouc-Wen candidate came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
+pub enum BoucWenRoute {
+    /// Fitted by flatness of the implied input ([`fit_flatness`]).
+    Flatness,
+    /// Mapped from the poles by eqs. (37)–(38) ([`Linearization::Paper`]).
+    Paper,
+    /// Mapped by the describing function's inversion ([`Linearization::Harmonic`]).
+    Harmonic,
+}
+
+impl BoucWenRoute {
+    /// The name used in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            BoucWenRoute::Flatness => "flatness",
+            BoucWenRoute::Paper => "paper",
+            BoucWenRoute::Harmonic => "harmonic",
+        }
+    }
+
+    fn of(l: Linearization) -> Self {
+        match l {
+            Linearization::Paper => BoucWenRoute::Paper,
+            Linearization::Harmonic => BoucWenRoute::Harmonic,
+        }
+    }
+}
+
+/// A model's score on one validation record: ε and the RMS error, or why it could not be
+/// simulated.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(untagged))]
+pub enum Score {
+    /// The model simulated and was compared.
+    Scored(Validation),
+    /// It did not simulate.
+    Failed {
+        /// Why.
+        error: String,
+    },
+}
+
+impl Score {
+    fn of(r: Result<Validation, IdentError>) -> Self {
+        match r {
+            Ok(v) => Score::Scored(v),
+            Err(e) => Score::Failed {
+                error: e.to_string(),
+            },
+        }
+    }
+
+    /// ε, when the model simulated.
+    pub fn epsilon(&self) -> Option<f64> {
+        match self {
+            Score::Scored(v) => Some(v.epsilon),
+            Score::Failed { .. } => None,
+        }
+    }
+}
+
+/// A Bouc-Wen candidate with its score on every validation record.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct BoucWenCandidate {
+    /// Where it came from.
+    pub route: BoucWenRoute,
+    /// The model.
+    pub model: Oscillator,
+    /// Its score on each validation record, in order.
+    pub validation: Vec<Score>,
+}
+
+/// Every model's score on one validation record.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct ValidationRow {
+    /// The record's name.
+    pub record: String,
+    /// Whether it was simulated to its steady state (else from rest).
+    pub periodic: bool,
+    /// The linear model's score.
+    pub linear: Score,
+    /// The Zener model's, when there is one.
+    pub zener: Option<Score>,
+    /// The kept Bouc-Wen candidate's, when there is one.
+    pub bouc_wen: Option<Score>,
+}
+
+/// What [`identify_and_validate`] finds: the models (the Bouc-Wen one the candidate kept),
+/// the candidates and validations, and the pipeline's own result.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct IdentReport {
+    /// The linear model.
+    pub linear: Oscillator,
+    /// The Zener model, when there is one.
+    pub zener: Option<Oscillator>,
+    /// The Bouc-Wen candidate kept: the best on the first validation record, or without
+    /// records the first (the flatness fit when the band is known, else the first mapping).
+    pub bouc_wen: Option<Oscillator>,
+    /// Where the kept candidate came from.
+    pub bouc_wen_route: Option<BoucWenRoute>,
+    /// Every Bouc-Wen candidate, in the order tried.
+    pub candidates: Vec<BoucWenCandidate>,
+    /// Every model's score on each validation record.
+    pub validation: Vec<ValidationRow>,
+    /// The options the pipeline ran with (its linearization the first mapping tried).
+    pub options: IdentOptions,
+    /// The pipeline's result (steps 1–4b).
+    pub identification: Identification,
+    /// Remarks of every step.
+    pub notes: Vec<String>,
+    /// Wall time of the identification (s), validation apart.
+    pub seconds: f64,
+}
+
+/// The mappings to Bouc-Wen tried: `chosen` alone when given, else the describing
+/// function's, with the paper's beside it when there are records to tell them apart.
+fn mappings(chosen: Option<Linearization>, records: usize) -> Vec<Linearization> {
+    match chosen {
+        Some(l) => vec![l],
+        None if records == 0 => vec![Linearization::Harmonic],
+        None => vec![Linearization::Harmonic, Linearization::Paper],
+    }
+}
+
+/// The output-only job on `y` sampled at `fs`: [`identify`] with `opts` (its
+/// `linearization` replaced by the first of the mappings tried: `mapping` when given, else
+/// [`Linearization::Harmonic`] and, with validation records, [`Linearization::Paper`] too),
+/// each mapping's Bouc-Wen model beside the flatness fit, every model validated on
+/// `records`, and the Bouc-Wen candidate that validates best on the first record kept
+/// ([`best_by_validation`]).
+pub fn identify_and_validate(
+    y: &[f64],
+    fs: f64,
+    opts: &IdentOptions,
+    mapping: Option<Linearization>,
+    records: &[ValidationRecord],
+) -> Result<IdentReport, IdentError> {
+    let t0 = std::time::Instant::now();
+    let choices = mappings(mapping, records.len());
+    let opts = IdentOptions {
+        linearization: choices[0],
+        ..opts.clone()
+    };
+    let id = identify(y, fs, &opts)?;
+    // The other mappings share steps 1–3: only the models are built again.
+    let mut mapped = vec![(choices[0], id.models.bouc_wen_mapped)];
+    for lin in &choices[1..] {
+        let o = IdentOptions {
+            linearization: *lin,
+            ..opts.clone()
+        };
+        mapped.push((
+            *lin,
+            build_models(&id.poles, &id.prepared, &o)?.bouc_wen_mapped,
+        ));
+    }
+    let seconds = t0.elapsed().as_secs_f64();
+    let mut candidates: Vec<(BoucWenRoute, Oscillator)> = Vec::new();
+    if let Some(f) = &id.flatness {
+        candidates.push((BoucWenRoute::Flatness, f.model));
+    }
+    candidates.extend(
+        mapped
+            .iter()
+            .filter_map(|(l, m)| Some((BoucWenRoute::of(*l), (*m)?))),
+    );
+    let scores: Vec<Vec<Result<Validation, IdentError>>> = candidates
+        .iter()
+        .map(|(_, m)| validate_all(m, records, fs))
+        .collect();
+    let best = best_by_validation(&scores);
+    let candidates: Vec<BoucWenCandidate> = candidates
+        .into_iter()
+        .zip(scores)
+        .map(|((route, model), v)| BoucWenCandidate {
+            route,
+            model,
+            validation: v.into_iter().map(Score::of).collect(),
+        })
+        .collect();
+    let kept = best.and_then(|i| candidates.get(i));
+    let scores_of = |m: Option<&Oscillator>| -> Vec<Option<Score>> {
+        match m {
+            Some(m) => validate_all(m, records, fs)
+                .into_iter()
+                .map(|r| Some(Score::of(r)))
+                .collect(),
+            None => vec![None; records.len()],
+        }
+    };
+    let linear = scores_of(Some(&id.models.linear));
+    let zener = scores_of(id.models.zener.as_ref());
+    let validation = records
+        .iter()
+        .enumerate()
+        .map(|(i, r)| ValidationRow {
+            record: r.name.clone(),
+            periodic: r.periodic,
+            linear: linear[i].clone().unwrap_or(Score::Failed {
+                error: "no model".into(),
+            }),
+            zener: zener[i].clone(),
+            bouc_wen: kept.map(|c| c.validation[i].clone()),
+        })
+        .collect();
+    let mut notes: Vec<String> = id
+        .poles
+        .notes
+        .iter()
+        .chain(&id.models.notes)
+        .chain(&id.ssi.notes)
+        .cloned()
+        .collect();
+    if id.zener_spectrum.is_some() && opts.excitation.is_none() {
+        notes.push(
+            "one record maps to Bouc-Wen through one amplitude; records of the same \
+             structure at several force levels map to one Bouc-Wen model together: hyst levels"
+                .into(),
+        );
+    }
+    Ok(IdentReport {
+        linear: id.models.linear,
+        zener: id.models.zener,
+        bouc_wen: kept.map(|c| c.model),
+        bouc_wen_route: kept.map(|c| c.route),
+        candidates,
+        validation,
+        options: opts,
+        identification: id,
+        notes,
+        seconds,
+    })
+}
+
+fn eps_text(s: Option<&Score>) -> String {
+    s.and_then(Score::epsilon)
+        .map_or("-".to_string(), |e| format!("{:.3} %", 100.0 * e))
+}
+
+impl IdentReport {
+    fn fmt_fits(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let id = &self.identification;
+        if let Some(z) = &id.zener_spectrum {
+            let held = z.unconstrained_c.map_or(String::new(), |[c, se]| {
+                format!(" (held at 0: the most likely c is {c:.3} ± {se:.3})")
+            });
+            writeln!(
+                f,
+                "zener spectral fit (white force, {} frequencies up to {:.1} Hz, misfit {:.3}): \
+                 c = {:.3} ± {:.3} N s/m{held}, k = {:.1} ± {:.1} N/m, k_inf = {:.1} ± {:.1} N/m, \
+                 omega = {:.3} ± {:.3} rad/s; force density {:.4e} ± {:.1e} N^2 s, noise std {:.3e}",
+                z.bins,
+                z.max_frequency_hz,
+                z.misfit,
+                z.c,
+                z.se[0],
+                z.k,
+                z.se[1],
+                z.k_inf,
+                z.se[2],
+                z.omega,
+                z.se[3],
+                z.force_density,
+                z.force_density_se,
+                z.noise_std
+            )?;
+        }
+        if let Some(fl) = &id.flatness {
+            writeln!(
+                f,
+                "flatness fit: {} periods averaged (aperiodicity {}), bins {}..={}, spread of |U| \
+                 over the band {:.3} dB -> {:.3} dB in {} iterations, implied input RMS {:.3} N",
+                fl.periods,
+                fl.aperiodicity
+                    .map_or("-".to_string(), |a| format!("{a:.3}")),
+                fl.bins.0,
+                fl.bins.1,
+                fl.start_spread_db,
+                fl.spread_db,
+                fl.iterations,
+                fl.input_rms
+            )?;
+        }
+        Ok(())
+    }
+
+    fn fmt_validation(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let route = self.bouc_wen_route.map_or("none", BoucWenRoute::name);
+        for c in &self.candidates {
+            let tag = if Some(c.route) == self.bouc_wen_route {
+                " (kept)"
+            } else {
+                ""
+            };
+            writeln!(f, "bouc_wen [{}]{tag}: {}", c.route.name(), c.model)?;
+            for (r, s) in self.validation.iter().zip(&c.validation) {
+                writeln!(f, "  validation {}: {}", r.record, eps_text(Some(s)))?;
+            }
+        }
+        for r in &self.validation {
+            writeln!(
+                f,
+                "validation {} ({}): linear {}, zener {}, bouc_wen [{route}] {}",
+                r.record,
+                if r.periodic {
+                    "one steady-state period"
+                } else {
+                    "from rest"
+                },
+                eps_text(Some(&r.linear)),
+                eps_text(r.zener.as_ref()),
+                eps_text(r.bouc_wen.as_ref())
+            )?;
+        }
+        Ok(())
+    }
+}
+
+impl fmt::Display for IdentReport {
+    /// What `hyst ident` prints: the prepared record, the poles, each model, the spectral
+    /// and flatness fits, every Bouc-Wen candidate with its validation, the validation
+    /// table, the notes and the time taken.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let id = &self.identification;
+        let p = &id.prepared;
+        writeln!(
+            f,
+            "prepared: fs {} Hz (decimation {}), dominant {:.2} Hz, sigma_x {:.3e}, skewness {:.3}, kurtosis {:.3}",
+            p.fs, p.decimation, p.dominant_hz, p.sigma_x, p.skewness, p.kurtosis
+        )?;
+        let real = id
+            .poles
+            .real
+            .map_or("none".to_string(), |r| format!("{r:.4} rad/s"));
+        writeln!(
+            f,
+            "pair {:.4} rad/s, real pole {real}, c = {:.3} ({})",
+            id.poles.pair, id.poles.c, id.poles.c_source
+        )?;
+        writeln!(f, "linear: {}", self.linear)?;
+        if let Some(z) = &self.zener {
+            writeln!(f, "zener: {z}")?;
+        }
+        self.fmt_fits(f)?;
+        self.fmt_validation(f)?;
+        for n in &self.notes {
+            writeln!(f, "note: {n}")?;
+        }
+        writeln!(f, "identification time: {:.3} s", self.seconds)
+    }
+}
