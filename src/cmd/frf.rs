@@ -62,7 +62,6 @@ impl FrfArgs {
 }
 
 pub fn run(a: &FrfArgs) -> Result<(), Error> {
-    use serde_json::json;
     let fs = check_fs(a.fs)?;
     let band = (a.band.low_hz, a.band.high_hz);
     if a.period < 4 {
@@ -119,85 +118,12 @@ pub fn run(a: &FrfArgs) -> Result<(), Error> {
             names.join(",")
         ))
     };
-    let fit = frf::modes_from_frf(&rec, band, a.modes).map_err(context)?;
-    println!(
-        "{} whole periods, {} excited lines in {}–{} Hz, {} channel(s)",
-        fit.periods,
-        fit.frequency_hz.len(),
-        band.0,
-        band.1,
-        names.len()
-    );
-    if fit.modes.is_empty() {
-        println!("no stable oscillating pole inside the band: try another band or more modes");
-    }
-    // The band's share of the uncertainty, which the standard errors (noise alone) do not
-    // hold.
-    let spread = frf::band_spread(&rec, band, a.modes, &fit);
-    for (m, d) in fit.modes.iter().zip(&spread) {
-        println!(
-            "mode {:9.4} ± {:.4} Hz (band {:.4})  damping {:.5} ± {:.5} (band {:.5})",
-            m.frequency_hz,
-            m.frequency_se_hz,
-            d.frequency_hz,
-            m.damping_ratio,
-            m.damping_se,
-            d.damping
-        );
-    }
-    if names.len() > 1 {
-        for m in &fit.modes {
-            println!(
-                "shape at {:.4} Hz ({}): {}  MPC {:.4}",
-                m.frequency_hz,
-                names.join(", "),
-                hyst::shape_text(&m.shape, "  "),
-                hyst::covssi::mpc(&m.shape)
-            );
-        }
-    }
-    if !fit.modes.is_empty() {
-        println!(
-            "± one standard error (the noise); band: the largest move of the mode when the band is \
-             narrowed or widened by a tenth of its width at each end"
-        );
-    }
-    // With one period there is no noise estimate and the misfit has unit weights.
-    if fit.periods >= 2 {
-        println!("misfit {:.3} (1 when the fit is at the noise)", fit.misfit);
-        if fit.misfit > 3.0 {
-            println!(
-                "note: the response departs from the fitted model by more than its noise (a \
-                 nonlinear structure's periodic distortions, or modes near the band left out); \
-                 the ± describe the noise alone, and the band's share is given beside them: \
-                 compare fits with more modes too"
-            );
-        }
-    } else {
-        println!("one period only: no noise estimate, so no standard errors");
-    }
+    let report = frf::frf_report(&rec, &names, band, a.modes).map_err(context)?;
+    print!("{report}");
     if let Some(path) = &a.json {
-        let num = |v: f64| if v.is_finite() { json!(v) } else { json!(null) };
-        let doc = json!({
-            "band_hz": [band.0, band.1],
-            "periods": fit.periods,
-            "lines": fit.frequency_hz.len(),
-            "misfit": num(fit.misfit),
-            "modes": fit.modes.iter().zip(&spread).map(|(m, d)| json!({
-                "frequency_hz": m.frequency_hz,
-                "damping_ratio": m.damping_ratio,
-                "frequency_band_spread_hz": num(d.frequency_hz),
-                "damping_band_spread": num(d.damping),
-                "frequency_se_hz": num(m.frequency_se_hz),
-                "damping_se": num(m.damping_se),
-                "shape": m.shape.iter().map(|c| json!([c.re, c.im])).collect::<Vec<_>>(),
-                "shape_se": m.shape_se.iter().map(|&v| num(v)).collect::<Vec<_>>(),
-                "mpc": hyst::covssi::mpc(&m.shape),
-            })).collect::<Vec<_>>(),
-        });
-        std::fs::write(path, serde_json::to_string_pretty(&doc)?)
-            .map_err(|e| fail(format!("{}: {e}", path.display())))?;
+        hyst::report::write_json(&report, path)?;
     }
+    let fit = &report.fit;
     if let Some(path) = &a.svg {
         let palette = [colors::BLUE, colors::GREEN, colors::ORANGE, colors::BLACK];
         let mut series = Vec::new();

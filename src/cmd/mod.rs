@@ -2,7 +2,6 @@
 //! helpers they share (reading records, checking flags, the models' JSON).
 
 use clap::{Parser, Subcommand, ValueEnum};
-use hyst::model::Oscillator;
 
 pub(crate) mod args;
 pub(crate) mod frf;
@@ -206,12 +205,6 @@ pub(crate) fn check_fs(fs: f64) -> Result<f64, Error> {
             "--fs must be a positive number of Hz, got {fs}"
         )))
     }
-}
-
-/// The oscillator in the reports' short form (m, c, k, the restoring element's parameters),
-/// with any extra force terms that are on.
-pub(crate) fn osc_json(o: &Oscillator) -> serde_json::Value {
-    serde_json::to_value(o).unwrap_or_default()
 }
 
 /// The column `column` of the CSV record `path` after its first `skip` rows, which must

@@ -56,19 +56,6 @@ pub(crate) struct RefineArgs {
     pub(crate) svg_dir: Option<PathBuf>,
 }
 
-/// `v` to six significant digits: fixed-point for magnitudes in [1e-3, 1e6), else exponent.
-pub(crate) fn six_digits(v: f64) -> String {
-    let a = v.abs();
-    if a == 0.0 || !a.is_finite() {
-        format!("{v}")
-    } else if (1e-3..1e6).contains(&a) {
-        let decimals = (5 - a.log10().floor() as i32).max(0) as usize;
-        format!("{v:.decimals$}")
-    } else {
-        format!("{v:.5e}")
-    }
-}
-
 /// Residual spectra (estimation rows) of the baseline and the final model, both models
 /// against the measured output over the first second of the first test range, and the
 /// restoring-force surface of the baseline's residual (its map over the phase plane and its
@@ -206,8 +193,7 @@ pub(crate) fn refine_figures(
 }
 
 pub(crate) fn run(a: &RefineArgs) -> Result<(), Error> {
-    use hyst::ident::refine::{self, Record, Start, noise::NoiseMethod};
-    use serde_json::json;
+    use hyst::ident::refine::{self, Record, Start};
     let fs = check_fs(a.fs)?;
     let t = read_csv(&a.data)?;
     let u = t
@@ -246,227 +232,27 @@ pub(crate) fn run(a: &RefineArgs) -> Result<(), Error> {
             InterpolationArg::Linear => refine::InputInterpolation::Linear,
         },
     };
-    let t0 = std::time::Instant::now();
     // One line per step on stderr while the loop runs (hidden when stderr is not a terminal).
-    let bar = indicatif::ProgressBar::new_spinner();
-    bar.enable_steady_tick(std::time::Duration::from_millis(200));
+    let t0 = std::time::Instant::now();
+    let bar = spinner();
     let say = |m: &str| bar.set_message(format!("{:.0} s: {m}", t0.elapsed().as_secs_f64()));
-    let r = refine::refine_record_with(&rec, a.mass, start, estimate, &tests, &say)
+    let r = refine::refine_report(&rec, a.mass, start, estimate, &tests, &say)
         .map_err(|e| fail(format!("{}: {e}", a.data.display())));
     bar.finish_and_clear();
-    let r = r?;
-    let secs = t0.elapsed().as_secs_f64();
-    let pct = |v: f64| format!("{:.3} %", 100.0 * v);
-    println!(
-        "start: {} (asked for {})",
-        r.start.used.name(),
-        r.start.requested.name()
-    );
-    for note in &r.start.notes {
-        println!("  {note}");
-    }
-    if a.mass.is_none() {
-        println!(
-            "  no --mass: the mass is fitted ({:.6e} kg); the missing force is traced with it",
-            r.model.mass
-        );
-    }
-    println!(
-        "baseline (output-only start, refined with the input): {}",
-        osc_json(&r.baseline)
-    );
-    for s in &r.steps {
-        let name = s.effect.map_or("none", |e| e.name());
-        println!(
-            "step: {name}  (residual peak {:.2} Hz, share above 1.5x resonance {:.2})",
-            s.spectrum.peak_hz, s.spectrum.above_resonance
-        );
-        if let Some(f) = &s.trace {
-            println!("    trace: {}", f.signature());
-        }
-        for e in &s.evidence {
-            // The exponent's candidate says which ν it fitted.
-            let nu = match (e.effect, e.model.map(|m| m.restoring)) {
-                (refine::Effect::HysteresisExponent, Some(hyst::model::Restoring::BoucWen(b))) => {
-                    format!("  (ν = {:.3})", b.nu)
-                }
-                _ => String::new(),
-            };
-            let held = e.held_out.map_or(String::new(), |g| {
-                format!(
-                    "  held out {:+.2} % (p {:.1e})",
-                    -100.0 * g.relative_gain(),
-                    g.p_value
-                )
-            });
-            println!(
-                "    {:<19} dBIC {:>12.1}  variance explained {:>7.3}{held}{nu}{}",
-                e.effect.name(),
-                e.delta_bic,
-                e.variance_explained,
-                e.rejected
-                    .as_ref()
-                    .map_or(String::new(), |w| format!("  ({w})"))
-            );
-        }
-        for ((rows, b), af) in tests.iter().zip(&s.before).zip(&s.after) {
-            println!(
-                "    test {}:{}  eps {} -> {}  rms {:.4e} -> {:.4e}",
-                rows.0,
-                rows.1,
-                pct(b.epsilon),
-                pct(af.epsilon),
-                b.rms,
-                af.rms
-            );
-        }
-    }
-    println!("final model: {}", osc_json(&r.model));
-    if !r.estimates.is_empty() {
-        let list: Vec<String> = r
-            .estimates
-            .iter()
-            .map(|e| format!("{} {} ± {:.2e}", e.name, six_digits(e.value), e.se))
-            .collect();
-        println!(
-            "  with standard errors (output error, blocks of {} rows, coloured residual allowed): {}",
-            refine::SE_BLOCK_ROWS,
-            list.join(", ")
-        );
-    }
-    match &r.noise {
-        Ok(nl) => {
-            let how = match nl.method {
-                NoiseMethod::PeriodToPeriod { period, pairs } => {
-                    format!("from the output one period ({period} samples) apart, {pairs} pairs")
-                }
-                NoiseMethod::OutOfBand { share } => format!(
-                    "from the residual's spectrum where the input has no power ({:.0} % of the band; white noise assumed)",
-                    100.0 * share
-                ),
-                NoiseMethod::Residual { out_of_band } => format!(
-                    "the residual itself: above the level out of band ({out_of_band:.4e}) but no function of (x, dx/dt), of time or of the input, so coloured noise"
-                ),
-            };
-            let eps: Vec<String> = r.noise_epsilon.iter().map(|e| pct(*e)).collect();
-            println!(
-                "noise level: {:.4e} (eps {} on the test rows), {how}",
-                nl.std,
-                eps.join(", ")
-            );
-        }
-        Err(why) => println!("noise level: unknown ({why})"),
-    }
-    if r.nonstationary {
-        println!("nonstationary: the halves of the estimation rows differ:");
-        for h in refine::drift::drifting(&r.halves) {
-            println!(
-                "    {} {} ± {:.2e} then {} ± {:.2e} (z = {:.1})",
-                h.name,
-                six_digits(h.first.0),
-                h.first.1,
-                six_digits(h.second.0),
-                h.second.1,
-                h.z
-            );
-        }
-    }
-    match &r.unexplained {
-        Some(u) => println!(
-            "unexplained: the held-out residual is {:.2} × the noise level; the missing force: {}",
-            u.residual_to_noise, u.signature
-        ),
-        None if r.noise.is_ok() => println!("the held-out residual is at the noise level"),
-        None => {}
-    }
+    let report = hyst::report::FileReport::new(a.data.display().to_string(), r?);
+    print!("{}", report.report);
     if let Some(dir) = &a.svg_dir {
-        refine_figures(dir, &r, &rec, estimate, tests[0], a.mass.is_none())?;
+        refine_figures(
+            dir,
+            &report.report.refinement,
+            &rec,
+            estimate,
+            tests[0],
+            a.mass.is_none(),
+        )?;
     }
-    println!("time: {secs:.1} s");
     if let Some(path) = &a.json {
-        let first = r
-            .steps
-            .iter()
-            .find_map(|s| s.effect)
-            .map_or("none", |e| e.name());
-        let base_err: Vec<_> = r
-            .steps
-            .first()
-            .map(|s| s.before.clone())
-            .unwrap_or_default();
-        let finite = |v: f64| if v.is_finite() { json!(v) } else { json!(null) };
-        let steps: Vec<_> = r
-            .steps
-            .iter()
-            .map(|s| {
-                json!({
-                    "effect": s.effect.map_or("none", |e| e.name()),
-                    "evidence": s.evidence.iter().map(|e| json!({
-                        "effect": e.effect.name(), "delta_bic": finite(e.delta_bic),
-                        "variance_explained": e.variance_explained, "rejected": e.rejected,
-                        "held_out_p_value": e.held_out.map(|g| g.p_value),
-                        "held_out_gain": e.held_out.map(|g| finite(g.relative_gain())),
-                    })).collect::<Vec<_>>(),
-                    "residual_peak_hz": s.spectrum.peak_hz,
-                    "residual_share_above_resonance": s.spectrum.above_resonance,
-                    "trace_signature": s.trace.as_ref().map(|f| f.signature()),
-                    "p_value": s.gain.map(|g| g.p_value),
-                    "held_out_gain": s.gain.map(|g| g.relative_gain()),
-                    "error_before": s.before.first().map(|v| v.epsilon),
-                    "error_after": s.after.first().map(|v| v.epsilon),
-                })
-            })
-            .collect();
-        let test_rows: Vec<_> = tests
-            .iter()
-            .enumerate()
-            .map(|(i, rows)| {
-                json!({
-                    "rows": [rows.0, rows.1],
-                    "rms_before": base_err.get(i).map(|v| v.rms),
-                    "rms_after": r.tests.get(i).map(|v| v.rms),
-                    "error_before": base_err.get(i).map(|v| v.epsilon),
-                    "error_after": r.tests.get(i).map(|v| v.epsilon),
-                    "noise_error": r.noise_epsilon.get(i).copied().map(finite),
-                })
-            })
-            .collect();
-        let noise = match &r.noise {
-            Ok(nl) => json!({
-                "std": nl.std,
-                "epsilon": r.noise_epsilon.first().copied().map(finite),
-                "method": match nl.method {
-                    NoiseMethod::PeriodToPeriod { .. } => "period_to_period",
-                    NoiseMethod::OutOfBand { .. } => "out_of_band",
-                    NoiseMethod::Residual { .. } => "residual",
-                },
-            }),
-            Err(_) => json!(null),
-        };
-        let doc = json!({
-            "effect": first,
-            "error_before": base_err.first().map(|v| v.epsilon),
-            "error_after": r.tests.first().map(|v| v.epsilon),
-            "steps": steps,
-            "tests": test_rows,
-            "model": osc_json(&r.model),
-            "standard_errors": r.estimates.iter().map(|e| (e.name.to_string(), json!(e.se))).collect::<serde_json::Map<_, _>>(),
-            "baseline": osc_json(&r.baseline),
-            "start": {"requested": r.start.requested.name(), "used": r.start.used.name(), "notes": r.start.notes},
-            "noise_level": noise,
-            "noise_unknown": r.noise.as_ref().err(),
-            "nonstationary": r.nonstationary,
-            "halves": r.halves.iter().map(|h| json!({
-                "name": h.name, "first": finite(h.first.0), "first_se": finite(h.first.1),
-                "second": finite(h.second.0), "second_se": finite(h.second.1), "z": finite(h.z),
-            })).collect::<Vec<_>>(),
-            "unexplained": r.unexplained.as_ref().map(|u| json!({
-                "residual_to_noise": u.residual_to_noise, "signature": u.signature,
-            })),
-            "seconds": secs,
-        });
-        std::fs::write(path, serde_json::to_string_pretty(&doc)?)
-            .map_err(|e| fail(format!("{}: {e}", path.display())))?;
+        report.write_json(path)?;
     }
     Ok(())
 }

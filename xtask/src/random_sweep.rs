@@ -66,7 +66,7 @@ pub struct RandomLevel {
     pub predicted_sigma_x: f64,
     /// ε of the one Bouc-Wen model identified from all levels ([`levels_model`]).
     pub eps_bouc_wen_levels: f64,
-    /// ε of the Bouc-Wen model of all levels by simulation ([`simulated_model`]).
+    /// ε of the Bouc-Wen model of all levels by simulation ([`levels_models`]).
     pub eps_bouc_wen_simulated: f64,
     /// (c, k, k∞, Ω) fitted to that model's simulated record at this level.
     pub simulated_fit: [f64; 4],
@@ -163,23 +163,22 @@ pub fn run_level(level: f64, i: usize, samples: usize, seed: u64) -> Result<Rand
     })
 }
 
-/// The one Bouc-Wen model of all levels ([`hyst_ident::levels::bouc_wen_from_levels`]) from
-/// the levels' Zener spectral fits.
-pub fn levels_model(results: &[RandomLevel]) -> Result<LevelsBoucWen, String> {
-    let refs: Vec<&ZenerSpectralFit> = results.iter().map(|r| &r.spectral).collect();
-    hyst_ident::levels::bouc_wen_from_levels(&refs).map_err(|e| e.to_string())
-}
-
-/// The Bouc-Wen model of all levels by simulation
-/// ([`hyst_ident::levels::bouc_wen_by_simulation`]), started from [`levels_model`];
-/// `progress` prints each iteration.
-pub fn simulated_model(
+/// The Bouc-Wen models of all levels ([`hyst_ident::levels::fit_levels`], as `hyst levels`
+/// fits them) from the levels' Zener spectral fits: by the statistical linearization, and by
+/// simulation (the records simulated as one steady-state period each, as they were made)
+/// when `samples` is given; `progress` prints each iteration of the latter.
+pub fn levels_models(
     results: &[RandomLevel],
-    samples: usize,
+    samples: Option<usize>,
     progress: bool,
-) -> Result<hyst_ident::levels::SimulatedBoucWen, String> {
-    let start = levels_model(results)?.oscillator;
+) -> Result<hyst_ident::levels::LevelsModels, String> {
+    use hyst_ident::levels::{LevelsOptions, SimulationOptions, fit_levels};
     let refs: Vec<&ZenerSpectralFit> = results.iter().map(|r| &r.spectral).collect();
+    let lengths = vec![samples.unwrap_or(0); refs.len()];
+    let simulation = samples.map(|_| SimulationOptions {
+        periodic: true,
+        ..SimulationOptions::default()
+    });
     let t = std::time::Instant::now();
     let report = |it: usize, cost: f64| {
         if progress {
@@ -189,17 +188,18 @@ pub fn simulated_model(
             );
         }
     };
-    hyst_ident::levels::bouc_wen_by_simulation(
+    fit_levels(
         &refs,
-        &vec![samples; refs.len()],
-        &start,
-        &hyst_ident::levels::SimulationOptions {
-            periodic: true,
-            ..Default::default()
-        },
+        &lengths,
+        &LevelsOptions::default().by_simulation(simulation),
         &report,
     )
     .map_err(|e| e.to_string())
+}
+
+/// The one Bouc-Wen model of all levels by the statistical linearization.
+pub fn levels_model(results: &[RandomLevel]) -> Result<LevelsBoucWen, String> {
+    levels_models(results, None, false).map(|m| m.statistical)
 }
 
 /// Run all levels in parallel, then the levels' Bouc-Wen models (by the statistical
@@ -210,8 +210,11 @@ pub fn run(opts: &SweepOptions) -> crate::sweep::Outcome<RandomLevel> {
     let (mut results, secs) = crate::sweep::run_levels(opts, "random sweep", run_level)?;
     let t = std::time::Instant::now();
     if results.len() >= 2 {
-        let model = levels_model(&results)?.oscillator;
-        let sim = simulated_model(&results, opts.samples, opts.progress)?;
+        let models = levels_models(&results, Some(opts.samples), opts.progress)?;
+        let model = models.statistical.oscillator;
+        let sim = models
+            .by_simulation
+            .ok_or("the levels' fit by simulation was asked for")?;
         let eps: Vec<(f64, f64)> = results
             .par_iter()
             .enumerate()

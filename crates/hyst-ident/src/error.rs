@@ -15,6 +15,25 @@ pub enum IdentError {
     /// A simulation failed.
     #[error("simulation: {0}")]
     Sim(#[from] SimError),
+    /// An error in one of several records, named.
+    #[error("{record}: {source}")]
+    InRecord {
+        /// The record.
+        record: String,
+        /// What went wrong there.
+        source: Box<IdentError>,
+    },
+    /// A record of the levels workflow has no Zener spectral fit (it was not the response to
+    /// a broadband random force, or its pair and real pole were not refined).
+    #[error(
+        "{record}: no Zener spectral fit, so no level for the model ({notes}); each record must be the response to a broadband random force"
+    )]
+    NoSpectralFit {
+        /// The record.
+        record: String,
+        /// The pipeline's notes on its poles.
+        notes: String,
+    },
     /// The mass is not a positive finite number.
     #[error("mass must be > 0 kg, got {mass}")]
     NonPositiveMass {
@@ -223,4 +242,14 @@ pub enum IdentError {
         /// The value.
         value: f64,
     },
+}
+
+impl IdentError {
+    /// This error as one of the record `record`'s.
+    pub fn in_record(self, record: &str) -> IdentError {
+        IdentError::InRecord {
+            record: record.to_string(),
+            source: Box::new(self),
+        }
+    }
 }

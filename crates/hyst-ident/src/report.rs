@@ -54,7 +54,8 @@ pub enum Score {
 }
 
 impl Score {
-    fn of(r: Result<Validation, IdentError>) -> Self {
+    /// A validation's outcome as a score.
+    pub(crate) fn of(r: Result<Validation, IdentError>) -> Self {
         match r {
             Ok(v) => Score::Scored(v),
             Err(e) => Score::Failed {

@@ -40,6 +40,7 @@ mod fit;
 pub mod heldout;
 pub mod noise;
 mod params;
+mod report;
 pub mod surface;
 
 use candidates::diagnose_on;
@@ -53,6 +54,7 @@ pub use fit::{
     Estimate, FIRST_WINDOW, InputInterpolation, Record, SE_BLOCK_ROWS, WARM_UP, fit, response,
     standard_errors, test_error,
 };
+pub use report::{RefineReport, refine_report};
 
 /// One step of the loop.
 #[derive(Debug, Clone, PartialEq)]

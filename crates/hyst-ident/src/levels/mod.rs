@@ -21,6 +21,11 @@ use nalgebra::{DMatrix, DVector, Matrix4, Vector4};
 use crate::IdentError;
 use crate::zener_spectrum::ZenerSpectralFit;
 
+mod report;
+pub use report::{
+    Level, LevelsModels, LevelsOptions, LevelsReport, LevelsValidation, fit_levels, levels_report,
+};
+
 /// The Bouc-Wen model of several levels.
 #[derive(Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
