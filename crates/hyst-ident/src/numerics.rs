@@ -50,18 +50,58 @@ pub(crate) fn normal_equations(cols: &[Vec<f64>], r: &[f64]) -> (Vec<Vec<f64>>, 
     (a, g)
 }
 
+/// How a Levenberg–Marquardt fit damps its steps: λ multiplies the normal equations'
+/// diagonal by `1 + λ`; a rejected step raises λ by `grow`, an accepted one lowers it by
+/// `shrink` (not below `min`); past `max` the fit has no step left.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct LmSchedule {
+    /// Factor λ is multiplied by after an accepted step (< 1).
+    pub shrink: f64,
+    /// Factor λ is multiplied by after a rejected step (> 1).
+    pub grow: f64,
+    /// Smallest λ.
+    pub min: f64,
+    /// Largest λ tried.
+    pub max: f64,
+}
+
+impl Default for LmSchedule {
+    /// λ × 0.3 on success (at least 1e-12), × 10 on failure, up to 1e10.
+    fn default() -> Self {
+        LmSchedule {
+            shrink: 0.3,
+            grow: 10.0,
+            min: 1e-12,
+            max: 1e10,
+        }
+    }
+}
+
 /// One Levenberg–Marquardt step on the normal equations `a·step = g` (Gauss–Newton matrix and
-/// gradient of ½‖r‖²): the diagonal is damped by `1 + λ` and `λ` raised tenfold until `try_step`
-/// accepts the step (the caller moves to `x − step` when its cost is lower and returns
-/// `Some(significant)`, else `None`); on acceptance λ shrinks to 0.3 λ. Returns whether an
-/// accepted step lowered the cost significantly; `false` also when λ passes 1e10.
+/// gradient of ½‖r‖²) with the default [`LmSchedule`]; see [`lm_step_with`].
 pub(crate) fn lm_step(
+    a: &[Vec<f64>],
+    g: &[f64],
+    lambda: &mut f64,
+    try_step: impl FnMut(&[f64]) -> Option<bool>,
+) -> bool {
+    lm_step_with(&LmSchedule::default(), a, g, lambda, try_step)
+}
+
+/// One Levenberg–Marquardt step on the normal equations `a·step = g`: the diagonal is damped
+/// by `1 + λ` and λ raised by the schedule until `try_step` accepts the step (the caller
+/// moves to `x − step` when its cost is lower and returns `Some(significant)`, else `None`);
+/// on acceptance λ shrinks. Returns whether an accepted step lowered the cost
+/// significantly; `false` also when λ passes the schedule's largest. Every fit of the crate
+/// steps through here.
+pub(crate) fn lm_step_with(
+    schedule: &LmSchedule,
     a: &[Vec<f64>],
     g: &[f64],
     lambda: &mut f64,
     mut try_step: impl FnMut(&[f64]) -> Option<bool>,
 ) -> bool {
-    while *lambda < 1e10 {
+    while *lambda < schedule.max {
         let mut m = a.to_vec();
         for (i, row) in m.iter_mut().enumerate() {
             row[i] = row[i] * (1.0 + *lambda) + 1e-300;
@@ -69,37 +109,89 @@ pub(crate) fn lm_step(
         if let Some(step) = solve(m, g.to_vec())
             && let Some(significant) = try_step(&step)
         {
-            *lambda = (*lambda * 0.3).max(1e-12);
+            *lambda = (*lambda * schedule.shrink).max(schedule.min);
             return significant;
         }
-        *lambda *= 10.0;
+        *lambda *= schedule.grow;
     }
     false
 }
 
-/// Solve the small dense system `a x = b` by Gaussian elimination with partial pivoting;
-/// `None` if it is singular or the result is not finite.
-pub(crate) fn solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
+/// Solve the small dense system `a x = b` (nalgebra's LU with partial pivoting); `None` if
+/// it is singular or the result is not finite.
+pub(crate) fn solve(a: Vec<Vec<f64>>, b: Vec<f64>) -> Option<Vec<f64>> {
     let n = b.len();
-    for col in 0..n {
-        let piv = (col..n).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
-        a.swap(col, piv);
-        b.swap(col, piv);
-        if a[col][col] == 0.0 || !a[col][col].is_finite() {
-            return None;
+    if a.len() != n || a.iter().any(|row| row.len() != n) {
+        return None;
+    }
+    let m = nalgebra::DMatrix::from_fn(n, n, |i, j| a[i][j]);
+    let x = m.lu().solve(&nalgebra::DVector::from_vec(b))?;
+    x.iter()
+        .all(|v| v.is_finite())
+        .then(|| x.iter().copied().collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The solve against a system with a known answer, a singular one, and a zero pivot that
+    /// partial pivoting steps around.
+    #[test]
+    fn solve_is_exact_on_small_systems() {
+        let a = vec![
+            vec![0.0, 2.0, 1.0],
+            vec![1.0, 1.0, 0.0],
+            vec![2.0, 0.0, 3.0],
+        ];
+        let x = [1.0, -2.0, 0.5];
+        let b: Vec<f64> = a
+            .iter()
+            .map(|r| r.iter().zip(&x).map(|(p, q)| p * q).sum())
+            .collect();
+        let got = solve(a, b).unwrap();
+        for (g, e) in got.iter().zip(x) {
+            // Three unknowns of order 1: rounding only.
+            approx::assert_abs_diff_eq!(*g, e, epsilon = 1e-14);
         }
-        for row in col + 1..n {
-            let f = a[row][col] / a[col][col];
-            let pivot_row = a[col].clone();
-            for (k, v) in a[row].iter_mut().enumerate().skip(col) {
-                *v -= f * pivot_row[k];
+        assert!(solve(vec![vec![1.0, 2.0], vec![2.0, 4.0]], vec![1.0, 1.0]).is_none());
+    }
+
+    /// Levenberg–Marquardt on f(x) = (x − 3)²: steps until the cost stops falling, and λ
+    /// follows the schedule (shrunk on success, grown on failure, capped).
+    #[test]
+    fn lm_reaches_the_minimum_of_a_parabola() {
+        let mut x = 0.0f64;
+        let mut lambda = 1e-3;
+        for _ in 0..50 {
+            // r = x − 3, J = 1: JᵀJ = 1, Jᵀr = x − 3.
+            let (a, g) = (vec![vec![1.0]], vec![x - 3.0]);
+            let cost = (x - 3.0).powi(2);
+            let moved = lm_step(&a, &g, &mut lambda, |step| {
+                let q = x - step[0];
+                ((q - 3.0).powi(2) < cost).then(|| {
+                    x = q;
+                    true
+                })
+            });
+            if !moved {
+                break;
             }
-            b[row] -= f * b[col];
         }
+        approx::assert_abs_diff_eq!(x, 3.0, epsilon = 1e-9);
+        let s = LmSchedule {
+            shrink: 0.5,
+            grow: 4.0,
+            min: 0.1,
+            max: 100.0,
+        };
+        let mut l = 0.15;
+        assert!(lm_step_with(&s, &[vec![1.0]], &[1.0], &mut l, |_| Some(
+            true
+        )));
+        assert_eq!(l, 0.1);
+        let mut l = 1.0;
+        assert!(!lm_step_with(&s, &[vec![1.0]], &[1.0], &mut l, |_| None));
+        assert_eq!(l, 256.0);
     }
-    for col in (0..n).rev() {
-        let s: f64 = (col + 1..n).map(|k| a[col][k] * b[k]).sum();
-        b[col] = (b[col] - s) / a[col][col];
-    }
-    b.iter().all(|v| v.is_finite()).then_some(b)
 }

@@ -712,18 +712,14 @@ fn sk_fit(x: &[C], h: &[Vec<C>], sd: &[Vec<f64>], q: usize) -> Option<Rational> 
     })
 }
 
-/// The roots of $s^q + \sum_{j<q} a_j s^j$ (eigenvalues of its companion matrix).
+/// The roots of $s^q + \sum_{j<q} a_j s^j$ ([`hyst_model::poly::roots`], the workspace's one
+/// root finder).
 fn roots(a: &[f64]) -> Vec<C> {
-    let q = a.len();
-    let mut m = DMatrix::<f64>::zeros(q, q);
-    for i in 1..q {
-        m[(i, i - 1)] = 1.0;
-    }
-    for (i, v) in a.iter().enumerate() {
-        m[(i, q - 1)] = -v;
-    }
-    m.complex_eigenvalues()
-        .iter()
+    let coeffs: Vec<f64> = std::iter::once(1.0)
+        .chain(a.iter().rev().copied())
+        .collect();
+    hyst_model::poly::roots(&coeffs)
+        .into_iter()
         .map(|z| C::new(z.re, z.im))
         .collect()
 }

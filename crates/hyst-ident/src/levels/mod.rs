@@ -16,7 +16,7 @@
 use hyst_linearize::LinearizeError;
 use hyst_linearize::statistical::{self, LevelEquivalent, ResponseMoments};
 use hyst_model::{BoucWen, Oscillator, ZenerParams};
-use nalgebra::{DMatrix, DVector, Matrix4, Vector4};
+use nalgebra::{DMatrix, Matrix4, Vector4};
 
 use crate::IdentError;
 use crate::zener_spectrum::ZenerSpectralFit;
@@ -180,7 +180,6 @@ pub fn bouc_wen_by_simulation(
     opts: &SimulationOptions,
     progress: &(dyn Fn(usize, f64) + Sync),
 ) -> Result<SimulatedBoucWen, IdentError> {
-    use rayon::prelude::*;
     shared_mass(fits)?;
     if lengths.len() != fits.len() {
         return Err(IdentError::LengthMismatch {
@@ -195,63 +194,99 @@ pub fn bouc_wen_by_simulation(
         }
         .into());
     };
-    let mass = start.mass;
     // (c, k, α, βγ, βδ), then ν when it is fitted.
     let osc = |p: &[f64]| {
         Oscillator::bouc_wen(
-            mass,
+            start.mass,
             p[0],
             p[1],
             BoucWen::from_products(p[2], p[3], p[4], p.get(5).copied().unwrap_or(bw.nu)),
         )
     };
-    // The auxiliary statistics of the model p: one simulated record per level.
-    let aux = |p: &[f64]| -> Result<Vec<[f64; 4]>, IdentError> {
-        let model = osc(p);
-        model.validate().map_err(|e| IdentError::Sim(e.into()))?;
-        fits.par_iter()
-            .zip(lengths)
-            .enumerate()
-            .map(|(i, (f, &n))| {
-                let seed = opts.seed.wrapping_add(2 * i as u64);
-                let rms = (f.force_density * f.fs).sqrt();
-                let sim = hyst_sim::SimOptions::default();
-                let mut y = if opts.periodic {
-                    let u = hyst_sim::excitation::white_noise(n, rms, seed)?;
-                    hyst_sim::steady_state_period(&model, &u, f.fs, &sim, 1e-10, 200)?.y
-                } else {
-                    let warm = warm_up_samples(f, n);
-                    let u = hyst_sim::excitation::white_noise(warm + n, rms, seed)?;
-                    let mut y = hyst_sim::simulate(
-                        &model,
-                        hyst_sim::Input::Sampled(&u),
-                        f.fs,
-                        warm + n,
-                        &sim,
-                    )?;
-                    y.drain(..warm);
-                    y
-                };
-                hyst_sim::excitation::add_noise(&mut y, f.noise_std, seed + 1)?;
-                let mean = y.iter().sum::<f64>() / n as f64;
-                y.iter_mut().for_each(|v| *v -= mean);
-                let g = crate::zener_spectrum::fit(
-                    &y,
-                    f.fs,
-                    f.mass,
-                    f.pair,
-                    f.real,
-                    f.max_frequency_hz,
-                )?;
-                Ok([g.c, g.k, g.k_inf, g.omega])
+    let weights = fit_weights(fits)?;
+    let resid = |a: &[[f64; 4]]| -> Vec<f64> {
+        a.iter()
+            .zip(fits)
+            .zip(&weights)
+            .flat_map(|((a, f), w)| {
+                let d = Vector4::new(a[0] - f.c, a[1] - f.k, a[2] - f.k_inf, a[3] - f.omega);
+                (w * d).iter().copied().collect::<Vec<_>>()
             })
             .collect()
     };
-    // Weights: the inverse Cholesky factor of each measured fit's covariance, so that the
-    // precise combinations (k + k∞ above all) weigh as much as they are precise. A fit held
-    // at c = 0 has no variance in c: [`c_standard_error`] stands in, uncorrelated.
-    let weights: Vec<Matrix4<f64>> = fits
-        .iter()
+    let mut p = vec![
+        start.damping,
+        start.stiffness,
+        bw.alpha,
+        bw.beta_gamma(),
+        bw.beta_delta(),
+    ];
+    if opts.fit_exponent {
+        p.push(bw.nu);
+    }
+    let aux = |p: &[f64]| simulated_fits(&osc(p), fits, lengths, opts);
+    let fit = indirect_lm(&mut p, &aux, &resid, opts, progress)?;
+    let se_of = |k: usize| {
+        fit.covariance
+            .as_ref()
+            .filter(|c| k < c.nrows())
+            .map_or(f64::NAN, |c| (2.0 * c[(k, k)]).max(0.0).sqrt())
+    };
+    Ok(SimulatedBoucWen {
+        oscillator: osc(&p),
+        residual_rms: (fit.cost / fit.residuals as f64).sqrt(),
+        simulated: fit.simulated,
+        iterations: fit.iterations,
+        se: std::array::from_fn(se_of),
+        nu_se: se_of(5),
+    })
+}
+
+/// The auxiliary statistics of `model`: at each level one simulated record of the level's
+/// length (white force of its density, its noise added, common random numbers by the
+/// options' seed) fitted as the measured one was, (c, k, k∞, Ω). In parallel over levels.
+fn simulated_fits(
+    model: &Oscillator,
+    fits: &[&ZenerSpectralFit],
+    lengths: &[usize],
+    opts: &SimulationOptions,
+) -> Result<Vec<[f64; 4]>, IdentError> {
+    use rayon::prelude::*;
+    model.validate().map_err(|e| IdentError::Sim(e.into()))?;
+    fits.par_iter()
+        .zip(lengths)
+        .enumerate()
+        .map(|(i, (f, &n))| {
+            let seed = opts.seed.wrapping_add(2 * i as u64);
+            let rms = (f.force_density * f.fs).sqrt();
+            let sim = hyst_sim::SimOptions::default();
+            let mut y = if opts.periodic {
+                let u = hyst_sim::excitation::white_noise(n, rms, seed)?;
+                hyst_sim::steady_state_period(model, &u, f.fs, &sim, 1e-10, 200)?.y
+            } else {
+                let warm = warm_up_samples(f, n);
+                let u = hyst_sim::excitation::white_noise(warm + n, rms, seed)?;
+                let mut y =
+                    hyst_sim::simulate(model, hyst_sim::Input::Sampled(&u), f.fs, warm + n, &sim)?;
+                y.drain(..warm);
+                y
+            };
+            hyst_sim::excitation::add_noise(&mut y, f.noise_std, seed + 1)?;
+            let mean = y.iter().sum::<f64>() / n as f64;
+            y.iter_mut().for_each(|v| *v -= mean);
+            let g =
+                crate::zener_spectrum::fit(&y, f.fs, f.mass, f.pair, f.real, f.max_frequency_hz)?;
+            Ok([g.c, g.k, g.k_inf, g.omega])
+        })
+        .collect()
+}
+
+/// Weights of each level's residual: the inverse Cholesky factor of its measured fit's
+/// covariance, so that the precise combinations (k + k∞ above all) weigh as much as they
+/// are precise. A fit held at c = 0 has no variance in c: [`c_standard_error`] stands in,
+/// uncorrelated.
+fn fit_weights(fits: &[&ZenerSpectralFit]) -> Result<Vec<Matrix4<f64>>, IdentError> {
+    fits.iter()
         .map(|f| {
             let mut cov = Matrix4::from_fn(|i, j| f.covariance[i][j]);
             if f.unconstrained_c.is_some() {
@@ -264,35 +299,53 @@ pub fn bouc_wen_by_simulation(
             cov.cholesky()
                 .and_then(|l| l.l().try_inverse())
                 .filter(|w| w.iter().all(|v| v.is_finite()))
-                .ok_or(LinearizeError::Invalid {
-                    name: "a level's fit covariance (not positive definite)",
-                    value: f.k,
+                .ok_or_else(|| {
+                    LinearizeError::Invalid {
+                        name: "a level's fit covariance (not positive definite)",
+                        value: f.k,
+                    }
+                    .into()
                 })
         })
-        .collect::<Result<_, _>>()?;
-    let resid = |a: &[[f64; 4]]| -> Vec<f64> {
-        a.iter()
-            .zip(fits)
-            .zip(&weights)
-            .flat_map(|((a, f), w)| {
-                let d = Vector4::new(a[0] - f.c, a[1] - f.k, a[2] - f.k_inf, a[3] - f.omega);
-                (w * d).iter().copied().collect::<Vec<_>>()
-            })
-            .collect()
+        .collect()
+}
+
+/// The auxiliary statistics of a parameter vector: each level's (c, k, k∞, Ω) fitted to the
+/// model's simulated record.
+type AuxiliaryStatistics<'a> = dyn Fn(&[f64]) -> Result<Vec<[f64; 4]>, IdentError> + Sync + 'a;
+
+/// Where the indirect-inference fit ended.
+struct IndirectFit {
+    /// The auxiliary statistics at the optimum.
+    simulated: Vec<[f64; 4]>,
+    /// Weighted sum of squares there.
+    cost: f64,
+    /// Residuals in the sum.
+    residuals: usize,
+    iterations: usize,
+    /// (JᵀJ)⁻¹ of the last iteration's Jacobian, when it is invertible.
+    covariance: Option<DMatrix<f64>>,
+}
+
+/// The crate's Levenberg–Marquardt on the simulated statistics: forward differences of
+/// 1 % of each parameter (c at least 0.1 N s/m: large enough that the fits' own
+/// convergence tolerance does not show), λ from 1e-2, ÷3 on success (at least 1e-7), ×10 on
+/// failure up to 1e6; stops when an iteration gains less than the options' tolerance.
+fn indirect_lm(
+    p: &mut Vec<f64>,
+    aux: &AuxiliaryStatistics<'_>,
+    resid: &dyn Fn(&[[f64; 4]]) -> Vec<f64>,
+    opts: &SimulationOptions,
+    progress: &(dyn Fn(usize, f64) + Sync),
+) -> Result<IndirectFit, IdentError> {
+    const SCHEDULE: crate::LmSchedule = crate::LmSchedule {
+        shrink: 1.0 / 3.0,
+        grow: 10.0,
+        min: 1e-7,
+        max: 1e6,
     };
     let sum_sq = |r: &[f64]| r.iter().map(|v| v * v).sum::<f64>();
-    let mut p = vec![
-        start.damping,
-        start.stiffness,
-        bw.alpha,
-        bw.beta_gamma(),
-        bw.beta_delta(),
-    ];
-    if opts.fit_exponent {
-        p.push(bw.nu);
-    }
-    let np = p.len();
-    let mut sim = aux(&p)?;
+    let mut sim = aux(p)?;
     let mut r = resid(&sim);
     let mut cost = sum_sq(&r);
     let mut lambda: f64 = 1e-2;
@@ -300,14 +353,12 @@ pub fn bouc_wen_by_simulation(
     let mut last_jtj = None;
     while iterations < opts.max_iterations {
         iterations += 1;
-        // Forward differences, 1 % of each parameter (c at least 0.1 N s/m): large enough
-        // that the fits' own convergence tolerance does not show.
         let steps: Vec<f64> = p
             .iter()
             .enumerate()
             .map(|(k, v)| (0.01 * v.abs()).max(if k == 0 { 0.1 } else { 1e-3 }))
             .collect();
-        let columns: Vec<Vec<f64>> = (0..np)
+        let columns: Vec<Vec<f64>> = (0..p.len())
             .map(|k| {
                 let mut q = p.clone();
                 q[k] += steps[k];
@@ -315,64 +366,31 @@ pub fn bouc_wen_by_simulation(
                 Ok(rq.iter().zip(&r).map(|(a, b)| (a - b) / steps[k]).collect())
             })
             .collect::<Result<_, IdentError>>()?;
-        let mut jtj = DMatrix::<f64>::zeros(np, np);
-        let mut jtr = DVector::<f64>::zeros(np);
-        for a in 0..np {
-            jtr[a] = columns[a].iter().zip(&r).map(|(j, v)| j * v).sum::<f64>();
-            for b in 0..np {
-                jtj[(a, b)] = columns[a]
-                    .iter()
-                    .zip(&columns[b])
-                    .map(|(x, y)| x * y)
-                    .sum::<f64>();
-            }
-        }
-        last_jtj = Some(jtj.clone());
+        let (jtj, jtr) = crate::normal_equations(&columns, &r);
+        last_jtj = Some(DMatrix::from_fn(p.len(), p.len(), |i, j| jtj[i][j]));
         let before = cost;
-        loop {
-            let mut m = jtj.clone();
-            for a in 0..np {
-                m[(a, a)] *= 1.0 + lambda;
-            }
-            let accepted = m.lu().solve(&jtr).and_then(|step| {
-                let mut q = p.clone();
-                for k in 0..np {
-                    q[k] -= step[k];
-                }
-                q[0] = q[0].max(0.0);
-                let s = aux(&q).ok()?;
-                let rq = resid(&s);
-                let c = sum_sq(&rq);
-                (c < cost).then_some((q, s, rq, c))
-            });
-            match accepted {
-                Some((q, s, rq, c)) => {
-                    (p, sim, r, cost) = (q, s, rq, c);
-                    lambda = (lambda / 3.0).max(1e-7);
-                    break;
-                }
-                None if lambda < 1e6 => lambda *= 10.0,
-                None => break,
-            }
-        }
+        crate::lm_step_with(&SCHEDULE, &jtj, &jtr, &mut lambda, |step| {
+            let mut q: Vec<f64> = p.iter().zip(step).map(|(a, b)| a - b).collect();
+            q[0] = q[0].max(0.0);
+            let s = aux(&q).ok()?;
+            let rq = resid(&s);
+            let c = sum_sq(&rq);
+            (c < cost).then(|| {
+                (*p, sim, r, cost) = (q, s, rq, c);
+                true
+            })
+        });
         progress(iterations, cost);
         if before - cost <= opts.tolerance * before {
             break;
         }
     }
-    let cov = last_jtj.and_then(|m| m.try_inverse());
-    let se_of = |k: usize| {
-        cov.as_ref()
-            .filter(|c| k < c.nrows())
-            .map_or(f64::NAN, |c| (2.0 * c[(k, k)]).max(0.0).sqrt())
-    };
-    Ok(SimulatedBoucWen {
-        oscillator: osc(&p),
+    Ok(IndirectFit {
         simulated: sim,
-        residual_rms: (cost / r.len() as f64).sqrt(),
+        cost,
+        residuals: r.len(),
         iterations,
-        se: std::array::from_fn(se_of),
-        nu_se: se_of(5),
+        covariance: last_jtj.and_then(|m| m.try_inverse()),
     })
 }
 
