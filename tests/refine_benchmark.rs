@@ -4,7 +4,7 @@
 
 mod common;
 
-use hyst::ident::refine::{self, Effect, InputInterpolation, Record, Start};
+use hyst::ident::residual::{self, Effect, InputInterpolation, Record, Start};
 use hyst::model::{Oscillator, Restoring};
 
 /// The training record at 750 Hz, its force band-limited (the benchmark's README).
@@ -25,7 +25,7 @@ fn the_zener_start_lacks_hysteresis_and_the_loop_finds_it() {
     let rec = record(&u, &y);
     // Periods 2-4 estimate (the first holds the start-up transient), period 5 is held out.
     let (estimate, test) = ((8192, 32768), (32768, 40960));
-    let r = refine::refine_record(&rec, Some(2.0), Start::Zener, estimate, &[test]).unwrap();
+    let r = residual::refine_record(&rec, Some(2.0), Start::Zener, estimate, &[test]).unwrap();
     for s in &r.steps {
         eprintln!(
             "step {:?}: held-out ε {:.4} % -> {:.4} %",
@@ -45,7 +45,7 @@ fn the_zener_start_lacks_hysteresis_and_the_loop_finds_it() {
     // record's measurement noise (7.4e-6 m RMS): 0.149 %. A model fitted to 24 576 noisy
     // samples can do no better and should do hardly worse (its excess is about p/2N ≈ 1e-4
     // relative for p = 5 parameters); 1 % leaves room for the fit's stopping tolerance.
-    let truth = refine::test_error(&Oscillator::benchmark(), &rec, test).unwrap();
+    let truth = residual::test_error(&Oscillator::benchmark(), &rec, test).unwrap();
     let (before, after) = (r.steps[0].before[0].epsilon, r.tests[0].epsilon);
     eprintln!(
         "held-out ε: Zener {:.4} %, final {:.4} %, the benchmark {:.4} %",
@@ -106,8 +106,8 @@ fn the_benchmark_s_exponent_comes_back_to_one() {
         let mut start = bench;
         start.restoring =
             Restoring::BoucWen(hyst::linearize::bouc_wen_exact(b.alpha, nu, &df).unwrap());
-        let (m, _) = refine::fit(&start, &rec, estimate, false, 300).unwrap();
-        let se = refine::standard_errors(&m, &rec, estimate, false).unwrap();
+        let (m, _) = residual::fit(&start, &rec, estimate, false, 300).unwrap();
+        let se = residual::standard_errors(&m, &rec, estimate, false).unwrap();
         let e = se.iter().find(|e| e.name == "nu").expect("ν is free");
         eprintln!("from ν = {nu}: ν = {:.5} ± {:.5}", e.value, e.se);
         assert!((e.value - 1.0).abs() < 4.0 * e.se, "{} ± {}", e.value, e.se);

@@ -5,7 +5,7 @@
 //! nothing and is said to be at its noise level, a drifting stiffness is reported as
 //! nonstationary and not fitted, and a linear oscillator gets nothing.
 
-use hyst::ident::refine::{self, Effect, InputInterpolation, Record, Start};
+use hyst::ident::residual::{self, Effect, InputInterpolation, Record, Start};
 use hyst::model::{Clearance, Oscillator};
 use hyst::sim::excitation::{Multisine, add_noise, band_limited_noise};
 use hyst::sim::{Input, simulate_drifting};
@@ -62,8 +62,8 @@ fn record(truth: &Oscillator, periodic: bool, drift: f64, coloured: bool) -> Rec
 /// σₓ of the benchmark's response to the random force (the effects are sized from it).
 const SIGMA_X: f64 = 6.6e-4;
 
-fn run(rec: &Record<'_>, start: Start) -> refine::Refinement {
-    let r = refine::refine_record(rec, Some(2.0), start, ESTIMATE, &[TEST]).unwrap();
+fn run(rec: &Record<'_>, start: Start) -> residual::Refinement {
+    let r = residual::refine_record(rec, Some(2.0), start, ESTIMATE, &[TEST]).unwrap();
     for s in &r.steps {
         eprintln!(
             "step {:?}: {:.4} % -> {:.4} % (p {:?}); trace: {}",
@@ -81,7 +81,7 @@ fn run(rec: &Record<'_>, start: Start) -> refine::Refinement {
     r
 }
 
-fn effects(r: &refine::Refinement) -> Vec<Effect> {
+fn effects(r: &residual::Refinement) -> Vec<Effect> {
     r.steps.iter().filter_map(|s| s.effect).collect()
 }
 
@@ -142,8 +142,8 @@ fn a_clearance_is_named() {
     // Periodic: the noise comes from the output a period apart.
     assert!(matches!(
         r.noise,
-        Ok(refine::noise::NoiseLevel {
-            method: refine::noise::NoiseMethod::PeriodToPeriod { period: 4096, .. },
+        Ok(residual::noise::NoiseLevel {
+            method: residual::noise::NoiseMethod::PeriodToPeriod { period: 4096, .. },
             ..
         })
     ));
@@ -159,8 +159,8 @@ fn a_control_with_coloured_noise_gets_nothing() {
     assert!(effects(&r).is_empty());
     assert!(matches!(
         r.noise,
-        Ok(refine::noise::NoiseLevel {
-            method: refine::noise::NoiseMethod::Residual { .. },
+        Ok(residual::noise::NoiseLevel {
+            method: residual::noise::NoiseMethod::Residual { .. },
             ..
         })
     ));
@@ -179,7 +179,7 @@ fn a_drifting_stiffness_is_nonstationary() {
         .collect();
     assert!(named.is_empty(), "{named:?}");
     assert!(r.nonstationary);
-    let moving = refine::drift::drifting(&r.halves);
+    let moving = residual::drift::drifting(&r.halves);
     assert!(
         moving.iter().any(|h| h.name == "stiffness" && h.z < 0.0),
         "{moving:?}"

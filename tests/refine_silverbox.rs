@@ -4,7 +4,7 @@
 
 mod common;
 
-use hyst::ident::refine::{self, Effect, InputInterpolation, Record, Start};
+use hyst::ident::residual::{self, Effect, InputInterpolation, Record, Start};
 
 #[test]
 fn silverbox_finds_the_cubic_spring() {
@@ -22,7 +22,7 @@ fn silverbox_finds_the_cubic_spring() {
     // The multisine part is rows 40650..127400; its first 75 % estimates.
     let estimate = (40650, 40650 + 3 * (127400 - 40650) / 4);
     let tests = [(100, 40575), (100, 32100)];
-    let r = refine::refine_record(&rec, None, Start::Linear, estimate, &tests).unwrap();
+    let r = residual::refine_record(&rec, None, Start::Linear, estimate, &tests).unwrap();
     let mv = |v: f64| 1e3 * v;
     let first = &r.steps[0];
     eprintln!(
@@ -70,7 +70,7 @@ fn input_and_output_of_different_lengths() {
         interpolation: InputInterpolation::BandLimited,
     };
     let e =
-        refine::refine_record(&rec, Some(1.0), Start::Linear, (0, 80), &[(80, 90)]).unwrap_err();
+        residual::refine_record(&rec, Some(1.0), Start::Linear, (0, 80), &[(80, 90)]).unwrap_err();
     assert!(
         e.to_string().contains("input has 100 samples, output 90"),
         "{e}"

@@ -6,7 +6,7 @@
 
 mod common;
 
-use hyst::ident::refine::{self, Effect, InputInterpolation, Record, Start};
+use hyst::ident::residual::{self, Effect, InputInterpolation, Record, Start};
 use hyst::model::{BoucWen, Coulomb, Oscillator, SecondMass};
 use hyst::sim::excitation::{add_noise, white_noise};
 use hyst::sim::{self, Input, SimOptions};
@@ -41,7 +41,10 @@ const ESTIMATE: (usize, usize) = (0, 3 * N / 4);
 const HELD_OUT: (usize, usize) = (3 * N / 4, N);
 
 /// The loop on `truth`'s record from a linear start (mass known), and the record.
-fn run_with<R>(truth: &Oscillator, then: impl FnOnce(&Record<'_>) -> R) -> (refine::Refinement, R) {
+fn run_with<R>(
+    truth: &Oscillator,
+    then: impl FnOnce(&Record<'_>) -> R,
+) -> (residual::Refinement, R) {
     let (u, y) = record(truth);
     let rec = Record {
         u: &u,
@@ -50,15 +53,15 @@ fn run_with<R>(truth: &Oscillator, then: impl FnOnce(&Record<'_>) -> R) -> (refi
         // The records are simulated with linearly interpolated input.
         interpolation: InputInterpolation::Linear,
     };
-    let r = refine::refine_record(&rec, Some(1.0), Start::Linear, ESTIMATE, &[HELD_OUT]).unwrap();
+    let r = residual::refine_record(&rec, Some(1.0), Start::Linear, ESTIMATE, &[HELD_OUT]).unwrap();
     (r, then(&rec))
 }
 
-fn run(truth: &Oscillator) -> refine::Refinement {
+fn run(truth: &Oscillator) -> residual::Refinement {
     run_with(truth, |_| ()).0
 }
 
-fn report(name: &str, r: &refine::Refinement) {
+fn report(name: &str, r: &residual::Refinement) {
     eprintln!("{name}: baseline {:?}\n   final {:?}", r.baseline, r.model);
     for s in &r.steps {
         eprintln!(
@@ -177,7 +180,7 @@ fn finds_a_sharper_hysteresis_exponent() {
         BoucWen::from_products(alpha, bg, -0.4 * bg, 2.0),
     );
     // The true model's own held-out error, on the same record.
-    let (r, truth) = run_with(&t, |rec| refine::test_error(&t, rec, HELD_OUT).unwrap());
+    let (r, truth) = run_with(&t, |rec| residual::test_error(&t, rec, HELD_OUT).unwrap());
     report("exponent", &r);
     let effects: Vec<Option<Effect>> = r.steps.iter().map(|s| s.effect).collect();
     assert_eq!(
@@ -237,10 +240,10 @@ fn the_held_out_test_asks_for_a_consistent_gain() {
         interpolation: InputInterpolation::Linear,
     };
     let held_out = (3 * n / 4, n);
-    let r =
-        refine::refine_record(&rec, Some(1.0), Start::Linear, (0, 3 * n / 4), &[held_out]).unwrap();
+    let r = residual::refine_record(&rec, Some(1.0), Start::Linear, (0, 3 * n / 4), &[held_out])
+        .unwrap();
     report("held-out check", &r);
-    let truth = refine::test_error(&t, &rec, held_out).unwrap();
+    let truth = residual::test_error(&t, &rec, held_out).unwrap();
     eprintln!(
         "held-out check: true model {:.4} %, loop's model {:.4} %",
         100.0 * truth.epsilon,

@@ -62,13 +62,13 @@ pub(crate) struct RefineArgs {
 /// two sections, the final model's sections beside them).
 pub(crate) fn refine_figures(
     dir: &std::path::Path,
-    r: &hyst::ident::refine::Refinement,
-    rec: &hyst::ident::refine::Record<'_>,
+    r: &hyst::ident::residual::Refinement,
+    rec: &hyst::ident::residual::Record<'_>,
     estimate: (usize, usize),
     test: (usize, usize),
     fit_mass: bool,
 ) -> Result<(), Error> {
-    use hyst::ident::refine::{response, surface};
+    use hyst::ident::residual::{response, surface};
     use hyst::plot::{cell_map, chart, chart_log_y, colors};
     std::fs::create_dir_all(dir).map_err(|e| fail(format!("{}: {e}", dir.display())))?;
     let y = &rec.y[estimate.0..estimate.1];
@@ -193,7 +193,7 @@ pub(crate) fn refine_figures(
 }
 
 pub(crate) fn run(a: &RefineArgs) -> Result<(), Error> {
-    use hyst::ident::refine::{self, Record, Start};
+    use hyst::ident::residual::{self, Record, Start};
     let fs = check_fs(a.fs)?;
     let t = read_csv(&a.data)?;
     let u = t
@@ -228,15 +228,15 @@ pub(crate) fn run(a: &RefineArgs) -> Result<(), Error> {
         y,
         fs,
         interpolation: match a.input_interpolation {
-            InterpolationArg::BandLimited => refine::InputInterpolation::BandLimited,
-            InterpolationArg::Linear => refine::InputInterpolation::Linear,
+            InterpolationArg::BandLimited => residual::InputInterpolation::BandLimited,
+            InterpolationArg::Linear => residual::InputInterpolation::Linear,
         },
     };
     // One line per step on stderr while the loop runs (hidden when stderr is not a terminal).
     let t0 = std::time::Instant::now();
     let bar = spinner();
     let say = |m: &str| bar.set_message(format!("{:.0} s: {m}", t0.elapsed().as_secs_f64()));
-    let r = refine::refine_report(&rec, a.mass, start, estimate, &tests, &say)
+    let r = residual::refine_report(&rec, a.mass, start, estimate, &tests, &say)
         .map_err(|e| fail(format!("{}: {e}", a.data.display())));
     bar.finish_and_clear();
     let report = hyst::report::FileReport::new(a.data.display().to_string(), r?);

@@ -49,7 +49,7 @@ pub fn rel_rms(a: &[f64], b: &[f64]) -> f64 {
 /// standard errors of the expected value; prints every z, each line after `label`.
 pub fn assert_estimates_near(
     label: &str,
-    estimates: &[hyst::ident::refine::Estimate],
+    estimates: &[hyst::ident::residual::Estimate],
     expected: &[(&str, f64)],
     max_z: f64,
 ) {

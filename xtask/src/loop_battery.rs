@@ -16,7 +16,7 @@
 
 use std::time::Instant;
 
-use hyst_ident::refine::{self, Record, Refinement, Start};
+use hyst_ident::residual::{self, Record, Refinement, Start};
 use hyst_model::{
     BoucWen, Clearance, Coulomb, ForceSurface, Oscillator, SURFACE_TERMS, SecondMass,
 };
@@ -532,9 +532,9 @@ pub fn run(args: &BatteryArgs) -> Result<(), String> {
                     u: &m.u,
                     y: &m.y,
                     fs: FS,
-                    interpolation: refine::InputInterpolation::BandLimited,
+                    interpolation: residual::InputInterpolation::BandLimited,
                 };
-                let r = refine::refine_record(
+                let r = residual::refine_record(
                     &rec,
                     Some(2.0),
                     case.start,

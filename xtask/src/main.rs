@@ -485,7 +485,7 @@ fn bench_real_poles() {
 /// `hyst refine`'s loop on a 32768-sample record: a 10 Hz oscillator with an undeclared cubic
 /// spring under white noise at 200 Hz, estimate on 75 %, test on 25 %.
 fn bench_refine() {
-    use hyst_ident::refine::{self, Record, Start};
+    use hyst_ident::residual::{self, Record, Start};
     let n = 32768;
     let w = 2.0 * std::f64::consts::PI * 10.0;
     let mut o = Oscillator::linear(1.0, 2.0 * 0.02 * w, w * w);
@@ -498,12 +498,12 @@ fn bench_refine() {
         u: &u,
         y: &y,
         fs: 200.0,
-        interpolation: refine::InputInterpolation::Linear,
+        interpolation: residual::InputInterpolation::Linear,
     };
     let mut r = None;
     let t = best_of(1, || {
         r = Some(
-            refine::refine_record(
+            residual::refine_record(
                 &rec,
                 Some(1.0),
                 Start::Linear,

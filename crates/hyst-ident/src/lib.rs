@@ -66,7 +66,7 @@ pub mod levels;
 
 pub mod periodic;
 
-pub mod refine;
+pub mod residual;
 
 pub mod zener_spectrum;
 

@@ -646,7 +646,7 @@ pub fn grid(trace: &Trace, bins: usize) -> SurfaceGrid {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::refine::InputInterpolation;
+    use crate::residual::InputInterpolation;
     use hyst_sim::{Input, SimOptions, excitation::band_limited_noise};
 
     /// The derivatives of a sum of sines in the band are the analytic ones, away from the
