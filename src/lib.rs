@@ -12,6 +12,7 @@ pub use hyst_linearize as linearize;
 pub use hyst_model as model;
 pub use hyst_sim as sim;
 
+pub mod figures;
 pub mod io;
 pub mod plot;
 

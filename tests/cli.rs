@@ -1392,8 +1392,11 @@ fn refine_frees_the_exponent_of_a_sharper_element() {
     ]);
     assert!(ok, "{err}");
     let json = tmp("nu2_refine.json");
+    let figures = tmp("nu2_refine_figures");
     let (ok, out, err) = hyst(&[
         "refine",
+        "--svg-dir",
+        s(&figures),
         "--data",
         s(&rec),
         "--fs",
@@ -1415,6 +1418,17 @@ fn refine_frees_the_exponent_of_a_sharper_element() {
     // The report says which start it used, each step's held-out test, the noise level and
     // whether anything is left; the JSON carries the same.
     assert!(out.contains("start: linear (asked for linear)"), "{out}");
+    for f in [
+        "residual_spectra.svg",
+        "time_overlay.svg",
+        "residual_force_cells.svg",
+        "residual_force_surface.svg",
+        "residual_force_stiffness.svg",
+        "residual_force_damping.svg",
+    ] {
+        let svg = std::fs::read_to_string(figures.join(f)).unwrap_or_default();
+        assert!(svg.starts_with("<svg"), "{f}");
+    }
     assert!(out.contains("noise level: "), "{out}");
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();

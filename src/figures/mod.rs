@@ -1,0 +1,10 @@
+//! The figures the commands draw (SVG through [`crate::plot`]), one module per command;
+//! each function draws every figure of its command into a folder.
+
+mod ident;
+mod levels;
+mod residual;
+
+pub use ident::ident_figures;
+pub use levels::levels_figures;
+pub use residual::residual_figures;
