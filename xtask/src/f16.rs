@@ -463,142 +463,179 @@ fn shapes_markdown(rows: &[Row]) -> String {
 /// Per mode: frequency and damping over force by every method, and the force's line
 /// amplitudes across the mode's band at each level.
 pub fn figures(rows: &[Row], out: &Path) -> Result<Vec<PathBuf>, String> {
-    use hyst::plot::colors;
     std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
     let mut paths = Vec::new();
     for (i, tg) in TARGETS.iter().enumerate() {
         let mine: Vec<&Row> = rows.iter().filter(|r| r.target == i).collect();
-        let series = |f: &dyn Fn(&Row) -> Option<f64>| -> Vec<(f64, f64)> {
-            mine.iter()
-                .filter_map(|r| f(r).map(|v| (r.force_rms, v)))
-                .collect()
-        };
         let slug = tg.name.replace(' ', "_");
-        let freq: Vec<Series> = vec![
-            (
-                "SSI, accelerations only".into(),
-                series(&|r| r.ssi.map(|c| c.0)),
-                colors::BLUE,
-            ),
-            (
-                "SSI, force made flat".into(),
-                series(&|r| r.ssi_flat.map(|c| c.0)),
-                colors::GREEN,
-            ),
-            (
-                "fit of the response, mode alone".into(),
-                series(&|r| r.narrow.0.as_ref().map(|m| m.frequency_hz)),
-                colors::RED,
-            ),
-            (
-                "fit of the response, with neighbours".into(),
-                series(&|r| r.wide.0.as_ref().map(|m| m.frequency_hz)),
-                colors::ORANGE,
-            ),
-        ];
-        let damp: Vec<Series> = vec![
-            (
-                freq[0].0.clone(),
-                series(&|r| r.ssi.map(|c| 100.0 * c.2)),
-                colors::BLUE,
-            ),
-            (
-                freq[1].0.clone(),
-                series(&|r| r.ssi_flat.map(|c| 100.0 * c.2)),
-                colors::GREEN,
-            ),
-            (
-                freq[2].0.clone(),
-                series(&|r| r.narrow.0.as_ref().map(|m| 100.0 * m.damping_ratio)),
-                colors::RED,
-            ),
-            (
-                freq[3].0.clone(),
-                series(&|r| r.wide.0.as_ref().map(|m| 100.0 * m.damping_ratio)),
-                colors::ORANGE,
-            ),
-        ];
-        for (what, unit, s) in [
-            ("frequency", "natural frequency (Hz)", freq),
-            ("damping", "damping ratio (%)", damp),
-        ] {
-            let p = out.join(format!("f16_{slug}_{what}.svg"));
-            hyst::plot::chart(
-                &p,
-                &format!("F-16 {}: {what} over force level", tg.name),
-                "force RMS (N)",
-                unit,
-                &s,
-            )?;
-            paths.push(p);
-        }
-        // The loss over force, and the most a ν = 1 Bouc-Wen element allows above the second
-        // level: its loss grows no faster than its amplitude (docs/results.md), here taken to
-        // grow as the fastest-growing response measure ([`NuBound`]).
-        let loss_fit: Vec<(f64, f64)> = mine
-            .iter()
-            .filter_map(|r| Some((r.force_rms, loss(r.narrow.0.as_ref()?))))
-            .collect();
-        let second = mine
-            .get(1)
-            .and_then(|r| Some((r.level, loss(r.narrow.0.as_ref()?))));
-        let bound: Vec<(f64, f64)> = match second {
-            // At the second level itself the growth is 1.
-            Some((l2, l2_loss)) => mine[1..]
-                .iter()
-                .map(|r| (r.force_rms, l2_loss * largest_growth(rows, l2, r.level)))
-                .collect(),
-            None => Vec::new(),
-        };
-        let p = out.join(format!("f16_{slug}_loss.svg"));
+        paths.extend(modal_figures(&mine, tg, &slug, out)?);
+        paths.push(loss_figure(rows, &mine, tg, &slug, out)?);
+        paths.extend(line_figures(&mine, tg, &slug, out)?);
+    }
+    Ok(paths)
+}
+
+/// A target mode's frequency and damping over the force level, by each method.
+fn modal_figures(
+    mine: &[&Row],
+    tg: &Target,
+    slug: &str,
+    out: &Path,
+) -> Result<Vec<PathBuf>, String> {
+    use hyst::plot::colors;
+    let mut paths = Vec::new();
+    let series = |f: &dyn Fn(&Row) -> Option<f64>| -> Vec<(f64, f64)> {
+        mine.iter()
+            .filter_map(|r| f(r).map(|v| (r.force_rms, v)))
+            .collect()
+    };
+    let freq: Vec<Series> = vec![
+        (
+            "SSI, accelerations only".into(),
+            series(&|r| r.ssi.map(|c| c.0)),
+            colors::BLUE,
+        ),
+        (
+            "SSI, force made flat".into(),
+            series(&|r| r.ssi_flat.map(|c| c.0)),
+            colors::GREEN,
+        ),
+        (
+            "fit of the response, mode alone".into(),
+            series(&|r| r.narrow.0.as_ref().map(|m| m.frequency_hz)),
+            colors::RED,
+        ),
+        (
+            "fit of the response, with neighbours".into(),
+            series(&|r| r.wide.0.as_ref().map(|m| m.frequency_hz)),
+            colors::ORANGE,
+        ),
+    ];
+    let damp: Vec<Series> = vec![
+        (
+            freq[0].0.clone(),
+            series(&|r| r.ssi.map(|c| 100.0 * c.2)),
+            colors::BLUE,
+        ),
+        (
+            freq[1].0.clone(),
+            series(&|r| r.ssi_flat.map(|c| 100.0 * c.2)),
+            colors::GREEN,
+        ),
+        (
+            freq[2].0.clone(),
+            series(&|r| r.narrow.0.as_ref().map(|m| 100.0 * m.damping_ratio)),
+            colors::RED,
+        ),
+        (
+            freq[3].0.clone(),
+            series(&|r| r.wide.0.as_ref().map(|m| 100.0 * m.damping_ratio)),
+            colors::ORANGE,
+        ),
+    ];
+    for (what, unit, s) in [
+        ("frequency", "natural frequency (Hz)", freq),
+        ("damping", "damping ratio (%)", damp),
+    ] {
+        let p = out.join(format!("f16_{slug}_{what}.svg"));
         hyst::plot::chart(
             &p,
-            &format!("F-16 {}: loss 2ζω² over force", tg.name),
+            &format!("F-16 {}: {what} over force level", tg.name),
             "force RMS (N)",
-            "loss 2ζω² (rad²/s²)",
-            &[
-                (
-                    "fit of the response, mode alone".into(),
-                    loss_fit,
-                    colors::RED,
-                ),
-                (
-                    "largest a ν = 1 Bouc-Wen element allows from the second level".into(),
-                    bound,
-                    colors::GREY,
-                ),
-            ],
+            unit,
+            &s,
         )?;
         paths.push(p);
-        // One curve per level across the mode's band: the force's lines, the response's.
-        let palette = [colors::BLACK, colors::BLUE, colors::GREEN, colors::RED];
-        let per_level = |lines: fn(&Row) -> &Vec<(f64, f64)>| -> Vec<Series> {
-            mine.iter()
-                .zip(palette)
-                .map(|(r, c)| {
-                    let name = format!("level {} ({:.0} N RMS)", r.level, r.force_rms);
-                    (name, lines(r).clone(), c)
-                })
-                .collect()
-        };
-        for (file, title, axis, series) in [
+    }
+    Ok(paths)
+}
+
+/// A target mode's loss 2ζω² over the force level, beside the most a ν = 1 Bouc-Wen element
+/// allows from the second level.
+fn loss_figure(
+    rows: &[Row],
+    mine: &[&Row],
+    tg: &Target,
+    slug: &str,
+    out: &Path,
+) -> Result<PathBuf, String> {
+    use hyst::plot::colors;
+    // The loss over force, and the most a ν = 1 Bouc-Wen element allows above the second
+    // level: its loss grows no faster than its amplitude (docs/results.md), here taken to
+    // grow as the fastest-growing response measure ([`NuBound`]).
+    let loss_fit: Vec<(f64, f64)> = mine
+        .iter()
+        .filter_map(|r| Some((r.force_rms, loss(r.narrow.0.as_ref()?))))
+        .collect();
+    let second = mine
+        .get(1)
+        .and_then(|r| Some((r.level, loss(r.narrow.0.as_ref()?))));
+    let bound: Vec<(f64, f64)> = match second {
+        // At the second level itself the growth is 1.
+        Some((l2, l2_loss)) => mine[1..]
+            .iter()
+            .map(|r| (r.force_rms, l2_loss * largest_growth(rows, l2, r.level)))
+            .collect(),
+        None => Vec::new(),
+    };
+    let p = out.join(format!("f16_{slug}_loss.svg"));
+    hyst::plot::chart(
+        &p,
+        &format!("F-16 {}: loss 2ζω² over force", tg.name),
+        "force RMS (N)",
+        "loss 2ζω² (rad²/s²)",
+        &[
             (
-                "response",
-                format!("F-16: |acc2 / force| across the {} band", tg.name),
-                "|acc2 / force| (log10)",
-                per_level(|r| &r.response_lines),
+                "fit of the response, mode alone".into(),
+                loss_fit,
+                colors::RED,
             ),
             (
-                "force",
-                format!("F-16: force amplitude per line across the {} band", tg.name),
-                "force amplitude per line (N, log10)",
-                per_level(|r| &r.force_lines),
+                "largest a ν = 1 Bouc-Wen element allows from the second level".into(),
+                bound,
+                colors::GREY,
             ),
-        ] {
-            let p = out.join(format!("f16_{slug}_{file}.svg"));
-            hyst::plot::chart_log_y(&p, &title, "frequency (Hz)", axis, &series)?;
-            paths.push(p);
-        }
+        ],
+    )?;
+    Ok(p)
+}
+
+/// One curve per level across a target mode's band: the force's lines, the response's.
+fn line_figures(
+    mine: &[&Row],
+    tg: &Target,
+    slug: &str,
+    out: &Path,
+) -> Result<Vec<PathBuf>, String> {
+    use hyst::plot::colors;
+    let mut paths = Vec::new();
+    let palette = [colors::BLACK, colors::BLUE, colors::GREEN, colors::RED];
+    let per_level = |lines: fn(&Row) -> &Vec<(f64, f64)>| -> Vec<Series> {
+        mine.iter()
+            .zip(palette)
+            .map(|(r, c)| {
+                let name = format!("level {} ({:.0} N RMS)", r.level, r.force_rms);
+                (name, lines(r).clone(), c)
+            })
+            .collect()
+    };
+    for (file, title, axis, series) in [
+        (
+            "response",
+            format!("F-16: |acc2 / force| across the {} band", tg.name),
+            "|acc2 / force| (log10)",
+            per_level(|r| &r.response_lines),
+        ),
+        (
+            "force",
+            format!("F-16: force amplitude per line across the {} band", tg.name),
+            "force amplitude per line (N, log10)",
+            per_level(|r| &r.force_lines),
+        ),
+    ] {
+        let p = out.join(format!("f16_{slug}_{file}.svg"));
+        hyst::plot::chart_log_y(&p, &title, "frequency (Hz)", axis, &series)?;
+        paths.push(p);
     }
     Ok(paths)
 }

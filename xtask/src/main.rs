@@ -275,8 +275,15 @@ fn bench_covssi() {
     // The floor: reading the 10-channel record once (a sum over every sample).
     let t = best_of(5, || all.iter().map(|c| c.iter().sum::<f64>()).sum::<f64>());
     println!("read_record_ms_1e6_10ch {:.2} ms", t * 1e3);
-    // The maximum-likelihood refinement of the SSI modes (not part of the times above): on
-    // records of the OMA files' length and on the long one.
+    bench_covssi_refine(&all, all_modes);
+    bench_real_poles();
+}
+
+/// The maximum-likelihood refinement of the SSI modes on records of the OMA files' length
+/// and on the long one `all` (of `all_modes` modes), each line with its calibration.
+fn bench_covssi_refine(all: &[Vec<f64>], all_modes: usize) {
+    use hyst::covssi::{BlockRows, SsiOptions, identify};
+    let n = all[0].len();
     // Three modes in ten channels: the joint fit through four combinations of them (the
     // five-mode record's ten channels are fitted band by band).
     let three_modes = 3;
@@ -291,7 +298,7 @@ fn bench_covssi() {
     let lines = [
         (
             "covssi_refine_ms_65536_1ch",
-            &all,
+            all,
             all_modes,
             65536usize,
             1usize,
@@ -300,7 +307,7 @@ fn bench_covssi() {
         ),
         (
             "covssi_refine_ms_65536_3ch",
-            &all,
+            all,
             all_modes,
             65536,
             3,
@@ -309,7 +316,7 @@ fn bench_covssi() {
         ),
         (
             "covssi_refine_ms_65536_10ch",
-            &all,
+            all,
             all_modes,
             65536,
             10,
@@ -318,17 +325,17 @@ fn bench_covssi() {
         ),
         (
             "covssi_refine_ms_65536_10ch_3modes",
-            &three,
+            &three[..],
             three_modes,
             65536,
             10,
             20,
             2,
         ),
-        ("covssi_refine_ms_1e6_1ch", &all, all_modes, n, 1, 40, 2),
+        ("covssi_refine_ms_1e6_1ch", all, all_modes, n, 1, 40, 2),
         (
             "covssi_refine_ms_131072_16ch_8modes",
-            &large,
+            &large[..],
             large_modes,
             131072,
             16,
@@ -353,39 +360,8 @@ fn bench_covssi() {
             t = t.min(start.elapsed().as_secs_f64());
         }
         let r = r.expect("at least one run");
-        // The estimates against the generator's modes, in standard errors: their RMS is near
-        // 1 when the standard errors are right.
-        let z: Vec<f64> = r
-            .modes
-            .iter()
-            .flat_map(|m| {
-                let &(f, zeta) = BENCH_MODES[..modes]
-                    .iter()
-                    .min_by(|a, b| {
-                        (a.0 - m.frequency_hz)
-                            .abs()
-                            .total_cmp(&(b.0 - m.frequency_hz).abs())
-                    })
-                    .expect("records have modes");
-                [
-                    m.frequency_se_hz.map(|se| (m.frequency_hz - f) / se),
-                    m.damping_se.map(|se| (m.damping_ratio - zeta) / se),
-                ]
-            })
-            .flatten()
-            .collect();
-        let calibration = if z.is_empty() {
-            "no standard errors".to_string()
-        } else {
-            let z_rms = (z.iter().map(|v| v * v).sum::<f64>() / z.len() as f64).sqrt();
-            let z_max = z.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-            format!(
-                "z-score RMS {z_rms:.2}, largest |z| {z_max:.1}, over {} estimates",
-                z.len()
-            )
-        };
         println!(
-            "{name} {:.0} ms ({} SSI modes in, {} kept{}; misfit {:.3}; {calibration})",
+            "{name} {:.0} ms ({} SSI modes in, {} kept{}; misfit {:.3}; {})",
             t * 1e3,
             res.modes.len(),
             r.modes.len(),
@@ -394,10 +370,44 @@ fn bench_covssi() {
             } else {
                 String::new()
             },
-            r.misfit
+            r.misfit,
+            calibration(&r, modes)
         );
     }
-    bench_real_poles();
+}
+
+/// The refined estimates against the generator's first `modes` modes, in standard errors:
+/// their RMS is near 1 when the standard errors are right.
+fn calibration(r: &hyst::covssi::Refinement, modes: usize) -> String {
+    let z: Vec<f64> = r
+        .modes
+        .iter()
+        .flat_map(|m| {
+            let &(f, zeta) = BENCH_MODES[..modes]
+                .iter()
+                .min_by(|a, b| {
+                    (a.0 - m.frequency_hz)
+                        .abs()
+                        .total_cmp(&(b.0 - m.frequency_hz).abs())
+                })
+                .expect("records have modes");
+            [
+                m.frequency_se_hz.map(|se| (m.frequency_hz - f) / se),
+                m.damping_se.map(|se| (m.damping_ratio - zeta) / se),
+            ]
+        })
+        .flatten()
+        .collect();
+    if z.is_empty() {
+        "no standard errors".to_string()
+    } else {
+        let z_rms = (z.iter().map(|v| v * v).sum::<f64>() / z.len() as f64).sqrt();
+        let z_max = z.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        format!(
+            "z-score RMS {z_rms:.2}, largest |z| {z_max:.1}, over {} estimates",
+            z.len()
+        )
+    }
 }
 
 /// The refinement with real poles on ten records of the Zener oscillator the pipeline

@@ -325,7 +325,6 @@ pub fn csv(results: &[RandomLevel]) -> String {
 
 /// The results tables as Markdown.
 pub fn markdown(results: &[RandomLevel], seconds: f64, samples: usize) -> String {
-    let p = |v: f64| format!("{:.2} %", 100.0 * v);
     let mut s = format!(
         "# Random-force sweep results\n\n{} levels × {} samples, {:.2} s wall time.\n\n\
          ## The Zener spectral fit (truth of the benchmark: c = 10, k = 50000)\n\n\
@@ -361,6 +360,17 @@ pub fn markdown(results: &[RandomLevel], seconds: f64, samples: usize) -> String
             r.c_cluster
         );
     }
+    s += &validation_table(results);
+    s += &linearization_table(results);
+    s += &levels_section(results);
+    s += &simulation_section(results);
+    s
+}
+
+/// Each level's validation errors, with c from the fit and from the paper's cluster.
+fn validation_table(results: &[RandomLevel]) -> String {
+    let p = |v: f64| format!("{:.2} %", 100.0 * v);
+    let mut s = String::new();
     s += "\n## Validation error ε (one steady-state period of a fresh white force)\n\n\
           | \\|F\\| (N) | ε Zener, c from the fit | ε Zener, cluster's c | ε Bouc-Wen, c from the fit | ε Bouc-Wen, cluster's c |\n\
           |---|---|---|---|---|\n";
@@ -374,6 +384,12 @@ pub fn markdown(results: &[RandomLevel], seconds: f64, samples: usize) -> String
             p(r.eps_bouc_wen_cluster)
         );
     }
+    s
+}
+
+/// Each level's Zener beside the statistical linearization of the benchmark.
+fn linearization_table(results: &[RandomLevel]) -> String {
+    let mut s = String::new();
     s += "\n## The identified Zener against the statistical linearization of the benchmark\n\n\
           Predicted: the fixed point of the Gaussian linearization of the true benchmark under the \
           true force density. z: (identified − predicted) / standard error.\n\n\
@@ -398,6 +414,13 @@ pub fn markdown(results: &[RandomLevel], seconds: f64, samples: usize) -> String
             r.moments[2]
         );
     }
+    s
+}
+
+/// The one Bouc-Wen model of all levels and its error at each level.
+fn levels_section(results: &[RandomLevel]) -> String {
+    let p = |v: f64| format!("{:.2} %", 100.0 * v);
+    let mut s = String::new();
     match levels_model(results) {
         Ok(fit) => {
             let model = fit.oscillator;
@@ -436,6 +459,13 @@ pub fn markdown(results: &[RandomLevel], seconds: f64, samples: usize) -> String
         }
         Err(e) => s += &format!("\n## One Bouc-Wen model from all levels\n\nnone: {e}\n"),
     }
+    s
+}
+
+/// The model of all levels by simulation, and what each level's simulated record gives.
+fn simulation_section(results: &[RandomLevel]) -> String {
+    let p = |v: f64| format!("{:.2} %", 100.0 * v);
+    let mut s = String::new();
     if let Some(m) = results.first().map(|r| r.simulated_model) {
         s += &format!(
             "\n## One Bouc-Wen model from all levels, by simulation\n\n\

@@ -16,6 +16,7 @@ use hyst_linearize::{Amplitude, describing_function};
 use hyst_model::{BoucWen, Oscillator, Restoring};
 use hyst_sim::excitation::{Multisine, add_noise};
 use hyst_sim::{Input, SimOptions};
+use plotters::style::RGBColor;
 use rayon::prelude::*;
 
 const FS: f64 = 750.0;
@@ -89,6 +90,46 @@ pub(crate) fn eps_of(model: Option<&Oscillator>, u: &[f64], y: &[f64]) -> (f64, 
     }
 }
 
+/// Mean, smallest and largest of a cluster's natural frequencies (rad/s) or damping ratios.
+type Spread = (f64, f64, f64);
+
+/// The spread of the cluster's natural frequencies (rad/s) and of its damping ratios.
+fn cluster_spread(cluster: &[hyst_ident::Complex64]) -> (Spread, Spread) {
+    let ws: Vec<f64> = cluster.iter().map(|l| l.norm()).collect();
+    let zs: Vec<f64> = cluster.iter().map(|l| -l.re / l.norm()).collect();
+    let stats = |v: &[f64]| {
+        (
+            v.iter().sum::<f64>() / v.len().max(1) as f64,
+            v.iter().copied().fold(f64::INFINITY, f64::min),
+            v.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        )
+    };
+    (stats(&ws), stats(&zs))
+}
+
+/// The identified Zener model's (k, c, k∞, Ω) (NaN but c without one), and its equivalent
+/// stiffness and damping at the pair's frequency `w` and amplitude `a`.
+fn zener_and_equivalent(id: &hyst_ident::Identification, w: f64, a: f64) -> ([f64; 4], (f64, f64)) {
+    let (k, c, k_inf, omega_c) = match id.models.zener.map(|z| (z, z.restoring)) {
+        Some((z, Restoring::Zener(p))) => (z.stiffness, z.damping, p.k_inf, p.omega),
+        _ => (f64::NAN, id.poles.c, f64::NAN, f64::NAN),
+    };
+    let equivalent = if k_inf.is_finite() {
+        let d = hyst_linearize::zener_at(
+            &hyst_model::ZenerParams {
+                k_inf,
+                omega: omega_c,
+            },
+            w,
+            a,
+        );
+        (d.stiffness, d.damping(w))
+    } else {
+        (f64::NAN, f64::NAN)
+    };
+    ([k, c, k_inf, omega_c], equivalent)
+}
+
 /// Run one level (index `i` for the seeds).
 pub fn run_level(level: f64, i: usize, samples: usize, seed: u64) -> Result<LevelResult, String> {
     let truth = Oscillator::benchmark();
@@ -112,18 +153,7 @@ pub fn run_level(level: f64, i: usize, samples: usize, seed: u64) -> Result<Leve
     let yv = hyst_sim::steady_state_period(&truth, &uv, FS, &opts, 1e-10, 200)
         .map_err(|e| e.to_string())?
         .y;
-    let cluster = &id.poles.pair_cluster;
-    let ws: Vec<f64> = cluster.iter().map(|l| l.norm()).collect();
-    let zs: Vec<f64> = cluster.iter().map(|l| -l.re / l.norm()).collect();
-    let stats = |v: &[f64]| {
-        (
-            v.iter().sum::<f64>() / v.len().max(1) as f64,
-            v.iter().copied().fold(f64::INFINITY, f64::min),
-            v.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-        )
-    };
-    let (wm, wmin, wmax) = stats(&ws);
-    let (zm, zmin, zmax) = stats(&zs);
+    let ((wm, wmin, wmax), (zm, zmin, zmax)) = cluster_spread(&id.poles.pair_cluster);
     let bw_for = |a: Amplitude| {
         let o = IdentOptions {
             amplitude: a,
@@ -157,23 +187,7 @@ pub fn run_level(level: f64, i: usize, samples: usize, seed: u64) -> Result<Leve
     let w = id.poles.pair.norm();
     let a = id.prepared.sigma_x;
     let df = describing_function(&BoucWen::benchmark(), a).map_err(|e| e.to_string())?;
-    let (k, c, k_inf, omega_c) = match id.models.zener.map(|z| (z, z.restoring)) {
-        Some((z, Restoring::Zener(p))) => (z.stiffness, z.damping, p.k_inf, p.omega),
-        _ => (f64::NAN, id.poles.c, f64::NAN, f64::NAN),
-    };
-    let (ik, ic) = if k_inf.is_finite() {
-        let d = hyst_linearize::zener_at(
-            &hyst_model::ZenerParams {
-                k_inf,
-                omega: omega_c,
-            },
-            w,
-            a,
-        );
-        (d.stiffness, d.damping(w))
-    } else {
-        (f64::NAN, f64::NAN)
-    };
+    let ([k, c, k_inf, omega_c], (ik, ic)) = zener_and_equivalent(&id, w, a);
     let (alpha, bg, bd) = match id.models.bouc_wen_mapped.map(|b| b.restoring) {
         Some(Restoring::BoucWen(b)) => (b.alpha, b.beta_gamma(), b.beta_delta()),
         _ => (f64::NAN, f64::NAN, f64::NAN),
@@ -445,19 +459,35 @@ pub fn write(
     seconds: f64,
     samples: usize,
 ) -> Result<(), String> {
-    use plotters::style::RGBColor;
     write_tables(out, csv(results), markdown(results, seconds, samples))?;
-    let purple = RGBColor(130, 50, 170);
-    let (blue, black, red, grey, green) = (
-        RGBColor(40, 100, 200),
-        RGBColor(0, 0, 0),
-        RGBColor(200, 40, 40),
-        RGBColor(150, 150, 150),
-        RGBColor(30, 150, 60),
-    );
-    let by = |f: fn(&LevelResult) -> f64| -> Vec<(f64, f64)> {
-        results.iter().map(|r| (r.level_n, f(r))).collect()
-    };
+    figures_6_to_8(out, results)?;
+    figure_9(out, results)?;
+    figures_of_the_flatness_fit(out, results)
+}
+
+/// The sweep's colours.
+const PURPLE: RGBColor = RGBColor(130, 50, 170);
+const BLUE: RGBColor = RGBColor(40, 100, 200);
+const BLACK: RGBColor = RGBColor(0, 0, 0);
+const RED: RGBColor = RGBColor(200, 40, 40);
+const GREY: RGBColor = RGBColor(150, 150, 150);
+const GREEN: RGBColor = RGBColor(30, 150, 60);
+
+/// `f` of each level against its force level.
+fn by_level(results: &[LevelResult], f: fn(&LevelResult) -> f64) -> Vec<(f64, f64)> {
+    results.iter().map(|r| (r.level_n, f(r))).collect()
+}
+
+/// `f` of each level against its σₓ.
+fn by_sigma_x(results: &[LevelResult], f: fn(&LevelResult) -> f64) -> Vec<(f64, f64)> {
+    results.iter().map(|r| (r.sigma_x, f(r))).collect()
+}
+
+/// Figures 6 (modal frequency and damping over the level), 7 (the Zener parameters over
+/// σₓ), 8 (k∞/Ω over Aω) and the equivalent stiffness beside the describing function's.
+fn figures_6_to_8(out: &Path, results: &[LevelResult]) -> Result<(), String> {
+    let (blue, black, grey) = (BLUE, BLACK, GREY);
+    let by = |f: fn(&LevelResult) -> f64| by_level(results, f);
     chart(
         &out.join("fig6a_omega.svg"),
         "Fig. 6(a): natural frequency vs |F|",
@@ -480,9 +510,7 @@ pub fn write(
             ("max".into(), by(|r| r.zeta_max), grey),
         ],
     )?;
-    let by_a = |f: fn(&LevelResult) -> f64| -> Vec<(f64, f64)> {
-        results.iter().map(|r| (r.sigma_x, f(r))).collect()
-    };
+    let by_a = |f: fn(&LevelResult) -> f64| by_sigma_x(results, f);
     for (file, title, yl, f) in [
         (
             "fig7a_c.svg",
@@ -544,7 +572,13 @@ pub fn write(
                 blue,
             ),
         ],
-    )?;
+    )
+}
+
+/// Figure 9: the response at 20 and 80 N, exact beside the paper's mapping and the flatness
+/// fit.
+fn figure_9(out: &Path, results: &[LevelResult]) -> Result<(), String> {
+    let (blue, black, red) = (BLUE, BLACK, RED);
     for target in [20.0, 80.0] {
         if let Some(r) = results.iter().find(|r| (r.level_n - target).abs() < 1e-9) {
             let t = |v: &[f64]| -> Vec<(f64, f64)> {
@@ -566,6 +600,13 @@ pub fn write(
             )?;
         }
     }
+    Ok(())
+}
+
+/// The flatness fit's parameters over the level, and figure 10: every model's ε.
+fn figures_of_the_flatness_fit(out: &Path, results: &[LevelResult]) -> Result<(), String> {
+    let (blue, black, red, grey, green, purple) = (BLUE, BLACK, RED, GREY, GREEN, PURPLE);
+    let by = |f: fn(&LevelResult) -> f64| by_level(results, f);
     chart(
         &out.join("fig_flatness_params.svg"),
         "Bouc-Wen by implied-input flatness: estimate / truth",
