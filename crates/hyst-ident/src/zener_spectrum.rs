@@ -311,18 +311,16 @@ fn covariance(f: &[Vec<f64>]) -> Vec<Vec<f64>> {
     cov
 }
 
-/// Fit the Zener oscillator of mass `mass` to the record `y` (sampled at `fs` Hz, mean
-/// removed) over the frequencies of its periodogram in $(0, f_{\max})$ Hz, starting from the
-/// oscillating pole `pair` (Im > 0) and the real pole `real` (rad/s), e.g. those of
-/// [`covssi::refine_with_real_poles`]. See the [module documentation](self).
-pub fn fit(
+/// The checks of [`fit`]'s inputs: a positive mass and rate, a finite record that is not
+/// constant, a positive band edge, a stable start.
+fn check_inputs(
     y: &[f64],
     fs: f64,
     mass: f64,
     pair: C,
     real: f64,
     f_max: f64,
-) -> Result<ZenerSpectralFit, IdentError> {
+) -> Result<(), IdentError> {
     if !(mass.is_finite() && mass > 0.0) {
         return Err(IdentError::NonPositiveMass { mass });
     }
@@ -350,6 +348,22 @@ pub fn fit(
     if !(pair.re < 0.0 && pair.im > 0.0 && real < 0.0 && pair.re.is_finite() && real.is_finite()) {
         return Err(IdentError::UnstableStart { pair, real });
     }
+    Ok(())
+}
+
+/// Fit the Zener oscillator of mass `mass` to the record `y` (sampled at `fs` Hz, mean
+/// removed) over the frequencies of its periodogram in $(0, f_{\max})$ Hz, starting from the
+/// oscillating pole `pair` (Im > 0) and the real pole `real` (rad/s), e.g. those of
+/// [`covssi::refine_with_real_poles`]. See the [module documentation](self).
+pub fn fit(
+    y: &[f64],
+    fs: f64,
+    mass: f64,
+    pair: C,
+    real: f64,
+    f_max: f64,
+) -> Result<ZenerSpectralFit, IdentError> {
+    check_inputs(y, fs, mass, pair, real, f_max)?;
     let n = y.len();
     let top = f_max.min(fs / 2.0);
     let last = ((top / (fs / n as f64)).ceil() as usize).min(n.div_ceil(2));

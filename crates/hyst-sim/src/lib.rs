@@ -494,8 +494,36 @@ pub fn simulate_from(
         max_abs: opts.max_abs_state,
         fs,
     };
-    let integ = opts.integrator;
-    let s_end = match input {
+    let s_end = drive_input(
+        model,
+        s0,
+        opts.integrator,
+        &run,
+        input,
+        n_samples,
+        &mut sink,
+    )?;
+    let y = match &opts.decimation {
+        Decimation::Subsample => out,
+        Decimation::Fir(stages) => resample::decimate_stages(&out, stages),
+    };
+    Ok((y, s_end))
+}
+
+/// Integrate over the run's intervals with the input `input` known at each sub-step's
+/// start, middle and end as its kind says; returns the final state.
+fn drive_input(
+    model: &Oscillator,
+    s0: State,
+    integ: Integrator,
+    run: &Run,
+    input: Input<'_>,
+    n_samples: usize,
+    sink: &mut Sink<'_>,
+) -> Result<State, SimError> {
+    let (r, h, fs) = (run.r, run.h, run.fs);
+    let run = &run;
+    Ok(match input {
         Input::Sampled(u) => {
             check_length(u, n_samples)?;
             let inv_r = 1.0 / r as f64;
@@ -503,14 +531,14 @@ pub fn simulate_from(
                 model,
                 s0,
                 integ,
-                &run,
+                run,
                 |k, i| {
                     let (a, b) = (u[k], u[k + 1]);
                     let d = b - a;
                     let t0 = i as f64 * inv_r;
                     (a + d * t0, a + d * (t0 + 0.5 * inv_r), a + d * (t0 + inv_r))
                 },
-                &mut sink,
+                sink,
             )?
         }
         Input::BandLimited(u) => {
@@ -522,12 +550,12 @@ pub fn simulate_from(
                 model,
                 s0,
                 integ,
-                &run,
+                run,
                 |k, i| {
                     let base = k * 2 * r + 2 * i;
                     (fine_u[base], fine_u[base + 1], fine_u[base + 2])
                 },
-                &mut sink,
+                sink,
             )?
         }
         Input::Periodic(p) => {
@@ -539,13 +567,13 @@ pub fn simulate_from(
                 model,
                 s0,
                 integ,
-                &run,
+                run,
                 |k, i| {
                     let base = (k % p.len()) * per + 2 * i;
                     let end = if base + 2 == len { 0 } else { base + 2 };
                     (fine_u[base], fine_u[base + 1], fine_u[end])
                 },
-                &mut sink,
+                sink,
             )?
         }
         Input::Interpolated {
@@ -562,12 +590,12 @@ pub fn simulate_from(
                 model,
                 s0,
                 integ,
-                &run,
+                run,
                 |k, i| {
                     let base = k * per_sample + 2 * i;
                     (samples[base], samples[base + 1], samples[base + 2])
                 },
-                &mut sink,
+                sink,
             )?
         }
         Input::Function(f) => {
@@ -576,20 +604,15 @@ pub fn simulate_from(
                 model,
                 s0,
                 integ,
-                &run,
+                run,
                 |k, i| {
                     let t0 = k as f64 * dt + i as f64 * h;
                     (f(t0), f(t0 + 0.5 * h), f(t0 + h))
                 },
-                &mut sink,
+                sink,
             )?
         }
-    };
-    let y = match &opts.decimation {
-        Decimation::Subsample => out,
-        Decimation::Fir(stages) => resample::decimate_stages(&out, stages),
-    };
-    Ok((y, s_end))
+    })
 }
 
 /// One period of the periodic steady-state response to one period of a periodic input.

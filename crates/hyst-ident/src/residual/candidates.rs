@@ -519,6 +519,77 @@ pub fn diagnose(
     diagnose_on(o, c0, &Prepared::new(rec), range, fit_mass, trace)
 }
 
+/// What the candidates of one step are fitted on.
+#[derive(Clone, Copy)]
+struct Candidates<'a> {
+    /// The current model.
+    o: &'a Oscillator,
+    /// The output's RMS and a velocity scale (its RMS times the resonance's ω).
+    sx: f64,
+    sv: f64,
+    rec: &'a Prepared<'a>,
+    range: (usize, usize),
+    fit_mass: bool,
+    /// The current model's trace, when it was made.
+    trace: Option<&'a Trace>,
+    /// The current model's residual on `range`.
+    residual: &'a [f64],
+    /// Its power scan ([`power_scan`]).
+    scan: &'a [(f64, f64)],
+}
+
+/// The starts of the effect `e`'s fit from the current model, or why it is not a candidate.
+fn candidate_starts(e: Effect, ctx: &Candidates<'_>) -> Result<Vec<Oscillator>, &'static str> {
+    let Candidates {
+        o,
+        sx,
+        sv,
+        rec,
+        range,
+        fit_mass,
+        trace,
+        residual: r0,
+        scan,
+    } = *ctx;
+    match (e, o.restoring) {
+        (Effect::Hysteresis, Restoring::Zener(z)) => bouc_wen_replacing(o, &z, sx, rec, range)
+            .map(|m| vec![m])
+            .ok_or("no Bouc-Wen element matching the Zener element simulates on the record"),
+        (Effect::Hysteresis, Restoring::BoucWen(_)) => {
+            Err("the model already has a Bouc-Wen element")
+        }
+        (Effect::HysteresisExponent, Restoring::BoucWen(b)) if b.nu != 1.0 => {
+            Err("the Bouc-Wen element's exponent is free already")
+        }
+        (Effect::HysteresisExponent, Restoring::BoucWen(b)) => Ok(exponent_starts(o, &b, sx))
+            .and_then(|v| {
+                (!v.is_empty())
+                    .then_some(v)
+                    .ok_or("no element of another exponent matches the current one")
+            }),
+        (Effect::HysteresisExponent, _) => Err("the model has no Bouc-Wen element"),
+        _ => match already_has(o, e) {
+            Some(why) => Err(why),
+            None if e == Effect::Clearance => trace
+                .map(|t| clearance_starts(o, t, sx))
+                .filter(|v| !v.is_empty())
+                .ok_or("no clearance spring fits the missing force"),
+            None if e == Effect::RestoringSurface => trace
+                .and_then(|t| surface_start(o, t))
+                .map(|m| vec![m])
+                .ok_or("the missing force's surface has no term present"),
+            None if e == Effect::SecondMode => Ok(second_mass_starts(o, scan)).and_then(|v| {
+                (!v.is_empty())
+                    .then_some(v)
+                    .ok_or("the residual has no peak")
+            }),
+            None => with_effect(o, e, sx, sv)
+                .map(|m| vec![regression_start(m, e, r0, rec, range, fit_mass)])
+                .ok_or("the effect does not apply"),
+        },
+    }
+}
+
 pub(super) fn diagnose_on(
     o: &Oscillator,
     c0: f64,
@@ -537,51 +608,21 @@ pub(super) fn diagnose_on(
     let scan = power_scan(&r0, rec.fs);
     let spec = periodogram_peak(&scan, resonance_hz(o));
     let p0 = free(o, fit_mass).len();
+    let ctx = Candidates {
+        o,
+        sx,
+        sv,
+        rec,
+        range,
+        fit_mass,
+        trace,
+        residual: &r0,
+        scan: &scan,
+    };
     let ev = Effect::ALL
         .iter()
         .map(|&e| {
-            let starts = match (e, o.restoring) {
-                (Effect::Hysteresis, Restoring::Zener(z)) => bouc_wen_replacing(
-                    o, &z, sx, rec, range,
-                )
-                .map(|m| vec![m])
-                .ok_or("no Bouc-Wen element matching the Zener element simulates on the record"),
-                (Effect::Hysteresis, Restoring::BoucWen(_)) => {
-                    Err("the model already has a Bouc-Wen element")
-                }
-                (Effect::HysteresisExponent, Restoring::BoucWen(b)) if b.nu != 1.0 => {
-                    Err("the Bouc-Wen element's exponent is free already")
-                }
-                (Effect::HysteresisExponent, Restoring::BoucWen(b)) => {
-                    Ok(exponent_starts(o, &b, sx)).and_then(|v| {
-                        (!v.is_empty())
-                            .then_some(v)
-                            .ok_or("no element of another exponent matches the current one")
-                    })
-                }
-                (Effect::HysteresisExponent, _) => Err("the model has no Bouc-Wen element"),
-                _ => match already_has(o, e) {
-                    Some(why) => Err(why),
-                    None if e == Effect::Clearance => trace
-                        .map(|t| clearance_starts(o, t, sx))
-                        .filter(|v| !v.is_empty())
-                        .ok_or("no clearance spring fits the missing force"),
-                    None if e == Effect::RestoringSurface => trace
-                        .and_then(|t| surface_start(o, t))
-                        .map(|m| vec![m])
-                        .ok_or("the missing force's surface has no term present"),
-                    None if e == Effect::SecondMode => {
-                        Ok(second_mass_starts(o, &scan)).and_then(|v| {
-                            (!v.is_empty())
-                                .then_some(v)
-                                .ok_or("the residual has no peak")
-                        })
-                    }
-                    None => with_effect(o, e, sx, sv)
-                        .map(|m| vec![regression_start(m, e, &r0, rec, range, fit_mass)])
-                        .ok_or("the effect does not apply"),
-                },
-            };
+            let starts = candidate_starts(e, &ctx);
             let starts = match starts {
                 Ok(v) => v,
                 Err(why) => {

@@ -234,13 +234,89 @@ pub fn refine_with(
             })
             .collect()
     };
+    progress("fitting the start by output error");
+    let (model, c) = baseline(start, rec, estimate, fit_mass)?;
+    let baseline = model;
+    let (model, steps) = add_effects(model, c, rec, estimate, tests, fit_mass, progress);
+    progress("standard errors, noise level, halves");
+    let tests_err = errs(&model);
+    let estimates = standard_errors_on(&model, rec, estimate, fit_mass).unwrap_or_default();
+    let resid = residual(&model, rec, estimate).unwrap_or_default();
+    let noise = noise::noise_level(rec.u, rec.y, &resid, rec.fs);
+    let trace = surface::trace(&model, rec, estimate, fit_mass).fit;
+    let halves = drift::halves(&model, rec, estimate, fit_mass).unwrap_or_default();
+    let moving = drift::drifting(&halves);
+    let nonstationary = !moving.is_empty();
+    let noise = coloured_noise(
+        noise,
+        &resid,
+        &rec.u[estimate.0..estimate.1],
+        trace.as_ref(),
+        nonstationary,
+    );
+    let noise_epsilon: Vec<f64> = tests
+        .iter()
+        .map(|r| {
+            let y = &rec.y[r.0..r.1];
+            let span = y.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
+                - y.iter().cloned().fold(f64::INFINITY, f64::min);
+            noise.as_ref().map_or(f64::NAN, |n| n.std / span)
+        })
+        .collect();
+    let ratio = match (tests_err.first(), noise_epsilon.first()) {
+        (Some(e), Some(n)) if n.is_finite() && *n > 0.0 => Some(e.epsilon / n),
+        _ => None,
+    };
+    let unexplained = ratio
+        .filter(|r| *r > UNEXPLAINED_RATIO || nonstationary)
+        .map(|r| unexplained(r, trace.as_ref(), &moving));
+    Ok(Refinement {
+        start: StartReport {
+            requested: Start::of(start),
+            used: Start::of(start),
+            notes: Vec::new(),
+        },
+        baseline,
+        steps,
+        model,
+        tests: tests_err,
+        estimates,
+        noise,
+        noise_epsilon,
+        trace,
+        halves,
+        nonstationary,
+        unexplained,
+    })
+}
+
+/// The loop's steps from `model` (its sum of squares `c`): each traces the residual, fits
+/// every candidate, and adds the one the held-out test accepts, until none is or
+/// [`MAX_STEPS`] are added. Returns the final model and the steps.
+fn add_effects(
+    mut model: Oscillator,
+    mut c: f64,
+    rec: &Prepared<'_>,
+    estimate: (usize, usize),
+    tests: &[(usize, usize)],
+    fit_mass: bool,
+    progress: Progress<'_>,
+) -> (Oscillator, Vec<Step>) {
+    let errs = |m: &Oscillator| -> Vec<Validation> {
+        tests
+            .iter()
+            .map(|&r| {
+                test_error_on(m, rec, r).unwrap_or(Validation {
+                    epsilon: f64::INFINITY,
+                    rms: f64::INFINITY,
+                })
+            })
+            .collect()
+    };
     let outputs = |m: &Oscillator| -> Vec<Option<Vec<f64>>> {
         tests.iter().map(|&r| simulate(m, rec, r)).collect()
     };
     let ys: Vec<&[f64]> = tests.iter().map(|r| &rec.y[r.0..r.1]).collect();
-    progress("fitting the start by output error");
-    let (mut model, mut c) = baseline(start, rec, estimate, fit_mass)?;
-    let baseline = model;
     let mut steps = Vec::new();
     for k in 0..MAX_STEPS {
         progress(&format!(
@@ -298,95 +374,73 @@ pub fn refine_with(
             }
         }
     }
-    progress("standard errors, noise level, halves");
-    let tests_err = errs(&model);
-    let estimates = standard_errors_on(&model, rec, estimate, fit_mass).unwrap_or_default();
-    let resid = residual(&model, rec, estimate).unwrap_or_default();
-    let mut noise = noise::noise_level(rec.u, rec.y, &resid, rec.fs);
-    let trace = surface::trace(&model, rec, estimate, fit_mass).fit;
-    let halves = drift::halves(&model, rec, estimate, fit_mass).unwrap_or_default();
-    let moving = drift::drifting(&halves);
-    let nonstationary = !moving.is_empty();
-    // Out of band, coloured noise reads low. A residual above that level which is no
-    // function of (x, ẋ), of time or of the input is that noise: its own level is taken.
-    if let Ok(
+    (model, steps)
+}
+
+/// Out of band, coloured noise reads low. A residual `resid` above that level which is no
+/// function of (x, ẋ) (its trace's fit finds no group), of time or of the input `u` is that
+/// noise: its own level is taken.
+fn coloured_noise(
+    noise: Result<noise::NoiseLevel, String>,
+    resid: &[f64],
+    u: &[f64],
+    trace: Option<&surface::SurfaceFit>,
+    nonstationary: bool,
+) -> Result<noise::NoiseLevel, String> {
+    let Ok(
         nl @ noise::NoiseLevel {
             method: noise::NoiseMethod::OutOfBand { .. },
             ..
         },
     ) = noise
-    {
-        let level = (sse(&resid) / resid.len().max(1) as f64).sqrt();
-        let (share, bias) = noise::coherent_share(&resid, &rec.u[estimate.0..estimate.1]);
-        let structured = trace.as_ref().is_none_or(|f| f.present().next().is_some());
-        if level > UNEXPLAINED_RATIO * nl.std && !structured && share < 3.0 * bias && !nonstationary
-        {
-            noise = Ok(noise::NoiseLevel {
-                std: level,
-                method: noise::NoiseMethod::Residual {
-                    out_of_band: nl.std,
-                },
-            });
-        }
-    }
-    let noise_epsilon: Vec<f64> = tests
-        .iter()
-        .map(|r| {
-            let y = &rec.y[r.0..r.1];
-            let span = y.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
-                - y.iter().cloned().fold(f64::INFINITY, f64::min);
-            noise.as_ref().map_or(f64::NAN, |n| n.std / span)
-        })
-        .collect();
-    let ratio = match (tests_err.first(), noise_epsilon.first()) {
-        (Some(e), Some(n)) if n.is_finite() && *n > 0.0 => Some(e.epsilon / n),
-        _ => None,
+    else {
+        return noise;
     };
-    let unexplained = ratio
-        .filter(|r| *r > UNEXPLAINED_RATIO || nonstationary)
-        .map(|r| {
-            let mut signature = trace.as_ref().map_or_else(
-                || "the missing force could not be fitted".to_string(),
-                |f| f.signature(),
-            );
-            if nonstationary {
-                let list: Vec<String> = moving
-                    .iter()
-                    .map(|h| {
-                        format!(
-                            "{} {:.4e} → {:.4e} (z = {:.1})",
-                            h.name, h.first.0, h.second.0, h.z
-                        )
-                    })
-                    .collect();
-                signature = format!(
-                    "nonstationary: the halves of the estimation rows differ ({}); {signature}",
-                    list.join(", ")
-                );
-            }
-            Unexplained {
-                residual_to_noise: r,
-                signature,
-            }
-        });
-    Ok(Refinement {
-        start: StartReport {
-            requested: Start::of(start),
-            used: Start::of(start),
-            notes: Vec::new(),
-        },
-        baseline,
-        steps,
-        model,
-        tests: tests_err,
-        estimates,
-        noise,
-        noise_epsilon,
-        trace,
-        halves,
-        nonstationary,
-        unexplained,
-    })
+    let level = (sse(resid) / resid.len().max(1) as f64).sqrt();
+    let (share, bias) = noise::coherent_share(resid, u);
+    let structured = trace.is_none_or(|f| f.present().next().is_some());
+    if level > UNEXPLAINED_RATIO * nl.std && !structured && share < 3.0 * bias && !nonstationary {
+        Ok(noise::NoiseLevel {
+            std: level,
+            method: noise::NoiseMethod::Residual {
+                out_of_band: nl.std,
+            },
+        })
+    } else {
+        Ok(nl)
+    }
+}
+
+/// What is left when the held-out residual is `ratio` × the noise level: the missing
+/// force's signature, and the parameters whose halves differ (`moving`).
+fn unexplained(
+    ratio: f64,
+    trace: Option<&surface::SurfaceFit>,
+    moving: &[&drift::HalfChange],
+) -> Unexplained {
+    let mut signature = trace.map_or_else(
+        || "the missing force could not be fitted".to_string(),
+        |f| f.signature(),
+    );
+    if !moving.is_empty() {
+        let list: Vec<String> = moving
+            .iter()
+            .map(|h| {
+                format!(
+                    "{} {:.4e} → {:.4e} (z = {:.1})",
+                    h.name, h.first.0, h.second.0, h.z
+                )
+            })
+            .collect();
+        signature = format!(
+            "nonstationary: the halves of the estimation rows differ ({}); {signature}",
+            list.join(", ")
+        );
+    }
+    Unexplained {
+        residual_to_noise: ratio,
+        signature,
+    }
 }
 
 /// The start fitted by output error. A plain oscillator's (m, c, k) also follow from the

@@ -499,29 +499,6 @@ pub fn fit_surface(k: &Kinematics, r: &[f64], fit_mass: bool) -> Option<SurfaceF
         let se = cov[(nl + j, nl + j)].sqrt();
         tstat[j] = if se > 0.0 { beta[nl + j] / se } else { 0.0 };
     }
-    let section = |along: &[f64], across: &[f64], s_along: f64, s_across: f64| {
-        let bins = 16;
-        let (lo, hi) = (-2.5 * s_along, 2.5 * s_along);
-        let mut acc = vec![(0.0, 0usize); bins];
-        for ((a, c), f) in along.iter().zip(across).zip(r) {
-            if c.abs() < 0.2 * s_across && *a > lo && *a < hi {
-                let b = (((a - lo) / (hi - lo)) * bins as f64) as usize;
-                let e = &mut acc[b.min(bins - 1)];
-                e.0 += f;
-                e.1 += 1;
-            }
-        }
-        acc.iter()
-            .enumerate()
-            .filter(|(_, (_, c))| *c >= 5)
-            .map(|(b, (s, c))| {
-                (
-                    lo + (b as f64 + 0.5) * (hi - lo) / bins as f64,
-                    s / *c as f64,
-                )
-            })
-            .collect::<Vec<_>>()
-    };
     let signature = SurfaceFit::signature_of(&groups);
     Some(SurfaceFit {
         signature,
@@ -534,10 +511,43 @@ pub fn fit_surface(k: &Kinematics, r: &[f64], fit_mass: bool) -> Option<SurfaceF
         linear: (0..nl).map(|i| beta[i]).collect(),
         groups,
         explained: if sse_lin > 0.0 { beyond / sse_lin } else { 0.0 },
-        stiffness_section: section(&k.x, &k.v, sx, sv),
-        damping_section: section(&k.v, &k.x, sv, sx),
+        stiffness_section: section(&k.x, &k.v, sx, sv, r),
+        damping_section: section(&k.v, &k.x, sv, sx, r),
         rows: n,
     })
+}
+
+/// The mean force `r` in 16 bins of `along` over ±2.5 `s_along`, on the rows where `across`
+/// is within 0.2 `s_across` of 0: a section of the surface (bins with fewer than 5 rows
+/// left out).
+fn section(
+    along: &[f64],
+    across: &[f64],
+    s_along: f64,
+    s_across: f64,
+    r: &[f64],
+) -> Vec<(f64, f64)> {
+    let bins = 16;
+    let (lo, hi) = (-2.5 * s_along, 2.5 * s_along);
+    let mut acc = vec![(0.0, 0usize); bins];
+    for ((a, c), f) in along.iter().zip(across).zip(r) {
+        if c.abs() < 0.2 * s_across && *a > lo && *a < hi {
+            let b = (((a - lo) / (hi - lo)) * bins as f64) as usize;
+            let e = &mut acc[b.min(bins - 1)];
+            e.0 += f;
+            e.1 += 1;
+        }
+    }
+    acc.iter()
+        .enumerate()
+        .filter(|(_, (_, c))| *c >= 5)
+        .map(|(b, (s, c))| {
+            (
+                lo + (b as f64 + 0.5) * (hi - lo) / bins as f64,
+                s / *c as f64,
+            )
+        })
+        .collect()
 }
 
 /// A model's missing force along the measured motion, and its fit on the surface basis.
