@@ -147,8 +147,8 @@ fn refine_up_to(
     opts: &RefineOptions,
     joint_max: usize,
 ) -> Result<Refinement, SsiError> {
-    crate::check_fs(fs)?;
-    let (n, means) = crate::check_channels(y)?;
+    crate::identify::check_fs(fs)?;
+    let (n, means) = crate::identify::check_channels(y)?;
     // No iterations would report the starts as estimates; a tolerance that is not a positive
     // number never (or always) ends a fit.
     if opts.max_iterations == 0 {
