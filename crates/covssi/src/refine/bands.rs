@@ -164,69 +164,24 @@ pub(super) fn joint_by_bands(
     };
     let mut ratios = Vec::new();
     for (group, band) in &groups {
-        let combined = match &scale {
-            Some(scale) => {
-                let lams: Vec<C64> = group.iter().map(|&j| fit.lambdas[j]).collect();
-                Some(model.project(&lams, joint_max, scale)?)
-            }
-            None => None,
-        };
-        let views: Vec<&[f64]> = combined.iter().flatten().map(Vec::as_slice).collect();
-        let zeros = vec![0.0; views.len()];
-        let combined_model = combined
-            .is_some()
-            .then(|| Model::new(&views, &zeros, model.fs));
-        let rec = combined_model.as_ref().unwrap_or(model);
-        let lj = rec.x.len();
-        // The modes next to the group's (by |λ|), whose tails reach furthest into the band:
-        // their shapes and gains are fitted with the group's before its poles move.
-        let fitted: Vec<usize> = group
-            .iter()
-            .copied()
-            .chain(neighbours(&by_size, group))
-            .collect();
-        let (mf, mn) = (group.len(), fitted.len());
-        // Ten observations per parameter, a frequency giving l² of them.
-        if !(2..=joint_max).contains(&lj) || band.len() * lj * lj < 10 * joint::parameters(lj, mf) {
-            return None;
-        }
-        // The group's modes first, then their neighbours, then the others.
-        let order: Vec<usize> = fitted
-            .iter()
-            .copied()
-            .chain((0..mk).filter(|j| !fitted.contains(j)))
-            .collect();
-        let poles: Vec<f64> = [0, mk]
-            .iter()
-            .flat_map(|&off| order.iter().map(move |&j| fit.theta[off + j]))
-            .collect();
-        // The first phase of the fit, poles held, reaches three half-power half-widths past
-        // each neighbour's peak, so that its shape and gain come from its peak and not only
-        // from the tail that reaches into the band.
-        let index = |w: f64| frequency_index(w, model.fs, model.y[0].len(), model.k());
-        let wide = fitted[mf..].iter().fold(band.clone(), |b, &j| {
-            let (w, h) = (fit.lambdas[j].norm(), -fit.lambdas[j].re);
-            b.start.min(index(w - 3.0 * h))..b.end.max(index(w + 3.0 * h) + 1)
-        });
-        let (mut jm, start) = joint::Joint::start(rec, &poles, mn, wide)?;
-        let jf = jm.fit(start, mf, band.clone(), opts).ok()?;
-        ratios.extend(jm.ratios(&jf.theta)?);
-        // Its asymptotic covariance is F⁻¹ (an exact likelihood); a singular F means the
-        // channels are degenerate for it (e.g. one a copy of another).
-        let cov = linalg::spd_inverse(&jf.fisher)?;
-        // A pole that left its band (to a neighbour's peak) is not that band's mode.
-        let (lo, hi) = (rec.z[band.start].arg(), rec.z[band.end - 1].arg());
-        if band.len() < rec.k()
-            && jf
-                .lambdas
-                .iter()
-                .any(|lam| !(lo..=hi).contains(&(lam.im / model.fs)))
-        {
-            return None;
-        }
-        // The group's shapes, in channel space only when the channels were fitted
-        // themselves.
-        let shapes = jm.fitted_shapes(&jf.theta);
+        let BandFit {
+            fit: jf,
+            covariance: cov,
+            shapes,
+            channels: lj,
+            ratios: band_ratios,
+        } = fit_band(
+            model,
+            fit,
+            (group, band),
+            &by_size,
+            scale.as_deref(),
+            joint_max,
+            opts,
+        )?;
+        ratios.extend(band_ratios);
+        let mf = group.len();
+
         for (i, &j) in group.iter().enumerate() {
             est.lambdas[j] = jf.lambdas[i];
             est.se[j] = Some(pole_se(&cov, i, mf, jf.lambdas[i]));
@@ -239,6 +194,105 @@ pub(super) fn joint_by_bands(
     }
     est.misfit = exponential_misfit(ratios);
     Some(est)
+}
+
+/// A band's joint fit.
+struct BandFit {
+    fit: Fit,
+    /// Its asymptotic covariance F⁻¹.
+    covariance: Dense,
+    /// The shapes of every mode of its model.
+    shapes: Vec<Vec<C64>>,
+    /// The channels fitted (the combinations' count when combined).
+    channels: usize,
+    /// The whitened periodogram ordinates of the fit.
+    ratios: Vec<f64>,
+}
+
+/// The joint fit of the modes `group` over the frequencies `band` (through combinations of
+/// the channels scaled by `scale` when given), their neighbours by |λ| (`by_size`) fitted
+/// with them, with its whitened ordinates. `None` when the band has too
+/// few observations, the fit fails, F is singular, or a pole leaves its band.
+fn fit_band(
+    model: &Model,
+    fit: &Fit,
+    (group, band): (&[usize], &Range<usize>),
+    by_size: &[usize],
+    scale: Option<&[f64]>,
+    joint_max: usize,
+    opts: &RefineOptions,
+) -> Option<BandFit> {
+    let mk = fit.lambdas.len();
+    let combined = match scale {
+        Some(scale) => {
+            let lams: Vec<C64> = group.iter().map(|&j| fit.lambdas[j]).collect();
+            Some(model.project(&lams, joint_max, scale)?)
+        }
+        None => None,
+    };
+    let views: Vec<&[f64]> = combined.iter().flatten().map(Vec::as_slice).collect();
+    let zeros = vec![0.0; views.len()];
+    let combined_model = combined
+        .is_some()
+        .then(|| Model::new(&views, &zeros, model.fs));
+    let rec = combined_model.as_ref().unwrap_or(model);
+    let lj = rec.x.len();
+    // The modes next to the group's (by |λ|), whose tails reach furthest into the band:
+    // their shapes and gains are fitted with the group's before its poles move.
+    let fitted: Vec<usize> = group
+        .iter()
+        .copied()
+        .chain(neighbours(by_size, group))
+        .collect();
+    let (mf, mn) = (group.len(), fitted.len());
+    // Ten observations per parameter, a frequency giving l² of them.
+    if !(2..=joint_max).contains(&lj) || band.len() * lj * lj < 10 * joint::parameters(lj, mf) {
+        return None;
+    }
+    // The group's modes first, then their neighbours, then the others.
+    let order: Vec<usize> = fitted
+        .iter()
+        .copied()
+        .chain((0..mk).filter(|j| !fitted.contains(j)))
+        .collect();
+    let poles: Vec<f64> = [0, mk]
+        .iter()
+        .flat_map(|&off| order.iter().map(move |&j| fit.theta[off + j]))
+        .collect();
+    // The first phase of the fit, poles held, reaches three half-power half-widths past
+    // each neighbour's peak, so that its shape and gain come from its peak and not only
+    // from the tail that reaches into the band.
+    let index = |w: f64| frequency_index(w, model.fs, model.y[0].len(), model.k());
+    let wide = fitted[mf..].iter().fold(band.clone(), |b, &j| {
+        let (w, h) = (fit.lambdas[j].norm(), -fit.lambdas[j].re);
+        b.start.min(index(w - 3.0 * h))..b.end.max(index(w + 3.0 * h) + 1)
+    });
+    let (mut jm, start) = joint::Joint::start(rec, &poles, mn, wide)?;
+    let jf = jm.fit(start, mf, band.clone(), opts).ok()?;
+    let ratios = jm.ratios(&jf.theta)?;
+    // Its asymptotic covariance is F⁻¹ (an exact likelihood); a singular F means the
+    // channels are degenerate for it (e.g. one a copy of another).
+    let cov = linalg::spd_inverse(&jf.fisher)?;
+    // A pole that left its band (to a neighbour's peak) is not that band's mode.
+    let (lo, hi) = (rec.z[band.start].arg(), rec.z[band.end - 1].arg());
+    if band.len() < rec.k()
+        && jf
+            .lambdas
+            .iter()
+            .any(|lam| !(lo..=hi).contains(&(lam.im / model.fs)))
+    {
+        return None;
+    }
+    // The group's shapes, in channel space only when the channels were fitted
+    // themselves.
+    let shapes = jm.fitted_shapes(&jf.theta);
+    Some(BandFit {
+        fit: jf,
+        covariance: cov,
+        shapes,
+        channels: lj,
+        ratios,
+    })
 }
 
 /// The modes just below and just above `group` in `by_size` (modes in order of |λ|, `group`

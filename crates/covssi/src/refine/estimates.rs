@@ -69,3 +69,97 @@ pub(super) fn pole_se(cov: &Dense, j: usize, m: usize, lam: C64) -> (f64, f64) {
         cov.at(m + j, m + j).max(0.0).sqrt() * zeta * (1.0 - zeta),
     )
 }
+
+/// The per-channel fit's estimates, with their asymptotic covariance: F⁻¹ for one channel;
+/// for the per-channel likelihood of several, the composite likelihood's sandwich
+/// F⁻¹ J F⁻¹, J the covariance of the score given the channels' coherence.
+pub(super) fn per_channel_estimates(
+    fitted_model: &Model<'_>,
+    fit: Fit,
+    l: usize,
+    misfit: f64,
+) -> Estimates {
+    let mk = fit.lambdas.len();
+    let cov = linalg::spd_inverse(&fit.fisher).and_then(|fi| {
+        if l == 1 {
+            return Some(fi);
+        }
+        let j = fitted_model.eval(&fit.theta, mk, What::Sandwich)?.f;
+        Some(linalg::sandwich(&fi, &j))
+    });
+    Estimates {
+        se: (0..mk)
+            .map(|j| cov.as_ref().map(|c| pole_se(c, j, mk, fit.lambdas[j])))
+            .collect(),
+        reals: fit
+            .reals
+            .iter()
+            .enumerate()
+            .map(|(i, &lam)| {
+                let t = 2 * mk + i;
+                (lam, cov.as_ref().map(|c| -lam * c.at(t, t).max(0.0).sqrt()))
+            })
+            .collect(),
+        shapes: vec![None; fit.lambdas.len()],
+        lambdas: fit.lambdas,
+        l: fit.l,
+        misfit,
+        iterations: fit.iterations,
+        combinations: None,
+        bands: 1,
+    }
+}
+
+/// The refined modes of `est` with their `evidence`, named after the SSI `modes` they are,
+/// by frequency.
+pub(super) fn refined_modes(est: &Estimates, evidence: &[f64], modes: &[Mode]) -> Vec<RefinedMode> {
+    let mut kept: Vec<RefinedMode> = est
+        .lambdas
+        .iter()
+        .zip(&est.se)
+        .zip(&est.shapes)
+        .enumerate()
+        .map(|(j, ((&lam, se), shape_and_se))| {
+            let w = lam.norm();
+            RefinedMode {
+                source: None,
+                frequency_hz: w / (2.0 * std::f64::consts::PI),
+                damping_ratio: -lam.re / w,
+                frequency_se_hz: se.map(|s| s.0),
+                damping_se: se.map(|s| s.1),
+                lambda: lam,
+                shape: shape_and_se.as_ref().map(|s| s.0.clone()),
+                shape_se: shape_and_se.as_ref().map(|s| s.1.clone()),
+                mpc: shape_and_se.as_ref().map(|s| crate::mpc(&s.0)),
+                evidence: evidence[j],
+            }
+        })
+        .collect();
+    pair_with_ssi_modes(&mut kept, modes);
+    kept.sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
+    kept
+}
+
+/// The refined real poles of `est`, with the SSI clusters they started from and their
+/// evidence, slowest first.
+pub(super) fn refined_real_poles(
+    est: &Estimates,
+    sources: &[usize],
+    evidence: &[f64],
+) -> Vec<RefinedRealPole> {
+    let mut real_kept: Vec<RefinedRealPole> = est
+        .reals
+        .iter()
+        .zip(sources.iter().zip(evidence))
+        .map(
+            |(&(lambda, lambda_se), (&source, &evidence))| RefinedRealPole {
+                source,
+                lambda,
+                lambda_se,
+                evidence,
+            },
+        )
+        .collect();
+    real_kept.sort_by(|a, b| b.lambda.total_cmp(&a.lambda));
+    real_kept
+}

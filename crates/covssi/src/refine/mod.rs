@@ -149,8 +149,110 @@ fn refine_up_to(
 ) -> Result<Refinement, SsiError> {
     crate::identify::check_fs(fs)?;
     let (n, means) = crate::identify::check_channels(y)?;
-    // No iterations would report the starts as estimates; a tolerance that is not a positive
-    // number never (or always) ends a fit.
+    check_refine_options(opts, real_poles)?;
+    let m = modes.len();
+    let l = y.len();
+    let p = 2 * m + real_poles.len();
+    let params = p + l * (p + 1);
+    // Enough frequencies that the Fisher information can be estimated: ten per parameter.
+    let needed = 2 * (10 * params + 1) + 2;
+    if n < needed {
+        return Err(SsiError::TooShortToRefine {
+            samples: n,
+            modes: m,
+            needed,
+        });
+    }
+    let (scaled, scales) = equilibrated(y, &means);
+    let (views, centres): (Vec<&[f64]>, Vec<f64>) = match &scaled {
+        Some(c) => (c.iter().map(Vec::as_slice).collect(), vec![0.0; l]),
+        None => (y.to_vec(), means.clone()),
+    };
+    let model = Model::new(&views, &centres, fs);
+    let penalty = bic_penalty(l, model.k());
+    let real_penalty = 0.5 * (1.0 + l as f64) * (model.k() as f64).ln();
+    // 1. The strong modes and real poles, then the other real poles, then the weak modes.
+    let (first, weak, weak_reals) = strong_first(&model, modes, real_poles, opts)?;
+    let reals = add_real_poles(&model, first, real_poles, &weak_reals, real_penalty, opts)?;
+    //    The real poles' evidence is weighed once here, before the weak modes, too: a
+    //    spurious strong real pole left in wanders through every weak mode's fit, slowing
+    //    each (on a Zener record, 2.9 s against 0.3 s for the weak modes' fits).
+    let mut real_dropped = reals.dropped;
+    let reals = real_pole_evidence(
+        &model,
+        reals.fit,
+        reals.sources,
+        real_poles,
+        real_penalty,
+        opts,
+    )?;
+    real_dropped.extend(reals.dropped);
+    let real_sources = reals.sources;
+    let with_reals = reals.model;
+    let cur = with_reals.as_ref().unwrap_or(&model);
+    let mut dropped = Vec::new();
+    let fit = add_weak_modes(cur, reals.fit, modes, &weak, penalty, opts, &mut dropped)?;
+    // 2. Each kept mode's evidence, the weakest dropped while below the penalty.
+    let (fit, evidence) = mode_evidence(cur, fit, modes, penalty, opts, &mut dropped)?;
+    // 2b. The real poles' evidence, tested the same way.
+    let reals = real_pole_evidence(&model, fit, real_sources, real_poles, real_penalty, opts)?;
+    real_dropped.extend(reals.dropped);
+    let fit = reals.fit;
+    let fitted_model = reals.model.as_ref().unwrap_or(&model);
+    // 3. The chosen modes fitted once more by the joint likelihood, when asked, when the
+    //    record follows the per-channel model (a record that does not, e.g. under a
+    //    multisine, will not follow the joint one either) and when it has enough frequencies
+    //    for the joint parameters (ten observations each, a frequency giving l² of them). If
+    //    that fails the per-channel fit stands.
+    let mk = fit.lambdas.len();
+    let per_channel_misfit = fitted_model
+        .eval(&fit.theta, mk, What::Ratios)
+        .map_or(1.0, |e| exponential_misfit(e.ratios));
+    //    Above `joint_max` channels (the joint cost grows as l⁴) the joint likelihood is that
+    //    of `joint_max` combinations of them carrying the modes; with more modes than
+    //    combinations, band by band (see [`joint_by_bands`]).
+    //    The joint model has no real poles: with one kept, the per-channel fit stands.
+    let wanted = opts.joint && mk > 0 && fit.reals.is_empty() && per_channel_misfit <= MISFIT_LIMIT;
+    let joint_fit = wanted
+        .then(|| joint_by_bands(&model, &fit, joint_max, opts))
+        .flatten();
+    let joint = joint_fit.is_some();
+    let est = match joint_fit {
+        Some(est) => est,
+        None => per_channel_estimates(fitted_model, fit, l, per_channel_misfit),
+    };
+    let kept = refined_modes(&est, &evidence, modes);
+    let real_kept = refined_real_poles(&est, &reals.sources, &reals.evidence);
+    Ok(Refinement {
+        modes: kept,
+        dropped,
+        penalty,
+        real_poles: real_kept,
+        dropped_real_poles: real_dropped,
+        real_pole_penalty: real_penalty,
+        // S of a channel scaled by d is d² times its own: each frequency's ln S (ln det S,
+        // jointly) rises by Σ ln d². Combinations are built from the channels over their own
+        // noise floors, whatever their units, and need no correction.
+        neg_log_likelihood: match est.combinations {
+            None => est.l - model.k() as f64 * scales.iter().map(|d| 2.0 * d.ln()).sum::<f64>(),
+            Some(_) => est.l,
+        },
+        misfit: est.misfit,
+        frequencies: model.k(),
+        iterations: est.iterations,
+        joint,
+        combinations: est.combinations,
+        bands: est.bands,
+    })
+}
+
+/// The options the refinement checks itself: no iterations would report the starts as
+/// estimates; a tolerance that is not a positive number never (or always) ends a fit; a
+/// real pole must be negative and finite.
+fn check_refine_options(
+    opts: &RefineOptions,
+    real_poles: &[RealPoleCluster],
+) -> Result<(), SsiError> {
     if opts.max_iterations == 0 {
         return Err(SsiError::InvalidOption {
             option: SsiOption::MaxIterations,
@@ -169,19 +271,13 @@ fn refine_up_to(
     {
         return Err(SsiError::NotNegativeRealPole { lambda: bad.lambda });
     }
-    let m = modes.len();
+    Ok(())
+}
+
+/// The channels scaled to like sizes, when their peak deviations differ by more than
+/// [`EQUILIBRATE_ABOVE`] (centred and scaled; `None` otherwise), and the scales.
+fn equilibrated(y: &[&[f64]], means: &[f64]) -> (Option<Vec<Vec<f64>>>, Vec<f64>) {
     let l = y.len();
-    let p = 2 * m + real_poles.len();
-    let params = p + l * (p + 1);
-    // Enough frequencies that the Fisher information can be estimated: ten per parameter.
-    let needed = 2 * (10 * params + 1) + 2;
-    if n < needed {
-        return Err(SsiError::TooShortToRefine {
-            samples: n,
-            modes: m,
-            needed,
-        });
-    }
     // Channels of very different sizes (units a million apart) made the start's regressions
     // ill-conditioned, and the joint fit failed and fell back to the per-channel one. As
     // LAPACK equilibrates a matrix only when it is badly scaled, each channel is then scaled
@@ -193,7 +289,7 @@ fn refine_up_to(
     // Only the likelihood's value depends on the units; it is given back in the user's.
     let peaks: Vec<f64> = y
         .iter()
-        .zip(&means)
+        .zip(means)
         .map(|(c, m)| c.iter().fold(0.0f64, |a, v| a.max((v - m).abs())))
         .collect();
     let top = peaks.iter().copied().fold(0.0f64, f64::max);
@@ -207,20 +303,25 @@ fn refine_up_to(
     } else {
         vec![1.0; l]
     };
-    let scaled: Vec<Vec<f64>>;
-    let (views, centres): (Vec<&[f64]>, Vec<f64>) = if equilibrate {
-        scaled = y
-            .iter()
-            .zip(&means)
+    let scaled = equilibrate.then(|| {
+        y.iter()
+            .zip(means)
             .zip(&scales)
             .map(|((c, m), d)| c.iter().map(|v| (v - m) * d).collect())
-            .collect();
-        (scaled.iter().map(Vec::as_slice).collect(), vec![0.0; l])
-    } else {
-        (y.to_vec(), means.clone())
-    };
-    let model = Model::new(&views, &centres, fs);
-    let penalty = bic_penalty(l, model.k());
+            .collect()
+    });
+    (scaled, scales)
+}
+
+/// Step 1: the strong SSI modes and real poles fitted together; the weak modes (most
+/// members first) and the real poles still to add, in the order to add them.
+fn strong_first<'a>(
+    model: &Model<'a>,
+    modes: &[Mode],
+    real_poles: &[RealPoleCluster],
+    opts: &RefineOptions,
+) -> Result<(RealPoles<'a>, Vec<usize>, Vec<usize>), SsiError> {
+    let m = modes.len();
     // 1. The strong SSI modes (at least half the largest member count) are fitted together:
     //    each then has a pole at its place from the start, and no pole has to travel to a
     //    peak left without one. The others are added one at a time, most members first, and
@@ -277,27 +378,21 @@ fn refine_up_to(
             }
         }
     };
-    let real_penalty = 0.5 * (1.0 + l as f64) * (model.k() as f64).ln();
-    let reals = add_real_poles(&model, first, real_poles, &weak_reals, real_penalty, opts)?;
-    //    The real poles' evidence is weighed once here, before the weak modes, too: a
-    //    spurious strong real pole left in wanders through every weak mode's fit, slowing
-    //    each (on a Zener record, 2.9 s against 0.3 s for the weak modes' fits).
-    let mut real_dropped = reals.dropped;
-    let reals = real_pole_evidence(
-        &model,
-        reals.fit,
-        reals.sources,
-        real_poles,
-        real_penalty,
-        opts,
-    )?;
-    real_dropped.extend(reals.dropped);
-    let mut fit = reals.fit;
-    let real_sources = reals.sources;
-    let with_reals = reals.model;
-    let cur = with_reals.as_ref().unwrap_or(&model);
-    let mut dropped = Vec::new();
-    for &cand in &weak {
+    Ok((first, weak, weak_reals))
+}
+
+/// Step 1, continued: the weak modes `weak` added one at a time to `fit`, each kept when L
+/// falls by at least `penalty` (when selecting), else recorded in `dropped`.
+fn add_weak_modes(
+    cur: &Model<'_>,
+    mut fit: Fit,
+    modes: &[Mode],
+    weak: &[usize],
+    penalty: f64,
+    opts: &RefineOptions,
+    dropped: &mut Vec<DroppedMode>,
+) -> Result<Fit, SsiError> {
+    for &cand in weak {
         let next = cur.fit_with(
             &fit,
             modes[cand].lambda,
@@ -315,11 +410,23 @@ fn refine_up_to(
             });
         }
     }
-    // 2. Evidence of each kept mode: the rise of L when it is removed, the other poles held
-    //    and the numerators refitted. For the decision, everything is then let move from
-    //    there: the other poles stay at their own peaks unless the removed one shared a peak
-    //    with them, and then the rise is small. While the weakest rise is below the penalty,
-    //    that mode goes.
+    Ok(fit)
+}
+
+/// Step 2: each kept mode's evidence (the rise of L when it is removed, the other poles held
+/// and the numerators refitted), and the fit once every mode left has at least `penalty`
+/// (when selecting); those dropped are recorded in `dropped`.
+fn mode_evidence(
+    cur: &Model<'_>,
+    mut fit: Fit,
+    modes: &[Mode],
+    penalty: f64,
+    opts: &RefineOptions,
+    dropped: &mut Vec<DroppedMode>,
+) -> Result<(Fit, Vec<f64>), SsiError> {
+    // For the decision, everything is let move from the held fit: the other poles stay at
+    // their own peaks unless the removed one shared a peak with them, and then the rise is
+    // small. While the weakest rise is below the penalty, that mode goes.
     let evidence = loop {
         let without: Vec<(f64, Fit)> = (0..fit.lambdas.len())
             .into_par_iter()
@@ -351,124 +458,7 @@ fn refine_up_to(
             _ => break without.iter().map(|(held, _)| *held).collect::<Vec<f64>>(),
         }
     };
-    // 2b. The real poles' evidence, tested the same way.
-    let reals = real_pole_evidence(&model, fit, real_sources, real_poles, real_penalty, opts)?;
-    real_dropped.extend(reals.dropped);
-    let fit = reals.fit;
-    let fitted_model = reals.model.as_ref().unwrap_or(&model);
-    // 3. The chosen modes fitted once more by the joint likelihood, when asked, when the
-    //    record follows the per-channel model (a record that does not, e.g. under a
-    //    multisine, will not follow the joint one either) and when it has enough frequencies
-    //    for the joint parameters (ten observations each, a frequency giving l² of them). If
-    //    that fails the per-channel fit stands.
-    let mk = fit.lambdas.len();
-    let per_channel_misfit = fitted_model
-        .eval(&fit.theta, mk, What::Ratios)
-        .map_or(1.0, |e| exponential_misfit(e.ratios));
-    //    Above `joint_max` channels (the joint cost grows as l⁴) the joint likelihood is that
-    //    of `joint_max` combinations of them carrying the modes; with more modes than
-    //    combinations, band by band (see [`joint_by_bands`]).
-    //    The joint model has no real poles: with one kept, the per-channel fit stands.
-    let wanted = opts.joint && mk > 0 && fit.reals.is_empty() && per_channel_misfit <= MISFIT_LIMIT;
-    let joint_fit = wanted
-        .then(|| joint_by_bands(&model, &fit, joint_max, opts))
-        .flatten();
-    let joint = joint_fit.is_some();
-    let est = match joint_fit {
-        Some(est) => est,
-        None => {
-            // Asymptotic covariance: F⁻¹ for one channel; for the per-channel likelihood of
-            // several, the composite likelihood's sandwich F⁻¹ J F⁻¹, J the covariance of the
-            // score given the channels' coherence.
-            let cov = linalg::spd_inverse(&fit.fisher).and_then(|fi| {
-                if l == 1 {
-                    return Some(fi);
-                }
-                let j = fitted_model.eval(&fit.theta, mk, What::Sandwich)?.f;
-                Some(linalg::sandwich(&fi, &j))
-            });
-            Estimates {
-                se: (0..mk)
-                    .map(|j| cov.as_ref().map(|c| pole_se(c, j, mk, fit.lambdas[j])))
-                    .collect(),
-                reals: fit
-                    .reals
-                    .iter()
-                    .enumerate()
-                    .map(|(i, &lam)| {
-                        let t = 2 * mk + i;
-                        (lam, cov.as_ref().map(|c| -lam * c.at(t, t).max(0.0).sqrt()))
-                    })
-                    .collect(),
-                shapes: vec![None; fit.lambdas.len()],
-                lambdas: fit.lambdas,
-                l: fit.l,
-                misfit: per_channel_misfit,
-                iterations: fit.iterations,
-                combinations: None,
-                bands: 1,
-            }
-        }
-    };
-    let mut kept: Vec<RefinedMode> = est
-        .lambdas
-        .iter()
-        .zip(&est.se)
-        .zip(&est.shapes)
-        .enumerate()
-        .map(|(j, ((&lam, se), shape_and_se))| {
-            let w = lam.norm();
-            RefinedMode {
-                source: None,
-                frequency_hz: w / (2.0 * std::f64::consts::PI),
-                damping_ratio: -lam.re / w,
-                frequency_se_hz: se.map(|s| s.0),
-                damping_se: se.map(|s| s.1),
-                lambda: lam,
-                shape: shape_and_se.as_ref().map(|s| s.0.clone()),
-                shape_se: shape_and_se.as_ref().map(|s| s.1.clone()),
-                mpc: shape_and_se.as_ref().map(|s| crate::mpc(&s.0)),
-                evidence: evidence[j],
-            }
-        })
-        .collect();
-    pair_with_ssi_modes(&mut kept, modes);
-    kept.sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
-    let mut real_kept: Vec<RefinedRealPole> = est
-        .reals
-        .iter()
-        .zip(reals.sources.iter().zip(&reals.evidence))
-        .map(
-            |(&(lambda, lambda_se), (&source, &evidence))| RefinedRealPole {
-                source,
-                lambda,
-                lambda_se,
-                evidence,
-            },
-        )
-        .collect();
-    real_kept.sort_by(|a, b| b.lambda.total_cmp(&a.lambda));
-    Ok(Refinement {
-        modes: kept,
-        dropped,
-        penalty,
-        real_poles: real_kept,
-        dropped_real_poles: real_dropped,
-        real_pole_penalty: real_penalty,
-        // S of a channel scaled by d is d² times its own: each frequency's ln S (ln det S,
-        // jointly) rises by Σ ln d². Combinations are built from the channels over their own
-        // noise floors, whatever their units, and need no correction.
-        neg_log_likelihood: match est.combinations {
-            None => est.l - model.k() as f64 * scales.iter().map(|d| 2.0 * d.ln()).sum::<f64>(),
-            Some(_) => est.l,
-        },
-        misfit: est.misfit,
-        frequencies: model.k(),
-        iterations: est.iterations,
-        joint,
-        combinations: est.combinations,
-        bands: est.bands,
-    })
+    Ok((fit, evidence))
 }
 
 #[cfg(test)]

@@ -315,17 +315,21 @@ impl<'a> Model<'a> {
     /// Nyquist, a numerator zero on the unit circle, overflow).
     pub(super) fn eval(&self, th: &[f64], m: usize, what: What) -> Option<Eval> {
         let derivs = matches!(what, What::Fisher | What::Sandwich | What::FisherNumerators);
-        let sandwich = what == What::Sandwich;
-        let ratios = what == What::Ratios;
-        let l = self.x.len();
         // Pole parameters, and each numerator's degree: 2m, plus one per real pole.
         let p = self.poles(m);
-        let q = p;
         // ∂ log S_c by the poles' parameters is −∂ ln|A|², the same for every channel: its
         // columns D_p are stored once (none when the poles are held), and each channel's
         // D_c holds those by ln σ_c² and by B_c's coefficients.
-        let pole_derivs = derivs && what != What::FisherNumerators;
-        let np = p + l * (q + 1);
+        let shape = Shape {
+            p,
+            q: p,
+            l: self.x.len(),
+            derivs,
+            pole_derivs: derivs && what != What::FisherNumerators,
+            sandwich: what == What::Sandwich,
+            ratios: what == What::Ratios,
+        };
+        let np = p + shape.l * (shape.q + 1);
         let den = Denominator::with_reals(th, m, self.reals, self.fs)?;
         let nchunks = self.k().div_ceil(CHUNK);
         let zero = || Eval::zero(if derivs { np } else { 0 });
@@ -334,153 +338,154 @@ impl<'a> Model<'a> {
             .map(|ci| {
                 let lo = ci * CHUNK;
                 let hi = (lo + CHUNK).min(self.k());
-                let mut acc = zero();
-                let mut d = if derivs {
-                    vec![Dense::zeros(hi - lo, q + 1); l]
-                } else {
-                    Vec::new()
-                };
-                let mut dp = Dense::zeros(if pole_derivs { hi - lo } else { 0 }, p);
-                let mut da = vec![0.0; p];
-                let mut pw = vec![C64::new(0.0, 0.0); q + 1];
-                for (row, kk) in (lo..hi).enumerate() {
-                    let z = self.z[kk];
-                    let log_a2 = den.at(z, pole_derivs, &mut da);
-                    let zc = z.conj();
-                    pw[0] = C64::new(1.0, 0.0);
-                    for k in 1..=q {
-                        pw[k] = pw[k - 1] * zc;
-                    }
-                    // Σ_c r_c, by which the poles' score grows.
-                    let mut r_sum = 0.0;
-                    for (c, xc) in self.x.iter().enumerate() {
-                        let off = p + c * (q + 1);
-                        let b = pw[0]
-                            + pw[1..]
-                                .iter()
-                                .zip(&th[off + 1..=off + q])
-                                .map(|(p, bk)| p * bk)
-                                .sum::<C64>();
-                        let b2 = b.norm_sqr();
-                        let log_s = th[off] + b2.ln() - log_a2;
-                        let s = log_s.exp();
-                        let ic = xc[kk].norm_sqr();
-                        acc.l += log_s + ic / s;
-                        if ratios {
-                            acc.ratios.push(ic / s);
-                        }
-                        if derivs {
-                            // The row of D_c (∂ log S_c), and U += its entries times r. The
-                            // score is summed as the row is written: reading the row back
-                            // would stride across D_c's columns.
-                            let r = ic / s - 1.0;
-                            r_sum += r;
-                            let dc = &mut d[c];
-                            dc.set(row, 0, 1.0);
-                            acc.u[off] += r;
-                            let bc = b.conj();
-                            for (k, pk) in pw.iter().enumerate().skip(1) {
-                                let v = 2.0 * (pk * bc).re / b2;
-                                dc.set(row, k, v);
-                                acc.u[off + k] += v * r;
-                            }
-                        }
-                    }
-                    if pole_derivs {
-                        for (t, dat) in da.iter().enumerate() {
-                            dp.set(row, t, -dat);
-                            acc.u[t] -= dat * r_sum;
-                        }
-                    }
+                let (mut acc, dp, d) = self.chunk(th, &den, &shape, lo..hi, zero());
+                if shape.derivs && !shape.sandwich {
+                    fisher_blocks(&mut acc, &dp, &d, &shape);
                 }
-                if derivs && !sandwich {
-                    // F: Σ_c [D_p D_c]ᵀ[D_p D_c], by blocks: l D_pᵀD_p for the poles, D_pᵀD_c
-                    // between the poles and channel c, D_cᵀD_c within channel c.
-                    let nb = q + 1;
-                    // `block` (or its transpose) added into f from row r0, column c0.
-                    let add = |f: &mut Dense, block: &Dense, r0: usize, c0: usize, t: bool| {
-                        for a in 0..block.rows {
-                            for b in 0..block.cols {
-                                let (i, j) = if t {
-                                    (r0 + b, c0 + a)
-                                } else {
-                                    (r0 + a, c0 + b)
-                                };
-                                f.set(i, j, f.at(i, j) + block.at(a, b));
-                            }
-                        }
-                    };
-                    if pole_derivs {
-                        let mut gp = Dense::zeros(p, p);
-                        linalg::gram_add(&dp, &mut gp);
-                        gp.data.iter_mut().for_each(|v| *v *= l as f64);
-                        add(&mut acc.f, &gp, 0, 0, false);
-                    }
-                    let mut cross = Dense::zeros(p, nb);
-                    let mut gc = Dense::zeros(nb, nb);
-                    for (c, dc) in d.iter().enumerate() {
-                        let off = p + c * nb;
-                        gc.data.iter_mut().for_each(|v| *v = 0.0);
-                        linalg::gram_add(dc, &mut gc);
-                        add(&mut acc.f, &gc, off, off, false);
-                        if pole_derivs {
-                            cross.data.iter_mut().for_each(|v| *v = 0.0);
-                            linalg::tn_add(&dp, dc, &mut cross);
-                            add(&mut acc.f, &cross, 0, off, false);
-                            add(&mut acc.f, &cross, off, 0, true);
-                        }
-                    }
-                }
-                if sandwich {
-                    // J = Σ_{c,c'} D_cᵀ diag(γ²_cc') D_c' (cov(I_c/S_c, I_c'/S_c') = γ²_cc'),
-                    // D_c = [D_p D_c] in full.
-                    let per = p + q + 1;
-                    let d: Vec<Dense> = d
-                        .iter()
-                        .map(|dc| {
-                            let mut full = Dense::zeros(hi - lo, per);
-                            for row in 0..hi - lo {
-                                for t in 0..p {
-                                    full.set(row, t, dp.at(row, t));
-                                }
-                                for t in 0..=q {
-                                    full.set(row, p + t, dc.at(row, t));
-                                }
-                            }
-                            full
-                        })
-                        .collect();
-                    let mut block = Dense::zeros(per, per);
-                    for (c, dc) in d.iter().enumerate() {
-                        let off = p + c * (q + 1);
-                        for (c2, dc2) in d.iter().enumerate() {
-                            block.data.iter_mut().for_each(|v| *v = 0.0);
-                            if c2 == c {
-                                linalg::gram_add(dc, &mut block);
-                            } else {
-                                let g = &self.coherence[pair(c, c2, l)][lo..hi];
-                                let mut scaled = dc2.clone();
-                                for t in 0..per {
-                                    for (row, gr) in g.iter().enumerate() {
-                                        scaled.set(row, t, scaled.at(row, t) * gr);
-                                    }
-                                }
-                                linalg::tn_add(dc, &scaled, &mut block);
-                            }
-                            let off2 = p + c2 * (q + 1);
-                            for a in 0..per {
-                                for b in 0..per {
-                                    let (ga, gb) = (global(a, p, off), global(b, p, off2));
-                                    acc.f.set(ga, gb, acc.f.at(ga, gb) + block.at(a, b));
-                                }
-                            }
-                        }
-                    }
+                if shape.sandwich {
+                    self.sandwich_blocks(&mut acc, &dp, &d, &shape, lo..hi);
                 }
                 acc
             })
             .reduce(zero, Eval::merge);
         partial.l.is_finite().then_some(partial)
+    }
+
+    /// `L` over the frequencies `rows`, and with derivatives the score and the rows of
+    /// D_p (the poles' columns) and of each channel's D_c.
+    fn chunk(
+        &self,
+        th: &[f64],
+        den: &Denominator,
+        shape: &Shape,
+        rows: Range<usize>,
+        mut acc: Eval,
+    ) -> (Eval, Dense, Vec<Dense>) {
+        let Shape {
+            p,
+            q,
+            l,
+            derivs,
+            pole_derivs,
+            ratios,
+            ..
+        } = *shape;
+        let (lo, hi) = (rows.start, rows.end);
+        let mut d = if derivs {
+            vec![Dense::zeros(hi - lo, q + 1); l]
+        } else {
+            Vec::new()
+        };
+        let mut dp = Dense::zeros(if pole_derivs { hi - lo } else { 0 }, p);
+        let mut da = vec![0.0; p];
+        let mut pw = vec![C64::new(0.0, 0.0); q + 1];
+        for (row, kk) in (lo..hi).enumerate() {
+            let z = self.z[kk];
+            let log_a2 = den.at(z, pole_derivs, &mut da);
+            let zc = z.conj();
+            pw[0] = C64::new(1.0, 0.0);
+            for k in 1..=q {
+                pw[k] = pw[k - 1] * zc;
+            }
+            // Σ_c r_c, by which the poles' score grows.
+            let mut r_sum = 0.0;
+            for (c, xc) in self.x.iter().enumerate() {
+                let off = p + c * (q + 1);
+                let b = pw[0]
+                    + pw[1..]
+                        .iter()
+                        .zip(&th[off + 1..=off + q])
+                        .map(|(p, bk)| p * bk)
+                        .sum::<C64>();
+                let b2 = b.norm_sqr();
+                let log_s = th[off] + b2.ln() - log_a2;
+                let s = log_s.exp();
+                let ic = xc[kk].norm_sqr();
+                acc.l += log_s + ic / s;
+                if ratios {
+                    acc.ratios.push(ic / s);
+                }
+                if derivs {
+                    // The row of D_c (∂ log S_c), and U += its entries times r. The
+                    // score is summed as the row is written: reading the row back
+                    // would stride across D_c's columns.
+                    let r = ic / s - 1.0;
+                    r_sum += r;
+                    let dc = &mut d[c];
+                    dc.set(row, 0, 1.0);
+                    acc.u[off] += r;
+                    let bc = b.conj();
+                    for (k, pk) in pw.iter().enumerate().skip(1) {
+                        let v = 2.0 * (pk * bc).re / b2;
+                        dc.set(row, k, v);
+                        acc.u[off + k] += v * r;
+                    }
+                }
+            }
+            if pole_derivs {
+                for (t, dat) in da.iter().enumerate() {
+                    dp.set(row, t, -dat);
+                    acc.u[t] -= dat * r_sum;
+                }
+            }
+        }
+        (acc, dp, d)
+    }
+
+    /// The sandwich's middle over the frequencies `rows`: J = Σ_{c,c'} D_cᵀ diag(γ²_cc') D_c'
+    /// (cov(I_c/S_c, I_c'/S_c') = γ²_cc'), D_c = [D_p D_c] in full, added into `acc.f`.
+    fn sandwich_blocks(
+        &self,
+        acc: &mut Eval,
+        dp: &Dense,
+        d: &[Dense],
+        shape: &Shape,
+        rows: Range<usize>,
+    ) {
+        let Shape { p, q, l, .. } = *shape;
+        let (lo, hi) = (rows.start, rows.end);
+        let per = p + q + 1;
+        let d: Vec<Dense> = d
+            .iter()
+            .map(|dc| {
+                let mut full = Dense::zeros(hi - lo, per);
+                for row in 0..hi - lo {
+                    for t in 0..p {
+                        full.set(row, t, dp.at(row, t));
+                    }
+                    for t in 0..=q {
+                        full.set(row, p + t, dc.at(row, t));
+                    }
+                }
+                full
+            })
+            .collect();
+        let mut block = Dense::zeros(per, per);
+        for (c, dc) in d.iter().enumerate() {
+            let off = p + c * (q + 1);
+            for (c2, dc2) in d.iter().enumerate() {
+                block.data.iter_mut().for_each(|v| *v = 0.0);
+                if c2 == c {
+                    linalg::gram_add(dc, &mut block);
+                } else {
+                    let g = &self.coherence[pair(c, c2, l)][lo..hi];
+                    let mut scaled = dc2.clone();
+                    for t in 0..per {
+                        for (row, gr) in g.iter().enumerate() {
+                            scaled.set(row, t, scaled.at(row, t) * gr);
+                        }
+                    }
+                    linalg::tn_add(dc, &scaled, &mut block);
+                }
+                let off2 = p + c2 * (q + 1);
+                for a in 0..per {
+                    for b in 0..per {
+                        let (ga, gb) = (global(a, p, off), global(b, p, off2));
+                        acc.f.set(ga, gb, acc.f.at(ga, gb) + block.at(a, b));
+                    }
+                }
+            }
+        }
     }
 
     /// Fit a model with the given starting poles (numerators from [`Self::start_numerator`]);
@@ -714,4 +719,65 @@ pub(super) fn pair(a: usize, b: usize, l: usize) -> usize {
 /// are the shared pole parameters.
 pub(super) fn global(t: usize, p: usize, off: usize) -> usize {
     if t < p { t } else { off + t - p }
+}
+
+/// What the sizes of one evaluation are, and what it computes.
+#[derive(Clone, Copy)]
+struct Shape {
+    /// Pole parameters.
+    p: usize,
+    /// Each numerator's degree.
+    q: usize,
+    /// Channels.
+    l: usize,
+    derivs: bool,
+    pole_derivs: bool,
+    sandwich: bool,
+    ratios: bool,
+}
+
+/// F over one chunk: Σ_c [D_p D_c]ᵀ[D_p D_c], by blocks: l D_pᵀD_p for the poles, D_pᵀD_c
+/// between the poles and channel c, D_cᵀD_c within channel c; added into `acc.f`.
+fn fisher_blocks(acc: &mut Eval, dp: &Dense, d: &[Dense], shape: &Shape) {
+    let Shape {
+        p,
+        q,
+        l,
+        pole_derivs,
+        ..
+    } = *shape;
+    let nb = q + 1;
+    // `block` (or its transpose) added into f from row r0, column c0.
+    let add = |f: &mut Dense, block: &Dense, r0: usize, c0: usize, t: bool| {
+        for a in 0..block.rows {
+            for b in 0..block.cols {
+                let (i, j) = if t {
+                    (r0 + b, c0 + a)
+                } else {
+                    (r0 + a, c0 + b)
+                };
+                f.set(i, j, f.at(i, j) + block.at(a, b));
+            }
+        }
+    };
+    if pole_derivs {
+        let mut gp = Dense::zeros(p, p);
+        linalg::gram_add(dp, &mut gp);
+        gp.data.iter_mut().for_each(|v| *v *= l as f64);
+        add(&mut acc.f, &gp, 0, 0, false);
+    }
+    let mut cross = Dense::zeros(p, nb);
+    let mut gc = Dense::zeros(nb, nb);
+    for (c, dc) in d.iter().enumerate() {
+        let off = p + c * nb;
+        gc.data.iter_mut().for_each(|v| *v = 0.0);
+        linalg::gram_add(dc, &mut gc);
+        add(&mut acc.f, &gc, off, off, false);
+        if pole_derivs {
+            cross.data.iter_mut().for_each(|v| *v = 0.0);
+            linalg::tn_add(dp, dc, &mut cross);
+            add(&mut acc.f, &cross, 0, off, false);
+            add(&mut acc.f, &cross, off, 0, true);
+        }
+    }
 }
