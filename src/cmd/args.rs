@@ -112,3 +112,17 @@ mod tests {
         );
     }
 }
+
+/// The columns of the records `hyst ident` and `hyst levels` read, and the rows they skip.
+#[derive(clap::Args, Debug)]
+pub(crate) struct RecordColumns {
+    /// Column of the output (displacement).
+    #[arg(long, default_value = "y")]
+    pub(crate) output_column: String,
+    /// Column of the input force (only used by --validate files).
+    #[arg(long, default_value = "u")]
+    pub(crate) input_column: String,
+    /// Skip this many leading rows of each --data record (e.g. a start-up transient).
+    #[arg(long, default_value_t = 0)]
+    pub(crate) skip: usize,
+}

@@ -47,15 +47,8 @@ pub(crate) struct IdentArgs {
     /// Mass of the oscillator (kg), assumed known.
     #[arg(long)]
     pub(crate) mass: Option<f64>,
-    /// Column of the output (displacement).
-    #[arg(long, default_value = "y")]
-    pub(crate) output_column: String,
-    /// Column of the input force (only used by --validate files).
-    #[arg(long, default_value = "u")]
-    pub(crate) input_column: String,
-    /// Skip this many leading rows of --data (e.g. a start-up transient).
-    #[arg(long, default_value_t = 0)]
-    pub(crate) skip: usize,
+    #[command(flatten)]
+    pub(crate) columns: super::args::RecordColumns,
     /// Validation records (input and output columns): each identified model is simulated with
     /// the input and compared with the output, to its steady state when the record's input
     /// is periodic over it, else from rest (see --validation-kind).
@@ -172,7 +165,7 @@ fn record(
                     "--mass is required with --data: the mapping from poles to stiffness needs the mass",
                 ));
             }
-            let y = output_after_skip(path, &a.output_column, a.skip)?;
+            let y = output_after_skip(path, &a.columns.output_column, a.columns.skip)?;
             Ok((y, fs, path.display().to_string()))
         }
         None => {
@@ -199,8 +192,8 @@ fn validation_records(a: &IdentArgs) -> Result<Vec<hyst::ident::ValidationRecord
         let t = read_csv(v)?;
         let mut record = hyst::ident::ValidationRecord::new(
             v.display().to_string(),
-            t.column(&a.input_column)?.to_vec(),
-            t.column(&a.output_column)?.to_vec(),
+            t.column(&a.columns.input_column)?.to_vec(),
+            t.column(&a.columns.output_column)?.to_vec(),
         );
         match a.validation_kind {
             ValidationKindArg::Periodic => record.periodic = true,
@@ -290,7 +283,7 @@ pub(crate) fn run(a: &IdentArgs) -> Result<(), Error> {
         report.write_json(path)?;
     }
     if let Some(dir) = &a.svg_dir {
-        hyst::figures::ident_figures(dir, &report.report, &y, fs, &validations)?;
+        hyst::figures::ident_figures(dir, &report.report, &y, fs, &validations).map_err(fail)?;
     }
     Ok(())
 }

@@ -17,15 +17,8 @@ pub(crate) struct LevelsArgs {
     /// Mass of the oscillator (kg), assumed known.
     #[arg(long)]
     pub(crate) mass: f64,
-    /// Column of the output (displacement).
-    #[arg(long, default_value = "y")]
-    pub(crate) output_column: String,
-    /// Column of the input force (only used by --validate files).
-    #[arg(long, default_value = "u")]
-    pub(crate) input_column: String,
-    /// Skip this many leading rows of each --data record (e.g. a start-up transient).
-    #[arg(long, default_value_t = 0)]
-    pub(crate) skip: usize,
+    #[command(flatten)]
+    pub(crate) columns: super::args::RecordColumns,
     /// Validation records (input and output columns): the model is simulated with the input
     /// and compared with the output.
     #[arg(long, num_args = 1..)]
@@ -69,7 +62,7 @@ pub(crate) fn run(a: &LevelsArgs) -> Result<(), Error> {
         .map(|p| {
             Ok((
                 p.display().to_string(),
-                output_after_skip(p, &a.output_column, a.skip)?,
+                output_after_skip(p, &a.columns.output_column, a.columns.skip)?,
             ))
         })
         .collect::<Result<_, Error>>()?;
@@ -79,8 +72,8 @@ pub(crate) fn run(a: &LevelsArgs) -> Result<(), Error> {
         let t = read_csv(v)?;
         validations.push(hyst::ident::ValidationRecord {
             name: v.display().to_string(),
-            u: t.column(&a.input_column)?.to_vec(),
-            y: t.column(&a.output_column)?.to_vec(),
+            u: t.column(&a.columns.input_column)?.to_vec(),
+            y: t.column(&a.columns.output_column)?.to_vec(),
             periodic: a.periodic,
         });
     }
@@ -99,7 +92,7 @@ pub(crate) fn run(a: &LevelsArgs) -> Result<(), Error> {
     let report = report.map_err(|e| fail(e.to_string()))?;
     print!("{report}");
     if let Some(dir) = &a.svg_dir {
-        hyst::figures::levels_figures(dir, &report)?;
+        hyst::figures::levels_figures(dir, &report).map_err(fail)?;
     }
     if let Some(path) = &a.json {
         hyst::report::write_json(&report, path)?;

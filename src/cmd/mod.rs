@@ -126,10 +126,12 @@ pub(crate) enum Command {
     Frf(frf_cmd::FrfArgs),
 }
 
-pub(crate) type Error = Box<dyn std::error::Error>;
+/// The command line's error: a library's, or a message naming the flag or file at fault
+/// (`anyhow`, in the binary only).
+pub(crate) type Error = anyhow::Error;
 
 pub(crate) fn fail(msg: impl Into<String>) -> Error {
-    msg.into().into()
+    anyhow::anyhow!(msg.into())
 }
 
 /// The channels to analyse: those given, else every column but a time column (`t`, `time`)

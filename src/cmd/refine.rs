@@ -113,7 +113,8 @@ pub(crate) fn run(a: &RefineArgs) -> Result<(), Error> {
             estimate,
             tests[0],
             a.mass.is_none(),
-        )?;
+        )
+        .map_err(fail)?;
     }
     if let Some(path) = &a.json {
         report.write_json(path)?;
