@@ -10,12 +10,15 @@
 //!   runs covssi beside pyOMA2 and koma (see `compare.rs`).
 //! - `cargo xtask loop-battery --seed S [--cases NAMES] [--forces periodic,random] [--out FILE]`
 //!   runs the residual loop on records with undeclared effects (see `loop_battery.rs`).
+//! - `cargo xtask unused-deps` and `cargo xtask sizes` check the workspace's manifests and the
+//!   size of its files and functions (`deps.rs`, `sizes.rs`; tests run both in CI).
 
 mod compare;
 mod deps;
 mod f16;
 mod loop_battery;
 mod random_sweep;
+mod sizes;
 mod sweep;
 
 use std::time::Instant;
@@ -659,6 +662,9 @@ enum Task {
     LoopBattery(loop_battery::BatteryArgs),
     /// Fail if a workspace member declares a dependency its sources do not use (`deps.rs`).
     UnusedDeps,
+    /// Fail if a source file, a function or `src/main.rs` outgrows its limit, or the command
+    /// line builds JSON by hand (`sizes.rs`).
+    Sizes,
 }
 
 fn main() {
@@ -711,6 +717,22 @@ fn main() {
                 eprintln!("error: {e}");
                 std::process::exit(1);
             }
+        }
+        Task::Sizes => {
+            let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+            let found = sizes::breaches(&root);
+            for b in &found {
+                eprintln!("{b}");
+            }
+            if !found.is_empty() {
+                eprintln!("error: {} breach(es) of the size limits", found.len());
+                std::process::exit(1);
+            }
+            println!(
+                "sizes: every file within {} lines of code, every function within {} lines",
+                sizes::MAX_FILE_LINES,
+                sizes::MAX_FN_LINES
+            );
         }
         Task::CompareTools { args } => {
             if let Err(e) = compare::run(&args) {
