@@ -48,6 +48,8 @@
 mod error;
 mod fft;
 mod models;
+#[cfg(feature = "serde")]
+mod nullable;
 mod numerics;
 mod options;
 mod pipeline;

@@ -7,8 +7,10 @@ use crate::*;
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Validation {
     /// ε of eq. (39): RMS error divided by the range of the measured output (a fraction).
+    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
     pub epsilon: f64,
     /// RMS error in the output's units.
+    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
     pub rms: f64,
 }
 

@@ -51,9 +51,11 @@ pub struct ZenerSpectralFit {
     /// Corner frequency Ω (rad/s).
     pub omega: f64,
     /// Standard errors of (c, k, k∞, Ω); NaN when the Fisher information is singular.
+    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
     pub se: [f64; 4],
     /// Covariance of (c, k, k∞, Ω), whose diagonal `se` is the root of. k and k∞ are strongly
     /// anti-correlated: their sum, the stiffness above Ω, is set by the resonance.
+    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
     pub covariance: [[f64; 4]; 4],
     /// When the most likely c was negative: that c and its standard error. A dashpot gives
     /// no energy, so the fit is then the most likely one with c = 0 (Ω = −Σp), and `se[0]`
@@ -67,6 +69,7 @@ pub struct ZenerSpectralFit {
     /// Two-sided spectral density q of the white force (N² s).
     pub force_density: f64,
     /// Its standard error.
+    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
     pub force_density_se: f64,
     /// Standard deviation σ of the white measurement noise (the record's units).
     pub noise_std: f64,

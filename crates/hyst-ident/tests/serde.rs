@@ -45,6 +45,50 @@ fn an_ident_report_reads_back_as_written() {
     assert!(json["validation"][0]["bouc_wen"]["epsilon"].is_number());
 }
 
+/// A residual loop's report, rejected candidates (ΔBIC = ∞, written as null) and all, reads
+/// back to the same JSON.
+#[test]
+fn a_refine_report_reads_back_as_written() {
+    use hyst_ident::residual::{InputInterpolation, Record, Start, refine_report};
+    let mut model = Oscillator::linear(2.0, 10.0, 5e4);
+    model.extras.cubic_stiffness = 3e9;
+    let u = hyst_sim::excitation::white_noise(4096, 50.0, 31).unwrap();
+    let mut y = simulate(
+        &model,
+        Input::Sampled(&u),
+        750.0,
+        u.len(),
+        &SimOptions::default(),
+    )
+    .unwrap();
+    add_noise(&mut y, 1e-6, 32).unwrap();
+    let rec = Record {
+        u: &u,
+        y: &y,
+        fs: 750.0,
+        interpolation: InputInterpolation::Linear,
+    };
+    let report = refine_report(
+        &rec,
+        Some(2.0),
+        Start::Linear,
+        (0, 3072),
+        &[(3072, 4096)],
+        &|_| {},
+    )
+    .unwrap();
+    let json = serde_json::to_value(&report).unwrap();
+    let rejected = json["steps"][0]["evidence"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|e| e["delta_bic"].is_null())
+        .count();
+    assert!(rejected > 0, "no rejected candidate to read back: {json}");
+    let back: hyst_ident::residual::RefineReport = serde_json::from_value(json.clone()).unwrap();
+    assert_eq!(serde_json::to_value(&back).unwrap(), json);
+}
+
 #[test]
 fn an_unknown_option_is_refused() {
     let o: IdentOptions = serde_json::from_str(r#"{"mass": 3.5}"#).unwrap();

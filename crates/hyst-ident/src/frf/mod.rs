@@ -55,8 +55,10 @@ pub struct FrfMode {
     pub damping_ratio: f64,
     /// Jackknife standard error of the frequency over periods (Hz); NaN with one period (or
     /// when fewer than two of the leave-one-out fits succeeded).
+    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
     pub frequency_se_hz: f64,
     /// Jackknife standard error of the damping ratio; NaN with one period.
+    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
     pub damping_se: f64,
     /// Each output's residue at the pole, scaled so that the largest is 1: the mode's shape
     /// as the outputs see it.
@@ -64,6 +66,7 @@ pub struct FrfMode {
     /// Jackknife standard error of each entry of `shape` over periods, √(E|δ|²) of the
     /// complex entry (each left-out fit's shape scaled by the same entry; 0 for that entry);
     /// NaN with one period.
+    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
     pub shape_se: Vec<f64>,
     /// Modal phase collinearity of `shape` ([`covssi::mpc`]): 1 for a real (normal) mode.
     pub mpc: f64,
@@ -87,6 +90,7 @@ pub struct FrfFit {
     pub fitted: Vec<Vec<Complex64>>,
     /// Weighted residual mean square per real equation (near 1 when the fit is at the noise;
     /// computed with unit weights, and so not comparable to 1, with one period).
+    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
     pub misfit: f64,
 }
 
@@ -256,8 +260,10 @@ fn fit_band(spectra: &Spectra, band: (f64, f64), modes: usize) -> Result<FrfFit,
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct BandSpread {
     /// The largest change of the frequency (Hz).
+    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
     pub frequency_hz: f64,
     /// The largest change of the damping ratio.
+    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
     pub damping: f64,
 }
 

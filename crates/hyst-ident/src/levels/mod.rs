@@ -35,12 +35,15 @@ pub struct LevelsBoucWen {
     pub oscillator: Oscillator,
     /// Standard errors of (c, k, α, βγ, βδ), from the fits' standard errors (those of α, βγ,
     /// βδ at the fitted ν).
+    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
     pub se: [f64; 5],
     /// Standard error of ν from its profile χ² (NaN when ν is held at 1, or when the χ² + 1
     /// interval reaches an end of the range searched).
+    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
     pub nu_se: f64,
     /// χ² per degree of freedom of (α, βγ, βδ) against the levels' (k∞, Ω): near 1 when the
     /// levels agree with one Bouc-Wen element within their standard errors; NaN for two levels.
+    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
     pub chi2_per_dof: f64,
     /// Each level's response moments under its fitted model, in the order given.
     pub moments: Vec<ResponseMoments>,
@@ -152,14 +155,17 @@ pub struct SimulatedBoucWen {
     /// RMS of (simulated − measured) over every level's four numbers, in the measured fit's
     /// covariance (whitened): about √2 when the model explains each level within the noise
     /// of both records.
+    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
     pub residual_rms: f64,
     /// Levenberg–Marquardt iterations done.
     pub iterations: usize,
     /// Standard errors of (c, k, α, βγ, βδ): 2 (JᵀJ)⁻¹ from the last iteration's Jacobian of
     /// the whitened residuals, the 2 for the simulated records' own noise (one simulation per
     /// measured record); NaN without an iteration.
+    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
     pub se: [f64; 5],
     /// Standard error of ν, the same way (NaN when ν is not fitted).
+    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
     pub nu_se: f64,
 }
 

@@ -103,8 +103,10 @@ pub struct Evidence {
     /// The candidate.
     pub effect: Effect,
     /// Share of the residual variance the refitted model explains.
+    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
     pub variance_explained: f64,
     /// Change of the BIC (negative favours the effect).
+    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
     pub delta_bic: f64,
     /// The refitted model, unless the fit diverged or the candidate was rejected.
     pub model: Option<Oscillator>,

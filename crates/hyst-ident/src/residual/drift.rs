@@ -27,10 +27,13 @@ pub struct HalfChange {
     )]
     pub name: std::borrow::Cow<'static, str>,
     /// Its value and standard error on the first half.
+    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
     pub first: (f64, f64),
     /// Its value and standard error on the second half.
+    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
     pub second: (f64, f64),
     /// The difference in combined standard errors, (second − first) / √(se₁² + se₂²).
+    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
     pub z: f64,
 }
 

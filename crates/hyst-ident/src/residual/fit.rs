@@ -319,6 +319,7 @@ pub struct Estimate {
     /// Its fitted value.
     pub value: f64,
     /// Its standard error (NaN when the sensitivities are singular).
+    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
     pub se: f64,
 }
 

@@ -35,13 +35,17 @@ pub const MIN_RELATIVE_GAIN: f64 = 0.01;
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct HeldOutGain {
     /// Mean squared error of the current model over every test row.
+    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
     pub mse_before: f64,
     /// Mean squared error of the candidate (infinite when it diverges on a test range).
+    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
     pub mse_after: f64,
     /// The group t statistic of the blocks' mean log ratio of squared errors (positive:
     /// the candidate is better).
+    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
     pub t: f64,
     /// One-sided p-value of `t` (Student's t with `blocks − 1` degrees of freedom).
+    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
     pub p_value: f64,
     /// Blocks the statistic is built on.
     pub blocks: usize,

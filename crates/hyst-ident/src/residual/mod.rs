@@ -121,6 +121,7 @@ pub struct Refinement {
     #[cfg_attr(feature = "serde", serde(with = "noise::as_level_or_unknown"))]
     pub noise: Result<noise::NoiseLevel, String>,
     /// The noise's ε (eq. 39) on each test range (NaN when the level is unknown).
+    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
     pub noise_epsilon: Vec<f64>,
     /// The final model's missing force along the measured motion (estimation rows), fitted
     /// on the surface basis (`None` when the fit could not be made).
