@@ -155,7 +155,7 @@ pub enum SsiError {
         /// Toeplitz columns.
         cols: usize,
     },
-    /// A correlation matrix given to [`identify_from_correlations`] does not have
+    /// A correlation matrix given to [`identify_from_correlations`](crate::identify_from_correlations) does not have
     /// channels × references entries.
     #[error(
         "the correlation matrix at lag {lag} has {len} entries; {channels} channels × {references} references need {}",

@@ -93,7 +93,7 @@ impl Default for StabilityCriteria {
     }
 }
 
-/// Options of [`identify`]. `SsiOptions::default()` suits most records.
+/// Options of [`identify`](crate::identify()). `SsiOptions::default()` suits most records.
 #[derive(Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[cfg_attr(feature = "serde", serde(default, deny_unknown_fields))]
