@@ -60,12 +60,18 @@ pub struct ModalAnalysis {
     pub ssi: SsiResult,
     /// MAC between SSI's modes (1 on the diagonal).
     pub mac: Vec<Vec<f64>>,
-    /// The refinement; `None` when it was not asked for or SSI found nothing to refine.
+    /// The refinement; `None` when it was not asked for, SSI found nothing to refine, or it
+    /// failed (`not_refined` says why).
     pub refined: Option<Refinement>,
+    /// Why the refinement asked for gave no result (e.g. a record too short for the modes SSI
+    /// found): SSI's result stands, and the report says so rather than failing.
+    pub not_refined: Option<String>,
 }
 
 /// SSI on the channels `y` sampled at `fs` Hz, then the refinement of its modes and real
-/// poles when `opts.refine` asks for it and SSI found any.
+/// poles when `opts.refine` asks for it and SSI found any. An error of SSI is this
+/// function's; an error of the refinement leaves SSI's result, with
+/// [`ModalAnalysis::not_refined`] saying why.
 pub fn analyze(y: &[&[f64]], fs: f64, opts: &AnalysisOptions) -> Result<ModalAnalysis, SsiError> {
     analyze_with_progress(y, fs, opts, &|_| {})
 }
@@ -84,7 +90,7 @@ pub fn analyze_with_progress(
         .iter()
         .map(|a| ssi.modes.iter().map(|b| mac(&a.shape, &b.shape)).collect())
         .collect();
-    let refined = match &opts.refine {
+    let (refined, not_refined) = match &opts.refine {
         Some(r) if !(ssi.modes.is_empty() && ssi.real_poles.is_empty()) => {
             progress(&format!(
                 "refining {} SSI mode(s) and {} real pole(s) by maximum likelihood on {} channel(s) of {} samples",
@@ -93,15 +99,14 @@ pub fn analyze_with_progress(
                 y.len(),
                 y.first().map_or(0, |v| v.len())
             ));
-            Some(refine_with_real_poles(
-                y,
-                fs,
-                &ssi.modes,
-                &ssi.real_poles,
-                r,
-            )?)
+            match refine_with_real_poles(y, fs, &ssi.modes, &ssi.real_poles, r) {
+                Ok(refined) => (Some(refined), None),
+                // An option of the refinement out of range is the caller's to hear.
+                Err(e @ SsiError::InvalidOption { .. }) => return Err(e),
+                Err(e) => (None, Some(e.to_string())),
+            }
         }
-        _ => None,
+        _ => (None, None),
     };
     Ok(ModalAnalysis {
         channels: (0..y.len()).map(|c| c.to_string()).collect(),
@@ -109,6 +114,7 @@ pub fn analyze_with_progress(
         ssi,
         mac,
         refined,
+        not_refined,
     })
 }
 
@@ -307,6 +313,9 @@ impl fmt::Display for ModalAnalysis {
     /// and the misfit.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         self.fmt_ssi(f)?;
+        if let Some(why) = &self.not_refined {
+            writeln!(f, "not refined: {why}")?;
+        }
         match &self.refined {
             Some(r) => self.fmt_refined(f, r),
             None => Ok(()),
@@ -355,6 +364,31 @@ mod tests {
             "{text}"
         );
         let none = analyze(&[&y], fs, &opts.clone().with_refine(None)).unwrap();
-        assert!(none.refined.is_none());
+        assert!(none.refined.is_none() && none.not_refined.is_none());
+    }
+
+    /// A record long enough for SSI but too short to refine its modes: SSI's result stands,
+    /// and the report says why there is no refinement.
+    #[test]
+    fn a_refinement_that_cannot_run_leaves_ssi_and_says_why() {
+        let fs = 50.0;
+        let y: Vec<f64> = (0..150)
+            .map(|n| {
+                let t = n as f64 / fs;
+                (-0.4 * t).exp() * (2.0 * std::f64::consts::PI * 3.0 * t).cos()
+                    + (-0.3 * t).exp() * (2.0 * std::f64::consts::PI * 7.0 * t).sin()
+            })
+            .collect();
+        let opts = AnalysisOptions::default().with_ssi(SsiOptions {
+            max_order: Some(10),
+            min_cluster_size: Some(2),
+            ..SsiOptions::default()
+        });
+        let a = analyze(&[&y], fs, &opts).unwrap();
+        assert!(!a.ssi.modes.is_empty(), "{a}");
+        assert!(a.refined.is_none());
+        let why = a.not_refined.as_deref().unwrap_or_default();
+        assert!(why.contains("samples"), "{why}");
+        assert!(a.to_string().contains("not refined: "));
     }
 }
