@@ -224,17 +224,7 @@ pub fn refine_with(
     check_test_rows(tests)?;
     let prep = Prepared::new(rec);
     let rec = &prep;
-    let errs = |m: &Oscillator| -> Vec<Validation> {
-        tests
-            .iter()
-            .map(|&r| {
-                test_error_on(m, rec, r).unwrap_or(Validation {
-                    epsilon: f64::INFINITY,
-                    rms: f64::INFINITY,
-                })
-            })
-            .collect()
-    };
+    let errs = |m: &Oscillator| held_out_errors(m, rec, tests);
     progress("fitting the start by output error");
     let (model, c) = baseline(start, rec, estimate, fit_mass)?;
     let baseline = model;
@@ -291,6 +281,23 @@ pub fn refine_with(
     })
 }
 
+/// `m`'s error on each test range (infinite where it does not simulate).
+fn held_out_errors(
+    m: &Oscillator,
+    rec: &Prepared<'_>,
+    tests: &[(usize, usize)],
+) -> Vec<Validation> {
+    tests
+        .iter()
+        .map(|&r| {
+            test_error_on(m, rec, r).unwrap_or(Validation {
+                epsilon: f64::INFINITY,
+                rms: f64::INFINITY,
+            })
+        })
+        .collect()
+}
+
 /// The loop's steps from `model` (its sum of squares `c`): each traces the residual, fits
 /// every candidate, and adds the one the held-out test accepts, until none is or
 /// [`MAX_STEPS`] are added. Returns the final model and the steps.
@@ -303,17 +310,7 @@ fn add_effects(
     fit_mass: bool,
     progress: Progress<'_>,
 ) -> (Oscillator, Vec<Step>) {
-    let errs = |m: &Oscillator| -> Vec<Validation> {
-        tests
-            .iter()
-            .map(|&r| {
-                test_error_on(m, rec, r).unwrap_or(Validation {
-                    epsilon: f64::INFINITY,
-                    rms: f64::INFINITY,
-                })
-            })
-            .collect()
-    };
+    let errs = |m: &Oscillator| held_out_errors(m, rec, tests);
     let outputs = |m: &Oscillator| -> Vec<Option<Vec<f64>>> {
         tests.iter().map(|&r| simulate(m, rec, r)).collect()
     };
