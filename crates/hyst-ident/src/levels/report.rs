@@ -78,8 +78,6 @@ pub struct LevelsModels {
     /// Whether the levels determine α, βγ and βδ (each standard error below its value);
     /// when not, the levels' responses are too close together.
     pub determined: bool,
-    /// The model's own linearization at each level's force density, in order.
-    pub model_zener: Vec<Option<ZenerParams>>,
     /// By simulation, when asked ([`bouc_wen_by_simulation`], started from `statistical`).
     pub by_simulation: Option<SimulatedBoucWen>,
 }
@@ -105,14 +103,6 @@ pub fn fit_levels(
         .iter()
         .zip(&statistical.se[2..])
         .all(|(v, s)| s.partial_cmp(&v.abs()) == Some(std::cmp::Ordering::Less));
-    let model_zener = fits
-        .iter()
-        .map(|f| {
-            statistical::equivalent_zener(o.mass, o.damping, o.stiffness, &bw, f.force_density)
-                .ok()
-                .map(|(z, _)| z)
-        })
-        .collect();
     let by_simulation = match &opts.by_simulation {
         Some(s) => {
             let s = SimulationOptions {
@@ -126,9 +116,17 @@ pub fn fit_levels(
     Ok(LevelsModels {
         statistical,
         determined,
-        model_zener,
         by_simulation,
     })
+}
+
+/// The Zener element the Bouc-Wen oscillator `o` linearizes to under the force density
+/// `q` (`None` when `o` has no Bouc-Wen element or the linearization fails).
+fn own_linearization(o: &Oscillator, q: f64) -> Option<ZenerParams> {
+    let bw = bouc_wen_of(o).ok()?;
+    statistical::equivalent_zener(o.mass, o.damping, o.stiffness, &bw, q)
+        .ok()
+        .map(|(z, _)| z)
 }
 
 fn bouc_wen_of(o: &Oscillator) -> Result<BoucWen, IdentError> {
@@ -181,7 +179,8 @@ pub fn levels_report(
     validations: &[ValidationRecord],
     progress: &(dyn Fn(&str) + Sync),
 ) -> Result<LevelsReport, IdentError> {
-    let mut levels = Vec::with_capacity(records.len());
+    // (name, σₓ, samples, fit) of each record.
+    let mut identified = Vec::with_capacity(records.len());
     for (name, y) in records {
         progress(&format!("identifying {name}"));
         let id = crate::identify(y, fs, &opts.ident).map_err(|e| e.in_record(name))?;
@@ -189,16 +188,10 @@ pub fn levels_report(
             record: name.clone(),
             notes: id.poles.notes.join("; "),
         })?;
-        levels.push(Level {
-            record: name.clone(),
-            sigma_x: id.prepared.sigma_x,
-            samples: y.len(),
-            fit,
-            model_zener: None,
-        });
+        identified.push((name.clone(), id.prepared.sigma_x, y.len(), fit));
     }
-    let fits: Vec<&ZenerSpectralFit> = levels.iter().map(|l| &l.fit).collect();
-    let lengths: Vec<usize> = levels.iter().map(|l| l.samples).collect();
+    let fits: Vec<&ZenerSpectralFit> = identified.iter().map(|l| &l.3).collect();
+    let lengths: Vec<usize> = identified.iter().map(|l| l.2).collect();
     if opts.by_simulation.is_some() {
         progress("fitting by simulation");
     }
@@ -208,9 +201,17 @@ pub fn levels_report(
         ))
     };
     let models = fit_levels(&fits, &lengths, opts, &iteration)?;
-    for (l, z) in levels.iter_mut().zip(&models.model_zener) {
-        l.model_zener = *z;
-    }
+    let own = &models.statistical.oscillator;
+    let levels = identified
+        .into_iter()
+        .map(|(record, sigma_x, samples, fit)| Level {
+            model_zener: own_linearization(own, fit.force_density),
+            record,
+            sigma_x,
+            samples,
+            fit,
+        })
+        .collect();
     let mut validation = Vec::with_capacity(validations.len());
     for r in validations {
         progress(&format!("validating on {}", r.name));
