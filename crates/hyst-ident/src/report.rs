@@ -196,27 +196,22 @@ pub fn identify_and_validate(
         })
         .collect();
     let kept = best.and_then(|i| candidates.get(i));
-    let scores_of = |m: Option<&Oscillator>| -> Vec<Option<Score>> {
-        match m {
-            Some(m) => validate_all(m, records, fs)
-                .into_iter()
-                .map(|r| Some(Score::of(r)))
-                .collect(),
-            None => vec![None; records.len()],
-        }
+    let scores_of = |m: &Oscillator| -> Vec<Score> {
+        validate_all(m, records, fs)
+            .into_iter()
+            .map(Score::of)
+            .collect()
     };
-    let linear = scores_of(Some(&id.models.linear));
-    let zener = scores_of(id.models.zener.as_ref());
+    let linear = scores_of(&id.models.linear);
+    let zener = id.models.zener.as_ref().map(scores_of);
     let validation = records
         .iter()
         .enumerate()
         .map(|(i, r)| ValidationRow {
             record: r.name.clone(),
             periodic: r.periodic,
-            linear: linear[i].clone().unwrap_or(Score::Failed {
-                error: "no model".into(),
-            }),
-            zener: zener[i].clone(),
+            linear: linear[i].clone(),
+            zener: zener.as_ref().map(|z| z[i].clone()),
             bouc_wen: kept.map(|c| c.validation[i].clone()),
         })
         .collect();
