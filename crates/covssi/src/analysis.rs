@@ -246,7 +246,7 @@ impl ModalAnalysis {
                 se_text(m.damping_se),
                 m.evidence,
             )?;
-            if let (Some(shape), Some(sd)) = (&m.shape, &m.shape_se) {
+            if let (Some(shape), Some(sd), Some(mpc)) = (&m.shape, &m.shape_se, m.mpc) {
                 // Two digits whatever the size; the entry scaled to 1 has none.
                 let se: Vec<String> = sd
                     .iter()
@@ -263,7 +263,7 @@ impl ModalAnalysis {
                     "     shape {}  (standard errors {}; MPC {:.3})",
                     shape_text(shape, "  "),
                     se.join(", "),
-                    crate::mpc(shape)
+                    mpc
                 )?;
             }
         }

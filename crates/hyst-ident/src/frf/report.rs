@@ -78,7 +78,7 @@ impl fmt::Display for FrfReport {
                     m.frequency_hz,
                     self.channels.join(", "),
                     covssi::shape_text(&m.shape, "  "),
-                    covssi::mpc(&m.shape)
+                    m.mpc
                 )?;
             }
         }
