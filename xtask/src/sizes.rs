@@ -148,9 +148,26 @@ struct FileSizes {
 
 fn measure(src: &str) -> FileSizes {
     let s = strip(src);
+    let in_test = test_lines(&s);
+    let code_lines = s
+        .lines()
+        .enumerate()
+        .filter(|(n, l)| !l.trim().is_empty() && !in_test[*n])
+        .count();
+    let functions = functions(&s)
+        .into_iter()
+        .filter(|(_, first, _)| !in_test[first - 1])
+        .collect();
+    FileSizes {
+        code_lines,
+        functions,
+    }
+}
+
+/// Whether each line of the stripped text `s` lies in a `#[cfg(test)] mod … { … }` block.
+fn test_lines(s: &str) -> Vec<bool> {
     let bytes = s.as_bytes();
-    let lines: Vec<&str> = s.lines().collect();
-    let mut in_test = vec![false; lines.len() + 1];
+    let mut in_test = vec![false; s.lines().count() + 1];
     let mut from = 0;
     while let Some(k) = s[from..].find("#[cfg(test)]") {
         let at = from + k;
@@ -164,8 +181,7 @@ fn measure(src: &str) -> FileSizes {
             && is_mod
             && rest.as_bytes()[brace] == b'{'
         {
-            let open = at + 12 + brace;
-            let end = closing(bytes, open);
+            let end = closing(bytes, at + 12 + brace);
             for flag in in_test
                 .iter_mut()
                 .take(line_of(bytes, end) + 1)
@@ -176,46 +192,36 @@ fn measure(src: &str) -> FileSizes {
         }
         from = at + 12;
     }
-    let code_lines = lines
-        .iter()
-        .enumerate()
-        .filter(|(n, l)| !l.trim().is_empty() && !in_test[*n])
-        .count();
-    let mut functions = Vec::new();
+    in_test
+}
+
+/// Every function with a body in the stripped text `s`, as (name, first line 1-based,
+/// lines spanned).
+fn functions(s: &str) -> Vec<(String, usize, usize)> {
+    let bytes = s.as_bytes();
+    let mut out = Vec::new();
     let mut from = 0;
     while let Some(k) = s[from..].find("fn ") {
         let at = from + k;
         from = at + 3;
         let word_start =
             at == 0 || !(bytes[at - 1].is_ascii_alphanumeric() || bytes[at - 1] == b'_');
-        if !word_start {
-            continue;
-        }
         let name: String = s[at + 3..]
             .chars()
             .take_while(|c| c.is_alphanumeric() || *c == '_')
             .collect();
-        if name.is_empty() {
-            continue;
-        }
         // The body's brace, unless a `;` ends a declaration first.
         let Some(end_sig) = s[at..].find(['{', ';']) else {
             continue;
         };
-        if bytes[at + end_sig] == b';' {
+        if !word_start || name.is_empty() || bytes[at + end_sig] == b';' {
             continue;
         }
-        let open = at + end_sig;
-        let close = closing(bytes, open);
+        let close = closing(bytes, at + end_sig);
         let first = line_of(bytes, at);
-        if !in_test[first] {
-            functions.push((name, first + 1, line_of(bytes, close) - first + 1));
-        }
+        out.push((name, first + 1, line_of(bytes, close) - first + 1));
     }
-    FileSizes {
-        code_lines,
-        functions,
-    }
+    out
 }
 
 fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
@@ -311,6 +317,15 @@ mod tests {
         assert_eq!(m.functions, vec![("short".to_string(), 4, 4)]);
         let raw = "fn raw() {\n    let _ = r#\"{ \"quoted\" }\"#;\n}\n";
         assert_eq!(measure(raw).functions, vec![("raw".to_string(), 1, 3)]);
+        // A function past the limit is measured as long as it is.
+        let long = format!(
+            "fn long() {{\n{}}}\n",
+            "    let _ = 1;\n".repeat(MAX_FN_LINES)
+        );
+        assert_eq!(
+            measure(&long).functions,
+            vec![("long".to_string(), 1, MAX_FN_LINES + 2)]
+        );
     }
 
     /// The workspace keeps to the limits (CI runs this).
