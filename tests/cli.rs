@@ -1573,6 +1573,65 @@ fn bouc_wen_white_record(
     out
 }
 
+/// A record the levels cannot use is named in the error (the first of them, as the records
+/// are identified in order): one under a multisine (no Zener spectral fit: the stationary
+/// model does not hold), and one that is constant.
+#[test]
+fn levels_name_the_record_they_cannot_use() {
+    let multisine = tmp("levels_multisine.csv");
+    let (ok, _, err) = hyst(&[
+        "simulate",
+        "--system",
+        "benchmark",
+        "--excitation",
+        "multisine",
+        "--rms",
+        "50",
+        "--samples",
+        "32768",
+        "--seed",
+        "3",
+        "--out",
+        s(&multisine),
+    ]);
+    assert!(ok, "{err}");
+    let white = write_white_noise("levels_white.csv", 5);
+    let (ok, _, err) = hyst(&[
+        "levels",
+        "--data",
+        s(&multisine),
+        s(&white),
+        "--fs",
+        "750",
+        "--mass",
+        "2",
+    ]);
+    assert!(!ok);
+    assert!(
+        err.contains(&format!("{}: ", multisine.display()))
+            && err.contains("no Zener spectral fit")
+            && err.contains("broadband random force"),
+        "{err}"
+    );
+    let constant = write(
+        "levels_constant.csv",
+        &format!("y\n{}", "1.5\n".repeat(4096)),
+    );
+    let (ok, _, err) = hyst(&[
+        "levels",
+        "--data",
+        s(&constant),
+        s(&white),
+        "--fs",
+        "750",
+        "--mass",
+        "2",
+    ]);
+    assert!(!ok);
+    assert!(err.contains(&format!("{}: ", constant.display())), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+}
+
 #[test]
 fn levels_gives_one_bouc_wen_model_of_several_records() {
     let records: Vec<PathBuf> = [("10", "1"), ("50", "2"), ("90", "3")]

@@ -1,5 +1,5 @@
 //! The command line's commands: the arguments (clap), one module per subcommand, and the
-//! helpers they share (reading records, checking flags, the models' JSON).
+//! helpers they share (reading records, checking flags, a spinner).
 
 use clap::{Parser, Subcommand, ValueEnum};
 
