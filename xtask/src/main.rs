@@ -13,6 +13,7 @@
 //! - `cargo xtask unused-deps` and `cargo xtask sizes` check the workspace's manifests and the
 //!   size of its files and functions (`deps.rs`, `sizes.rs`; tests run both in CI).
 
+mod bench_command;
 mod compare;
 mod deps;
 mod f16;
@@ -617,6 +618,14 @@ fn bench_ident() {
     println!("ident_zener_spectrum_ms_2e17 {:.1} ms", t * 1e3);
 }
 
+/// `cargo xtask bench command` (`bench_command.rs`).
+fn bench_command() {
+    if let Err(e) = bench_command::run() {
+        eprintln!("error: {e}");
+        std::process::exit(1);
+    }
+}
+
 /// Project tasks: benches, studies, comparisons.
 #[derive(clap::Parser)]
 #[command(name = "cargo xtask", bin_name = "cargo xtask")]
@@ -632,6 +641,8 @@ enum BenchGroup {
     Covssi,
     Ident,
     Refine,
+    /// The whole `hyst ssi` command on a 10-channel 10⁶-sample record, beside pyOMA2.
+    Command,
 }
 
 #[derive(clap::Subcommand)]
@@ -671,11 +682,12 @@ fn main() {
     use clap::Parser;
     match Cli::parse().task {
         Task::Bench { groups } => {
-            let all: [(BenchGroup, fn()); 4] = [
+            let all: [(BenchGroup, fn()); 5] = [
                 (BenchGroup::Rk4, bench),
                 (BenchGroup::Covssi, bench_covssi),
                 (BenchGroup::Ident, bench_ident),
                 (BenchGroup::Refine, bench_refine),
+                (BenchGroup::Command, bench_command),
             ];
             for (group, run) in all {
                 if groups.is_empty() || groups.contains(&group) {

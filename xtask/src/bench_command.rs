@@ -1,0 +1,167 @@
+//! `cargo xtask bench command`: the whole `hyst ssi` command on a long ten-channel record, as
+//! a user runs it (CSV in, JSON out), with its wall time and peak memory, beside pyOMA2's
+//! SSI-cov identification of the same record in the same run.
+//!
+//! The record: ten channels, 10⁶ samples at 100 Hz, five modes 1.3–13.2 Hz damped 1–2.5 %
+//! (`covssi::synth::ModalRecord`, fixed dense gains), 5 % white measurement noise, written once
+//! under `target/bench/` with seven significant digits (a 24-bit sensor's resolution; 135 MB).
+//! The peak memory is the maximum resident set size `/usr/bin/time` reports; the record as
+//! f64 is 80 MB.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The record's modes: frequency (Hz) and damping ratio.
+pub const MODES: [(f64, f64); 5] = [
+    (1.3, 0.01),
+    (3.4, 0.015),
+    (6.1, 0.02),
+    (9.5, 0.025),
+    (13.2, 0.02),
+];
+
+/// Samples, channels and sampling rate of the record.
+pub const SAMPLES: usize = 1_000_000;
+pub const CHANNELS: usize = 10;
+pub const FS: f64 = 100.0;
+
+/// The record: ten channels reading every mode's two states through fixed dense gains.
+pub fn record(n: usize, seed: u64) -> Vec<Vec<f64>> {
+    let gains = (0..CHANNELS)
+        .map(|ch| {
+            (0..2 * MODES.len())
+                .map(|j| (((ch * 2 * MODES.len() + j) as f64) * 0.7 + 0.3).sin())
+                .collect()
+        })
+        .collect();
+    covssi::synth::ModalRecord::new(FS, &MODES)
+        .with_gains(gains)
+        .with_noise(0.05)
+        .generate(n, seed)
+}
+
+/// The record as CSV under `dir` (made once, then reused).
+fn record_csv(dir: &Path) -> Result<PathBuf, String> {
+    let path = dir.join("ssi_1e6_10ch.csv");
+    if path.is_file() {
+        return Ok(path);
+    }
+    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let y = record(SAMPLES, 2026);
+    let tmp = dir.join("ssi_1e6_10ch.csv.part");
+    let file = std::fs::File::create(&tmp).map_err(|e| format!("{}: {e}", tmp.display()))?;
+    let mut w = std::io::BufWriter::new(file);
+    let header: Vec<String> = (0..CHANNELS).map(|c| format!("y{c}")).collect();
+    let io = |e: std::io::Error| format!("{}: {e}", tmp.display());
+    writeln!(w, "{}", header.join(",")).map_err(io)?;
+    for t in 0..SAMPLES {
+        for (c, ch) in y.iter().enumerate() {
+            let sep = if c + 1 == CHANNELS { '\n' } else { ',' };
+            write!(w, "{:.6e}{sep}", ch[t]).map_err(io)?;
+        }
+    }
+    w.flush().map_err(io)?;
+    drop(w);
+    std::fs::rename(&tmp, &path).map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok(path)
+}
+
+/// Wall time (s) and peak resident memory (MB) of `cmd`, by `/usr/bin/time`.
+fn timed(cmd: &mut Command) -> Result<(f64, f64), String> {
+    let out = cmd.output().map_err(|e| format!("could not start: {e}"))?;
+    if !out.status.success() {
+        return Err(format!(
+            "failed ({}): {}",
+            out.status,
+            String::from_utf8_lossy(&out.stderr)
+        ));
+    }
+    let err = String::from_utf8_lossy(&out.stderr);
+    let last = err
+        .lines()
+        .rev()
+        .find(|l| l.starts_with("TIMED "))
+        .ok_or("no /usr/bin/time line")?;
+    let f: Vec<f64> = last
+        .split_whitespace()
+        .skip(1)
+        .filter_map(|v| v.parse().ok())
+        .collect();
+    match f[..] {
+        [secs, kb] => Ok((secs, kb / 1024.0)),
+        _ => Err(format!("unreadable /usr/bin/time line: {last}")),
+    }
+}
+
+/// The bench: `hyst ssi` refined and not, and pyOMA2 when its environment exists.
+pub fn run() -> Result<(), String> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .ok_or("no workspace root")?
+        .to_path_buf();
+    let target = root.join("target");
+    let csv = record_csv(&target.join("bench"))?;
+    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+    let built = Command::new(cargo)
+        .args(["build", "--release", "--quiet", "--bin", "hyst"])
+        .current_dir(&root)
+        .status()
+        .map_err(|e| format!("cargo build: {e}"))?;
+    if !built.success() {
+        return Err("cargo build --release --bin hyst failed".into());
+    }
+    let hyst = target.join("release").join("hyst");
+    let json = target.join("bench").join("ssi_1e6_10ch.json");
+    let run = |extra: &[&str]| {
+        timed(
+            Command::new("/usr/bin/time")
+                .args(["-f", "TIMED %e %M"])
+                .arg(&hyst)
+                .args(["ssi", "--fs", "100", "--input"])
+                .arg(&csv)
+                .arg("--json")
+                .arg(&json)
+                .args(extra),
+        )
+    };
+    let (s, mb) = run(&[])?;
+    println!("hyst_ssi_s_1e6_10ch {s:.2} s");
+    println!("hyst_ssi_peak_mb_1e6_10ch {mb:.0} MB (the record as f64: 80 MB)");
+    let (s0, mb0) = run(&["--no-refine"])?;
+    println!("hyst_ssi_no_refine_s_1e6_10ch {s0:.2} s (peak {mb0:.0} MB)");
+    let python = target.join("compare-venv").join("bin").join("python");
+    if !python.is_file() {
+        println!(
+            "pyoma2_ssi_cov_s_1e6_10ch unavailable (no {}; `cargo xtask compare-tools` makes it)",
+            python.display()
+        );
+        return Ok(());
+    }
+    let out = Command::new(&python)
+        .arg(root.join("xtask/compare/ssi_timing.py"))
+        .arg(&csv)
+        .env("OMP_NUM_THREADS", "1")
+        .env("OPENBLAS_NUM_THREADS", "1")
+        .env("MKL_NUM_THREADS", "1")
+        .output()
+        .map_err(|e| format!("ssi_timing.py: {e}"))?;
+    if !out.status.success() {
+        return Err(format!(
+            "ssi_timing.py failed: {}",
+            String::from_utf8_lossy(&out.stderr)
+        ));
+    }
+    let text = String::from_utf8_lossy(&out.stdout);
+    let py: f64 = text
+        .split_whitespace()
+        .next()
+        .and_then(|v| v.parse().ok())
+        .ok_or_else(|| format!("ssi_timing.py printed {text:?}"))?;
+    println!("pyoma2_ssi_cov_s_1e6_10ch {py:.2} s (identification only, one BLAS thread)");
+    println!(
+        "hyst_ssi_over_pyoma2_1e6_10ch {:.2} (target at most 4)",
+        s / py
+    );
+    Ok(())
+}
