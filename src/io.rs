@@ -5,6 +5,7 @@
 //! Every error names the file, and where it applies the column, the row (1-based, counting the
 //! header as row 1, as a spreadsheet does) and the offending text.
 
+use std::io::BufRead;
 use std::path::{Path, PathBuf};
 
 /// Errors of reading or writing CSV records.
@@ -140,6 +141,14 @@ impl Table {
         }
     }
 
+    /// The column with this name taken out of the table (its place left empty), or an error
+    /// listing the available ones: for a caller that needs the record once, not a copy.
+    pub fn take_column(&mut self, name: &str) -> Result<Vec<f64>, IoError> {
+        self.column(name)?;
+        let i = self.names.iter().position(|n| n == name).unwrap_or(0);
+        Ok(std::mem::take(&mut self.columns[i]))
+    }
+
     /// Number of rows.
     pub fn len(&self) -> usize {
         self.columns.first().map_or(0, Vec::len)
@@ -218,27 +227,37 @@ pub fn read_csv(path: &Path) -> Result<Table, IoError> {
 /// cells; empty lines are skipped. Every row must have one cell per column of the header, and
 /// every cell must be a finite number.
 pub fn read_csv_with(path: &Path, delimiter: Delimiter) -> Result<Table, IoError> {
-    let bytes = std::fs::read(path).map_err(|source| IoError::File {
+    // The file is read as a stream (the record is kept once, as numbers, not also as text);
+    // its first non-blank line is read first to detect the delimiter.
+    let first_line = first_line(path)?;
+    let open = || {
+        std::fs::File::open(path).map_err(|source| IoError::File {
+            path: path.to_path_buf(),
+            source,
+        })
+    };
+    let file_error = |source| IoError::File {
         path: path.to_path_buf(),
         source,
-    })?;
+    };
     // A byte-order mark (spreadsheets write one) would become part of the first name.
-    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
-    let first_line = bytes
-        .split(|&b| b == b'\n')
-        .find(|l| !l.iter().all(u8::is_ascii_whitespace))
-        .ok_or_else(|| IoError::NoHeader {
-            path: path.to_path_buf(),
-        })?;
+    let mut file = std::io::BufReader::with_capacity(1 << 16, open()?);
+    if file
+        .fill_buf()
+        .map_err(file_error)?
+        .starts_with(b"\xEF\xBB\xBF")
+    {
+        file.consume(3);
+    }
     let sep = delimiter
         .byte()
-        .unwrap_or_else(|| Delimiter::detect(first_line));
+        .unwrap_or_else(|| Delimiter::detect(&first_line));
     let mut reader = csv::ReaderBuilder::new()
         .delimiter(sep)
         .has_headers(false)
         .flexible(true)
         .trim(csv::Trim::All)
-        .from_reader(bytes);
+        .from_reader(file);
     let mut records = reader.records();
     let csv_error = |e: csv::Error| {
         let row = e.position().map_or(0, |p| p.line() as usize);
@@ -313,6 +332,27 @@ pub fn read_csv_with(path: &Path, delimiter: Delimiter) -> Result<Table, IoError
         columns,
         path: path.to_path_buf(),
     })
+}
+
+/// The first line of the file `path` that is not blank, or why there is none.
+fn first_line(path: &Path) -> Result<Vec<u8>, IoError> {
+    let file_error = |source| IoError::File {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut head = std::io::BufReader::new(std::fs::File::open(path).map_err(file_error)?);
+    let mut line = Vec::new();
+    loop {
+        line.clear();
+        if head.read_until(b'\n', &mut line).map_err(file_error)? == 0 {
+            return Err(IoError::NoHeader {
+                path: path.to_path_buf(),
+            });
+        }
+        if !line.iter().all(u8::is_ascii_whitespace) {
+            return Ok(line);
+        }
+    }
 }
 
 /// The first name that appears twice in `names`, if any.

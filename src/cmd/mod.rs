@@ -199,6 +199,19 @@ pub(crate) fn spinner() -> indicatif::ProgressBar {
     bar
 }
 
+/// A bar of a run's steps on stderr (hidden when stderr is not a terminal), its message
+/// saying what runs; the caller sets its length and position as the steps come.
+pub(crate) fn steps_bar() -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(1);
+    if let Ok(style) =
+        indicatif::ProgressStyle::with_template("{spinner} [{elapsed}] {bar:20} {pos}/{len} {msg}")
+    {
+        bar.set_style(style);
+    }
+    bar.enable_steady_tick(std::time::Duration::from_millis(200));
+    bar
+}
+
 pub(crate) fn check_fs(fs: f64) -> Result<f64, Error> {
     if fs.is_finite() && fs > 0.0 {
         Ok(fs)

@@ -123,7 +123,7 @@ fn channels(a: &SsiArgs) -> Result<Channels, Error> {
     if a.decimate == 0 {
         return Err(fail("--decimate must be at least 1, got 0"));
     }
-    let t = read_csv(&a.input)?;
+    let mut t = read_csv(&a.input)?;
     let names = channel_names(&t, a.columns.as_deref(), &[]);
     if a.columns.is_none() {
         warn_on_force_like(&names);
@@ -133,23 +133,29 @@ fn channels(a: &SsiArgs) -> Result<Channels, Error> {
             "--columns names `{n}` twice: each channel once"
         )));
     }
-    if a.skip >= t.len() {
+    let rows = t.len();
+    if a.skip >= rows {
         return Err(fail(format!(
             "--skip {} leaves no rows of the {} in {}",
             a.skip,
-            t.len(),
+            rows,
             a.input.display()
         )));
     }
+    // The columns are taken from the table, not copied: a long record is held once.
     let mut channels = Vec::new();
     for n in &names {
-        let c = &t.column(n)?[a.skip..];
-        channels.push(hyst::sim::resample::decimate(c, a.decimate));
+        let mut c = t.take_column(n)?;
+        c.drain(..a.skip);
+        if a.decimate > 1 {
+            c = hyst::sim::resample::decimate(&c, a.decimate);
+        }
+        channels.push(c);
     }
     Ok(Channels {
         names,
         data: channels,
-        rows: t.len() - a.skip,
+        rows: rows - a.skip,
     })
 }
 
@@ -233,9 +239,12 @@ pub(crate) fn run(a: &SsiArgs) -> Result<(), Error> {
     let opts = AnalysisOptions::default()
         .with_ssi(ssi_options(a))
         .with_refine(refine);
-    let bar = spinner();
-    let analysis =
-        covssi::analyze_with_progress(&views, fs_used, &opts, &|m| bar.set_message(m.to_string()));
+    let bar = steps_bar();
+    let analysis = covssi::analyze_with_progress(&views, fs_used, &opts, &|p| {
+        bar.set_length(p.total as u64);
+        bar.set_position(p.done as u64);
+        bar.set_message(p.what.to_string());
+    });
     bar.finish_and_clear();
     let rows = (views.first().map_or(0, |c| c.len()), rows);
     let mut analysis = analysis.map_err(|e| flag_error(a, e, &names, fs_used, rows))?;

@@ -4,11 +4,9 @@
 
 use std::fmt;
 
+use crate::progress::Progress;
 use crate::refine::{MISFIT_LIMIT, SAME_MODE_DISTANCE};
-use crate::{
-    RefineOptions, Refinement, SsiError, SsiOptions, SsiResult, identify, mac,
-    refine_with_real_poles,
-};
+use crate::{RefineOptions, Refinement, SsiError, SsiOptions, SsiResult, identify, mac};
 
 /// Options of [`analyze`]: SSI's, and the refinement's (`None`: SSI alone).
 #[derive(Debug, Clone, PartialEq)]
@@ -76,14 +74,19 @@ pub fn analyze(y: &[&[f64]], fs: f64, opts: &AnalysisOptions) -> Result<ModalAna
     analyze_with_progress(y, fs, opts, &|_| {})
 }
 
-/// [`analyze`], telling `progress` what it starts (a line of text for a spinner).
+/// [`analyze`], telling `progress` of each step as it starts: SSI, then the refinement's
+/// steps ([`crate::refine::refine_with_progress`]).
 pub fn analyze_with_progress(
     y: &[&[f64]],
     fs: f64,
     opts: &AnalysisOptions,
-    progress: &dyn Fn(&str),
+    progress: &dyn Fn(Progress),
 ) -> Result<ModalAnalysis, SsiError> {
-    progress("SSI");
+    progress(Progress {
+        done: 0,
+        total: 1,
+        what: "SSI",
+    });
     let ssi = identify(y, fs, &opts.ssi)?;
     let mac = ssi
         .modes
@@ -92,14 +95,14 @@ pub fn analyze_with_progress(
         .collect();
     let (refined, not_refined) = match &opts.refine {
         Some(r) if !(ssi.modes.is_empty() && ssi.real_poles.is_empty()) => {
-            progress(&format!(
-                "refining {} SSI mode(s) and {} real pole(s) by maximum likelihood on {} channel(s) of {} samples",
-                ssi.modes.len(),
-                ssi.real_poles.len(),
-                y.len(),
-                y.first().map_or(0, |v| v.len())
-            ));
-            match refine_with_real_poles(y, fs, &ssi.modes, &ssi.real_poles, r) {
+            match crate::refine::refine_with_progress(
+                y,
+                fs,
+                &ssi.modes,
+                &ssi.real_poles,
+                r,
+                progress,
+            ) {
                 Ok(refined) => (Some(refined), None),
                 // An option of the refinement out of range is the caller's to hear.
                 Err(e @ SsiError::InvalidOption { .. }) => return Err(e),
@@ -326,6 +329,7 @@ impl fmt::Display for ModalAnalysis {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::refine_with_real_poles;
 
     /// The analysis is SSI then the refinement, nothing more: the same modes as the two
     /// calls made by hand, and without refinement none.

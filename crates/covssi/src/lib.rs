@@ -55,6 +55,7 @@ mod error;
 mod identify;
 mod linalg;
 mod options;
+pub mod progress;
 pub mod refine;
 mod stabilize;
 #[cfg(feature = "svg")]
@@ -71,6 +72,7 @@ pub use identify::{
 };
 pub use linalg::C64 as Complex64;
 pub use options::{BlockRows, SsiOptions, StabilityCriteria};
+pub use progress::Progress;
 pub use refine::{
     DroppedMode, DroppedRealPole, RefineOptions, RefinedMode, RefinedRealPole, Refinement, refine,
     refine_with_real_poles,

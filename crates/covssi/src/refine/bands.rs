@@ -6,15 +6,14 @@ use super::*;
 /// as few groups as that allows, ⌈m/p⌉, cut where the narrowest cut gap (ratio of
 /// neighbouring frequencies) is widest, ties going to the larger product of the cut gaps
 /// ([`cuts`]); with the frequency indices each group's band spans: from 0 and up to the
-/// last, cut at the geometric mean of the neighbouring groups' frequencies. Each band's
+/// last bin of `sp`, cut at the geometric mean of the neighbouring groups' frequencies. Each band's
 /// edges are where modes outside its group (held in its fit) reach in, so the fewer and the
 /// wider apart the cuts, the less of the held modes' tails each fit sees.
 pub(super) fn split_into_bands(
     lambdas: &[C64],
     p: usize,
     fs: f64,
-    n: usize,
-    k: usize,
+    sp: &Spectra,
 ) -> Vec<(Vec<usize>, Range<usize>)> {
     let mut order: Vec<usize> = (0..lambdas.len()).collect();
     order.sort_by(|&a, &b| lambdas[a].norm().total_cmp(&lambdas[b].norm()));
@@ -32,7 +31,8 @@ pub(super) fn split_into_bands(
         .windows(2)
         .map(|w| order[w[0]..w[1]].to_vec())
         .collect();
-    let index = |w: f64| frequency_index(w, fs, n, k);
+    let k = sp.bins();
+    let index = |w: f64| sp.bin_at(w / fs);
     let edges: Vec<usize> = groups
         .windows(2)
         .map(|w| {
@@ -50,12 +50,6 @@ pub(super) fn split_into_bands(
             (g, lo..hi)
         })
         .collect()
-}
-
-/// The index of the frequency nearest ω (rad/s) among the k of an N-sample record at `fs`
-/// (ω_k = 2π(k + 1)/N per sample at index k).
-pub(super) fn frequency_index(w: f64, fs: f64, n: usize, k: usize) -> usize {
-    ((w / fs * n as f64 / (2.0 * std::f64::consts::PI)).round() as usize).clamp(1, k) - 1
 }
 
 /// Where to cut m sorted modes (`gaps[i]`: ln of the gap below mode i) into ⌈m/p⌉ groups of
@@ -120,19 +114,13 @@ pub(super) fn joint_by_bands(
     joint_max: usize,
     opts: &RefineOptions,
 ) -> Option<Estimates> {
-    let l = model.x.len();
+    let l = model.l();
     let mk = fit.lambdas.len();
     let combine = l > joint_max;
     let groups = if combine && mk > joint_max {
-        split_into_bands(
-            &fit.lambdas,
-            joint_max,
-            model.fs,
-            model.y[0].len(),
-            model.k(),
-        )
+        split_into_bands(&fit.lambdas, joint_max, model.fs, &model.sp)
     } else {
-        vec![((0..mk).collect(), 0..model.k())]
+        vec![((0..mk).collect(), 0..model.sp.bins())]
     };
     let scale: Option<Vec<f64>> = if combine {
         Some(
@@ -162,14 +150,14 @@ pub(super) fn joint_by_bands(
     } else {
         Vec::new()
     };
-    let mut ratios = Vec::new();
+    let mut misfit = MisfitCounts::new();
     for (group, band) in &groups {
         let BandFit {
             fit: jf,
             covariance: cov,
             shapes,
             channels: lj,
-            ratios: band_ratios,
+            misfit: band_misfit,
         } = fit_band(
             model,
             fit,
@@ -179,7 +167,7 @@ pub(super) fn joint_by_bands(
             joint_max,
             opts,
         )?;
-        ratios.extend(band_ratios);
+        misfit.merge(&band_misfit);
         let mf = group.len();
 
         for (i, &j) in group.iter().enumerate() {
@@ -192,7 +180,7 @@ pub(super) fn joint_by_bands(
         est.iterations += jf.iterations;
         est.combinations = combine.then_some(lj);
     }
-    est.misfit = exponential_misfit(ratios);
+    est.misfit = misfit.distance();
     Some(est)
 }
 
@@ -205,8 +193,8 @@ struct BandFit {
     shapes: Vec<Vec<C64>>,
     /// The channels fitted (the combinations' count when combined).
     channels: usize,
-    /// The whitened periodogram ordinates of the fit.
-    ratios: Vec<f64>,
+    /// The misfit's counts of the whitened periodogram ordinates of the fit.
+    misfit: MisfitCounts,
 }
 
 /// The joint fit of the modes `group` over the frequencies `band` (through combinations of
@@ -230,13 +218,9 @@ fn fit_band(
         }
         None => None,
     };
-    let views: Vec<&[f64]> = combined.iter().flatten().map(Vec::as_slice).collect();
-    let zeros = vec![0.0; views.len()];
-    let combined_model = combined
-        .is_some()
-        .then(|| Model::new(&views, &zeros, model.fs));
+    let combined_model = combined.map(|rows| Model::new(model.sp.combined(rows), model.fs));
     let rec = combined_model.as_ref().unwrap_or(model);
-    let lj = rec.x.len();
+    let lj = rec.l();
     // The modes next to the group's (by |λ|), whose tails reach furthest into the band:
     // their shapes and gains are fitted with the group's before its poles move.
     let fitted: Vec<usize> = group
@@ -246,7 +230,8 @@ fn fit_band(
         .collect();
     let (mf, mn) = (group.len(), fitted.len());
     // Ten observations per parameter, a frequency giving l² of them.
-    if !(2..=joint_max).contains(&lj) || band.len() * lj * lj < 10 * joint::parameters(lj, mf) {
+    let frequencies = rec.sp.edges[band.end] - rec.sp.edges[band.start];
+    if !(2..=joint_max).contains(&lj) || frequencies * lj * lj < 10 * joint::parameters(lj, mf) {
         return None;
     }
     // The group's modes first, then their neighbours, then the others.
@@ -262,20 +247,20 @@ fn fit_band(
     // The first phase of the fit, poles held, reaches three half-power half-widths past
     // each neighbour's peak, so that its shape and gain come from its peak and not only
     // from the tail that reaches into the band.
-    let index = |w: f64| frequency_index(w, model.fs, model.y[0].len(), model.k());
+    let index = |w: f64| model.sp.bin_at(w / model.fs);
     let wide = fitted[mf..].iter().fold(band.clone(), |b, &j| {
         let (w, h) = (fit.lambdas[j].norm(), -fit.lambdas[j].re);
         b.start.min(index(w - 3.0 * h))..b.end.max(index(w + 3.0 * h) + 1)
     });
     let (mut jm, start) = joint::Joint::start(rec, &poles, mn, wide)?;
     let jf = jm.fit(start, mf, band.clone(), opts).ok()?;
-    let ratios = jm.ratios(&jf.theta)?;
+    let misfit = jm.misfit(&jf.theta)?;
     // Its asymptotic covariance is F⁻¹ (an exact likelihood); a singular F means the
     // channels are degenerate for it (e.g. one a copy of another).
     let cov = linalg::spd_inverse(&jf.fisher)?;
     // A pole that left its band (to a neighbour's peak) is not that band's mode.
-    let (lo, hi) = (rec.z[band.start].arg(), rec.z[band.end - 1].arg());
-    if band.len() < rec.k()
+    let (lo, hi) = (rec.sp.z[band.start].arg(), rec.sp.z[band.end - 1].arg());
+    if band.len() < rec.sp.bins()
         && jf
             .lambdas
             .iter()
@@ -291,7 +276,7 @@ fn fit_band(
         covariance: cov,
         shapes,
         channels: lj,
-        ratios,
+        misfit,
     })
 }
 

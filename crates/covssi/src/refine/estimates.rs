@@ -74,7 +74,7 @@ pub(super) fn pole_se(cov: &Dense, j: usize, m: usize, lam: C64) -> (f64, f64) {
 /// for the per-channel likelihood of several, the composite likelihood's sandwich
 /// F⁻¹ J F⁻¹, J the covariance of the score given the channels' coherence.
 pub(super) fn per_channel_estimates(
-    fitted_model: &Model<'_>,
+    fitted_model: &Model,
     fit: Fit,
     l: usize,
     misfit: f64,

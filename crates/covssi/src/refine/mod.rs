@@ -18,6 +18,15 @@
 //! channels are treated as independent (a composite likelihood): still consistent, but the
 //! standard errors ignore the channels' coherence.
 //!
+//! The periodograms enter through their averages over frequency bins narrower than the
+//! modes' half-power bands (the `spectra` module): over a bin of $n_b$ frequencies where $S$
+//! hardly changes, the terms add up to $n_b[\ln S(\bar\omega_b) + \bar I_b/S(\bar\omega_b)]$
+//! (jointly, $n_b[\ln\det S + \operatorname{tr}(S^{-1}\hat S_b)]$, a Wishart likelihood), so after
+//! one pass over the record the fits cost the same whatever its length. The bins are sized
+//! from SSI's poles so that the bias this makes stays under 1/24 of each estimate's standard
+//! error; a short record keeps one frequency per bin, Whittle's likelihood exactly. $K$ still
+//! counts the frequencies, and the misfit still looks at each of them.
+//!
 //! Which modes are real is decided by the record, with the BIC penalty of one mode's
 //! parameters, $\tfrac12(2+2l)\ln K$ for $l$ channels and $K$ frequencies, as the bar:
 //! 1. the strong SSI modes (at least half the largest member count) are fitted together, so
@@ -65,6 +74,7 @@ use crate::linalg::{self, C64, Dense};
 
 use crate::stabilize::pole_distance;
 
+use crate::progress::{Progress, Steps};
 use crate::{Mode, RealPoleCluster, SsiError, SsiOption};
 
 use rayon::prelude::*;
@@ -83,6 +93,7 @@ mod parametrization;
 mod real_poles;
 mod results;
 mod scoring;
+mod spectra;
 
 use bands::*;
 use estimates::*;
@@ -92,11 +103,14 @@ pub use pairing::SAME_MODE_DISTANCE;
 use pairing::*;
 use parametrization::*;
 use real_poles::*;
+use results::MisfitCounts;
 pub use results::{
     DroppedMode, DroppedRealPole, MISFIT_LIMIT, RefinedMode, RefinedRealPole, Refinement,
     exponential_misfit,
 };
 use scoring::*;
+use spectra::*;
+use std::sync::Arc;
 
 /// Most channels fitted by the joint likelihood; its cost grows as l⁴ (4lm parameters, l²
 /// observations per frequency). More channels are fitted through this many combinations of
@@ -114,7 +128,7 @@ pub fn refine(
     modes: &[Mode],
     opts: &RefineOptions,
 ) -> Result<Refinement, SsiError> {
-    refine_up_to(y, fs, modes, &[], opts, JOINT_MAX_CHANNELS)
+    refine_up_to(y, fs, modes, &[], opts, JOINT_MAX_CHANNELS, &|_| {})
 }
 
 /// [`refine`], testing and refining the real poles `real_poles` (e.g.
@@ -134,10 +148,23 @@ pub fn refine_with_real_poles(
     real_poles: &[RealPoleCluster],
     opts: &RefineOptions,
 ) -> Result<Refinement, SsiError> {
-    refine_up_to(y, fs, modes, real_poles, opts, JOINT_MAX_CHANNELS)
+    refine_up_to(y, fs, modes, real_poles, opts, JOINT_MAX_CHANNELS, &|_| {})
 }
 
-/// [`refine_with_real_poles`], fitting up to `joint_max` channels themselves by the joint
+/// [`refine_with_real_poles`], telling `progress` of each step as it starts: the spectra,
+/// the strong modes' fit, each weak mode added, the real poles, the evidence, the joint fit.
+pub fn refine_with_progress(
+    y: &[&[f64]],
+    fs: f64,
+    modes: &[Mode],
+    real_poles: &[RealPoleCluster],
+    opts: &RefineOptions,
+    progress: &dyn Fn(Progress),
+) -> Result<Refinement, SsiError> {
+    refine_up_to(y, fs, modes, real_poles, opts, JOINT_MAX_CHANNELS, progress)
+}
+
+/// [`refine_with_progress`], fitting up to `joint_max` channels themselves by the joint
 /// likelihood and more through `joint_max` combinations of them.
 fn refine_up_to(
     y: &[&[f64]],
@@ -146,33 +173,31 @@ fn refine_up_to(
     real_poles: &[RealPoleCluster],
     opts: &RefineOptions,
     joint_max: usize,
+    progress: &dyn Fn(Progress),
 ) -> Result<Refinement, SsiError> {
     crate::identify::check_fs(fs)?;
     let (n, means) = crate::identify::check_channels(y)?;
     check_refine_options(opts, real_poles)?;
-    let m = modes.len();
-    let l = y.len();
-    let p = 2 * m + real_poles.len();
-    let params = p + l * (p + 1);
-    // Enough frequencies that the Fisher information can be estimated: ten per parameter.
-    let needed = 2 * (10 * params + 1) + 2;
-    if n < needed {
-        return Err(SsiError::TooShortToRefine {
-            samples: n,
-            modes: m,
-            needed,
-        });
-    }
-    let (scaled, scales) = equilibrated(y, &means);
-    let (views, centres): (Vec<&[f64]>, Vec<f64>) = match &scaled {
-        Some(c) => (c.iter().map(Vec::as_slice).collect(), vec![0.0; l]),
-        None => (y.to_vec(), means.clone()),
-    };
-    let model = Model::new(&views, &centres, fs);
+    let (m, l) = (modes.len(), y.len());
+    check_length(n, m, l, real_poles.len())?;
+    // Steps: the spectra, the strong modes, each other mode, the real poles, the evidence,
+    // the joint fit (those strong are not added alone: the count is made exact below).
+    let mut steps = Steps::new(m + 5, progress);
+    steps.start(&format!(
+        "refining: spectra of {l} channel(s) of {n} samples"
+    ));
+    let (model, scales) = binned_model(y, &means, fs, modes, real_poles);
     let penalty = bic_penalty(l, model.k());
     let real_penalty = 0.5 * (1.0 + l as f64) * (model.k() as f64).ln();
     // 1. The strong modes and real poles, then the other real poles, then the weak modes.
+    steps.start(&format!(
+        "refining: the strong modes in {} bins of {} frequencies",
+        model.sp.bins(),
+        model.k()
+    ));
     let (first, weak, weak_reals) = strong_first(&model, modes, real_poles, opts)?;
+    steps.set_total(steps.done() + weak.len() + 3);
+    steps.start("refining: the real poles");
     let reals = add_real_poles(&model, first, real_poles, &weak_reals, real_penalty, opts)?;
     //    The real poles' evidence is weighed once here, before the weak modes, too: a
     //    spurious strong real pole left in wanders through every weak mode's fit, slowing
@@ -191,8 +216,14 @@ fn refine_up_to(
     let with_reals = reals.model;
     let cur = with_reals.as_ref().unwrap_or(&model);
     let mut dropped = Vec::new();
-    let fit = add_weak_modes(cur, reals.fit, modes, &weak, penalty, opts, &mut dropped)?;
+    let weak_fits = WeakModes {
+        modes,
+        weak: &weak,
+        penalty,
+    };
+    let fit = add_weak_modes(cur, reals.fit, &weak_fits, opts, &mut dropped, &mut steps)?;
     // 2. Each kept mode's evidence, the weakest dropped while below the penalty.
+    steps.start("refining: each mode's evidence");
     let (fit, evidence) = mode_evidence(cur, fit, modes, penalty, opts, &mut dropped)?;
     // 2b. The real poles' evidence, tested the same way.
     let reals = real_pole_evidence(&model, fit, real_sources, real_poles, real_penalty, opts)?;
@@ -206,13 +237,15 @@ fn refine_up_to(
     //    that fails the per-channel fit stands.
     let mk = fit.lambdas.len();
     let per_channel_misfit = fitted_model
-        .eval(&fit.theta, mk, What::Ratios)
-        .map_or(1.0, |e| exponential_misfit(e.ratios));
+        .eval(&fit.theta, mk, What::Misfit)
+        .and_then(|e| e.misfit)
+        .map_or(1.0, |m| m.distance());
     //    Above `joint_max` channels (the joint cost grows as l⁴) the joint likelihood is that
     //    of `joint_max` combinations of them carrying the modes; with more modes than
     //    combinations, band by band (see [`joint_by_bands`]).
     //    The joint model has no real poles: with one kept, the per-channel fit stands.
     let wanted = opts.joint && mk > 0 && fit.reals.is_empty() && per_channel_misfit <= MISFIT_LIMIT;
+    steps.start("refining: the joint likelihood");
     let joint_fit = wanted
         .then(|| joint_by_bands(&model, &fit, joint_max, opts))
         .flatten();
@@ -246,6 +279,45 @@ fn refine_up_to(
     })
 }
 
+/// An error unless a record of `n` samples has enough frequencies for the Fisher information
+/// of `m` modes and `reals` real poles on `l` channels to be estimated: ten per parameter.
+fn check_length(n: usize, m: usize, l: usize, reals: usize) -> Result<(), SsiError> {
+    let p = 2 * m + reals;
+    let params = p + l * (p + 1);
+    let needed = 2 * (10 * params + 1) + 2;
+    if n < needed {
+        return Err(SsiError::TooShortToRefine {
+            samples: n,
+            modes: m,
+            needed,
+        });
+    }
+    Ok(())
+}
+
+/// The model of the record `y` (less `means`, sampled at `fs` Hz), its spectra in bins sized
+/// for SSI's `modes` and `real_poles`, and each channel's scale ([`equilibrated`]).
+fn binned_model(
+    y: &[&[f64]],
+    means: &[f64],
+    fs: f64,
+    modes: &[Mode],
+    real_poles: &[RealPoleCluster],
+) -> (Model, Vec<f64>) {
+    let scales = equilibrated(y, means);
+    let poles: Vec<Scale> = modes
+        .iter()
+        .map(|md| Scale::of_pole(md.lambda, fs))
+        .chain(
+            real_poles
+                .iter()
+                .map(|r| Scale::of_pole(C64::new(r.lambda, 0.0), fs)),
+        )
+        .collect();
+    let model = Model::new(Spectra::new(y, means, &scales, &poles), fs);
+    (model, scales)
+}
+
 /// The options the refinement checks itself: no iterations would report the starts as
 /// estimates; a tolerance that is not a positive number never (or always) ends a fit; a
 /// real pole must be negative and finite.
@@ -274,9 +346,9 @@ fn check_refine_options(
     Ok(())
 }
 
-/// The channels scaled to like sizes, when their peak deviations differ by more than
-/// [`EQUILIBRATE_ABOVE`] (centred and scaled; `None` otherwise), and the scales.
-fn equilibrated(y: &[&[f64]], means: &[f64]) -> (Option<Vec<Vec<f64>>>, Vec<f64>) {
+/// The scale of each channel: a power of two that brings it to the size of the largest, when
+/// their peak deviations differ by more than [`EQUILIBRATE_ABOVE`]; otherwise 1.
+fn equilibrated(y: &[&[f64]], means: &[f64]) -> Vec<f64> {
     let l = y.len();
     // Channels of very different sizes (units a million apart) made the start's regressions
     // ill-conditioned, and the joint fit failed and fell back to the per-channel one. As
@@ -294,33 +366,24 @@ fn equilibrated(y: &[&[f64]], means: &[f64]) -> (Option<Vec<Vec<f64>>>, Vec<f64>
         .collect();
     let top = peaks.iter().copied().fold(0.0f64, f64::max);
     let low = peaks.iter().copied().fold(f64::INFINITY, f64::min);
-    let equilibrate = top > EQUILIBRATE_ABOVE * low;
-    let scales: Vec<f64> = if equilibrate {
+    if top > EQUILIBRATE_ABOVE * low {
         peaks
             .iter()
             .map(|p| 2f64.powi((top / p).log2().round() as i32))
             .collect()
     } else {
         vec![1.0; l]
-    };
-    let scaled = equilibrate.then(|| {
-        y.iter()
-            .zip(means)
-            .zip(&scales)
-            .map(|((c, m), d)| c.iter().map(|v| (v - m) * d).collect())
-            .collect()
-    });
-    (scaled, scales)
+    }
 }
 
 /// Step 1: the strong SSI modes and real poles fitted together; the weak modes (most
 /// members first) and the real poles still to add, in the order to add them.
-fn strong_first<'a>(
-    model: &Model<'a>,
+fn strong_first(
+    model: &Model,
     modes: &[Mode],
     real_poles: &[RealPoleCluster],
     opts: &RefineOptions,
-) -> Result<(RealPoles<'a>, Vec<usize>, Vec<usize>), SsiError> {
+) -> Result<(RealPoles, Vec<usize>, Vec<usize>), SsiError> {
     let m = modes.len();
     // 1. The strong SSI modes (at least half the largest member count) are fitted together:
     //    each then has a pole at its place from the start, and no pole has to travel to a
@@ -381,18 +444,30 @@ fn strong_first<'a>(
     Ok((first, weak, weak_reals))
 }
 
-/// Step 1, continued: the weak modes `weak` added one at a time to `fit`, each kept when L
-/// falls by at least `penalty` (when selecting), else recorded in `dropped`.
-fn add_weak_modes(
-    cur: &Model<'_>,
-    mut fit: Fit,
-    modes: &[Mode],
-    weak: &[usize],
+/// The weak modes to add: the SSI modes, which of them are weak (in the order to add them),
+/// and the penalty each must beat.
+struct WeakModes<'a> {
+    modes: &'a [Mode],
+    weak: &'a [usize],
     penalty: f64,
+}
+
+/// Step 1, continued: the weak modes added one at a time to `fit`, each kept when L falls by
+/// at least their penalty (when selecting), else recorded in `dropped`.
+fn add_weak_modes(
+    cur: &Model,
+    mut fit: Fit,
+    w: &WeakModes,
     opts: &RefineOptions,
     dropped: &mut Vec<DroppedMode>,
+    steps: &mut Steps,
 ) -> Result<Fit, SsiError> {
-    for &cand in weak {
+    let (modes, penalty) = (w.modes, w.penalty);
+    for &cand in w.weak {
+        steps.start(&format!(
+            "refining: adding the SSI mode at {:.4} Hz",
+            modes[cand].frequency_hz
+        ));
         let next = cur.fit_with(
             &fit,
             modes[cand].lambda,
@@ -417,7 +492,7 @@ fn add_weak_modes(
 /// and the numerators refitted), and the fit once every mode left has at least `penalty`
 /// (when selecting); those dropped are recorded in `dropped`.
 fn mode_evidence(
-    cur: &Model<'_>,
+    cur: &Model,
     mut fit: Fit,
     modes: &[Mode],
     penalty: f64,

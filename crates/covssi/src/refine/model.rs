@@ -3,26 +3,15 @@
 
 use super::*;
 
-/// The periodograms and what the model needs of the record.
-pub(super) struct Model<'a> {
-    pub(super) y: &'a [&'a [f64]],
-    pub(super) means: &'a [f64],
+/// The record's spectra and the model's shape: how many real poles it has.
+pub(super) struct Model {
+    /// The record as the likelihood sees it.
+    pub(super) sp: Arc<Spectra>,
     pub(super) fs: f64,
-    /// e^{iω_k}, 0 < ω_k < π.
-    pub(super) z: Vec<C64>,
-    /// Discrete Fourier transform of each channel at ω_k over √N: its periodogram is
-    /// I_c = |x_c|².
-    pub(super) x: Vec<Vec<C64>>,
-    /// Squared coherence γ²_ab(ω_k) of each channel pair a < b at index `pair(a, b, l)`
-    /// (empty otherwise), from periodograms smoothed over 2·COHERENCE_HALF_WIDTH + 1 bins.
-    pub(super) coherence: Vec<Vec<f64>>,
     /// Real poles of the model besides its modes: θ holds their ln ρ (λ = −ρ) after the
     /// modes' parameters, and each numerator's degree is 2m + `reals`.
     pub(super) reals: usize,
 }
-
-/// Half-width (bins) of the smoothing that estimates the channels' coherence.
-pub(super) const COHERENCE_HALF_WIDTH: usize = 16;
 
 /// A fitted model.
 pub(super) struct Fit {
@@ -48,7 +37,10 @@ pub(super) enum What {
     /// U, and the covariance J of the score in place of F.
     Sandwich,
     /// The ratios I/S of every channel and frequency.
+    #[cfg(test)]
     Ratios,
+    /// The misfit of those ratios, counted without keeping them.
+    Misfit,
 }
 
 /// L and what was asked for besides (empty otherwise).
@@ -57,6 +49,8 @@ pub(super) struct Eval {
     pub(super) u: Vec<f64>,
     pub(super) f: Dense,
     pub(super) ratios: Vec<f64>,
+    /// The misfit's counts of the ratios (with [`What::Misfit`]).
+    pub(super) misfit: Option<MisfitCounts>,
 }
 
 impl Eval {
@@ -68,6 +62,7 @@ impl Eval {
             u: vec![0.0; np],
             f: Dense::zeros(np, np),
             ratios: Vec::new(),
+            misfit: None,
         }
     }
 
@@ -81,64 +76,50 @@ impl Eval {
             .zip(&other.f.data)
             .for_each(|(x, y)| *x += y);
         self.ratios.extend(other.ratios);
+        match (&mut self.misfit, other.misfit) {
+            (Some(a), Some(b)) => a.merge(&b),
+            (None, b) => self.misfit = b,
+            _ => {}
+        }
         self
     }
 }
 
-pub(super) const CHUNK: usize = 2048;
+/// Bins per parallel chunk of an evaluation.
+pub(super) const CHUNK: usize = 128;
 
-impl<'a> Model<'a> {
-    pub(super) fn new(y: &'a [&'a [f64]], means: &'a [f64], fs: f64) -> Self {
-        let n = y[0].len();
-        let k_max = (n - 1) / 2; // 0 < ω_k = 2πk/N < π
-        let mut planner = RealFftPlanner::<f64>::new();
-        let fft = planner.plan_fft_forward(n);
-        let spectra: Vec<Vec<C64>> = y
-            .iter()
-            .zip(means)
-            .map(|(ch, mean)| {
-                let mut buf: Vec<f64> = ch.iter().map(|v| v - mean).collect();
-                let mut spec = fft.make_output_vec();
-                // Lengths match the plan, so this cannot fail.
-                fft.process(&mut buf, &mut spec).expect("FFT lengths");
-                spec[1..=k_max].to_vec()
-            })
-            .collect();
-        let scale = 1.0 / (n as f64).sqrt();
-        let x = spectra
-            .iter()
-            .map(|s| s.iter().map(|c| c * scale).collect())
-            .collect();
-        let l = y.len();
-        let mut coherence = vec![Vec::new(); l * l];
-        for a in 0..l {
-            for b in a + 1..l {
-                coherence[pair(a, b, l)] = smoothed_coherence(&spectra[a], &spectra[b]);
-            }
-        }
-        let z = (1..=k_max)
-            .map(|k| C64::from_polar(1.0, 2.0 * std::f64::consts::PI * k as f64 / n as f64))
-            .collect();
+/// Frequencies per parallel chunk when the ratios are asked for (they are per frequency).
+const FREQUENCY_CHUNK: usize = 8192;
+
+impl Model {
+    /// The model of the record `sp` sampled at `fs` Hz, without real poles.
+    pub(super) fn new(sp: Spectra, fs: f64) -> Self {
         Model {
-            y,
-            means,
+            sp: Arc::new(sp),
             fs,
-            z,
-            x,
-            coherence,
             reals: 0,
         }
+    }
+
+    /// The exact Whittle likelihood's model of the channels `y` less `means` (every
+    /// frequency its own bin).
+    #[cfg(test)]
+    pub(super) fn unbinned(y: &[&[f64]], means: &[f64], fs: f64) -> Self {
+        Self::new(Spectra::unbinned(y, means), fs)
     }
 
     /// This record's model with `r` real poles.
     pub(super) fn with_reals(&self, r: usize) -> Self {
         Model {
-            z: self.z.clone(),
-            x: self.x.clone(),
-            coherence: self.coherence.clone(),
+            sp: Arc::clone(&self.sp),
+            fs: self.fs,
             reals: r,
-            ..*self
         }
+    }
+
+    /// Channels.
+    pub(super) fn l(&self) -> usize {
+        self.sp.l
     }
 
     /// Number of pole parameters of a model of `m` modes: 2m, and one per real pole.
@@ -146,8 +127,9 @@ impl<'a> Model<'a> {
         2 * m + self.reals
     }
 
+    /// Frequencies of the likelihood, K.
     pub(super) fn k(&self) -> usize {
-        self.z.len()
+        self.sp.k()
     }
 
     /// The lowest value over frequency of each channel's fitted spectrum S_c (θ of a
@@ -156,12 +138,13 @@ impl<'a> Model<'a> {
     pub(super) fn noise_floor(&self, th: &[f64], m: usize) -> Option<Vec<f64>> {
         let q = self.poles(m);
         let den = Denominator::with_reals(th, m, self.reals, self.fs)?;
-        let floor = (0..self.x.len())
+        let floor = (0..self.l())
             .map(|c| {
                 let off = q + c * (q + 1);
                 let mut b = vec![1.0];
                 b.extend_from_slice(&th[off + 1..=off + q]);
-                self.z
+                self.sp
+                    .z
                     .iter()
                     .map(|&z| {
                         let b2 = poly_at(&b, z.conj()).norm_sqr();
@@ -176,13 +159,13 @@ impl<'a> Model<'a> {
             .then_some(floor)
     }
 
-    /// `p` combinations of the channels that carry the modes `lambdas`, as records of their
-    /// own, each channel first divided by `scale` (the square root of its noise floor, so
+    /// `p` combinations of the channels that carry the modes `lambdas` (rows of l weights),
+    /// each channel first divided by `scale` (the square root of its noise floor, so
     /// that the noise is white with equal level in all: then the directions orthogonal to the
     /// modes' shapes hold noise alone, independent of the rest). For each mode the
     /// cross-spectral matrix of the scaled channels over its half-power band (at least ±3
-    /// bins) is normalised to unit trace, so a weak mode weighs as much as a strong one; the
-    /// combinations are the leading `p` eigenvectors of the real part of their sum, which
+    /// frequencies) is normalised to unit trace, so a weak mode weighs as much as a strong one;
+    /// the combinations are the leading `p` eigenvectors of the real part of their sum, which
     /// spans the modes' shapes (real and imaginary parts). Scaling a channel changes nothing
     /// (its scale scales with it); permuting them changes the combinations' signs at most.
     /// `None` if a band holds no power or the eigenvectors cannot be computed.
@@ -192,21 +175,20 @@ impl<'a> Model<'a> {
         p: usize,
         scale: &[f64],
     ) -> Option<Vec<Vec<f64>>> {
-        let l = self.x.len();
-        let n = self.y[0].len();
-        let bin = 2.0 * std::f64::consts::PI / n as f64;
+        let l = self.l();
+        let bin = 2.0 * std::f64::consts::PI / self.sp.n as f64;
         let mut g = Dense::zeros(l, l);
         for lam in lambdas {
             let centre = lam.im / self.fs;
             let half = (-lam.re / self.fs).max(3.0 * bin);
-            let lo = ((centre - half) / bin).ceil().max(1.0) as usize;
-            let hi = (((centre + half) / bin).floor() as usize).min(self.k());
+            let (lo, hi) = (self.sp.bin_at(centre - half), self.sp.bin_at(centre + half));
             let mut s = Dense::zeros(l, l);
-            for kk in lo.saturating_sub(1)..hi {
+            for b in lo..=hi {
+                let w = self.sp.w[b];
                 for a in 0..l {
-                    for b in 0..l {
-                        let v = (self.x[a][kk] * self.x[b][kk].conj()).re / (scale[a] * scale[b]);
-                        s.set(a, b, s.at(a, b) + v);
+                    for c in 0..l {
+                        let v = w * self.sp.at(b, a, c).re / (scale[a] * scale[c]);
+                        s.set(a, c, s.at(a, c) + v);
                     }
                 }
             }
@@ -222,15 +204,7 @@ impl<'a> Model<'a> {
         let (u, _) = linalg::thin_svd_u(&g).ok()?;
         Some(
             (0..p.min(l))
-                .map(|j| {
-                    (0..n)
-                        .map(|t| {
-                            (0..l)
-                                .map(|c| u.at(c, j) * (self.y[c][t] - self.means[c]) / scale[c])
-                                .sum()
-                        })
-                        .collect()
-                })
+                .map(|j| (0..l).map(|c| u.at(c, j) / scale[c]).collect())
                 .collect(),
         )
     }
@@ -242,10 +216,10 @@ impl<'a> Model<'a> {
     pub(super) fn start_numerator(&self, c: usize, mu: &[C64]) -> Vec<f64> {
         let q = mu.len();
         let a = poly(mu);
-        let y = self.y[c];
-        let mean = self.means[c];
+        // The record's start is enough for a start ([`HEAD`] samples).
+        let y = &self.sp.head[c];
         let e: Vec<f64> = (0..y.len() - q)
-            .map(|t| (0..=q).map(|k| a[k] * (y[t + q - k] - mean)).sum())
+            .map(|t| (0..=q).map(|k| a[k] * y[t + q - k]).sum())
             .collect();
         let r: Vec<f64> = (0..=q)
             .map(|k| {
@@ -323,38 +297,61 @@ impl<'a> Model<'a> {
         let shape = Shape {
             p,
             q: p,
-            l: self.x.len(),
+            l: self.l(),
             derivs,
             pole_derivs: derivs && what != What::FisherNumerators,
             sandwich: what == What::Sandwich,
+            #[cfg(test)]
             ratios: what == What::Ratios,
+            #[cfg(not(test))]
+            ratios: false,
+            misfit: what == What::Misfit,
         };
         let np = p + shape.l * (shape.q + 1);
         let den = Denominator::with_reals(th, m, self.reals, self.fs)?;
-        let nchunks = self.k().div_ceil(CHUNK);
         let zero = || Eval::zero(if derivs { np } else { 0 });
-        let partial = (0..nchunks)
-            .into_par_iter()
-            .map(|ci| {
-                let lo = ci * CHUNK;
-                let hi = (lo + CHUNK).min(self.k());
-                let (mut acc, dp, d) = self.chunk(th, &den, &shape, lo..hi, zero());
-                if shape.derivs && !shape.sandwich {
-                    fisher_blocks(&mut acc, &dp, &d, &shape);
-                }
-                if shape.sandwich {
-                    self.sandwich_blocks(&mut acc, &dp, &d, &shape, lo..hi);
-                }
-                acc
-            })
-            .reduce(zero, Eval::merge);
-        partial.l.is_finite().then_some(partial)
+        // The ratios are per frequency: the misfit needs them so. Everything else sums over
+        // the bins. Chunks are summed in order, so the result does not depend on the threads.
+        let parts: Vec<Eval> = if shape.ratios || shape.misfit {
+            let k = self.k();
+            (0..k.div_ceil(FREQUENCY_CHUNK))
+                .into_par_iter()
+                .map(|ci| {
+                    let lo = ci * FREQUENCY_CHUNK;
+                    let f = self.sp.frequencies(lo..(lo + FREQUENCY_CHUNK).min(k));
+                    let mut acc = zero();
+                    acc.misfit = shape.misfit.then(MisfitCounts::new);
+                    self.chunk(&f, th, &den, &shape, 0..f.bins(), acc).0
+                })
+                .collect()
+        } else {
+            let bins = self.sp.bins();
+            (0..bins.div_ceil(CHUNK))
+                .into_par_iter()
+                .map(|ci| {
+                    let lo = ci * CHUNK;
+                    let hi = (lo + CHUNK).min(bins);
+                    let (mut acc, dp, d) = self.chunk(&self.sp, th, &den, &shape, lo..hi, zero());
+                    if shape.derivs && !shape.sandwich {
+                        fisher_blocks(&mut acc, &dp, &d, &shape);
+                    }
+                    if shape.sandwich {
+                        self.sandwich_blocks(&mut acc, &dp, &d, &shape, lo..hi);
+                    }
+                    acc
+                })
+                .collect()
+        };
+        let total = parts.into_iter().reduce(Eval::merge).unwrap_or_else(zero);
+        total.l.is_finite().then_some(total)
     }
 
-    /// `L` over the frequencies `rows`, and with derivatives the score and the rows of
-    /// D_p (the poles' columns) and of each channel's D_c.
+    /// `L` over the bins `rows` of `sp`, and with derivatives the score and the rows of
+    /// D_p (the poles' columns) and of each channel's D_c, each row times √n_b (so that
+    /// their Gram matrices sum n_b ∂ln S ∂ln Sᵀ).
     fn chunk(
         &self,
+        sp: &Spectra,
         th: &[f64],
         den: &Denominator,
         shape: &Shape,
@@ -380,16 +377,17 @@ impl<'a> Model<'a> {
         let mut da = vec![0.0; p];
         let mut pw = vec![C64::new(0.0, 0.0); q + 1];
         for (row, kk) in (lo..hi).enumerate() {
-            let z = self.z[kk];
+            let z = sp.z[kk];
+            let (w, sw) = (sp.w[kk], sp.w[kk].sqrt());
             let log_a2 = den.at(z, pole_derivs, &mut da);
             let zc = z.conj();
             pw[0] = C64::new(1.0, 0.0);
             for k in 1..=q {
                 pw[k] = pw[k - 1] * zc;
             }
-            // Σ_c r_c, by which the poles' score grows.
+            // Σ_c n_b r_c, by which the poles' score grows.
             let mut r_sum = 0.0;
-            for (c, xc) in self.x.iter().enumerate() {
+            for c in 0..l {
                 let off = p + c * (q + 1);
                 let b = pw[0]
                     + pw[1..]
@@ -400,31 +398,33 @@ impl<'a> Model<'a> {
                 let b2 = b.norm_sqr();
                 let log_s = th[off] + b2.ln() - log_a2;
                 let s = log_s.exp();
-                let ic = xc[kk].norm_sqr();
-                acc.l += log_s + ic / s;
+                let ic = sp.at(kk, c, c).re;
+                acc.l += w * (log_s + ic / s);
                 if ratios {
                     acc.ratios.push(ic / s);
                 }
-                if derivs {
-                    // The row of D_c (∂ log S_c), and U += its entries times r. The
-                    // score is summed as the row is written: reading the row back
-                    // would stride across D_c's columns.
-                    let r = ic / s - 1.0;
+                if let Some(counts) = &mut acc.misfit {
+                    counts.add(ic / s);
+                }
+                // With derivatives: the row of D_c (∂ log S_c, times √n_b), and U += its
+                // entries times n_b r. The score is summed as the row is written: reading
+                // the row back would stride across D_c's columns.
+                if let Some(dc) = d.get_mut(c) {
+                    let r = w * (ic / s - 1.0);
                     r_sum += r;
-                    let dc = &mut d[c];
-                    dc.set(row, 0, 1.0);
+                    dc.set(row, 0, sw);
                     acc.u[off] += r;
                     let bc = b.conj();
                     for (k, pk) in pw.iter().enumerate().skip(1) {
                         let v = 2.0 * (pk * bc).re / b2;
-                        dc.set(row, k, v);
+                        dc.set(row, k, v * sw);
                         acc.u[off + k] += v * r;
                     }
                 }
             }
             if pole_derivs {
                 for (t, dat) in da.iter().enumerate() {
-                    dp.set(row, t, -dat);
+                    dp.set(row, t, -dat * sw);
                     acc.u[t] -= dat * r_sum;
                 }
             }
@@ -468,7 +468,7 @@ impl<'a> Model<'a> {
                 if c2 == c {
                     linalg::gram_add(dc, &mut block);
                 } else {
-                    let g = &self.coherence[pair(c, c2, l)][lo..hi];
+                    let g = &self.sp.coherence[pair(c, c2, l)][lo..hi];
                     let mut scaled = dc2.clone();
                     for t in 0..per {
                         for (row, gr) in g.iter().enumerate() {
@@ -516,7 +516,7 @@ impl<'a> Model<'a> {
             reason: "a starting pole is at or above the Nyquist frequency",
         })?;
         mu.extend(reals.iter().map(|v| C64::new((v / self.fs).exp(), 0.0)));
-        for c in 0..self.x.len() {
+        for c in 0..self.l() {
             th.extend(self.start_numerator(c, &mu));
         }
         Ok(th)
@@ -559,8 +559,8 @@ impl<'a> Model<'a> {
     /// `factor` (coefficients of z⁻ᵏ from k = 0, leading 1): every channel's ln σ², then its
     /// new B's coefficients after the leading 1. They cancel the poles `factor` adds to A.
     pub(super) fn numerators_times(&self, theta: &[f64], q: usize, factor: &[f64]) -> Vec<f64> {
-        let mut out = Vec::with_capacity(self.x.len() * (q + factor.len()));
-        for c in 0..self.x.len() {
+        let mut out = Vec::with_capacity(self.l() * (q + factor.len()));
+        for c in 0..self.l() {
             let off = q + c * (q + 1);
             out.push(theta[off]);
             let mut b = vec![1.0];
@@ -683,32 +683,6 @@ impl<'a> Model<'a> {
     }
 }
 
-/// γ² = |Σ X_a X̄_b|² / (Σ|X_a|² Σ|X_b|²) over a window of neighbouring bins.
-pub(super) fn smoothed_coherence(xa: &[C64], xb: &[C64]) -> Vec<f64> {
-    let k = xa.len();
-    let h = COHERENCE_HALF_WIDTH;
-    // Prefix sums make every window O(1).
-    let mut cross = vec![C64::new(0.0, 0.0); k + 1];
-    let mut pa = vec![0.0; k + 1];
-    let mut pb = vec![0.0; k + 1];
-    for t in 0..k {
-        cross[t + 1] = cross[t] + xa[t] * xb[t].conj();
-        pa[t + 1] = pa[t] + xa[t].norm_sqr();
-        pb[t + 1] = pb[t] + xb[t].norm_sqr();
-    }
-    (0..k)
-        .map(|t| {
-            let (lo, hi) = (t.saturating_sub(h), (t + h + 1).min(k));
-            let den = (pa[hi] - pa[lo]) * (pb[hi] - pb[lo]);
-            if den > 0.0 {
-                ((cross[hi] - cross[lo]).norm_sqr() / den).min(1.0)
-            } else {
-                0.0
-            }
-        })
-        .collect()
-}
-
 /// Index of the unordered channel pair (a, b), a ≠ b, among l channels.
 pub(super) fn pair(a: usize, b: usize, l: usize) -> usize {
     let (a, b) = if a < b { (a, b) } else { (b, a) };
@@ -734,6 +708,7 @@ struct Shape {
     pole_derivs: bool,
     sandwich: bool,
     ratios: bool,
+    misfit: bool,
 }
 
 /// F over one chunk: Σ_c [D_p D_c]ᵀ[D_p D_c], by blocks: l D_pᵀD_p for the poles, D_pᵀD_c

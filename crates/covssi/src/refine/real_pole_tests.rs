@@ -108,8 +108,19 @@ fn spurious_real_poles_are_dropped() {
         let plain = refine(&views(&y), FS, &ssi.modes, &RefineOptions::default()).unwrap();
         assert_eq!(r.modes.len(), plain.modes.len());
         for (a, b) in r.modes.iter().zip(&plain.modes) {
-            // Same model, fitted from the same start: to the optimiser's tolerance.
-            assert!((a.lambda - b.lambda).norm() < 1e-6 * a.lambda.norm());
+            // Same model from the same start, on spectra binned for different poles (the
+            // real-pole candidates narrow the bins near 0 Hz): each binning biases an
+            // estimate by less than 1/24 of its standard error (`spectra`), so the two
+            // differ by less than a tenth of it.
+            let (fa, za) = (a.frequency_se_hz.unwrap(), a.damping_se.unwrap());
+            assert!(
+                (a.frequency_hz - b.frequency_hz).abs() < 0.1 * fa,
+                "{a:?} {b:?}"
+            );
+            assert!(
+                (a.damping_ratio - b.damping_ratio).abs() < 0.1 * za,
+                "{a:?} {b:?}"
+            );
         }
     }
     // Not vacuous: 7 of the 20 diagrams hold a real-pole cluster.

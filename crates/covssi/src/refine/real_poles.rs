@@ -3,9 +3,9 @@
 use super::*;
 
 /// What [`add_real_poles`] leaves.
-pub(super) struct RealPoles<'a> {
+pub(super) struct RealPoles {
     /// The record's model with the kept real poles; `None` when none is kept.
-    pub(super) model: Option<Model<'a>>,
+    pub(super) model: Option<Model>,
     /// The fit of the modes and the kept real poles.
     pub(super) fit: Fit,
     /// The SSI cluster each kept real pole started from, in the fit's order.
@@ -19,14 +19,14 @@ pub(super) struct RealPoles<'a> {
 /// modes and real poles `first`, each kept when it lowers L by at least `penalty` (two starts
 /// each: the model with the new pole cancelled by a numerator zero, and fresh numerators).
 /// No evidence yet.
-pub(super) fn add_real_poles<'a>(
-    model: &Model<'a>,
-    first: RealPoles<'a>,
+pub(super) fn add_real_poles(
+    model: &Model,
+    first: RealPoles,
     candidates: &[RealPoleCluster],
     order: &[usize],
     penalty: f64,
     opts: &RefineOptions,
-) -> Result<RealPoles<'a>, SsiError> {
+) -> Result<RealPoles, SsiError> {
     let RealPoles {
         model: mut fitted,
         mut fit,
@@ -72,14 +72,14 @@ pub(super) fn add_real_poles<'a>(
 /// Step 2b: as for the modes, each real pole of `fit` (started from the clusters
 /// `sources` of `candidates`)'s evidence is the rise of L when it is removed, the other poles
 /// held; while the weakest rise with everything free is below `penalty`, that pole goes.
-pub(super) fn real_pole_evidence<'a>(
-    model: &Model<'a>,
+pub(super) fn real_pole_evidence(
+    model: &Model,
     mut fit: Fit,
     mut sources: Vec<usize>,
     candidates: &[RealPoleCluster],
     penalty: f64,
     opts: &RefineOptions,
-) -> Result<RealPoles<'a>, SsiError> {
+) -> Result<RealPoles, SsiError> {
     let m = fit.lambdas.len();
     let mut dropped = Vec::new();
     let mut fitted = (!fit.reals.is_empty()).then(|| model.with_reals(fit.reals.len()));

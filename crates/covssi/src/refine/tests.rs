@@ -142,7 +142,7 @@ fn evidence_fits_stop_once_the_decision_is_settled() {
     let y = two_modes_two_channels(16384, 5);
     let v = views(&y);
     let means = vec![0.0; 2];
-    let model = Model::new(&v, &means, FS);
+    let model = Model::unbinned(&v, &means, FS);
     let opts = RefineOptions::default();
     let full = model
         .fit(
@@ -207,7 +207,11 @@ fn modes_are_split_into_bands_at_the_widest_gaps() {
     let (n, k) = (16384, 8191);
     // ω_k = 2π(k + 1)/N: the index of f Hz at FS.
     let index = |f: f64| (f / FS * n as f64).round() as usize - 1;
-    let split = |p| split_into_bands(&lambdas, p, FS, n, k);
+    // One frequency per bin: bins are frequencies.
+    let y: Vec<f64> = (0..n).map(|t| (t as f64 * 0.37).sin()).collect();
+    let sp = Spectra::unbinned(&[&y], &[0.0]);
+    assert_eq!(sp.bins(), k);
+    let split = |p| split_into_bands(&lambdas, p, FS, &sp);
     let four = split(4);
     assert_eq!(four.len(), 2);
     assert_eq!(four[0], (vec![1], 0..index((1.5f64 * 3.0).sqrt())));
@@ -228,7 +232,7 @@ fn modes_are_split_into_bands_at_the_widest_gaps() {
     // five that cutting at the widest gaps one by one gives (1.1 | 2.7 | 4.4 | 6.8 | …).
     let bench = [1.1, 2.7, 4.4, 6.8, 9.3, 12.1, 15.2, 18.6];
     let lambdas: Vec<C64> = bench.iter().map(|&f| pole(f, 0.02)).collect();
-    let groups: Vec<Vec<usize>> = split_into_bands(&lambdas, 4, FS, n, k)
+    let groups: Vec<Vec<usize>> = split_into_bands(&lambdas, 4, FS, &sp)
         .into_iter()
         .map(|g| g.0)
         .collect();
@@ -236,7 +240,7 @@ fn modes_are_split_into_bands_at_the_widest_gaps() {
     // Three groups of at most three: sizes 2-3-3, 3-2-3 or 3-3-2, whose narrowest cut
     // gaps are 1.30, 1.30 and 1.26; of the first two, 2-3-3's other cut (1.63) is wider
     // than 3-2-3's (1.55).
-    let groups: Vec<Vec<usize>> = split_into_bands(&lambdas, 3, FS, n, k)
+    let groups: Vec<Vec<usize>> = split_into_bands(&lambdas, 3, FS, &sp)
         .into_iter()
         .map(|g| g.0)
         .collect();
@@ -282,7 +286,7 @@ fn score_is_minus_the_gradient_of_l() {
     let y = two_modes_two_channels(4096, 1);
     let v = views(&y);
     let means = vec![0.0; 2];
-    let model = Model::new(&v, &means, FS);
+    let model = Model::unbinned(&v, &means, FS);
     score_matches_differences(&model, &two_mode_theta());
     score_matches_differences(&model.with_reals(1), &two_mode_real_theta());
 }
@@ -315,7 +319,7 @@ fn fisher_information_is_the_gram_of_the_log_spectra_gradients() {
     let y = two_modes_two_channels(4096, 1);
     let v = views(&y);
     let means = vec![0.0; 2];
-    let model = Model::new(&v, &means, FS);
+    let model = Model::unbinned(&v, &means, FS);
     fisher_is_gram(&model, &two_mode_theta());
     fisher_is_gram(&model.with_reals(1), &two_mode_real_theta());
 }
@@ -329,7 +333,7 @@ fn fisher_is_gram(model: &Model, th: &[f64]) {
         e.ratios
             .iter()
             .enumerate()
-            .map(|(i, r)| model.x[i % 2][i / 2].norm_sqr().ln() - r.ln())
+            .map(|(i, r)| model.sp.at(i / 2, i % 2, i % 2).re.ln() - r.ln())
             .collect()
     };
     let grads: Vec<Vec<f64>> = (0..np)
@@ -569,4 +573,24 @@ fn bad_input_is_an_error() {
     // No modes: an empty model, nothing kept.
     let r = refine(&[&y[0]], FS, &[], &opts).unwrap();
     assert!(r.modes.is_empty() && r.dropped.is_empty());
+}
+
+/// The misfit counted in cells is the exact Kolmogorov–Smirnov distance, from above, to
+/// within a cell's share of the values and width.
+#[test]
+fn misfit_counts_bound_the_exact_distance_closely() {
+    let n = 20000;
+    for scale in [1.0, 1.3, 0.5] {
+        // Quantiles of a scaled exponential law at a low-discrepancy sequence.
+        let v: Vec<f64> = (0..n)
+            .map(|i| -scale * (1.0 - ((i as f64 * 0.618_033_988_75) % 1.0)).ln())
+            .collect();
+        let exact = exponential_misfit(v.clone());
+        let mut counts = MisfitCounts::new();
+        v.iter().for_each(|&x| counts.add(x));
+        let d = counts.distance();
+        // Above by at most 1/32768 (a cell's width) plus a cell's share of the 20000
+        // values (here at most a few: 1.5e-4); 5e-4 holds both with room.
+        assert!(d >= exact - 1e-12 && d <= exact + 5e-4, "{d} {exact}");
+    }
 }

@@ -11,10 +11,12 @@
 
 use rayon::prelude::*;
 
-use super::{CHUNK, Joint, ZERO, invert, parameters};
+use super::{CHUNK, FREQUENCY_CHUNK, Joint, ZERO, invert, parameters};
 use crate::linalg::{self, C64, Dense};
 use crate::refine::model::Eval;
 use crate::refine::parametrization::Denominator;
+use crate::refine::results::MisfitCounts;
+use crate::refine::spectra::Spectra;
 
 /// The coordinates of a Hermitian l×l matrix: the l diagonal entries, then √2 Re and √2 Im
 /// of each entry above it, so that tr(XY) is their dot product.
@@ -47,14 +49,14 @@ impl Hermitian {
         }
     }
 
-    /// The coordinates of εεᴴ − I.
-    fn residual(&self, eps: &[C64], out: &mut [f64]) {
+    /// The coordinates of E − I for a Hermitian E (row-major), times `scale`.
+    fn residual(&self, e: &[C64], scale: f64, out: &mut [f64]) {
         let l = self.l;
         for c in 0..l {
-            out[c] = eps[c].norm_sqr() - 1.0;
+            out[c] = scale * (e[c * l + c].re - 1.0);
         }
         for (t, &(c, d)) in self.upper.iter().enumerate() {
-            let w = eps[c] * eps[d].conj();
+            let w = e[c * l + d] * scale;
             out[l + 2 * t] = std::f64::consts::SQRT_2 * w.re;
             out[l + 2 * t + 1] = std::f64::consts::SQRT_2 * w.im;
         }
@@ -120,16 +122,36 @@ impl Joint<'_> {
         let np = parameters(self.l(), self.free);
         debug_assert_eq!(th.len(), np);
         let terms = self.terms(&self.full(th))?;
-        let nchunks = self.band.len().div_ceil(CHUNK);
         let zero = || Eval::zero(if derivs { np } else { 0 });
-        let total = (0..nchunks)
-            .into_par_iter()
-            .map(|ci| {
-                let lo = self.band.start + ci * CHUNK;
-                let hi = (lo + CHUNK).min(self.band.end);
-                self.eval_chunk(&terms, lo..hi, derivs, ratios, zero())
-            })
-            .try_reduce(zero, |a, b| Some(a.merge(b)))?;
+        let sp = &self.rec.sp;
+        // The ordinates are per frequency (the misfit needs them so); L, U and F sum over
+        // the bins. Chunks are summed in order, whatever the threads.
+        let parts: Vec<Option<Eval>> = if ratios {
+            let k = sp.edges[self.band.start]..sp.edges[self.band.end];
+            (0..k.len().div_ceil(FREQUENCY_CHUNK))
+                .into_par_iter()
+                .map(|ci| {
+                    let lo = k.start + ci * FREQUENCY_CHUNK;
+                    let f = sp.frequencies(lo..(lo + FREQUENCY_CHUNK).min(k.end));
+                    let mut acc = zero();
+                    acc.misfit = Some(MisfitCounts::new());
+                    self.eval_chunk(&f, &terms, 0..f.bins(), derivs, true, acc)
+                })
+                .collect()
+        } else {
+            (0..self.band.len().div_ceil(CHUNK))
+                .into_par_iter()
+                .map(|ci| {
+                    let lo = self.band.start + ci * CHUNK;
+                    let hi = (lo + CHUNK).min(self.band.end);
+                    self.eval_chunk(sp, &terms, lo..hi, derivs, false, zero())
+                })
+                .collect()
+        };
+        let mut total = zero();
+        for part in parts {
+            total = total.merge(part?);
+        }
         total.l.is_finite().then_some(total)
     }
 
@@ -189,10 +211,9 @@ impl Joint<'_> {
         })
     }
 
-    /// H(z) (row-major) and each mode's d1 = 1/(z − μ), d2 = 1/(z − μ̄) at frequency `kk`.
-    fn transfer(&self, t: &Terms, kk: usize, hz: &mut [C64], d1: &mut [C64], d2: &mut [C64]) {
+    /// H(z) (row-major) and each mode's d1 = 1/(z − μ), d2 = 1/(z − μ̄) at z.
+    fn transfer(&self, t: &Terms, z: C64, hz: &mut [C64], d1: &mut [C64], d2: &mut [C64]) {
         let l = self.l();
-        let z = self.rec.z[kk];
         for (i, h) in hz.iter_mut().enumerate() {
             *h = C64::new(if i / l == i % l { 1.0 } else { 0.0 }, 0.0);
         }
@@ -209,10 +230,12 @@ impl Joint<'_> {
         }
     }
 
-    /// L over the frequencies `rows` added into `acc`, with the score and Fisher information
-    /// when `derivs`, the whitened ordinates when `ratios`.
+    /// L over the bins `rows` of `sp` added into `acc`, with the score and Fisher information
+    /// when `derivs`, the whitened ordinates (diagonal of E) when `ratios`. Each bin adds
+    /// n_b [ln det S + tr E], E = M Ŝ_b Mᴴ; its rows of the Jacobian are scaled by √n_b.
     fn eval_chunk(
         &self,
+        sp: &Spectra,
         t: &Terms,
         rows: std::ops::Range<usize>,
         derivs: bool,
@@ -236,8 +259,11 @@ impl Joint<'_> {
         let mut r = vec![0.0; ll];
         let mut d1 = vec![ZERO; m];
         let mut d2 = vec![ZERO; m];
+        let mut ms = vec![ZERO; ll];
+        let mut e = vec![ZERO; ll];
         for (row, kk) in rows.enumerate() {
-            self.transfer(t, kk, &mut hz, &mut d1, &mut d2);
+            let (w, sw) = (sp.w[kk], sp.w[kk].sqrt());
+            self.transfer(t, sp.z[kk], &mut hz, &mut d1, &mut d2);
             let (g, log_abs_det) = invert(&hz, l)?;
             // M = Λ⁻¹ H⁻¹, ε = M x.
             let mut mm = vec![ZERO; ll];
@@ -246,22 +272,27 @@ impl Joint<'_> {
                     mm[a * l + b] = (0..=a).map(|s| g[s * l + b] * t.lam_inv[a * l + s]).sum();
                 }
             }
-            let eps: Vec<C64> = (0..l)
-                .map(|a| {
-                    (0..l)
-                        .map(|b| mm[a * l + b] * self.rec.x[b][kk])
-                        .sum::<C64>()
-                })
-                .collect();
-            let quad: f64 = eps.iter().map(|e| e.norm_sqr()).sum();
-            acc.l += t.log_det_sigma + 2.0 * log_abs_det + quad;
-            if ratios {
-                acc.ratios.extend(eps.iter().map(|e| e.norm_sqr()));
+            // E = M Ŝ Mᴴ (its diagonal |ε|², ε = M x, at a single frequency).
+            let s_b = &sp.s[kk * ll..(kk + 1) * ll];
+            for a in 0..l {
+                for c in 0..l {
+                    ms[a * l + c] = (0..l).map(|b| mm[a * l + b] * s_b[b * l + c]).sum();
+                }
+            }
+            for a in 0..l {
+                for c in 0..l {
+                    e[a * l + c] = (0..l).map(|b| ms[a * l + b] * mm[c * l + b].conj()).sum();
+                }
+            }
+            let quad: f64 = (0..l).map(|a| e[a * l + a].re).sum();
+            acc.l += w * (t.log_det_sigma + 2.0 * log_abs_det + quad);
+            if let (true, Some(counts)) = (ratios, &mut acc.misfit) {
+                (0..l).for_each(|a| counts.add(e[a * l + a].re));
             }
             if !derivs {
                 continue;
             }
-            t.herm.residual(&eps, &mut r);
+            t.herm.residual(&e, sw, &mut r);
             let base = row * ll;
             for rr in 0..self.free {
                 self.mode_columns(t, rr, &mm, (d1[rr], d2[rr]), base, &mut cols);
@@ -271,11 +302,12 @@ impl Joint<'_> {
                 let at = (s_off + c) * cols.jac.rows + base;
                 cols.jac.data[at..at + ll].copy_from_slice(col);
             }
-            // U = −∇L = Σ_k J_kᵀ vec(εεᴴ − I).
+            // The bin's rows times √n_b; U = −∇L = Σ_b J_bᵀ vec(n_b (E − I)).
             for col in 0..np {
-                acc.u[col] += (0..ll)
-                    .map(|e| cols.jac.at(base + e, col) * r[e])
-                    .sum::<f64>();
+                let at = col * cols.jac.rows + base;
+                let rows = &mut cols.jac.data[at..at + ll];
+                rows.iter_mut().for_each(|v| *v *= sw);
+                acc.u[col] += rows.iter().zip(&r).map(|(j, ri)| j * ri).sum::<f64>();
             }
         }
         if derivs {

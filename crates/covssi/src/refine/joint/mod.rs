@@ -24,13 +24,17 @@
 use super::model::{Fit, Model};
 use super::options::RefineOptions;
 use super::parametrization::{discrete_poles, unpack};
+use super::results::MisfitCounts;
 use super::scoring::scoring;
 use crate::SsiError;
 use crate::linalg::C64;
 use std::ops::Range;
 
-/// Frequencies per parallel chunk (each gives l² rows of the Jacobian).
-const CHUNK: usize = 512;
+/// Bins per parallel chunk (each gives l² rows of the Jacobian).
+const CHUNK: usize = 32;
+
+/// Frequencies per parallel chunk of the whitened ordinates (they are per frequency).
+const FREQUENCY_CHUNK: usize = 4096;
 
 /// Iterations of the first phase of [`Joint::fit`], the poles held. On a 16-channel, 8-mode
 /// record of the bench's generator (seed 8, measured with a temporary program, not a
@@ -41,8 +45,8 @@ const SETTLE_ITERATIONS: usize = 40;
 /// The joint model of a record's channels, over a band of its frequencies, with its first
 /// `free` modes fitted and the others held.
 pub(super) struct Joint<'a> {
-    /// The record: its channels, means, transforms x_c(ω_k) = DFT/√N and e^{iω_k}.
-    rec: &'a Model<'a>,
+    /// The record's spectra.
+    rec: &'a Model,
     /// For each mode, the component of k_r held at 1.
     refs: Vec<usize>,
     /// Modes 0..free are fitted; θ (in [`Self::eval`] and [`Self::fit`]) holds theirs and Λ,
@@ -50,7 +54,7 @@ pub(super) struct Joint<'a> {
     free: usize,
     /// The held modes' parameters: their ln ω, their logit ζ, then their c and k.
     held: Vec<f64>,
-    /// Indices into the record's frequencies that L sums over.
+    /// The bins of the record's spectra that L sums over.
     band: Range<usize>,
 }
 
@@ -106,21 +110,17 @@ impl<'a> Joint<'a> {
     /// regression is singular or Σ is not positive definite (a channel that the others predict
     /// exactly, e.g. a copy).
     pub(super) fn start(
-        rec: &'a Model<'a>,
+        rec: &'a Model,
         poles: &[f64],
         free: usize,
         band: Range<usize>,
     ) -> Option<(Self, Vec<f64>)> {
-        let l = rec.x.len();
+        let l = rec.l();
         let m = poles.len() / 2;
         let mu = discrete_poles(&unpack(poles, m), rec.fs)?;
-        let n = rec.y[0].len();
-        let y: Vec<Vec<f64>> = rec
-            .y
-            .iter()
-            .zip(rec.means)
-            .map(|(c, mean)| c.iter().map(|v| v - mean).collect())
-            .collect();
+        // The regressions run on the record's start (centred), enough for a start.
+        let y = &rec.sp.head;
+        let n = y.first()?.len();
         // Long autoregression: order 6m (at least 4), at most a tenth of the samples.
         let p = (6 * m).max(4).min(n / 10);
         let fill_lags = |t: usize, x: &mut [f64]| {
@@ -230,7 +230,7 @@ impl<'a> Joint<'a> {
     }
 
     fn l(&self) -> usize {
-        self.rec.x.len()
+        self.rec.l()
     }
 
     /// Fisher scoring of the joint likelihood from θ: first with the poles held, so that the
@@ -273,9 +273,10 @@ impl<'a> Joint<'a> {
         })
     }
 
-    /// The whitened periodogram ordinates |ε_c(ω_k)|² (unit exponential under the model).
-    pub(super) fn ratios(&self, th: &[f64]) -> Option<Vec<f64>> {
-        self.eval(th, false, true).map(|e| e.ratios)
+    /// The misfit's counts of the whitened periodogram ordinates |ε_c(ω_k)|² (unit
+    /// exponential under the model).
+    pub(super) fn misfit(&self, th: &[f64]) -> Option<MisfitCounts> {
+        self.eval(th, false, true).and_then(|e| e.misfit)
     }
 
     /// The shapes c_r of every mode, in the model's order, given θ of the fitted modes and Λ

@@ -37,7 +37,7 @@ fn score_matches_differences(joint: &Joint, th: &[f64]) -> Eval {
 
 /// The joint model of `rec` over `band` with every mode fitted, k_r's component
 /// `refs[r]` held at 1.
-fn all_free<'a>(rec: &'a Model<'a>, refs: Vec<usize>, band: Range<usize>) -> Joint<'a> {
+fn all_free<'a>(rec: &'a Model, refs: Vec<usize>, band: Range<usize>) -> Joint<'a> {
     Joint {
         rec,
         free: refs.len(),
@@ -63,7 +63,7 @@ fn score_is_minus_the_gradient_of_l() {
     let y = two_modes_three_channels(11);
     let v = views(&y);
     let means = vec![0.0; 3];
-    let model = Model::new(&v, &means, FS);
+    let model = Model::unbinned(&v, &means, FS);
     // Reference components 0 and 2: k_0 = (1, ·, ·), k_1 = (·, ·, 1).
     let joint = all_free(&model, vec![0, 2], 0..model.k());
     let (w1, z1) = pole_theta(1.52, 0.03);
@@ -92,7 +92,7 @@ fn a_held_mode_and_a_band_keep_the_score_exact() {
     let y = two_modes_three_channels(13);
     let v = views(&y);
     let means = vec![0.0; 3];
-    let model = Model::new(&v, &means, FS);
+    let model = Model::unbinned(&v, &means, FS);
     let (w1, z1) = pole_theta(1.52, 0.03);
     let (w2, z2) = pole_theta(2.9, 0.05);
     // Mode 2 free, mode 1 held, over the frequencies from about 2.2 Hz up.
@@ -133,7 +133,7 @@ fn one_channel_is_the_per_channel_likelihood() {
     );
     let v = views(&y);
     let means = vec![0.0];
-    let model = Model::new(&v, &means, FS);
+    let model = Model::unbinned(&v, &means, FS);
     let (w1, z1) = pole_theta(1.52, 0.03);
     let (w2, z2) = pole_theta(2.9, 0.05);
     let b = [0.2, -0.4, 0.3, 0.1];
@@ -439,7 +439,7 @@ fn combinations_lose_nothing_and_ignore_scale_and_order() {
         );
         let v = views(&y);
         let comb = refine(&v, FS, &start, &opts).unwrap();
-        let all = refine_up_to(&v, FS, &start, &[], &opts, 6).unwrap();
+        let all = refine_up_to(&v, FS, &start, &[], &opts, 6, &|_| {}).unwrap();
         assert_eq!((comb.combinations, all.combinations), (Some(4), None));
         assert!(comb.joint && all.joint);
         let mut moved = y.clone();
