@@ -215,7 +215,7 @@ def run_covssi(hyst, y, br, tmp, extra=()):
     )
     doc = json.load(open(out))
     top = "stable_fdm" if y.shape[1] > 1 else "stable_fd"
-    poles = [p for o in doc["orders"] for p in o["poles"] if p["label"] == top]
+    poles = [p for o in doc["diagram"]["orders"] for p in o["poles"] if p["label"] == top]
     return (
         np.array([p["frequency_hz"] for p in poles]),
         np.array([p["damping_ratio"] for p in poles]),
@@ -232,7 +232,7 @@ def reported_mode(modes, f_true):
     """covssi's own report for a true mode: the mode (cluster) with most members within the
     window, or None."""
     candidates = [m for m in modes if near(m["frequency_hz"], f_true)]
-    return max(candidates, key=lambda m: m["poles"]) if candidates else None
+    return max(candidates, key=lambda m: len(m["members"])) if candidates else None
 
 
 def refined_mode(doc, f_true):
@@ -450,7 +450,7 @@ def cluster_statistics(doc, tr, nchan):
     order was fully stable too, koma's stability level 2), and the clusters far from every true
     mode (spurious) with their member counts and first orders."""
     top = "stable_fdm" if nchan > 1 else "stable_fd"
-    by_order = {o["order"]: o["poles"] for o in doc["orders"]}
+    by_order = {o["order"]: o["poles"] for o in doc["diagram"]["orders"]}
 
     def previous_stable(order, p):
         for back in (1, 2):  # as covssi: a real pole may sit at every other order only
@@ -483,7 +483,7 @@ def cluster_statistics(doc, tr, nchan):
     spurious, physical = [], []
     for m in doc["modes"]:
         physical_mode = any(near(m["frequency_hz"], f) for f, _ in tr)
-        (physical if physical_mode else spurious).append((m["poles"], m["members"][0][0]))
+        (physical if physical_mode else spurious).append((len(m["members"]), m["members"][0][0]))
     return values, spurious, physical
 
 
