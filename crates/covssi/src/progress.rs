@@ -27,7 +27,7 @@ impl<'a> Steps<'a> {
         }
     }
 
-    /// Steps finished (started and followed by another).
+    /// Steps started so far.
     pub(crate) fn done(&self) -> usize {
         self.done
     }

@@ -88,9 +88,6 @@ impl Eval {
 /// Bins per parallel chunk of an evaluation.
 pub(super) const CHUNK: usize = 128;
 
-/// Frequencies per parallel chunk when the ratios are asked for (they are per frequency).
-const FREQUENCY_CHUNK: usize = 8192;
-
 impl Model {
     /// The model of the record `sp` sampled at `fs` Hz, without real poles.
     pub(super) fn new(sp: Spectra, fs: f64) -> Self {

@@ -39,6 +39,9 @@ const MAX_RATIO: f64 = 0.25;
 /// that the spectrum's shape between far-apart modes is seen.
 const WIDEST: f64 = std::f64::consts::PI / 512.0;
 
+/// Frequencies per parallel chunk where single frequencies are evaluated (the misfit).
+pub(super) const FREQUENCY_CHUNK: usize = 8192;
+
 /// Half-width (frequencies) of the window that estimates the channels' coherence.
 pub(super) const COHERENCE_HALF_WIDTH: usize = 16;
 
@@ -92,31 +95,28 @@ impl Spectra {
     /// The spectra of the channels `y` less `means`, each times `scale`, in bins sized for the
     /// `scales` (none: one bin of every frequency, whatever it is, at most [`WIDEST`] wide).
     pub(super) fn new(y: &[&[f64]], means: &[f64], scale: &[f64], scales: &[Scale]) -> Self {
-        let n = y[0].len();
-        let x = transforms(y, means, scale);
-        let edges = layout(n, scales);
-        let head = y
-            .iter()
-            .zip(means)
-            .zip(scale)
-            .map(|((c, m), d)| c[..n.min(HEAD)].iter().map(|v| (v - m) * d).collect())
-            .collect();
-        Self::from_parts(n, Arc::new(x), None, edges, head)
+        Self::of_record(y, means, scale, layout(y[0].len(), scales))
     }
 
     /// The spectra of `y` less `means` with every frequency its own bin: the likelihood is
     /// then exactly Whittle's.
     #[cfg(test)]
     pub(super) fn unbinned(y: &[&[f64]], means: &[f64]) -> Self {
+        let k = (y[0].len() - 1) / 2;
+        Self::of_record(y, means, &vec![1.0; y.len()], (0..=k).collect())
+    }
+
+    /// The spectra of the channels `y` less `means`, each times `scale`, in the bins `edges`.
+    fn of_record(y: &[&[f64]], means: &[f64], scale: &[f64], edges: Vec<usize>) -> Self {
         let n = y[0].len();
-        let k = (n - 1) / 2;
-        let x = transforms(y, means, &vec![1.0; y.len()]);
         let head = y
             .iter()
             .zip(means)
-            .map(|(c, m)| c[..n.min(HEAD)].iter().map(|v| v - m).collect())
+            .zip(scale)
+            .map(|((c, m), d)| c[..n.min(HEAD)].iter().map(|v| (v - m) * d).collect())
             .collect();
-        Self::from_parts(n, Arc::new(x), None, (0..=k).collect(), head)
+        let x = transforms(y, means, scale);
+        Self::from_parts(n, Arc::new(x), None, edges, head)
     }
 
     fn from_parts(
@@ -333,11 +333,7 @@ fn transforms(y: &[&[f64]], means: &[f64], scale: &[f64]) -> Vec<Vec<C64>> {
             // Lengths match the plan, so this cannot fail.
             fft.process(&mut buf, &mut spec).expect("FFT lengths");
             drop(buf);
-            spec.truncate(k_max + 1);
-            spec.remove(0);
-            spec.iter_mut().for_each(|c| *c *= norm * d);
-            spec.shrink_to_fit();
-            spec
+            spec[1..=k_max].iter().map(|c| c * (norm * d)).collect()
         })
         .collect()
 }

@@ -11,12 +11,12 @@
 
 use rayon::prelude::*;
 
-use super::{CHUNK, FREQUENCY_CHUNK, Joint, ZERO, invert, parameters};
+use super::{CHUNK, Joint, ZERO, invert, parameters};
 use crate::linalg::{self, C64, Dense};
 use crate::refine::model::Eval;
 use crate::refine::parametrization::Denominator;
 use crate::refine::results::MisfitCounts;
-use crate::refine::spectra::Spectra;
+use crate::refine::spectra::{FREQUENCY_CHUNK, Spectra};
 
 /// The coordinates of a Hermitian l×l matrix: the l diagonal entries, then √2 Re and √2 Im
 /// of each entry above it, so that tr(XY) is their dot product.
@@ -115,10 +115,10 @@ fn re_im(p: &[C64], q: &[C64], d1: C64, d2: C64, re: &mut [C64], im: &mut [C64])
 
 impl Joint<'_> {
     /// L over the band at θ (the free modes' and Λ); with `derivs` the score U = −∇L and
-    /// the Fisher information, with respect to θ; with `ratios` the whitened ordinates.
-    /// `None` outside the model (a pole at Nyquist, H(z) singular on the unit circle,
-    /// overflow).
-    pub(in crate::refine) fn eval(&self, th: &[f64], derivs: bool, ratios: bool) -> Option<Eval> {
+    /// the Fisher information, with respect to θ; with `misfit` over single frequencies,
+    /// with the misfit's counts of the whitened ordinates. `None` outside the model (a pole
+    /// at Nyquist, H(z) singular on the unit circle, overflow).
+    pub(in crate::refine) fn eval(&self, th: &[f64], derivs: bool, misfit: bool) -> Option<Eval> {
         let np = parameters(self.l(), self.free);
         debug_assert_eq!(th.len(), np);
         let terms = self.terms(&self.full(th))?;
@@ -126,7 +126,7 @@ impl Joint<'_> {
         let sp = &self.rec.sp;
         // The ordinates are per frequency (the misfit needs them so); L, U and F sum over
         // the bins. Chunks are summed in order, whatever the threads.
-        let parts: Vec<Option<Eval>> = if ratios {
+        let parts: Vec<Option<Eval>> = if misfit {
             let k = sp.edges[self.band.start]..sp.edges[self.band.end];
             (0..k.len().div_ceil(FREQUENCY_CHUNK))
                 .into_par_iter()
@@ -135,7 +135,7 @@ impl Joint<'_> {
                     let f = sp.frequencies(lo..(lo + FREQUENCY_CHUNK).min(k.end));
                     let mut acc = zero();
                     acc.misfit = Some(MisfitCounts::new());
-                    self.eval_chunk(&f, &terms, 0..f.bins(), derivs, true, acc)
+                    self.eval_chunk(&f, &terms, 0..f.bins(), derivs, acc)
                 })
                 .collect()
         } else {
@@ -144,7 +144,7 @@ impl Joint<'_> {
                 .map(|ci| {
                     let lo = self.band.start + ci * CHUNK;
                     let hi = (lo + CHUNK).min(self.band.end);
-                    self.eval_chunk(sp, &terms, lo..hi, derivs, false, zero())
+                    self.eval_chunk(sp, &terms, lo..hi, derivs, zero())
                 })
                 .collect()
         };
@@ -231,7 +231,8 @@ impl Joint<'_> {
     }
 
     /// L over the bins `rows` of `sp` added into `acc`, with the score and Fisher information
-    /// when `derivs`, the whitened ordinates (diagonal of E) when `ratios`. Each bin adds
+    /// when `derivs`, the whitened ordinates (diagonal of E) counted into `acc.misfit` when it
+    /// is there. Each bin adds
     /// n_b [ln det S + tr E], E = M Ŝ_b Mᴴ; its rows of the Jacobian are scaled by √n_b.
     fn eval_chunk(
         &self,
@@ -239,7 +240,6 @@ impl Joint<'_> {
         t: &Terms,
         rows: std::ops::Range<usize>,
         derivs: bool,
-        ratios: bool,
         mut acc: Eval,
     ) -> Option<Eval> {
         let l = self.l();
@@ -286,7 +286,7 @@ impl Joint<'_> {
             }
             let quad: f64 = (0..l).map(|a| e[a * l + a].re).sum();
             acc.l += w * (t.log_det_sigma + 2.0 * log_abs_det + quad);
-            if let (true, Some(counts)) = (ratios, &mut acc.misfit) {
+            if let Some(counts) = &mut acc.misfit {
                 (0..l).for_each(|a| counts.add(e[a * l + a].re));
             }
             if !derivs {

@@ -33,9 +33,6 @@ use std::ops::Range;
 /// Bins per parallel chunk (each gives l² rows of the Jacobian).
 const CHUNK: usize = 32;
 
-/// Frequencies per parallel chunk of the whitened ordinates (they are per frequency).
-const FREQUENCY_CHUNK: usize = 4096;
-
 /// Iterations of the first phase of [`Joint::fit`], the poles held. On a 16-channel, 8-mode
 /// record of the bench's generator (seed 8, measured with a temporary program, not a
 /// repository command) the fit by bands lands on the same estimates (their z-scores equal to
