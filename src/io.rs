@@ -5,7 +5,7 @@
 //! Every error names the file, and where it applies the column, the row (1-based, counting the
 //! header as row 1, as a spreadsheet does) and the offending text.
 
-use std::io::BufRead;
+use std::io::{BufRead, Seek};
 use std::path::{Path, PathBuf};
 
 /// Errors of reading or writing CSV records.
@@ -227,21 +227,18 @@ pub fn read_csv(path: &Path) -> Result<Table, IoError> {
 /// cells; empty lines are skipped. Every row must have one cell per column of the header, and
 /// every cell must be a finite number.
 pub fn read_csv_with(path: &Path, delimiter: Delimiter) -> Result<Table, IoError> {
-    // The file is read as a stream (the record is kept once, as numbers, not also as text);
-    // its first non-blank line is read first to detect the delimiter.
-    let first_line = first_line(path)?;
-    let open = || {
-        std::fs::File::open(path).map_err(|source| IoError::File {
-            path: path.to_path_buf(),
-            source,
-        })
-    };
     let file_error = |source| IoError::File {
         path: path.to_path_buf(),
         source,
     };
+    // The file is read as a stream (the record is kept once, as numbers, not also as text);
+    // its first non-blank line is read first to detect the delimiter, then it is read again
+    // from its start.
+    let file = std::fs::File::open(path).map_err(file_error)?;
+    let mut file = std::io::BufReader::with_capacity(1 << 16, file);
+    let first_line = first_line(&mut file, path)?;
+    file.rewind().map_err(file_error)?;
     // A byte-order mark (spreadsheets write one) would become part of the first name.
-    let mut file = std::io::BufReader::with_capacity(1 << 16, open()?);
     if file
         .fill_buf()
         .map_err(file_error)?
@@ -334,17 +331,17 @@ pub fn read_csv_with(path: &Path, delimiter: Delimiter) -> Result<Table, IoError
     })
 }
 
-/// The first line of the file `path` that is not blank, or why there is none.
-fn first_line(path: &Path) -> Result<Vec<u8>, IoError> {
-    let file_error = |source| IoError::File {
-        path: path.to_path_buf(),
-        source,
-    };
-    let mut head = std::io::BufReader::new(std::fs::File::open(path).map_err(file_error)?);
+/// The first line of `file` (read from `path`) that is not blank, or why there is none.
+fn first_line(file: &mut impl BufRead, path: &Path) -> Result<Vec<u8>, IoError> {
     let mut line = Vec::new();
     loop {
         line.clear();
-        if head.read_until(b'\n', &mut line).map_err(file_error)? == 0 {
+        let read = file.read_until(b'\n', &mut line);
+        if read.map_err(|source| IoError::File {
+            path: path.to_path_buf(),
+            source,
+        })? == 0
+        {
             return Err(IoError::NoHeader {
                 path: path.to_path_buf(),
             });
