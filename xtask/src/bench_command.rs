@@ -28,15 +28,8 @@ pub const FS: f64 = 100.0;
 
 /// The record: ten channels reading every mode's two states through fixed dense gains.
 pub fn record(n: usize, seed: u64) -> Vec<Vec<f64>> {
-    let gains = (0..CHANNELS)
-        .map(|ch| {
-            (0..2 * MODES.len())
-                .map(|j| (((ch * 2 * MODES.len() + j) as f64) * 0.7 + 0.3).sin())
-                .collect()
-        })
-        .collect();
     covssi::synth::ModalRecord::new(FS, &MODES)
-        .with_gains(gains)
+        .with_gains(crate::dense_gains(CHANNELS, MODES.len(), 0.3))
         .with_noise(0.05)
         .generate(n, seed)
 }

@@ -232,18 +232,22 @@ const BENCH_MODES: [(f64, f64); 8] = [
 /// measurement noise; only the lowest `modes` modes respond.
 fn linear_record(n: usize, channels: usize, modes: usize, seed: u64) -> Vec<Vec<f64>> {
     let modes = &BENCH_MODES[..modes.min(BENCH_MODES.len())];
-    // Fixed, dense gains: every channel sees every mode's two states.
-    let gains = (0..channels)
-        .map(|ch| {
-            (0..2 * modes.len())
-                .map(|j| (((ch * 2 * modes.len() + j) as f64) * 0.7).sin())
-                .collect()
-        })
-        .collect();
     covssi::synth::ModalRecord::new(50.0, modes)
-        .with_gains(gains)
+        .with_gains(dense_gains(channels, modes.len(), 0.0))
         .with_noise(0.05)
         .generate(n, seed)
+}
+
+/// Fixed, dense gains of `channels` channels reading `modes` modes' two states each:
+/// sin(0.7 i + `phase`) for the i-th gain in row order, so every channel sees every state.
+fn dense_gains(channels: usize, modes: usize, phase: f64) -> Vec<Vec<f64>> {
+    (0..channels)
+        .map(|ch| {
+            (0..2 * modes)
+                .map(|j| (((ch * 2 * modes + j) as f64) * 0.7 + phase).sin())
+                .collect()
+        })
+        .collect()
 }
 
 fn bench_covssi() {
