@@ -112,6 +112,7 @@ pub(super) fn joint_by_bands(
     model: &Model,
     fit: &Fit,
     joint_max: usize,
+    scales: &[f64],
     opts: &RefineOptions,
 ) -> Option<Estimates> {
     let l = model.l();
@@ -173,8 +174,8 @@ pub(super) fn joint_by_bands(
         for (i, &j) in group.iter().enumerate() {
             est.lambdas[j] = jf.lambdas[i];
             est.se[j] = Some(pole_se(&cov, i, mf, jf.lambdas[i]));
-            est.shapes[j] =
-                (!combine).then(|| shape_se(&shapes[i], &cov, joint::shape_offset(i, mf, lj)));
+            let (c, c_cov) = &shapes[i];
+            est.shapes[j] = Some(shape_se(c, c_cov, scales));
         }
         est.l += jf.l;
         est.iterations += jf.iterations;
@@ -189,8 +190,8 @@ struct BandFit {
     fit: Fit,
     /// Its asymptotic covariance F⁻¹.
     covariance: Dense,
-    /// The shapes of every mode of its model.
-    shapes: Vec<Vec<C64>>,
+    /// The shapes of the group's modes in every channel, with their covariance.
+    shapes: Vec<joint::ChannelShape>,
     /// The channels fitted (the combinations' count when combined).
     channels: usize,
     /// The misfit's counts of the whitened periodogram ordinates of the fit.
@@ -218,7 +219,9 @@ fn fit_band(
         }
         None => None,
     };
-    let combined_model = combined.map(|rows| Model::new(model.sp.combined(rows), model.fs));
+    let combined_model = combined
+        .as_ref()
+        .map(|rows| Model::new(model.sp.combined(rows.clone()), model.fs));
     let rec = combined_model.as_ref().unwrap_or(model);
     let lj = rec.l();
     // The modes next to the group's (by |λ|), whose tails reach furthest into the band:
@@ -268,9 +271,20 @@ fn fit_band(
     {
         return None;
     }
-    // The group's shapes, in channel space only when the channels were fitted
-    // themselves.
-    let shapes = jm.fitted_shapes(&jf.theta);
+    // The group's shapes with their covariance: the fit's own when the channels were fitted
+    // themselves, else each channel's regressed on the fit's innovations.
+    let shapes = match &combined {
+        None => {
+            let c = jm.fitted_shapes(&jf.theta);
+            (0..mf)
+                .map(|i| {
+                    let offset = joint::shape_offset(i, mf, lj);
+                    (c[i].clone(), channel_block(&cov, offset, lj))
+                })
+                .collect()
+        }
+        Some(rows) => jm.channel_shapes(&jf.theta, &cov, (&model.sp, rows), mf)?,
+    };
     Some(BandFit {
         fit: jf,
         covariance: cov,

@@ -7,9 +7,9 @@ use super::*;
 pub(super) struct Estimates {
     pub(super) lambdas: Vec<C64>,
     pub(super) se: Vec<Option<(f64, f64)>>,
-    /// The modes' shapes c_r from the joint likelihood on the channels themselves (not on
-    /// combinations of them), largest entry 1, with each entry's standard error; `None`
-    /// otherwise.
+    /// The modes' shapes from the joint likelihood (in every channel: from the channels
+    /// themselves, or regressed on the fit of combinations of them), largest entry 1, with
+    /// each entry's standard error; `None` from the per-channel fit.
     pub(super) shapes: Vec<Option<(Vec<C64>, Vec<f64>)>>,
     /// Real poles λ and their standard errors (rad/s), in the order of the per-channel fit.
     pub(super) reals: Vec<(f64, Option<f64>)>,
@@ -20,16 +20,32 @@ pub(super) struct Estimates {
     pub(super) bands: usize,
 }
 
-/// A shape `c` scaled so that its largest entry is 1, s_a = c_a/c_b, with each entry's
+/// The covariance of a shape's entries (rows and columns 0..l its real parts, l..2l its
+/// imaginary ones) from the covariance `cov` of θ, whose entries `offset..offset + l` hold
+/// Re c and the next l Im c.
+pub(super) fn channel_block(cov: &Dense, offset: usize, l: usize) -> Dense {
+    let mut out = Dense::zeros(2 * l, 2 * l);
+    for i in 0..2 * l {
+        for j in 0..2 * l {
+            out.set(i, j, cov.at(offset + i, offset + j));
+        }
+    }
+    out
+}
+
+/// A shape `c` of the channels as fitted (channel a times `scales[a]`) in the channels' own
+/// units, c_a/d_a, scaled so that its largest entry is 1, s_a = c_a/c_b, with each entry's
 /// standard error by the delta method, √(E|δs_a|²) (0 for the entry b itself), from the
-/// covariance `cov` of θ, whose entries `offset..offset + l` hold Re c and the next l Im c:
+/// covariance `cov` of c (rows and columns 0..l its real parts, l..2l its imaginary ones):
 /// δs_a = δc_a/c_b − c_a δc_b/c_b².
-pub(super) fn shape_se(c: &[C64], cov: &Dense, offset: usize) -> (Vec<C64>, Vec<f64>) {
+pub(super) fn shape_se(c: &[C64], cov: &Dense, scales: &[f64]) -> (Vec<C64>, Vec<f64>) {
     let l = c.len();
-    let b = crate::stabilize::largest_entry(c);
+    let c: Vec<C64> = c.iter().zip(scales).map(|(v, d)| v / d).collect();
+    let cov_at = |i: usize, j: usize| cov.at(i, j) / (scales[i % l] * scales[j % l]);
+    let b = crate::stabilize::largest_entry(&c);
     let cb = c[b];
     if cb.norm() == 0.0 {
-        return (c.to_vec(), vec![f64::NAN; l]);
+        return (c, vec![f64::NAN; l]);
     }
     // Complex multiplication by w as a real 2 × 2 matrix acting on (Re, Im).
     let mat = |w: C64| [[w.re, -w.im], [w.im, w.re]];
@@ -44,12 +60,12 @@ pub(super) fn shape_se(c: &[C64], cov: &Dense, offset: usize) -> (Vec<C64>, Vec<
                 [p[0][0], p[0][1], q[0][0], q[0][1]],
                 [p[1][0], p[1][1], q[1][0], q[1][1]],
             ];
-            let idx = [offset + a, offset + l + a, offset + b, offset + l + b];
+            let idx = [a, l + a, b, l + b];
             let mut var = 0.0;
             for row in &jac {
                 for (u, &iu) in idx.iter().enumerate() {
                     for (v, &iv) in idx.iter().enumerate() {
-                        var += row[u] * cov.at(iu, iv) * row[v];
+                        var += row[u] * cov_at(iu, iv) * row[v];
                     }
                 }
             }

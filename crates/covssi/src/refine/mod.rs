@@ -54,7 +54,10 @@
 //!    (the channels scaled to equal noise floors, then the leading eigenvectors of their
 //!    cross-spectral matrices over the modes' bands, each normalised to unit trace); what
 //!    the combinations leave out is then measurement noise, so little is lost
-//!    ([`Refinement::combinations`]). With more modes than combinations, the modes are
+//!    ([`Refinement::combinations`]). Every channel's shape then comes from its
+//!    cross-spectra with the combinations' whitened innovations, linear in the shape once
+//!    the fit is known (the `joint::shapes` module), with standard errors that carry the
+//!    fit's own uncertainty. With more modes than combinations, the modes are
 //!    split into groups of at most that many at the widest frequency gaps, and each group is
 //!    fitted over its own band of frequencies through combinations carrying its modes, the
 //!    other modes in the model but held ([`Refinement::bands`]); the likelihood of a band is
@@ -247,7 +250,7 @@ fn refine_up_to(
     let wanted = opts.joint && mk > 0 && fit.reals.is_empty() && per_channel_misfit <= MISFIT_LIMIT;
     steps.start("refining: the joint likelihood");
     let joint_fit = wanted
-        .then(|| joint_by_bands(&model, &fit, joint_max, opts))
+        .then(|| joint_by_bands(&model, &fit, joint_max, &scales, opts))
         .flatten();
     let joint = joint_fit.is_some();
     let est = match joint_fit {

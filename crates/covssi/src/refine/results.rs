@@ -99,13 +99,17 @@ pub struct RefinedMode {
     pub damping_se: Option<f64>,
     /// Continuous-time pole (rad/s).
     pub lambda: C64,
-    /// The mode's shape from the joint likelihood (its $c_r$), scaled so that its largest
-    /// entry is 1; `None` when the channels were fitted each alone (one channel, `joint`
-    /// off, or a record the joint fit did not take) or through combinations of them (more
-    /// than [`JOINT_MAX_CHANNELS`]).
+    /// The mode's shape in every channel, in the channels' own units, scaled so that its
+    /// largest entry is 1: from the joint likelihood of the channels (its $c_r$), or, above
+    /// [`JOINT_MAX_CHANNELS`] channels, each channel regressed on the joint fit of the
+    /// combinations (see [`Refinement::combinations`]). `None` when the channels were
+    /// fitted each alone (one channel, `joint` off, a real pole kept, or a record the joint
+    /// fit did not take).
     pub shape: Option<Vec<C64>>,
-    /// Standard error of each entry of `shape` from the Fisher information, √(E|δ|²) of the
-    /// complex entry (0 for the entry scaled to 1); `None` with `shape`. When two entries are
+    /// Standard error of each entry of `shape`, √(E|δ|²) of the complex entry (0 for the
+    /// entry scaled to 1), from the Fisher information (through combinations: the
+    /// regression's, plus what the combinations' fit's own uncertainty carries into it);
+    /// `None` with `shape`. When two entries are
     /// about equally large, which one is scaled to 1 depends on the noise, and the other's
     /// ratio to it is pulled below 1 by that choice, which these standard errors do not hold.
     pub shape_se: Option<Vec<f64>>,
@@ -201,7 +205,10 @@ pub struct Refinement {
     pub joint: bool,
     /// For a joint fit of more than [`JOINT_MAX_CHANNELS`] channels: the number of
     /// combinations of the channels it was fitted to (`neg_log_likelihood` and `misfit` are
-    /// then theirs); `None` when the channels themselves were fitted.
+    /// then theirs; each channel's shape is then regressed on that fit, its cross-spectra
+    /// with the combinations' innovations being linear in the shape once the poles, gains
+    /// and innovations' covariance are known); `None` when the channels themselves were
+    /// fitted.
     pub combinations: Option<usize>,
     /// Bands of frequencies the joint fit was split into: 1, or with more modes than
     /// combinations one per group of at most that many modes, each fitted over its own band

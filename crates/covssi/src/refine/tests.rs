@@ -419,8 +419,8 @@ fn scaling_a_channel_leaves_the_poles() {
 }
 
 /// Three channels in km, m and µm are fitted jointly as in like units, with the same
-/// poles, standard errors and evidence, and the likelihood given back in their own
-/// units: before, the start's regressions failed across such channels and the fit fell
+/// poles, standard errors and evidence, and the likelihood and shapes given back in their
+/// own units: before, the start's regressions failed across such channels and the fit fell
 /// back to the per-channel likelihood.
 #[test]
 fn channels_in_units_far_apart_are_fitted_jointly_as_in_like_units() {
@@ -454,6 +454,15 @@ fn channels_in_units_far_apart_are_fitted_jointly_as_in_like_units() {
             (p.evidence - q.evidence).abs() < 1e-6 * p.evidence,
             "{p:?} {q:?}"
         );
+        // The shapes in the channels' own units: entry c is u_c times the other's, once
+        // both are scaled to the same entry (before, they were reported in the fit's
+        // scaled units).
+        let (ps, qs) = (p.shape.as_ref().unwrap(), q.shape.as_ref().unwrap());
+        for c in 0..3 {
+            let want = ps[c] * units[c] / (ps[0] * units[0]);
+            let got = qs[c] / qs[0];
+            assert!((got - want).norm() < 1e-6 * want.norm(), "{ps:?} {qs:?}");
+        }
     }
     // S of a channel in units u is u² times its own, so L in the new units is
     // K Σ ln u² above L in the old ones (K frequencies).

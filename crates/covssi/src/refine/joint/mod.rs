@@ -343,7 +343,9 @@ impl<'a> Joint<'a> {
 }
 
 mod eval;
+mod shapes;
 mod small;
+pub(super) use shapes::ChannelShape;
 use small::{cholesky, invert, rank_one, regress};
 
 #[cfg(test)]
