@@ -84,10 +84,8 @@ pub(crate) fn run(a: &LevelsArgs) -> Result<(), Error> {
     let opts = LevelsOptions::with_mass(a.mass)
         .fit_exponent(a.fit_exponent)
         .by_simulation(simulation);
-    let t0 = std::time::Instant::now();
-    let bar = spinner();
-    let say = |m: &str| bar.set_message(format!("{:.0} s: {m}", t0.elapsed().as_secs_f64()));
-    let report = levels::levels_report(&records, fs, &opts, &validations, &say);
+    let bar = steps_bar();
+    let report = levels::levels_report(&records, fs, &opts, &validations, &|p| show(&bar, p));
     bar.finish_and_clear();
     let report = report.map_err(|e| fail(e.to_string()))?;
     print!("{report}");

@@ -212,6 +212,13 @@ pub(crate) fn steps_bar() -> indicatif::ProgressBar {
     bar
 }
 
+/// `bar` showing the step `p`: its position among the run's steps and what runs.
+pub(crate) fn show(bar: &indicatif::ProgressBar, p: covssi::Progress<'_>) {
+    bar.set_length(p.total as u64);
+    bar.set_position(p.done as u64);
+    bar.set_message(p.what.to_string());
+}
+
 pub(crate) fn check_fs(fs: f64) -> Result<f64, Error> {
     if fs.is_finite() && fs > 0.0 {
         Ok(fs)

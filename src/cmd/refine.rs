@@ -96,11 +96,9 @@ pub(crate) fn run(a: &RefineArgs) -> Result<(), Error> {
             InterpolationArg::Linear => residual::InputInterpolation::Linear,
         },
     };
-    // One line per step on stderr while the loop runs (hidden when stderr is not a terminal).
-    let t0 = std::time::Instant::now();
-    let bar = spinner();
-    let say = |m: &str| bar.set_message(format!("{:.0} s: {m}", t0.elapsed().as_secs_f64()));
-    let r = residual::refine_report(&rec, a.mass, start, estimate, &tests, &say)
+    // A bar of the loop's steps on stderr (hidden when stderr is not a terminal).
+    let bar = steps_bar();
+    let r = residual::refine_report(&rec, a.mass, start, estimate, &tests, &|p| show(&bar, p))
         .map_err(|e| fail(format!("{}: {e}", a.data.display())));
     bar.finish_and_clear();
     let report = hyst::report::FileReport::new(a.data.display().to_string(), r?);

@@ -240,11 +240,7 @@ pub(crate) fn run(a: &SsiArgs) -> Result<(), Error> {
         .with_ssi(ssi_options(a))
         .with_refine(refine);
     let bar = steps_bar();
-    let analysis = covssi::analyze_with_progress(&views, fs_used, &opts, &|p| {
-        bar.set_length(p.total as u64);
-        bar.set_position(p.done as u64);
-        bar.set_message(p.what.to_string());
-    });
+    let analysis = covssi::analyze_with_progress(&views, fs_used, &opts, &|p| show(&bar, p));
     bar.finish_and_clear();
     let rows = (views.first().map_or(0, |c| c.len()), rows);
     let mut analysis = analysis.map_err(|e| flag_error(a, e, &names, fs_used, rows))?;

@@ -54,6 +54,21 @@ DF, DZ, DMAC = 0.01, 0.05, 0.03
 
 
 # ---------------------------------------------------------------------------- systems
+class Steps:
+    """The run's steps, told to `cargo xtask compare-tools` as `@progress DONE TOTAL WHAT`
+    lines on stderr, which it shows as a progress bar."""
+
+    def __init__(self, total):
+        self.done, self.total = 0, total
+
+    def start(self, what):
+        print(f"@progress {self.done} {self.total} {what}", file=sys.stderr, flush=True)
+        self.done += 1
+
+
+STEPS = Steps(0)
+
+
 def chain_3dof():
     k = 200.0
     K = k * np.array([[2.0, -1.0, 0.0], [-1.0, 2.0, -1.0], [0.0, -1.0, 1.0]])
@@ -347,6 +362,7 @@ def seeds(hyst, count, first, tmp):
         tr = truth(M, C, K)
         errs = {t: [] for t in TOOLS + ["z"]}
         for s in range(first, first + count):
+            STEPS.start(f"{name}, seed {s}: the three tools")
             y = record(system, chans, s)
             res = run_all(hyst, y, br, tr, tmp)
             for t in TOOLS + ["z"]:
@@ -527,6 +543,7 @@ def clusters(hyst, count, first, tmp):
         acc = {k: [[] for _ in tr] for k in ("mean", "median", "level 2")}
         spur, phys = [], []
         for s in range(first, first + count):
+            STEPS.start(f"{name}, seed {s}: covssi's clusters")
             y = record(system, chans, s)
             doc = run_covssi(hyst, y, br, tmp)[2]
             refined_counts[name].append(refined_census(doc, tr))
@@ -794,6 +811,8 @@ def main():
 
     print(f"pyOMA-2 {version('pyOMA-2')}, koma-python {version('koma-python')}, "
           f"numpy {np.__version__}\n")
+    phases = (a.seeds > 0 and not a.covssi_only) + a.clusters
+    STEPS.total = phases * a.seeds * len(CASES)
     with tempfile.TemporaryDirectory() as tmp:
         if not a.covssi_only:
             files(a.hyst, a.data, tmp)

@@ -22,6 +22,11 @@ fn run_ok(cmd: &mut Command, what: &str) -> Result<(), String> {
     let status = cmd
         .status()
         .map_err(|e| format!("{what}: could not start: {e}"))?;
+    succeeded(status, what)
+}
+
+/// An error naming `what` unless `status` is success.
+fn succeeded(status: std::process::ExitStatus, what: &str) -> Result<(), String> {
     if status.success() {
         Ok(())
     } else {
@@ -76,7 +81,7 @@ pub fn run(args: &[String]) -> Result<(), String> {
             "pip install",
         )?;
     }
-    run_ok(
+    run_with_progress(
         Command::new(&python)
             .arg(root.join("xtask/compare/oma_tools.py"))
             .arg("--hyst")
@@ -90,4 +95,65 @@ pub fn run(args: &[String]) -> Result<(), String> {
             .env("MKL_NUM_THREADS", "1"),
         "oma_tools.py",
     )
+}
+
+/// Run `cmd` (its stdout as this program's), showing the `@progress DONE TOTAL WHAT` lines
+/// of its stderr as a progress bar (hidden when stderr is not a terminal) and passing its
+/// other lines on.
+fn run_with_progress(cmd: &mut Command, what: &str) -> Result<(), String> {
+    use std::io::BufRead;
+    let mut child = cmd
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .map_err(|e| format!("{what}: could not start: {e}"))?;
+    let bar = indicatif::ProgressBar::new(0);
+    if let Ok(style) =
+        indicatif::ProgressStyle::with_template("[{elapsed}] {bar:30} {pos}/{len} {msg}")
+    {
+        bar.set_style(style);
+    }
+    if let Some(err) = child.stderr.take() {
+        for line in std::io::BufReader::new(err).lines() {
+            let line = line.map_err(|e| format!("{what}: reading its stderr: {e}"))?;
+            match progress_line(&line) {
+                Some((done, total, step)) => {
+                    bar.set_length(total);
+                    bar.set_position(done);
+                    bar.set_message(step.to_string());
+                }
+                None if bar.is_hidden() => eprintln!("{line}"),
+                None => bar.println(line),
+            }
+        }
+    }
+    bar.finish_and_clear();
+    let status = child
+        .wait()
+        .map_err(|e| format!("{what}: could not wait for it: {e}"))?;
+    succeeded(status, what)
+}
+
+/// `@progress DONE TOTAL WHAT` read as (done, total, what).
+fn progress_line(line: &str) -> Option<(u64, u64, &str)> {
+    let rest = line.strip_prefix("@progress ")?;
+    let mut parts = rest.splitn(3, ' ');
+    let done = parts.next()?.parse().ok()?;
+    let total = parts.next()?.parse().ok()?;
+    Some((done, total, parts.next().unwrap_or("")))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::progress_line;
+
+    #[test]
+    fn progress_lines_are_read_and_others_are_not() {
+        assert_eq!(
+            progress_line("@progress 3 120 3-DOF, seed 904: the three tools"),
+            Some((3, 120, "3-DOF, seed 904: the three tools"))
+        );
+        assert_eq!(progress_line("@progress 3"), None);
+        assert_eq!(progress_line("  3-DOF seed 904: pyOMA2 +0.1/+2.0"), None);
+        assert_eq!(progress_line("@progress x 1 a"), None);
+    }
 }

@@ -166,7 +166,7 @@ pub fn run_level(level: f64, i: usize, samples: usize, seed: u64) -> Result<Rand
 /// The Bouc-Wen models of all levels ([`hyst_ident::levels::fit_levels`], as `hyst levels`
 /// fits them) from the levels' Zener spectral fits: by the statistical linearization, and by
 /// simulation (the records simulated as one steady-state period each, as they were made)
-/// when `samples` is given; `progress` prints each iteration of the latter.
+/// when `samples` is given; `progress` shows the latter's iterations as a bar.
 pub fn levels_models(
     results: &[RandomLevel],
     samples: Option<usize>,
@@ -179,22 +179,30 @@ pub fn levels_models(
         periodic: true,
         ..SimulationOptions::default()
     });
-    let t = std::time::Instant::now();
-    let report = |it: usize, cost: f64| {
-        if progress {
-            eprintln!(
-                "  simulation fit, iteration {it}: weighted sum of squares {cost:.2} ({:.1} s)",
-                t.elapsed().as_secs_f64()
-            );
-        }
+    // A bar of the fit's iterations (as many as it may take), hidden when not asked or when
+    // stderr is not a terminal.
+    let bar = match (&simulation, progress) {
+        (Some(s), true) => indicatif::ProgressBar::new(s.max_iterations as u64),
+        _ => indicatif::ProgressBar::hidden(),
     };
-    fit_levels(
+    if let Ok(style) = indicatif::ProgressStyle::with_template(
+        "levels' fit by simulation {bar:30} {pos}/{len} iterations {elapsed} {msg}",
+    ) {
+        bar.set_style(style);
+    }
+    let report = |it: usize, cost: f64| {
+        bar.set_position(it as u64);
+        bar.set_message(format!("(weighted sum of squares {cost:.2})"));
+    };
+    let fit = fit_levels(
         &refs,
         &lengths,
         &LevelsOptions::default().by_simulation(simulation),
         &report,
     )
-    .map_err(|e| e.to_string())
+    .map_err(|e| e.to_string());
+    bar.finish_and_clear();
+    fit
 }
 
 /// The one Bouc-Wen model of all levels by the statistical linearization.

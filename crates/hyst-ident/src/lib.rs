@@ -80,7 +80,7 @@ use hyst_model::{BoucWen, Oscillator};
 
 use hyst_sim::{Decimation, Input, SimError, SimOptions};
 
-pub use covssi::Complex64;
+pub use covssi::{Complex64, Progress};
 pub use error::*;
 pub use models::*;
 pub use numerics::*;

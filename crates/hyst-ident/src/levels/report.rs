@@ -9,7 +9,7 @@ use std::fmt;
 use hyst_model::{BoucWen, Oscillator, Restoring, ZenerParams};
 
 use super::*;
-use crate::{IdentOptions, Score, ValidationRecord, validate};
+use crate::{IdentOptions, Progress, Score, ValidationRecord, validate};
 
 /// Options of [`levels_report`] and [`fit_levels`].
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -171,18 +171,23 @@ pub struct LevelsReport {
 /// The levels workflow: each of `records` (name, output) sampled at `fs` identified
 /// ([`crate::identify`]) for its Zener spectral fit (an error when a record has none: each
 /// must be the response to a broadband random force), then [`fit_levels`], then each model
-/// validated on `validations`. `progress` hears what runs.
+/// validated on `validations`. `progress` hears each step as it starts: each record's
+/// identification, each iteration of the fit by simulation (as many as it may take), each
+/// validation.
 pub fn levels_report(
     records: &[(String, &[f64])],
     fs: f64,
     opts: &LevelsOptions,
     validations: &[ValidationRecord],
-    progress: &(dyn Fn(&str) + Sync),
+    progress: &(dyn Fn(Progress<'_>) + Sync),
 ) -> Result<LevelsReport, IdentError> {
+    let iterations = opts.by_simulation.as_ref().map_or(0, |s| s.max_iterations);
+    let total = records.len() + iterations + validations.len();
+    let tell = |done: usize, what: &str| progress(Progress { done, total, what });
     // (name, σₓ, samples, fit) of each record.
     let mut identified = Vec::with_capacity(records.len());
-    for (name, y) in records {
-        progress(&format!("identifying {name}"));
+    for (i, (name, y)) in records.iter().enumerate() {
+        tell(i, &format!("identifying {name}"));
         let id = crate::identify(y, fs, &opts.ident).map_err(|e| e.in_record(name))?;
         let fit = id.zener_spectrum.ok_or_else(|| IdentError::NoSpectralFit {
             record: name.clone(),
@@ -193,12 +198,13 @@ pub fn levels_report(
     let fits: Vec<&ZenerSpectralFit> = identified.iter().map(|l| &l.3).collect();
     let lengths: Vec<usize> = identified.iter().map(|l| l.2).collect();
     if opts.by_simulation.is_some() {
-        progress("fitting by simulation");
+        tell(records.len(), "fitting by simulation");
     }
     let iteration = |it: usize, cost: f64| {
-        progress(&format!(
-            "fitting by simulation: iteration {it}, weighted sum of squares {cost:.2}"
-        ))
+        tell(
+            records.len() + it,
+            &format!("fitting by simulation: iteration {it}, weighted sum of squares {cost:.2}"),
+        )
     };
     let models = fit_levels(&fits, &lengths, opts, &iteration)?;
     let own = &models.statistical.oscillator;
@@ -213,8 +219,11 @@ pub fn levels_report(
         })
         .collect();
     let mut validation = Vec::with_capacity(validations.len());
-    for r in validations {
-        progress(&format!("validating on {}", r.name));
+    for (v, r) in validations.iter().enumerate() {
+        tell(
+            records.len() + iterations + v,
+            &format!("validating on {}", r.name),
+        );
         let score = |m: &Oscillator| Score::of(validate(m, &r.u, &r.y, fs, r.periodic));
         validation.push(LevelsValidation {
             record: r.name.clone(),

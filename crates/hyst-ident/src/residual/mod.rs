@@ -31,6 +31,7 @@
 
 use hyst_model::Oscillator;
 
+use crate::Progress;
 use crate::{IdentError, Validation};
 
 mod candidates;
@@ -180,10 +181,24 @@ fn check_test_rows(tests: &[(usize, usize)]) -> Result<(), IdentError> {
     }
 }
 
-/// The loop's messages as it goes (a step begun, a candidate tried on the test rows).
-pub type Progress<'a> = &'a (dyn Fn(&str) + Sync);
+/// Who hears the loop's steps as they start ([`Progress`]: the start's fit, each step of
+/// [`MAX_STEPS`], the report at the end; a candidate tried on the test rows is told within
+/// its step).
+pub type ProgressFn<'a> = &'a (dyn Fn(Progress<'_>) + Sync);
 
-fn no_progress(_: &str) {}
+fn no_progress(_: Progress<'_>) {}
+
+/// Steps of one run of the loop: the start's fit, at most [`MAX_STEPS`] steps, the report.
+const LOOP_STEPS: usize = MAX_STEPS + 2;
+
+/// `progress` told that the loop's step `done` (of [`LOOP_STEPS`]) starts, doing `what`.
+fn tell(progress: ProgressFn<'_>, done: usize, what: &str) {
+    progress(Progress {
+        done,
+        total: LOOP_STEPS,
+        what,
+    });
+}
 
 /// Refine `start` on the estimation rows and report on the test rows.
 ///
@@ -210,7 +225,7 @@ pub fn refine_with(
     estimate: (usize, usize),
     tests: &[(usize, usize)],
     fit_mass: bool,
-    progress: Progress<'_>,
+    progress: ProgressFn<'_>,
 ) -> Result<Refinement, IdentError> {
     if rec.u.len() != rec.y.len() {
         return Err(IdentError::LengthMismatch {
@@ -225,11 +240,15 @@ pub fn refine_with(
     let prep = Prepared::new(rec);
     let rec = &prep;
     let errs = |m: &Oscillator| held_out_errors(m, rec, tests);
-    progress("fitting the start by output error");
+    tell(progress, 0, "fitting the start by output error");
     let (model, c) = baseline(start, rec, estimate, fit_mass)?;
     let baseline = model;
     let (model, steps) = add_effects(model, c, rec, estimate, tests, fit_mass, progress);
-    progress("standard errors, noise level, halves");
+    tell(
+        progress,
+        LOOP_STEPS - 1,
+        "standard errors, noise level, halves",
+    );
     let tests_err = errs(&model);
     let estimates = standard_errors_on(&model, rec, estimate, fit_mass).unwrap_or_default();
     let resid = residual(&model, rec, estimate).unwrap_or_default();
@@ -308,7 +327,7 @@ fn add_effects(
     estimate: (usize, usize),
     tests: &[(usize, usize)],
     fit_mass: bool,
-    progress: Progress<'_>,
+    progress: ProgressFn<'_>,
 ) -> (Oscillator, Vec<Step>) {
     let errs = |m: &Oscillator| held_out_errors(m, rec, tests);
     let outputs = |m: &Oscillator| -> Vec<Option<Vec<f64>>> {
@@ -317,10 +336,14 @@ fn add_effects(
     let ys: Vec<&[f64]> = tests.iter().map(|r| &rec.y[r.0..r.1]).collect();
     let mut steps = Vec::new();
     for k in 0..MAX_STEPS {
-        progress(&format!(
-            "step {}: tracing the residual, fitting the candidates",
-            k + 1
-        ));
+        tell(
+            progress,
+            k + 1,
+            &format!(
+                "step {}: tracing the residual, fitting the candidates",
+                k + 1
+            ),
+        );
         let tr = surface::trace(&model, rec, estimate, fit_mass);
         let (mut evidence, spectrum) = diagnose_on(&model, c, rec, estimate, fit_mass, Some(&tr));
         let before = errs(&model);
@@ -335,7 +358,7 @@ fn add_effects(
                 let (m, c1) = fit_on(m, rec, estimate, fit_mass, CONVERGED_ITERATIONS)?;
                 Some((m, c1, outputs(&m)))
             },
-            progress,
+            &|what| tell(progress, k + 1, what),
         );
         let trace = tr.fit;
         match chosen {
@@ -485,7 +508,8 @@ type Tried = (usize, Oscillator, f64, Vec<Option<Vec<f64>>>);
 
 /// Pick the effect to add from the fitted candidates `evidence` (the current model's sum of
 /// squares `c0`, its outputs `before` on the test rows `ys`). `converge` fits a candidate to
-/// convergence and returns it with its sum of squares and test outputs.
+/// convergence and returns it with its sum of squares and test outputs. `progress` hears
+/// each candidate tried.
 fn choose(
     evidence: &mut [Evidence],
     trace: Option<&surface::SurfaceFit>,
@@ -493,7 +517,7 @@ fn choose(
     ys: &[&[f64]],
     before: &[Option<Vec<f64>>],
     converge: impl Fn(&Oscillator) -> Option<(Oscillator, f64, Vec<Option<Vec<f64>>>)>,
-    progress: Progress<'_>,
+    progress: &dyn Fn(&str),
 ) -> Option<Chosen> {
     let mut order: Vec<usize> = (0..evidence.len())
         .filter(|&i| evidence[i].model.is_some() && evidence[i].delta_bic < SIGNIFICANT_BIC)
@@ -674,7 +698,7 @@ pub fn refine_record_with(
     start: Start,
     estimate: (usize, usize),
     tests: &[(usize, usize)],
-    progress: Progress<'_>,
+    progress: ProgressFn<'_>,
 ) -> Result<Refinement, IdentError> {
     if rec.u.len() != rec.y.len() {
         return Err(IdentError::LengthMismatch {
@@ -691,7 +715,7 @@ pub fn refine_record_with(
         mass: mass.unwrap_or(1.0),
         ..crate::IdentOptions::default()
     };
-    progress("output-only identification of the start");
+    tell(progress, 0, "output-only identification of the start");
     let models = match crate::identify(&rec.y[estimate.0..estimate.1], rec.fs, &opts) {
         Ok(id) => Some(id.models),
         Err(e) => {

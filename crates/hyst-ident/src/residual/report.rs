@@ -33,7 +33,7 @@ pub fn refine_report(
     start: Start,
     estimate: (usize, usize),
     tests: &[(usize, usize)],
-    progress: Progress<'_>,
+    progress: ProgressFn<'_>,
 ) -> Result<RefineReport, IdentError> {
     let t0 = std::time::Instant::now();
     let refinement = refine_record_with(rec, mass, start, estimate, tests, progress)?;
