@@ -1,8 +1,9 @@
-"""pyOMA2's SSI-cov identification of one CSV record, for `cargo xtask bench command`.
+"""pyOMA2's and koma's SSI-cov identification of one CSV record, for `cargo xtask bench command`.
 
-Reads the record (not timed), then runs pyOMA2's cov_R SSI with the settings `hyst ssi` uses by
-default (20 block rows, orders up to 40) and prints the median wall time of three runs in
-seconds. Usage: ssi_timing.py RECORD.csv [FS]
+Reads the record (not timed), then runs pyOMA2's cov_R SSI and koma's covssi with the settings
+`hyst ssi` uses by default (20 block rows, orders up to 40) and prints the median wall time of
+three runs of each in seconds, one line per tool: `pyoma2 S` and `koma S`.
+Usage: ssi_timing.py RECORD.csv [FS]
 """
 import sys
 import time
@@ -19,17 +20,25 @@ def main():
     path = sys.argv[1]
     fs = float(sys.argv[2]) if len(sys.argv) > 2 else 100.0
     y = np.loadtxt(path, delimiter=",", skiprows=1)
+    from koma import oma
     from pyoma2.algorithms import SSI
 
-    times = []
-    for _ in range(3):
-        t0 = time.perf_counter()
+    def pyoma2():
         alg = SSI(name="t", method="cov_R", br=20, ordmax=40,
                   hc={"xi_max": 0.2, "mpc_lim": None, "mpd_lim": None, "CoV_max": None})
         alg._set_data(y, fs)
         alg.run()
-        times.append(time.perf_counter() - t0)
-    print(f"{float(np.median(times)):.4f}")
+
+    def koma():
+        oma.covssi(y, fs, 20, np.arange(2, 42, 2), showinfo=False)
+
+    for name, run in (("pyoma2", pyoma2), ("koma", koma)):
+        times = []
+        for _ in range(3):
+            t0 = time.perf_counter()
+            run()
+            times.append(time.perf_counter() - t0)
+        print(f"{name} {float(np.median(times)):.4f}")
 
 
 if __name__ == "__main__":

@@ -1,6 +1,6 @@
 //! `cargo xtask bench command`: the whole `hyst ssi` command on a long ten-channel record, as
-//! a user runs it (CSV in, JSON out), with its wall time and peak memory, beside pyOMA2's
-//! SSI-cov identification of the same record in the same run.
+//! a user runs it (CSV in, JSON out), with its wall time and peak memory, beside pyOMA2's and
+//! koma's SSI-cov identification of the same record in the same run.
 //!
 //! The record: ten channels, 10⁶ samples at 100 Hz, five modes 1.3–13.2 Hz damped 1–2.5 %
 //! (`covssi::synth::ModalRecord`, fixed dense gains), 5 % white measurement noise, written once
@@ -87,7 +87,7 @@ fn timed(cmd: &mut Command) -> Result<(f64, f64), String> {
     }
 }
 
-/// The bench: `hyst ssi` refined and not, and pyOMA2 when its environment exists.
+/// The bench: `hyst ssi` refined and not, and pyOMA2 and koma when their environment exists.
 pub fn run() -> Result<(), String> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"))
         .parent()
@@ -146,15 +146,23 @@ pub fn run() -> Result<(), String> {
         ));
     }
     let text = String::from_utf8_lossy(&out.stdout);
-    let py: f64 = text
-        .split_whitespace()
-        .next()
-        .and_then(|v| v.parse().ok())
-        .ok_or_else(|| format!("ssi_timing.py printed {text:?}"))?;
+    let tool = |name: &str| -> Result<f64, String> {
+        text.lines()
+            .find_map(|l| l.strip_prefix(name)?.trim().parse().ok())
+            .ok_or_else(|| format!("ssi_timing.py printed no {name} time: {text:?}"))
+    };
+    let (py, koma) = (tool("pyoma2 ")?, tool("koma ")?);
     println!("pyoma2_ssi_cov_s_1e6_10ch {py:.2} s (identification only, one BLAS thread)");
+    println!("koma_ssi_cov_s_1e6_10ch {koma:.2} s (identification only, one BLAS thread)");
     println!(
-        "hyst_ssi_over_pyoma2_1e6_10ch {:.2} (target at most 4)",
-        s / py
+        "hyst_ssi_over_pyoma2_1e6_10ch {:.2} (target at most 4); without refinement {:.2}",
+        s / py,
+        s0 / py
+    );
+    println!(
+        "hyst_ssi_over_koma_1e6_10ch {:.2}; without refinement {:.2}",
+        s / koma,
+        s0 / koma
     );
     Ok(())
 }

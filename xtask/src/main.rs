@@ -17,6 +17,7 @@ mod bench_command;
 mod compare;
 mod deps;
 mod f16;
+mod growth;
 mod loop_battery;
 mod random_sweep;
 mod sizes;
@@ -623,6 +624,13 @@ fn bench_ident() {
 }
 
 /// `cargo xtask bench command` (`bench_command.rs`).
+fn bench_growth() {
+    if let Err(e) = growth::run() {
+        eprintln!("error: {e}");
+        std::process::exit(1);
+    }
+}
+
 fn bench_command() {
     if let Err(e) = bench_command::run() {
         eprintln!("error: {e}");
@@ -645,8 +653,10 @@ enum BenchGroup {
     Covssi,
     Ident,
     Refine,
-    /// The whole `hyst ssi` command on a 10-channel 10⁶-sample record, beside pyOMA2.
+    /// The whole `hyst ssi` command on a 10-channel 10⁶-sample record, beside pyOMA2 and koma.
     Command,
+    /// covssi's cost against the record's length, channels and modes, with figures.
+    Growth,
 }
 
 #[derive(clap::Subcommand)]
@@ -686,12 +696,13 @@ fn main() {
     use clap::Parser;
     match Cli::parse().task {
         Task::Bench { groups } => {
-            let all: [(BenchGroup, fn()); 5] = [
+            let all: [(BenchGroup, fn()); 6] = [
                 (BenchGroup::Rk4, bench),
                 (BenchGroup::Covssi, bench_covssi),
                 (BenchGroup::Ident, bench_ident),
                 (BenchGroup::Refine, bench_refine),
                 (BenchGroup::Command, bench_command),
+                (BenchGroup::Growth, bench_growth),
             ];
             for (group, run) in all {
                 if groups.is_empty() || groups.contains(&group) {
