@@ -174,8 +174,9 @@ pub(super) fn joint_by_bands(
         for (i, &j) in group.iter().enumerate() {
             est.lambdas[j] = jf.lambdas[i];
             est.se[j] = Some(pole_se(&cov, i, mf, jf.lambdas[i]));
-            let (c, c_cov) = &shapes[i];
-            est.shapes[j] = Some(shape_se(c, c_cov, scales));
+            est.shapes[j] = shapes
+                .as_ref()
+                .map(|sh| shape_se(&sh[i].0, &sh[i].1, scales));
         }
         est.l += jf.l;
         est.iterations += jf.iterations;
@@ -190,8 +191,11 @@ struct BandFit {
     fit: Fit,
     /// Its asymptotic covariance F⁻¹.
     covariance: Dense,
-    /// The shapes of the group's modes in every channel, with their covariance.
-    shapes: Vec<joint::ChannelShape>,
+    /// The shapes of the group's modes in every channel, with their covariance; `None` when
+    /// the channels' regression on a fit of combinations cannot be made (too few
+    /// frequencies in the band for its unknowns, or singular), which leaves the poles as
+    /// fitted.
+    shapes: Option<Vec<joint::ChannelShape>>,
     /// The channels fitted (the combinations' count when combined).
     channels: usize,
     /// The misfit's counts of the whitened periodogram ordinates of the fit.
@@ -276,14 +280,15 @@ fn fit_band(
     let shapes = match &combined {
         None => {
             let c = jm.fitted_shapes(&jf.theta);
-            (0..mf)
+            let own = (0..mf)
                 .map(|i| {
                     let offset = joint::shape_offset(i, mf, lj);
                     (c[i].clone(), channel_block(&cov, offset, lj))
                 })
-                .collect()
+                .collect();
+            Some(own)
         }
-        Some(rows) => jm.channel_shapes(&jf.theta, &cov, (&model.sp, rows), mf)?,
+        Some(rows) => jm.channel_shapes(&jf.theta, &cov, (&model.sp, rows), mf),
     };
     Some(BandFit {
         fit: jf,

@@ -358,7 +358,7 @@ fn add_effects(
                 let (m, c1) = fit_on(m, rec, estimate, fit_mass, CONVERGED_ITERATIONS)?;
                 Some((m, c1, outputs(&m)))
             },
-            &|what| tell(progress, k + 1, what),
+            &|what| tell(progress, k + 1, &format!("step {}: {what}", k + 1)),
         );
         let trace = tr.fit;
         match chosen {
@@ -540,10 +540,7 @@ fn choose(
     let mut tried: Vec<Tried> = Vec::new();
     let mut try_one = |i: usize, ev: &mut [Evidence]| -> Option<usize> {
         let m = ev[i].model?;
-        progress(&format!(
-            "  trying {} on the test rows",
-            ev[i].effect.name()
-        ));
+        progress(&format!("trying {} on the test rows", ev[i].effect.name()));
         let (m, c1, out) = converge(&m)?;
         let gain = paired_gain(ys, before, &out);
         ev[i].held_out = Some(gain);
