@@ -18,7 +18,8 @@ use std::process::Command;
 /// The versions whose numbers the OMA README quotes.
 const TOOLS: [&str; 2] = ["pyOMA-2==1.4.3", "koma-python==1.3.6"];
 
-fn run_ok(cmd: &mut Command, what: &str) -> Result<(), String> {
+/// Run `cmd`, an error naming `what` unless it succeeds.
+pub(crate) fn run_ok(cmd: &mut Command, what: &str) -> Result<(), String> {
     let status = cmd
         .status()
         .map_err(|e| format!("{what}: could not start: {e}"))?;

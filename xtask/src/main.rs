@@ -10,6 +10,8 @@
 //!   runs covssi beside pyOMA2 and koma (see `compare.rs`).
 //! - `cargo xtask loop-battery --seed S [--cases NAMES] [--forces periodic,random] [--out FILE]`
 //!   runs the residual loop on records with undeclared effects (see `loop_battery.rs`).
+//! - `cargo xtask test` runs every test: the workspace's, then the Python package's
+//!   (`test_all.rs`).
 //! - `cargo xtask unused-deps` and `cargo xtask sizes` check the workspace's manifests and the
 //!   size of its files and functions (`deps.rs`, `sizes.rs`; tests run both in CI).
 
@@ -22,6 +24,7 @@ mod loop_battery;
 mod random_sweep;
 mod sizes;
 mod sweep;
+mod test_all;
 
 use std::time::Instant;
 
@@ -685,6 +688,8 @@ enum Task {
     },
     /// The residual loop on records with undeclared effects (`loop_battery.rs`).
     LoopBattery(loop_battery::BatteryArgs),
+    /// Every test: `cargo test --workspace`, then the Python package's pytest (`test_all.rs`).
+    Test,
     /// Fail if a workspace member declares a dependency its sources do not use (`deps.rs`).
     UnusedDeps,
     /// Fail if a source file, a function or `src/main.rs` outgrows its limit, or the command
@@ -735,6 +740,12 @@ fn main() {
         Task::F16 { out } => f16_cmd(out.as_deref()),
         Task::LoopBattery(a) => {
             if let Err(e) = loop_battery::run(&a) {
+                eprintln!("error: {e}");
+                std::process::exit(1);
+            }
+        }
+        Task::Test => {
+            if let Err(e) = test_all::run_all() {
                 eprintln!("error: {e}");
                 std::process::exit(1);
             }

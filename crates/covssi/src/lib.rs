@@ -74,7 +74,7 @@ pub use linalg::C64 as Complex64;
 pub use options::{BlockRows, SsiOptions, StabilityCriteria};
 pub use progress::Progress;
 pub use refine::{
-    DroppedMode, DroppedRealPole, RefineOptions, RefinedMode, RefinedRealPole, Refinement, refine,
-    refine_with_real_poles,
+    DroppedMode, DroppedRealPole, MISFIT_LIMIT, RefineOptions, RefinedMode, RefinedRealPole,
+    Refinement, refine, refine_with_real_poles,
 };
 pub use stabilize::{Mode, Pole, PoleStatus, RealPoleCluster, Rejection, Stability, mac, mpc};

@@ -1,0 +1,343 @@
+//! Python bindings of hyst: the extension module `hyst._hyst`, which the Python package
+//! `hyst` (`python/hyst/`) wraps.
+//!
+//! One job: hand numpy arrays to the library and its results back as numpy arrays, with no
+//! decision of its own. `ssi` runs [`covssi::analyze`] (SSI-COV, then the maximum-likelihood
+//! refinement) on the columns of a `(samples, channels)` float64 array, with the GIL released;
+//! a Fortran-ordered array's columns are read in place, a C-ordered one's are copied once.
+//! Errors are the library's, raised as `ValueError` with its message. `SsiResult.to_dict()`
+//! is the same JSON document `hyst ssi --json` writes (the library's types serialized, then
+//! parsed by Python's `json`).
+
+use std::borrow::Cow;
+
+use covssi::{AnalysisOptions, BlockRows, ModalAnalysis, RefineOptions, SsiOptions};
+use numpy::ndarray::{Array1, Array2};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+
+/// The modes reported first: the refined ones when the refinement ran and the record follows
+/// its model, else SSI's.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Source {
+    Refined,
+    Ssi,
+}
+
+/// What `hyst.ssi` found: SSI's stabilization diagram, modes and real poles, and the
+/// maximum-likelihood refinement of them.
+#[pyclass(module = "hyst", name = "SsiResult", frozen)]
+struct SsiResult {
+    analysis: ModalAnalysis,
+    record: String,
+}
+
+impl SsiResult {
+    fn reported(&self) -> Source {
+        match &self.analysis.refined {
+            Some(r) if r.misfit <= covssi::MISFIT_LIMIT && !r.modes.is_empty() => Source::Refined,
+            _ => Source::Ssi,
+        }
+    }
+
+    /// One value per reported mode: `refined` of each refined mode, or `ssi` of each SSI mode.
+    fn per_mode<'py>(
+        &self,
+        py: Python<'py>,
+        refined: impl Fn(&covssi::RefinedMode) -> f64,
+        ssi: impl Fn(&covssi::Mode) -> f64,
+    ) -> Bound<'py, PyArray1<f64>> {
+        let v: Vec<f64> = match (self.reported(), &self.analysis.refined) {
+            (Source::Refined, Some(r)) => r.modes.iter().map(refined).collect(),
+            _ => self.analysis.ssi.modes.iter().map(ssi).collect(),
+        };
+        Array1::from(v).into_pyarray(py)
+    }
+
+    /// The reported modes' shapes (modes × channels), from `refined` or `ssi`; NaN where a
+    /// refined mode has none.
+    fn per_entry<T: Copy + numpy::Element>(
+        &self,
+        refined: impl Fn(&covssi::RefinedMode) -> Option<Vec<T>>,
+        ssi: impl Fn(&covssi::Mode) -> Vec<T>,
+        missing: T,
+    ) -> Array2<T> {
+        let l = self.analysis.ssi.diagram.channels;
+        let rows: Vec<Vec<T>> = match (self.reported(), &self.analysis.refined) {
+            (Source::Refined, Some(r)) => r
+                .modes
+                .iter()
+                .map(|m| refined(m).unwrap_or_else(|| vec![missing; l]))
+                .collect(),
+            _ => self.analysis.ssi.modes.iter().map(ssi).collect(),
+        };
+        Array2::from_shape_fn((rows.len(), l), |(i, c)| rows[i][c])
+    }
+}
+
+#[pymethods]
+impl SsiResult {
+    /// "refined" when the modes reported are the maximum-likelihood refinement's (it ran and
+    /// the record follows its model), "ssi" when they are SSI's.
+    #[getter]
+    fn source(&self) -> &'static str {
+        match self.reported() {
+            Source::Refined => "refined",
+            Source::Ssi => "ssi",
+        }
+    }
+
+    /// Natural frequency of each reported mode (Hz), increasing.
+    #[getter]
+    fn frequency_hz<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.per_mode(py, |m| m.frequency_hz, |m| m.frequency_hz)
+    }
+
+    /// Damping ratio of each reported mode.
+    #[getter]
+    fn damping_ratio<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.per_mode(py, |m| m.damping_ratio, |m| m.damping_ratio)
+    }
+
+    /// Standard error of each frequency (Hz); NaN for SSI's modes, which have none.
+    #[getter]
+    fn frequency_se_hz<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.per_mode(py, |m| m.frequency_se_hz.unwrap_or(f64::NAN), |_| f64::NAN)
+    }
+
+    /// Standard error of each damping ratio; NaN for SSI's modes, which have none.
+    #[getter]
+    fn damping_se<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        self.per_mode(py, |m| m.damping_se.unwrap_or(f64::NAN), |_| f64::NAN)
+    }
+
+    /// Each reported mode's shape (modes × channels, complex, its largest entry 1).
+    #[getter]
+    fn shape<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<covssi::Complex64>> {
+        let nan = covssi::Complex64::new(f64::NAN, f64::NAN);
+        self.per_entry(|m| m.shape.clone(), |m| m.shape.clone(), nan)
+            .into_pyarray(py)
+    }
+
+    /// Standard error of each shape entry (modes × channels); NaN for SSI's modes.
+    #[getter]
+    fn shape_se<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        self.per_entry(
+            |m| m.shape_se.clone(),
+            |m| vec![f64::NAN; m.shape.len()],
+            f64::NAN,
+        )
+        .into_pyarray(py)
+    }
+
+    /// SSI's modes: frequency (Hz) and damping ratio, columns of a (modes × 2) array.
+    #[getter]
+    fn ssi_modes<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        let m = &self.analysis.ssi.modes;
+        Array2::from_shape_fn((m.len(), 2), |(i, j)| {
+            [m[i].frequency_hz, m[i].damping_ratio][j]
+        })
+        .into_pyarray(py)
+    }
+
+    /// The real poles λ (rad/s, negative): the refined ones kept when the modes reported are
+    /// refined, else SSI's clusters'.
+    #[getter]
+    fn real_poles<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        let v: Vec<f64> = match (self.reported(), &self.analysis.refined) {
+            (Source::Refined, Some(r)) => r.real_poles.iter().map(|p| p.lambda).collect(),
+            _ => self
+                .analysis
+                .ssi
+                .real_poles
+                .iter()
+                .map(|p| p.lambda)
+                .collect(),
+        };
+        Array1::from(v).into_pyarray(py)
+    }
+
+    /// The stabilization diagram's poles, one row per pole: model order, frequency (Hz),
+    /// damping ratio (a (poles × 3) array); their labels are [`Self::pole_status`].
+    #[getter]
+    fn poles<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        let rows: Vec<[f64; 3]> = self
+            .analysis
+            .ssi
+            .diagram
+            .orders
+            .iter()
+            .flat_map(|o| {
+                o.poles
+                    .iter()
+                    .map(move |p| [o.order as f64, p.frequency_hz, p.damping_ratio])
+            })
+            .collect();
+        Array2::from_shape_fn((rows.len(), 3), |(i, j)| rows[i][j]).into_pyarray(py)
+    }
+
+    /// Each pole's label, in the order of [`Self::poles`]: `stable_f`, `stable_fd`,
+    /// `stable_fdm`, `stable_real` or `rejected_<criterion>`.
+    #[getter]
+    fn pole_status(&self) -> Vec<&'static str> {
+        self.analysis
+            .ssi
+            .diagram
+            .orders
+            .iter()
+            .flat_map(|o| o.poles.iter().map(|p| p.status.name()))
+            .collect()
+    }
+
+    /// The refinement's misfit (Kolmogorov–Smirnov distance; above 0.05 the record does not
+    /// follow the model and SSI's modes are reported), or None when it did not run.
+    #[getter]
+    fn misfit(&self) -> Option<f64> {
+        self.analysis.refined.as_ref().map(|r| r.misfit)
+    }
+
+    /// Why the refinement asked for gave no result, or None.
+    #[getter]
+    fn not_refined(&self) -> Option<String> {
+        self.analysis.not_refined.clone()
+    }
+
+    /// The result as the JSON document `hyst ssi --json` writes.
+    fn to_json(&self) -> PyResult<String> {
+        let report = hyst::report::FileReport::new(self.record.clone(), &self.analysis);
+        serde_json::to_string(&report).map_err(|e| PyValueError::new_err(e.to_string()))
+    }
+
+    /// The result as the dictionary of `hyst ssi --json`'s document (the same keys and
+    /// values).
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let json = self.to_json()?;
+        py.import("json")?.call_method1("loads", (json,))
+    }
+
+    /// The stabilization diagram as SVG text, up to `max_frequency_hz` (default: Nyquist).
+    #[pyo3(signature = (title = "Stabilization diagram", max_frequency_hz = None))]
+    fn stabilization_svg(&self, title: &str, max_frequency_hz: Option<f64>) -> String {
+        covssi::svg::stabilization_svg(&self.analysis.ssi.diagram, max_frequency_hz, title)
+    }
+
+    /// The report `hyst ssi` prints.
+    fn __str__(&self) -> String {
+        self.analysis.to_string()
+    }
+
+    fn __repr__(&self) -> String {
+        let modes = match (self.reported(), &self.analysis.refined) {
+            (Source::Refined, Some(r)) => r.modes.len(),
+            _ => self.analysis.ssi.modes.len(),
+        };
+        format!(
+            "<SsiResult: {modes} mode(s), {}, {} channel(s) at {} Hz>",
+            self.source(),
+            self.analysis.ssi.diagram.channels,
+            self.analysis.fs_hz
+        )
+    }
+}
+
+/// The columns of `y` (samples × channels) as slices: in place when each is contiguous
+/// (a Fortran-ordered array), else copied.
+fn columns<'a>(y: &'a numpy::ndarray::ArrayView2<'a, f64>) -> Vec<Cow<'a, [f64]>> {
+    y.columns()
+        .into_iter()
+        .map(|c| match c.to_slice() {
+            Some(s) => Cow::Borrowed(s),
+            None => Cow::Owned(c.to_vec()),
+        })
+        .collect()
+}
+
+/// SSI-COV and the maximum-likelihood refinement of the channels `y` (float64, samples ×
+/// channels) sampled at `fs` Hz; see the Python wrapper `hyst.ssi` for the options.
+#[pyfunction]
+#[pyo3(signature = (
+    y, fs, *, block_rows = None, lag_seconds = None, max_order = None, order_step = 1,
+    references = None, df = None, dzeta = None, dmac = None, dreal = None, refine = true,
+    joint = true, channels = None, record = "array"
+))]
+#[allow(clippy::too_many_arguments)]
+fn ssi(
+    py: Python<'_>,
+    y: PyReadonlyArray2<'_, f64>,
+    fs: f64,
+    block_rows: Option<usize>,
+    lag_seconds: Option<f64>,
+    max_order: Option<usize>,
+    order_step: usize,
+    references: Option<Vec<usize>>,
+    df: Option<f64>,
+    dzeta: Option<f64>,
+    dmac: Option<f64>,
+    dreal: Option<f64>,
+    refine: bool,
+    joint: bool,
+    channels: Option<Vec<String>>,
+    record: &str,
+) -> PyResult<SsiResult> {
+    let view = y.as_array();
+    let l = view.ncols();
+    if let Some(names) = &channels
+        && names.len() != l
+    {
+        return Err(PyValueError::new_err(format!(
+            "channels names {} channel(s), the array has {l}",
+            names.len()
+        )));
+    }
+    let block_rows = match (lag_seconds, block_rows) {
+        (Some(_), Some(_)) => {
+            return Err(PyValueError::new_err(
+                "give block_rows or lag_seconds, not both",
+            ));
+        }
+        (Some(t), None) => BlockRows::Seconds(t),
+        (None, Some(n)) => BlockRows::Count(n),
+        (None, None) => SsiOptions::default().block_rows,
+    };
+    let defaults = covssi::StabilityCriteria::default();
+    let ssi = SsiOptions {
+        block_rows,
+        max_order,
+        order_step,
+        criteria: covssi::StabilityCriteria {
+            frequency: df.unwrap_or(defaults.frequency),
+            damping: dzeta.unwrap_or(defaults.damping),
+            mac: dmac.unwrap_or(defaults.mac),
+            real: dreal.unwrap_or(defaults.real),
+        },
+        references,
+        ..SsiOptions::default()
+    };
+    let opts = AnalysisOptions::default()
+        .with_ssi(ssi)
+        .with_refine(refine.then(|| RefineOptions {
+            joint,
+            ..RefineOptions::default()
+        }));
+    let cols = columns(&view);
+    let views: Vec<&[f64]> = cols.iter().map(|c| c.as_ref()).collect();
+    let mut analysis = py
+        .detach(|| covssi::analyze(&views, fs, &opts))
+        .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    if let Some(names) = channels {
+        analysis.channels = names;
+    }
+    Ok(SsiResult {
+        analysis,
+        record: record.to_string(),
+    })
+}
+
+/// The extension module: `hyst._hyst`.
+#[pymodule]
+fn _hyst(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(ssi, m)?)?;
+    m.add_class::<SsiResult>()?;
+    Ok(())
+}

@@ -1,0 +1,33 @@
+"""The code of docs/python.md runs as written."""
+
+import json
+import re
+
+from conftest import ROOT
+
+
+def test_the_python_guide_runs(data_dir, tmp_path, monkeypatch, capsys):
+    text = (ROOT / "docs" / "python.md").read_text()
+    blocks = re.findall(r"```python\n(.*?)```", text, flags=re.S)
+    assert blocks, "docs/python.md has no python block"
+    monkeypatch.setenv("HYST_DATA_DIR", str(data_dir))
+    monkeypatch.chdir(tmp_path)
+    for code in blocks:
+        exec(compile(code, "docs/python.md", "exec"), {"__name__": "docs"})
+    out = capsys.readouterr().out
+    # The mode table: each refined mode within three of its standard errors of the truth
+    # file's (an independent computation from the chain's matrices).
+    truth = json.loads((data_dir / "oma" / "truth_3dof.json").read_text())
+    rows = re.findall(
+        r"^\s*(\d+\.\d{4})\s+(\d+\.\d{4})\s+(\d+\.\d{4})\s+(\d+\.\d{4})\s+(\d\.\d{3})$",
+        out,
+        flags=re.M,
+    )
+    assert len(rows) == 3, out
+    for row, f0, z0 in zip(rows, truth["fn_hz"], truth["zeta"]):
+        f, fse, z, zse, mpc = map(float, row)
+        assert abs(f - f0) <= 3 * fse, (f, fse, f0)
+        assert abs(z - z0) <= 3 * zse, (z, zse, z0)
+        assert mpc > 0.99
+    assert "3 refined modes" in out
+    assert (tmp_path / "diagram.svg").read_text().startswith("<svg")

@@ -1,0 +1,90 @@
+//! `cargo xtask test`: every test of the project, the README's test command.
+//!
+//! First `cargo test --workspace`; then the Python package: a virtual environment under
+//! `target/py-venv` (made on first use, with maturin, numpy and pytest from PyPI), the
+//! package built and installed into it from `crates/hyst-py` (`pip install`, maturin's release
+//! build), the `hyst` command built for the tests that compare with it, and pytest run on
+//! `crates/hyst-py/tests` (which also runs the code of `docs/python.md`). Fails on the first
+//! failure.
+
+use std::path::Path;
+use std::process::Command;
+
+use crate::compare::run_ok as run;
+
+/// What the Python tests need besides the package.
+const PYTHON_NEEDS: [&str; 3] = ["maturin>=1.7,<2", "numpy", "pytest"];
+
+/// Every test, in order: the workspace's, then the Python package's.
+pub fn run_all() -> Result<(), String> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .ok_or("no workspace root")?
+        .to_path_buf();
+    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+    run(
+        Command::new(&cargo)
+            .args(["test", "--workspace"])
+            .current_dir(&root),
+        "cargo test --workspace",
+    )?;
+    let venv = root.join("target").join("py-venv");
+    let bin = venv.join("bin");
+    let python = bin.join("python");
+    if !python.is_file() {
+        run(
+            Command::new("python3").args(["-m", "venv"]).arg(&venv),
+            "python3 -m venv target/py-venv",
+        )?;
+    }
+    run(
+        Command::new(&python)
+            .args([
+                "-m",
+                "pip",
+                "install",
+                "--quiet",
+                "--disable-pip-version-check",
+            ])
+            .args(PYTHON_NEEDS),
+        "pip install maturin numpy pytest",
+    )?;
+    // maturin is found on PATH by pip's build step: the environment's own first.
+    let path = std::env::join_paths(
+        std::iter::once(bin.clone()).chain(
+            std::env::var_os("PATH")
+                .iter()
+                .flat_map(std::env::split_paths),
+        ),
+    )
+    .map_err(|e| format!("PATH: {e}"))?;
+    run(
+        Command::new(&python)
+            .args([
+                "-m",
+                "pip",
+                "install",
+                "--quiet",
+                "--disable-pip-version-check",
+            ])
+            .args(["--no-build-isolation", "--force-reinstall", "--no-deps"])
+            .arg(root.join("crates").join("hyst-py"))
+            .env("PATH", &path)
+            .current_dir(&root),
+        "pip install ./crates/hyst-py",
+    )?;
+    run(
+        Command::new(&cargo)
+            .args(["build", "--release", "--quiet", "--bin", "hyst"])
+            .current_dir(&root),
+        "cargo build --release --bin hyst",
+    )?;
+    run(
+        Command::new(&python)
+            .args(["-m", "pytest", "-q"])
+            .arg(root.join("crates").join("hyst-py").join("tests"))
+            .env("HYST_BIN", root.join("target").join("release").join("hyst"))
+            .current_dir(&root),
+        "pytest crates/hyst-py/tests",
+    )
+}
