@@ -15,6 +15,19 @@ use crate::compare::run_ok as run;
 /// What the Python tests need besides the package.
 const PYTHON_NEEDS: [&str; 3] = ["maturin>=1.7,<2", "numpy", "pytest"];
 
+/// `python -m pip install --quiet`, the arguments to follow.
+fn pip(python: &Path) -> Command {
+    let mut cmd = Command::new(python);
+    cmd.args([
+        "-m",
+        "pip",
+        "install",
+        "--quiet",
+        "--disable-pip-version-check",
+    ]);
+    cmd
+}
+
 /// Every test, in order: the workspace's, then the Python package's.
 pub fn run_all() -> Result<(), String> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -38,15 +51,7 @@ pub fn run_all() -> Result<(), String> {
         )?;
     }
     run(
-        Command::new(&python)
-            .args([
-                "-m",
-                "pip",
-                "install",
-                "--quiet",
-                "--disable-pip-version-check",
-            ])
-            .args(PYTHON_NEEDS),
+        pip(&python).args(PYTHON_NEEDS),
         "pip install maturin numpy pytest",
     )?;
     // maturin is found on PATH by pip's build step: the environment's own first.
@@ -59,14 +64,7 @@ pub fn run_all() -> Result<(), String> {
     )
     .map_err(|e| format!("PATH: {e}"))?;
     run(
-        Command::new(&python)
-            .args([
-                "-m",
-                "pip",
-                "install",
-                "--quiet",
-                "--disable-pip-version-check",
-            ])
+        pip(&python)
             .args(["--no-build-isolation", "--force-reinstall", "--no-deps"])
             .arg(root.join("crates").join("hyst-py"))
             .env("PATH", &path)
