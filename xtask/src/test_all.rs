@@ -41,6 +41,10 @@ pub fn run_all() -> Result<(), String> {
             .current_dir(&root),
         "cargo test --workspace",
     )?;
+    // The build's target folder (CARGO_TARGET_DIR when set): the command's binary is there.
+    let target = std::env::var_os("CARGO_TARGET_DIR")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| root.join("target"));
     let venv = root.join("target").join("py-venv");
     let bin = venv.join("bin");
     let python = bin.join("python");
@@ -81,7 +85,7 @@ pub fn run_all() -> Result<(), String> {
         Command::new(&python)
             .args(["-m", "pytest", "-q"])
             .arg(root.join("crates").join("hyst-py").join("tests"))
-            .env("HYST_BIN", root.join("target").join("release").join("hyst"))
+            .env("HYST_BIN", target.join("release").join("hyst"))
             .current_dir(&root),
         "pytest crates/hyst-py/tests",
     )
