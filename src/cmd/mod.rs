@@ -65,9 +65,9 @@ impl From<DelimiterArg> for hyst::io::Delimiter {
 /// The delimiter `--delimiter` gave, set once at start.
 pub(crate) static DELIMITER: std::sync::OnceLock<hyst::io::Delimiter> = std::sync::OnceLock::new();
 
-/// Read a CSV record with the delimiter of `--delimiter`.
+/// Read a record: a NumPy `.npy` array, or CSV with the delimiter of `--delimiter`.
 pub(crate) fn read_csv(path: &std::path::Path) -> Result<hyst::io::Table, hyst::io::IoError> {
-    hyst::io::read_csv_with(path, DELIMITER.get().copied().unwrap_or_default())
+    hyst::io::read_record(path, DELIMITER.get().copied().unwrap_or_default())
 }
 
 #[derive(Subcommand)]

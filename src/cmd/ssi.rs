@@ -8,7 +8,8 @@ use super::*;
 
 #[derive(Args, Debug)]
 pub(crate) struct SsiArgs {
-    /// Input CSV file with a header line.
+    /// The record: CSV with a header line, or a NumPy `.npy` array (samples × channels,
+    /// columns named 0, 1, …).
     #[arg(long)]
     pub(crate) input: PathBuf,
     /// Sampling rate of the file (Hz).

@@ -1,7 +1,8 @@
-//! Reading and writing the CSV records the command line works on.
+//! Reading and writing the records the command line works on.
 //!
 //! A record is a header line of column names followed by rows of numbers separated by `,`,
-//! `;` or tabs (detected from the header, or given), read by the `csv` crate.
+//! `;` or tabs (detected from the header, or given), read by the `csv` crate; or a NumPy
+//! `.npy` array (the `npy` module), chosen by the file's extension ([`read_record`]).
 //! Every error names the file, and where it applies the column, the row (1-based, counting the
 //! header as row 1, as a spreadsheet does) and the offending text.
 
@@ -115,6 +116,31 @@ pub enum IoError {
         /// The file.
         path: PathBuf,
     },
+    /// A `.npy` file that is not a record: not NumPy's format, a dtype other than float64 or
+    /// float32, a shape other than (samples,) or (samples, channels), data missing.
+    #[error("{path}: {what}")]
+    Npy {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        what: String,
+    },
+}
+
+mod npy;
+pub use npy::read_npy;
+
+/// The record at `path`: a NumPy `.npy` array when its extension says so ([`read_npy`]), else
+/// delimited text with `delimiter` ([`read_csv_with`]).
+pub fn read_record(path: &Path, delimiter: Delimiter) -> Result<Table, IoError> {
+    let npy = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("npy"));
+    if npy {
+        read_npy(path)
+    } else {
+        read_csv_with(path, delimiter)
+    }
 }
 
 /// A table of named numeric columns of equal length.
