@@ -63,17 +63,18 @@ impl Hermitian {
     }
 }
 
-/// What the evaluation needs of θ that does not depend on the frequency.
-struct Terms {
-    den: Denominator,
+/// What the evaluation (and the channels' shapes' regression) needs of θ that does not
+/// depend on the frequency.
+pub(super) struct Terms {
+    pub(super) den: Denominator,
     /// Each mode's c_r and c̄_r, k_r, and the row vectors k_rᵀΛ and k̄_rᵀΛ.
-    cs: Vec<Vec<C64>>,
-    cs_conj: Vec<Vec<C64>>,
-    ks: Vec<Vec<C64>>,
-    k_lam: Vec<Vec<C64>>,
-    kc_lam: Vec<Vec<C64>>,
+    pub(super) cs: Vec<Vec<C64>>,
+    pub(super) cs_conj: Vec<Vec<C64>>,
+    pub(super) ks: Vec<Vec<C64>>,
+    pub(super) k_lam: Vec<Vec<C64>>,
+    pub(super) kc_lam: Vec<Vec<C64>>,
     /// Λ⁻¹ (row-major), and Λ's rows as complex vectors.
-    lam_inv: Vec<f64>,
+    pub(super) lam_inv: Vec<f64>,
     lam_rows: Vec<Vec<C64>>,
     /// ln det Σ.
     log_det_sigma: f64,
@@ -156,7 +157,7 @@ impl Joint<'_> {
     }
 
     /// The terms of θ (all modes' and Λ) that do not depend on the frequency.
-    fn terms(&self, th: &[f64]) -> Option<Terms> {
+    pub(super) fn terms(&self, th: &[f64]) -> Option<Terms> {
         let l = self.l();
         let m = self.refs.len();
         let den = Denominator::new(th, m, self.rec.fs)?;
@@ -212,7 +213,14 @@ impl Joint<'_> {
     }
 
     /// H(z) (row-major) and each mode's d1 = 1/(z − μ), d2 = 1/(z − μ̄) at z.
-    fn transfer(&self, t: &Terms, z: C64, hz: &mut [C64], d1: &mut [C64], d2: &mut [C64]) {
+    pub(super) fn transfer(
+        &self,
+        t: &Terms,
+        z: C64,
+        hz: &mut [C64],
+        d1: &mut [C64],
+        d2: &mut [C64],
+    ) {
         let l = self.l();
         for (i, h) in hz.iter_mut().enumerate() {
             *h = C64::new(if i / l == i % l { 1.0 } else { 0.0 }, 0.0);

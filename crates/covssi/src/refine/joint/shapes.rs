@@ -25,9 +25,8 @@
 //! $\hat\Sigma_v \otimes G^{-1}$, $G$ the normal matrix and $\hat\Sigma_v$ the residuals'
 //! cross-products over the rows left after the fit.
 
-use super::{Joint, invert};
+use super::{Joint, ZERO, invert};
 use crate::linalg::{self, C64, Dense};
-use crate::refine::parametrization::{discrete_poles, unpack};
 use crate::refine::spectra::Spectra;
 use rayon::prelude::*;
 
@@ -100,8 +99,9 @@ impl Joint<'_> {
     /// (the free modes' and Λ) and its covariance `cov`, with their covariance: the
     /// regression's, given the fit, plus what the fit's own uncertainty carries into them,
     /// J cov Jᵀ with J the shapes' derivatives in θ (forward differences, steps a thousandth
-    /// of each parameter's standard error, which err by about that fraction; the two parts are uncorrelated, the score of the
-    /// combinations' likelihood being uncorrelated with that of the channels given them).
+    /// of each parameter's standard error, which err by about that fraction). The two parts
+    /// are uncorrelated: the score of the combinations' likelihood is uncorrelated with that
+    /// of the channels given them.
     /// `None` when the band has fewer than ten observations per unknown or the regression is
     /// singular.
     pub(in crate::refine) fn channel_shapes(
@@ -223,57 +223,33 @@ impl Joint<'_> {
     fn normal_equations(&self, full: &[f64], cross: &Cross) -> Option<Normal> {
         let (m, lz, l) = (self.refs.len(), self.l(), cross.yy.rows);
         let cols = 4 * m + lz;
-        let mu = discrete_poles(&unpack(full, m), self.rec.fs)?;
-        let (cs, ks) = self.shapes(full);
-        let (lam, lam_inv) = self.lambda(full);
-        let conj = |v: &[C64]| -> Vec<C64> { v.iter().map(|x| x.conj()).collect() };
-        // kᵀΛ of each mode.
-        let k_lam: Vec<Vec<C64>> = ks
-            .iter()
-            .map(|k| {
-                (0..lz)
-                    .map(|j| (j..lz).map(|i| k[i] * lam[i * lz + j]).sum())
-                    .collect()
-            })
-            .collect();
+        let t = self.terms(full)?;
+        let mu = &t.den.mu;
         let i1 = C64::new(0.0, 1.0);
-        let zero = C64::new(0.0, 0.0);
         let mut ne = Normal {
             g: Dense::zeros(cols, cols),
             h: Dense::zeros(cols, l),
         };
-        let mut x = vec![zero; cols * lz];
+        let mut x = vec![ZERO; cols * lz];
+        let (mut h, mut d1, mut d2) = (vec![ZERO; lz * lz], vec![ZERO; m], vec![ZERO; m]);
         let mut rows_of = Rows::new(cols, lz, l, self.band.len().min(BINS));
         for bin in self.band.clone() {
             let z = self.rec.sp.z[bin];
-            // H(z), then M = H⁻ᴴ Λ⁻ᵀ.
-            let mut h: Vec<C64> = (0..lz * lz)
-                .map(|t| C64::new(if t / lz == t % lz { 1.0 } else { 0.0 }, 0.0))
-                .collect();
-            for r in 0..m {
-                let (d1, d2) = (1.0 / (z - mu[2 * r]), 1.0 / (z - mu[2 * r + 1]));
-                for a in 0..lz {
-                    for c in 0..lz {
-                        let ck = cs[r][a] * ks[r][c];
-                        h[a * lz + c] += ck * d1 + ck.conj() * d2;
-                    }
-                }
-            }
+            // H(z) with each mode's 1/(z − μ) and 1/(z − μ̄), then M = H⁻ᴴ Λ⁻ᵀ.
+            self.transfer(&t, z, &mut h, &mut d1, &mut d2);
             let (h_inv, _) = invert(&h, lz)?;
             let mm = product(
                 (lz, lz, lz),
                 |i, k| h_inv[k * lz + i].conj(),
-                |k, j| C64::new(lam_inv[j * lz + k], 0.0),
+                |k, j| C64::new(t.lam_inv[j * lz + k], 0.0),
             );
             // The regressors' values at each output j.
             for r in 0..m {
-                let (d1, d2) = (1.0 / (z - mu[2 * r]), 1.0 / (z - mu[2 * r + 1]));
                 let (e1, e2) = (1.0 / (1.0 - z * mu[2 * r]), 1.0 / (1.0 - z * mu[2 * r + 1]));
-                let cc = conj(&cs[r]);
                 for j in 0..lz {
-                    let (g1, g2) = (k_lam[r][j] * d1, k_lam[r][j].conj() * d2);
-                    let cm: C64 = (0..lz).map(|i| cs[r][i] * mm[i * lz + j]).sum();
-                    let ccm: C64 = (0..lz).map(|i| cc[i] * mm[i * lz + j]).sum();
+                    let (g1, g2) = (t.k_lam[r][j] * d1[r], t.kc_lam[r][j] * d2[r]);
+                    let cm: C64 = (0..lz).map(|i| t.cs[r][i] * mm[i * lz + j]).sum();
+                    let ccm: C64 = (0..lz).map(|i| t.cs_conj[r][i] * mm[i * lz + j]).sum();
                     let (a1, a2) = (cm * e1, ccm * e2);
                     x[(2 * r) * lz + j] = g1 + g2;
                     x[(2 * r + 1) * lz + j] = i1 * (g1 - g2);
