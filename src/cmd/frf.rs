@@ -6,7 +6,7 @@ use clap::Args;
 use hyst::ident::frf::{self, PeriodicRecord};
 use hyst::io::write_csv;
 
-use super::read_csv;
+use super::read_record;
 use hyst::plot::colors;
 
 use super::{Error, channel_names, check_fs, fail};
@@ -70,7 +70,7 @@ pub fn run(a: &FrfArgs) -> Result<(), Error> {
             a.period
         )));
     }
-    let t = read_csv(&a.input)?;
+    let t = read_record(&a.input)?;
     let names = channel_names(&t, a.columns.as_deref(), &[a.force.as_str()]);
     if names.is_empty() {
         return Err(fail(format!(

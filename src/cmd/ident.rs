@@ -189,7 +189,7 @@ fn record(
 fn validation_records(a: &IdentArgs) -> Result<Vec<hyst::ident::ValidationRecord>, Error> {
     let mut out = Vec::new();
     for v in &a.validate {
-        let t = read_csv(v)?;
+        let t = read_record(v)?;
         let mut record = hyst::ident::ValidationRecord::new(
             v.display().to_string(),
             t.column(&a.columns.input_column)?.to_vec(),

@@ -69,7 +69,7 @@ pub(crate) fn run(a: &LevelsArgs) -> Result<(), Error> {
     let records: Vec<(String, &[f64])> = data.iter().map(|(n, y)| (n.clone(), &y[..])).collect();
     let mut validations = Vec::new();
     for v in &a.validate {
-        let t = read_csv(v)?;
+        let t = read_record(v)?;
         validations.push(hyst::ident::ValidationRecord {
             name: v.display().to_string(),
             u: t.column(&a.columns.input_column)?.to_vec(),

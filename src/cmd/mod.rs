@@ -66,7 +66,7 @@ impl From<DelimiterArg> for hyst::io::Delimiter {
 pub(crate) static DELIMITER: std::sync::OnceLock<hyst::io::Delimiter> = std::sync::OnceLock::new();
 
 /// Read a record: a NumPy `.npy` array, or CSV with the delimiter of `--delimiter`.
-pub(crate) fn read_csv(path: &std::path::Path) -> Result<hyst::io::Table, hyst::io::IoError> {
+pub(crate) fn read_record(path: &std::path::Path) -> Result<hyst::io::Table, hyst::io::IoError> {
     hyst::io::read_record(path, DELIMITER.get().copied().unwrap_or_default())
 }
 
@@ -236,7 +236,7 @@ pub(crate) fn output_after_skip(
     column: &str,
     skip: usize,
 ) -> Result<Vec<f64>, Error> {
-    let t = read_csv(path)?;
+    let t = read_record(path)?;
     let col = t.column(column)?;
     if skip >= col.len() {
         return Err(fail(format!(

@@ -59,7 +59,7 @@ pub(crate) struct RefineArgs {
 pub(crate) fn run(a: &RefineArgs) -> Result<(), Error> {
     use hyst::ident::residual::{self, Record, Start};
     let fs = check_fs(a.fs)?;
-    let t = read_csv(&a.data)?;
+    let t = read_record(&a.data)?;
     let u = t
         .column(&a.input_column)
         .map_err(|e| fail(format!("{e} (refine needs the input too)")))?;

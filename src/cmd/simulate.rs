@@ -181,7 +181,7 @@ pub(crate) fn run(a: &SimulateArgs) -> Result<(), Error> {
     let (u, fs, periodic) = match (&a.input, a.excitation) {
         (Some(path), None) => {
             let fs = check_fs(a.fs.ok_or_else(|| fail("--fs is required with --input"))?)?;
-            let t = read_csv(path)?;
+            let t = read_record(path)?;
             (t.column(&a.column)?.to_vec(), fs, a.periodic)
         }
         (None, Some(kind)) => {

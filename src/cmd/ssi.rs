@@ -124,7 +124,7 @@ fn channels(a: &SsiArgs) -> Result<Channels, Error> {
     if a.decimate == 0 {
         return Err(fail("--decimate must be at least 1, got 0"));
     }
-    let mut t = read_csv(&a.input)?;
+    let mut t = read_record(&a.input)?;
     let names = channel_names(&t, a.columns.as_deref(), &[]);
     if a.columns.is_none() {
         warn_on_force_like(&names);

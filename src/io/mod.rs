@@ -9,7 +9,7 @@
 use std::io::{BufRead, Seek};
 use std::path::{Path, PathBuf};
 
-/// Errors of reading or writing CSV records.
+/// Errors of reading or writing records.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum IoError {
@@ -464,7 +464,9 @@ pub fn data_dir() -> Option<PathBuf> {
 mod tests {
     use super::*;
 
-    fn file_path(name: &str) -> PathBuf {
+    /// A path for the test file `name` in this process's temporary folder (the `.npy`
+    /// reader's tests write theirs there too).
+    pub(super) fn file_path(name: &str) -> PathBuf {
         let dir = std::env::temp_dir().join(format!("hyst-io-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         dir.join(name)

@@ -132,9 +132,7 @@ mod tests {
     }
 
     fn write(name: &str, bytes: &[u8]) -> std::path::PathBuf {
-        let dir = std::env::temp_dir().join(format!("hyst-npy-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let path = dir.join(name);
+        let path = crate::io::tests::file_path(name);
         std::fs::write(&path, bytes).unwrap();
         path
     }
