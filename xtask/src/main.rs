@@ -626,16 +626,19 @@ fn bench_ident() {
     println!("ident_zener_spectrum_ms_2e17 {:.1} ms", t * 1e3);
 }
 
-/// `cargo xtask bench command` (`bench_command.rs`).
+/// `cargo xtask bench growth` (`growth.rs`).
 fn bench_growth() {
-    if let Err(e) = growth::run() {
-        eprintln!("error: {e}");
-        std::process::exit(1);
-    }
+    or_exit(growth::run());
 }
 
+/// `cargo xtask bench command` (`bench_command.rs`).
 fn bench_command() {
-    if let Err(e) = bench_command::run() {
+    or_exit(bench_command::run());
+}
+
+/// A task's error printed, and the process ended with status 1.
+fn or_exit(result: Result<(), String>) {
+    if let Err(e) = result {
         eprintln!("error: {e}");
         std::process::exit(1);
     }
@@ -738,24 +741,9 @@ fn main() {
             },
         ),
         Task::F16 { out } => f16_cmd(out.as_deref()),
-        Task::LoopBattery(a) => {
-            if let Err(e) = loop_battery::run(&a) {
-                eprintln!("error: {e}");
-                std::process::exit(1);
-            }
-        }
-        Task::Test => {
-            if let Err(e) = test_all::run_all() {
-                eprintln!("error: {e}");
-                std::process::exit(1);
-            }
-        }
-        Task::UnusedDeps => {
-            if let Err(e) = deps::run() {
-                eprintln!("error: {e}");
-                std::process::exit(1);
-            }
-        }
+        Task::LoopBattery(a) => or_exit(loop_battery::run(&a)),
+        Task::Test => or_exit(test_all::run_all()),
+        Task::UnusedDeps => or_exit(deps::run()),
         Task::Sizes => {
             let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
             let found = sizes::breaches(&root);
@@ -772,11 +760,6 @@ fn main() {
                 sizes::MAX_FN_LINES
             );
         }
-        Task::CompareTools { args } => {
-            if let Err(e) = compare::run(&args) {
-                eprintln!("error: {e}");
-                std::process::exit(1);
-            }
-        }
+        Task::CompareTools { args } => or_exit(compare::run(&args)),
     }
 }
