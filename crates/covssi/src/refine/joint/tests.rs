@@ -1,10 +1,10 @@
 //! Tests of the joint likelihood.
 
 use super::*;
-use crate::refine::JOINT_MAX_CHANNELS;
 use crate::refine::model::{Eval, Model, What};
 use crate::refine::parametrization::pole_params;
 use crate::refine::tests::{pole, record, views};
+use crate::refine::{JOINT_MAX_CHANNELS, RefinedMode};
 
 const FS: f64 = 20.0;
 
@@ -486,44 +486,7 @@ fn combinations_lose_nothing_and_ignore_scale_and_order() {
             }
             // Every channel's shape: where the all-channel fit puts it, with about its
             // precision.
-            // Every channel's shape, regressed on the combinations' fit, where the
-            // all-channel fit puts it, with its precision. Compared scaled to the same
-            // entry (with unequal noise the two fits can find different entries largest).
-            let (sb, seb) = (b.shape.as_ref().unwrap(), b.shape_se.as_ref().unwrap());
-            let (sa, sea) = (a.shape.as_ref().unwrap(), a.shape_se.as_ref().unwrap());
-            let top = seb.iter().position(|&v| v == 0.0).unwrap();
-            let same_top = sea[top] == 0.0;
-            for ch in (0..6).filter(|&ch| ch != top) {
-                let d = (sa[ch] / sa[top] - sb[ch]).norm() / seb[ch];
-                eprintln!(
-                    "  shape entry {ch}: Δ {d:.3} SE, SE ratio {:.3}",
-                    sea[ch] / seb[ch]
-                );
-                // Measured at most 0.116 SE. Two consistent estimators whose standard
-                // errors differ by at most 1.1 % (measured, where the same entry is
-                // largest) differ by at most √(1.011² − 1) ≈ 0.15 SE in standard
-                // deviation (as above): three of those.
-                assert!(d < 0.45, "seed {seed} mode {k} entry {ch}: {d} SE");
-                // Measured 0.986–1.011.
-                if same_top {
-                    let r = sea[ch] / seb[ch];
-                    assert!((0.95..1.05).contains(&r), "seed {seed} mode {k}: {r}");
-                }
-            }
-            // Rescaled (enough for the fit to scale the channels to like sizes) and
-            // reordered: the same shape, in the channels' own units.
-            let sc: Vec<C64> = c.shape.as_ref().unwrap().iter().rev().copied().collect();
-            let unscaled: Vec<C64> = (0..6)
-                .map(|ch| if ch == 2 { sc[ch] / 1e4 } else { sc[ch] })
-                .collect();
-            for ch in 0..6 {
-                let d = (unscaled[ch] / unscaled[top] - sa[ch] / sa[top]).norm();
-                // Measured below 7e-14; the fits' tolerance as above.
-                assert!(
-                    d < 1e-2 * seb[ch].max(seb.iter().copied().fold(0.0, f64::max)),
-                    "seed {seed} mode {k} entry {ch}: {d}"
-                );
-            }
+            shapes_agree(seed, k, (a, b, c));
             // Rescaled and reordered: the same fits (measured: within 3e-13 SE); the
             // bound is the fits' convergence tolerance (an L within 1e-6 puts the
             // estimates within ~1e-3 SE), should rounding steer an iteration elsewhere.
@@ -536,6 +499,52 @@ fn combinations_lose_nothing_and_ignore_scale_and_order() {
                 "{a:?} {c:?}"
             );
         }
+    }
+}
+
+/// The shapes of one mode in the checks of
+/// [`combinations_lose_nothing_and_ignore_scale_and_order`]: through combinations (`a`), by
+/// the all-channel fit (`b`), and through combinations on the channels rescaled (channel 2
+/// by 10⁴) and reversed (`c`).
+fn shapes_agree(seed: u64, k: usize, (a, b, c): (&RefinedMode, &RefinedMode, &RefinedMode)) {
+    // Every channel's shape, regressed on the combinations' fit, where the
+    // all-channel fit puts it, with its precision. Compared scaled to the same
+    // entry (with unequal noise the two fits can find different entries largest).
+    let (sb, seb) = (b.shape.as_ref().unwrap(), b.shape_se.as_ref().unwrap());
+    let (sa, sea) = (a.shape.as_ref().unwrap(), a.shape_se.as_ref().unwrap());
+    let top = seb.iter().position(|&v| v == 0.0).unwrap();
+    let same_top = sea[top] == 0.0;
+    for ch in (0..6).filter(|&ch| ch != top) {
+        let d = (sa[ch] / sa[top] - sb[ch]).norm() / seb[ch];
+        eprintln!(
+            "  shape entry {ch}: Δ {d:.3} SE, SE ratio {:.3}",
+            sea[ch] / seb[ch]
+        );
+        // Measured at most 0.116 SE. Two consistent estimators whose standard
+        // errors differ by at most 1.1 % (measured, where the same entry is
+        // largest) differ by at most √(1.011² − 1) ≈ 0.15 SE in standard
+        // deviation (as above): three of those.
+        assert!(d < 0.45, "seed {seed} mode {k} entry {ch}: {d} SE");
+        // Measured 0.986–1.011.
+        if same_top {
+            let r = sea[ch] / seb[ch];
+            assert!((0.95..1.05).contains(&r), "seed {seed} mode {k}: {r}");
+        }
+    }
+    // Rescaled (enough for the fit to scale the channels to like sizes) and
+    // reordered: the same shape, in the channels' own units.
+    let sc: Vec<C64> = c.shape.as_ref().unwrap().iter().rev().copied().collect();
+    let unscaled: Vec<C64> = (0..6)
+        .map(|ch| if ch == 2 { sc[ch] / 1e4 } else { sc[ch] })
+        .collect();
+    let largest_se = seb.iter().copied().fold(0.0, f64::max);
+    for ch in 0..6 {
+        let d = (unscaled[ch] / unscaled[top] - sa[ch] / sa[top]).norm();
+        // Measured below 7e-14; the fits' tolerance as above.
+        assert!(
+            d < 1e-2 * largest_se,
+            "seed {seed} mode {k} entry {ch}: {d}"
+        );
     }
 }
 
