@@ -17,14 +17,6 @@ use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
-/// The modes reported first: the refined ones when the refinement ran and the record follows
-/// its model, else SSI's.
-#[derive(Clone, Copy, PartialEq, Eq)]
-enum Source {
-    Refined,
-    Ssi,
-}
-
 /// What `hyst.ssi` found: SSI's stabilization diagram, modes and real poles, and the
 /// maximum-likelihood refinement of them.
 #[pyclass(module = "hyst", name = "SsiResult", frozen)]
@@ -34,11 +26,13 @@ struct SsiResult {
 }
 
 impl SsiResult {
-    fn reported(&self) -> Source {
-        match &self.analysis.refined {
-            Some(r) if r.misfit <= covssi::MISFIT_LIMIT && !r.modes.is_empty() => Source::Refined,
-            _ => Source::Ssi,
-        }
+    /// The refinement when its modes are the ones reported (it ran, found modes, and the
+    /// record follows its model); `None` when SSI's are.
+    fn refined(&self) -> Option<&covssi::Refinement> {
+        self.analysis
+            .refined
+            .as_ref()
+            .filter(|r| r.misfit <= covssi::MISFIT_LIMIT && !r.modes.is_empty())
     }
 
     /// One value per reported mode: `refined` of each refined mode, or `ssi` of each SSI mode.
@@ -48,9 +42,9 @@ impl SsiResult {
         refined: impl Fn(&covssi::RefinedMode) -> f64,
         ssi: impl Fn(&covssi::Mode) -> f64,
     ) -> Bound<'py, PyArray1<f64>> {
-        let v: Vec<f64> = match (self.reported(), &self.analysis.refined) {
-            (Source::Refined, Some(r)) => r.modes.iter().map(refined).collect(),
-            _ => self.analysis.ssi.modes.iter().map(ssi).collect(),
+        let v: Vec<f64> = match self.refined() {
+            Some(r) => r.modes.iter().map(refined).collect(),
+            None => self.analysis.ssi.modes.iter().map(ssi).collect(),
         };
         Array1::from(v).into_pyarray(py)
     }
@@ -64,13 +58,13 @@ impl SsiResult {
         missing: T,
     ) -> Array2<T> {
         let l = self.analysis.ssi.diagram.channels;
-        let rows: Vec<Vec<T>> = match (self.reported(), &self.analysis.refined) {
-            (Source::Refined, Some(r)) => r
+        let rows: Vec<Vec<T>> = match self.refined() {
+            Some(r) => r
                 .modes
                 .iter()
                 .map(|m| refined(m).unwrap_or_else(|| vec![missing; l]))
                 .collect(),
-            _ => self.analysis.ssi.modes.iter().map(ssi).collect(),
+            None => self.analysis.ssi.modes.iter().map(ssi).collect(),
         };
         Array2::from_shape_fn((rows.len(), l), |(i, c)| rows[i][c])
     }
@@ -82,9 +76,9 @@ impl SsiResult {
     /// the record follows its model), "ssi" when they are SSI's.
     #[getter]
     fn source(&self) -> &'static str {
-        match self.reported() {
-            Source::Refined => "refined",
-            Source::Ssi => "ssi",
+        match self.refined() {
+            Some(_) => "refined",
+            None => "ssi",
         }
     }
 
@@ -145,9 +139,9 @@ impl SsiResult {
     /// refined, else SSI's clusters'.
     #[getter]
     fn real_poles<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        let v: Vec<f64> = match (self.reported(), &self.analysis.refined) {
-            (Source::Refined, Some(r)) => r.real_poles.iter().map(|p| p.lambda).collect(),
-            _ => self
+        let v: Vec<f64> = match self.refined() {
+            Some(r) => r.real_poles.iter().map(|p| p.lambda).collect(),
+            None => self
                 .analysis
                 .ssi
                 .real_poles
@@ -228,9 +222,9 @@ impl SsiResult {
     }
 
     fn __repr__(&self) -> String {
-        let modes = match (self.reported(), &self.analysis.refined) {
-            (Source::Refined, Some(r)) => r.modes.len(),
-            _ => self.analysis.ssi.modes.len(),
+        let modes = match self.refined() {
+            Some(r) => r.modes.len(),
+            None => self.analysis.ssi.modes.len(),
         };
         format!(
             "<SsiResult: {modes} mode(s), {}, {} channel(s) at {} Hz>",
