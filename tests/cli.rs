@@ -32,8 +32,10 @@ fn hyst(args: &[&str]) -> (bool, String, String) {
     )
 }
 
+/// A path for the scratch file `name`: under cargo's per-target scratch folder, one folder
+/// that every run reuses (a folder per process in the system's temp left 50 MB behind per run).
 fn tmp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("hyst-cli-{}", std::process::id()));
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("cli");
     std::fs::create_dir_all(&dir).unwrap();
     dir.join(name)
 }
