@@ -12,7 +12,7 @@ use cmd::{Cli, Command};
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    cmd::set_delimiter(cli.delimiter);
+    cmd::set_read_options(&cli);
     let result = cmd::check_output_folders(&cli.command).and_then(|()| match &cli.command {
         Command::Simulate(a) => cmd::simulate::run(a),
         Command::Excite(a) => cmd::simulate::excite(a),

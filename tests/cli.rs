@@ -2065,3 +2065,52 @@ fn a_validation_record_named_anything_is_periodic_when_it_is() {
     // From rest, the period's start-up transient is counted: the error differs.
     assert_ne!(forced[0]["zener"]["epsilon"], rows[0]["zener"]["epsilon"]);
 }
+
+/// `--format` reads a file whatever its extension says; a record that states no rate needs
+/// `--fs`, and the error says so; `--shapes-uff` writes one dataset 55 per reported mode,
+/// the channels of a CSV as nodes 1, 2, 3.
+#[test]
+fn format_flag_rate_and_shapes_uff() {
+    let noise = std::fs::read_to_string(write_white_noise("noise.csv", 41)).unwrap();
+    let misnamed = write("noise_as.npy", &noise);
+    let json = tmp("format.json");
+    let run = |extra: &[&str]| {
+        let mut args = vec!["ssi", "--input", s(&misnamed), "--json", s(&json)];
+        args.extend_from_slice(extra);
+        hyst(&args)
+    };
+    let (ok, _, err) = run(&["--fs", "10"]);
+    assert!(!ok && err.contains("not a NumPy .npy file"), "{err}");
+    let (ok, _, err) = run(&["--fs", "10", "--format", "csv", "--no-refine"]);
+    assert!(ok, "{err}");
+    let (ok, _, err) = run(&["--format", "csv"]);
+    assert!(
+        !ok && err.contains("the file does not state its sampling rate"),
+        "{err}"
+    );
+    let Some(path) = common::data_file("oma/data_3dof.csv") else {
+        return;
+    };
+    let uff = tmp("shapes_3dof.uff");
+    let (ok, _, err) = hyst(&[
+        "ssi",
+        "--input",
+        s(&path),
+        "--fs",
+        "20",
+        "--json",
+        s(&json),
+        "--shapes-uff",
+        s(&uff),
+    ]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let reported = v["refined"]["modes"].as_array().unwrap().len();
+    let text = std::fs::read_to_string(&uff).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.iter().filter(|l| **l == "    55").count(), reported);
+    // Each dataset: 10 header lines, then node number and values per node, then `-1`.
+    let nodes: Vec<&str> = lines[10..16].iter().step_by(2).copied().collect();
+    assert_eq!(nodes, ["         1", "         2", "         3"]);
+}

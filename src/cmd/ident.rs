@@ -38,10 +38,11 @@ pub(crate) enum ValidationKindArg {
 
 #[derive(Args, Debug)]
 pub(crate) struct IdentArgs {
-    /// Record with the measured output (CSV with a header). Without it: the built-in default.
+    /// Record with the measured output (CSV with a header, or any format `--format` names).
+    /// Without it: the built-in default.
     #[arg(long)]
     pub(crate) data: Option<PathBuf>,
-    /// Sampling rate of --data (Hz).
+    /// Sampling rate of --data (Hz); a Universal File states its own.
     #[arg(long)]
     pub(crate) fs: Option<f64>,
     /// Mass of the oscillator (kg), assumed known.
@@ -159,13 +160,15 @@ fn record(
 ) -> Result<(Vec<f64>, f64, String), Error> {
     match &a.data {
         Some(path) => {
-            let fs = check_fs(a.fs.ok_or_else(|| fail("--fs is required with --data"))?)?;
             if a.mass.is_none() {
                 return Err(fail(
                     "--mass is required with --data: the mapping from poles to stiffness needs the mass",
                 ));
             }
-            let y = output_after_skip(path, &a.columns.output_column, a.columns.skip)?;
+            if let Some(fs) = a.fs {
+                check_fs(fs)?;
+            }
+            let (y, fs) = output_after_skip(path, &a.columns.output_column, a.columns.skip, a.fs)?;
             Ok((y, fs, path.display().to_string()))
         }
         None => {

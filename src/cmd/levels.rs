@@ -60,10 +60,8 @@ pub(crate) fn run(a: &LevelsArgs) -> Result<(), Error> {
         .data
         .iter()
         .map(|p| {
-            Ok((
-                p.display().to_string(),
-                output_after_skip(p, &a.columns.output_column, a.columns.skip)?,
-            ))
+            let (y, _) = output_after_skip(p, &a.columns.output_column, a.columns.skip, Some(fs))?;
+            Ok((p.display().to_string(), y))
         })
         .collect::<Result<_, Error>>()?;
     let records: Vec<(String, &[f64])> = data.iter().map(|(n, y)| (n.clone(), &y[..])).collect();

@@ -18,9 +18,15 @@ use refine::RefineArgs;
 use simulate::{ExcitationArgs, SimulateArgs};
 use ssi::SsiArgs;
 
-/// Set the delimiter `--delimiter` gave, once, before any command runs.
-pub(crate) fn set_delimiter(d: DelimiterArg) {
-    DELIMITER.get_or_init(|| d.into());
+/// Set how records are read (`--format`, `--delimiter`, `--variable`), once, before any
+/// command runs.
+pub(crate) fn set_read_options(cli: &Cli) {
+    READ_OPTIONS.get_or_init(|| {
+        hyst::io::ReadOptions::default()
+            .with_format(cli.format.into())
+            .with_delimiter(cli.delimiter.into())
+            .with_variable(cli.variable.clone())
+    });
 }
 
 #[derive(Parser)]
@@ -33,9 +39,47 @@ pub(crate) fn set_delimiter(d: DelimiterArg) {
 pub(crate) struct Cli {
     #[command(subcommand)]
     pub(crate) command: Command,
+    /// Format of every record read: by its extension by default (`.npy`, `.npz`, `.mat`,
+    /// `.uff`/`.unv`/`.uf`; anything else delimited text).
+    #[arg(long, global = true, value_enum, default_value_t = FormatArg::Auto)]
+    pub(crate) format: FormatArg,
     /// Cell separator of every CSV file read: detected from the header line by default.
     #[arg(long, global = true, value_enum, default_value_t = DelimiterArg::Auto)]
     pub(crate) delimiter: DelimiterArg,
+    /// The variable of a `.mat` file or the array of a `.npz` archive to read (needed when it
+    /// holds more than one array of more than one element).
+    #[arg(long, global = true, value_name = "NAME")]
+    pub(crate) variable: Option<String>,
+}
+
+#[derive(Clone, Copy, Debug, Default, ValueEnum)]
+pub(crate) enum FormatArg {
+    /// By the file's extension.
+    #[default]
+    Auto,
+    /// Delimited text with a header line.
+    Csv,
+    /// A NumPy array (samples × channels).
+    Npy,
+    /// A NumPy archive (one array of it).
+    Npz,
+    /// A MATLAB level 5 MAT-file (one variable of it).
+    Mat,
+    /// A Universal File of dataset 58 functions, ASCII or binary (58b); the rate is the file's.
+    Uff,
+}
+
+impl From<FormatArg> for hyst::io::Format {
+    fn from(f: FormatArg) -> Self {
+        match f {
+            FormatArg::Auto => Self::Auto,
+            FormatArg::Csv => Self::Csv,
+            FormatArg::Npy => Self::Npy,
+            FormatArg::Npz => Self::Npz,
+            FormatArg::Mat => Self::Mat,
+            FormatArg::Uff => Self::Uff,
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, Default, ValueEnum)]
@@ -62,12 +106,12 @@ impl From<DelimiterArg> for hyst::io::Delimiter {
     }
 }
 
-/// The delimiter `--delimiter` gave, set once at start.
-pub(crate) static DELIMITER: std::sync::OnceLock<hyst::io::Delimiter> = std::sync::OnceLock::new();
+/// How records are read, from `--format`, `--delimiter` and `--variable`, set once at start.
+static READ_OPTIONS: std::sync::OnceLock<hyst::io::ReadOptions> = std::sync::OnceLock::new();
 
-/// Read a record: a NumPy `.npy` array, or CSV with the delimiter of `--delimiter`.
+/// Read a record as `--format`, `--delimiter` and `--variable` say.
 pub(crate) fn read_record(path: &std::path::Path) -> Result<hyst::io::Table, hyst::io::IoError> {
-    hyst::io::read_record(path, DELIMITER.get().copied().unwrap_or_default())
+    hyst::io::read_record(path, READ_OPTIONS.get().unwrap_or(&Default::default()))
 }
 
 #[derive(Subcommand)]
@@ -229,14 +273,16 @@ pub(crate) fn check_fs(fs: f64) -> Result<f64, Error> {
     }
 }
 
-/// The column `column` of the CSV record `path` after its first `skip` rows, which must
-/// leave some.
+/// The column `column` of the record `path` after its first `skip` rows, which must leave
+/// some; and the sampling rate, `fs` or the file's (which must agree when both are there).
 pub(crate) fn output_after_skip(
     path: &std::path::Path,
     column: &str,
     skip: usize,
-) -> Result<Vec<f64>, Error> {
+    fs: Option<f64>,
+) -> Result<(Vec<f64>, f64), Error> {
     let t = read_record(path)?;
+    let fs = check_fs(t.rate(fs)?)?;
     let col = t.column(column)?;
     if skip >= col.len() {
         return Err(fail(format!(
@@ -245,7 +291,7 @@ pub(crate) fn output_after_skip(
             path.display()
         )));
     }
-    Ok(col[skip..].to_vec())
+    Ok((col[skip..].to_vec(), fs))
 }
 
 #[derive(Clone, Copy, ValueEnum, PartialEq, Eq, Debug)]
@@ -261,7 +307,11 @@ pub(crate) fn output_files(c: &Command) -> Vec<(&'static str, &std::path::Path)>
     let v: Vec<(&'static str, Option<&std::path::Path>)> = match c {
         Command::Simulate(a) => vec![("--out", Some(&a.out))],
         Command::Excite(a) => vec![("--out", Some(&a.out))],
-        Command::Ssi(a) => vec![("--json", Some(&a.json)), ("--svg", a.svg.as_deref())],
+        Command::Ssi(a) => vec![
+            ("--json", Some(&a.json)),
+            ("--svg", a.svg.as_deref()),
+            ("--shapes-uff", a.shapes_uff.as_deref()),
+        ],
         Command::Ident(a) => vec![("--json", a.json.as_deref())],
         Command::Refine(a) => vec![("--json", a.json.as_deref())],
         Command::Levels(a) => vec![("--json", a.json.as_deref())],

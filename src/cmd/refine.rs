@@ -15,12 +15,13 @@ pub(crate) enum StartArg {
 
 #[derive(Args, Debug)]
 pub(crate) struct RefineArgs {
-    /// Record with input and output columns (CSV with a header).
+    /// Record with input and output columns (CSV with a header, or any format `--format`
+    /// names).
     #[arg(long)]
     pub(crate) data: PathBuf,
-    /// Sampling rate (Hz).
+    /// Sampling rate (Hz); a Universal File states its own.
     #[arg(long)]
-    pub(crate) fs: f64,
+    pub(crate) fs: Option<f64>,
     /// Mass (kg); without it the mass is estimated too (and the missing force is traced with
     /// the estimate).
     #[arg(long)]
@@ -58,8 +59,11 @@ pub(crate) struct RefineArgs {
 
 pub(crate) fn run(a: &RefineArgs) -> Result<(), Error> {
     use hyst::ident::residual::{self, Record, Start};
-    let fs = check_fs(a.fs)?;
+    if let Some(fs) = a.fs {
+        check_fs(fs)?;
+    }
     let t = read_record(&a.data)?;
+    let fs = check_fs(t.rate(a.fs)?)?;
     let u = t
         .column(&a.input_column)
         .map_err(|e| fail(format!("{e} (refine needs the input too)")))?;

@@ -8,13 +8,14 @@ use super::*;
 
 #[derive(Args, Debug)]
 pub(crate) struct SsiArgs {
-    /// The record: CSV with a header line, or a NumPy `.npy` array (samples × channels,
-    /// columns named 0, 1, …).
+    /// The record: CSV with a header line; a NumPy `.npy` array or `.npz` archive, or a
+    /// MATLAB `.mat` variable (samples × channels, columns named 0, 1, …); a Universal File
+    /// of dataset 58 functions (columns named by their point, `12+Z`).
     #[arg(long)]
     pub(crate) input: PathBuf,
-    /// Sampling rate of the file (Hz).
+    /// Sampling rate of the file (Hz); a Universal File states its own.
     #[arg(long)]
-    pub(crate) fs: f64,
+    pub(crate) fs: Option<f64>,
     /// Channels to analyse, comma-separated; default: every column except `t` and `time` (with
     /// a warning for columns named like a force: `u`, `force`, `input`, `excitation`, `load`).
     #[arg(long, value_delimiter = ',')]
@@ -73,6 +74,11 @@ pub(crate) struct SsiArgs {
     /// Draw the stabilization diagram as SVG here.
     #[arg(long)]
     pub(crate) svg: Option<PathBuf>,
+    /// Write the reported modes' shapes as Universal File dataset 55 here (one dataset per
+    /// mode: its complex eigenvalue and, per node, the X, Y, Z entries; channels of a Universal
+    /// File at their nodes and directions, others as nodes 1, 2, … along Z).
+    #[arg(long, value_name = "FILE")]
+    pub(crate) shapes_uff: Option<PathBuf>,
     /// Skip the maximum-likelihood refinement of the modes and real poles (on by default: it
     /// fits them to the whole record, gives each a standard error, and drops those the record
     /// does not support).
@@ -117,6 +123,10 @@ struct Channels {
     data: Vec<Vec<f64>>,
     /// Rows after `--skip`, before `--decimate`.
     rows: usize,
+    /// The sampling rate, `--fs` or the file's.
+    fs: f64,
+    /// Where each channel was measured, if the file says.
+    points: Option<Vec<hyst::io::MeasurementPoint>>,
 }
 
 /// The channels to analyse, after `--skip` and `--decimate`, with their names.
@@ -124,7 +134,11 @@ fn channels(a: &SsiArgs) -> Result<Channels, Error> {
     if a.decimate == 0 {
         return Err(fail("--decimate must be at least 1, got 0"));
     }
+    if let Some(fs) = a.fs {
+        check_fs(fs)?;
+    }
     let mut t = read_record(&a.input)?;
+    let fs = check_fs(t.rate(a.fs)?)?;
     let names = channel_names(&t, a.columns.as_deref(), &[]);
     if a.columns.is_none() {
         warn_on_force_like(&names);
@@ -153,10 +167,19 @@ fn channels(a: &SsiArgs) -> Result<Channels, Error> {
         }
         channels.push(c);
     }
+    // Every name is the table's now: each channel's point, if the file gives them.
+    let points = t.points.as_ref().and_then(|p| {
+        names
+            .iter()
+            .map(|n| t.names.iter().position(|m| m == n).map(|i| p[i]))
+            .collect::<Option<Vec<_>>>()
+    });
     Ok(Channels {
         names,
         data: channels,
         rows: rows - a.skip,
+        fs,
+        points,
     })
 }
 
@@ -229,8 +252,13 @@ fn flag_error(
 
 pub(crate) fn run(a: &SsiArgs) -> Result<(), Error> {
     use hyst::covssi::{self, AnalysisOptions, RefineOptions};
-    let fs = check_fs(a.fs)?;
-    let Channels { names, data, rows } = channels(a)?;
+    let Channels {
+        names,
+        data,
+        rows,
+        fs,
+        points,
+    } = channels(a)?;
     let fs_used = fs / a.decimate as f64;
     let views: Vec<&[f64]> = data.iter().map(|c| c.as_slice()).collect();
     let refine = (!a.no_refine).then(|| RefineOptions {
@@ -257,5 +285,36 @@ pub(crate) fn run(a: &SsiArgs) -> Result<(), Error> {
         )
         .map_err(|e| fail(format!("{}: {e}", svg.display())))?;
     }
+    if let Some(path) = &a.shapes_uff {
+        write_shapes(path, &report.report, points.as_deref(), &a.input)?;
+    }
+    Ok(())
+}
+
+/// The reported modes' shapes as dataset 55 at `path`; a mode the refinement gave no shape
+/// is left out, and said.
+fn write_shapes(
+    path: &std::path::Path,
+    analysis: &hyst::covssi::ModalAnalysis,
+    points: Option<&[hyst::io::MeasurementPoint]>,
+    input: &std::path::Path,
+) -> Result<(), Error> {
+    let modes = analysis.reported_modes();
+    let mut written = Vec::new();
+    for m in &modes {
+        match &m.shape {
+            Some(shape) => written.push(hyst::io::ShapeMode {
+                frequency_hz: m.frequency_hz,
+                damping_ratio: m.damping_ratio,
+                shape,
+            }),
+            None => eprintln!(
+                "note: the mode at {:.4} Hz has no refined shape; it is not in {}",
+                m.frequency_hz,
+                path.display()
+            ),
+        }
+    }
+    hyst::io::write_shapes_uff(path, &written, points, &input.display().to_string())?;
     Ok(())
 }

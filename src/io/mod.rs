@@ -1,12 +1,19 @@
-//! Reading and writing the records the command line works on.
+//! Reading and writing the records the command line and the Python package work on.
 //!
-//! A record is a header line of column names followed by rows of numbers separated by `,`,
-//! `;` or tabs (detected from the header, or given), read by the `csv` crate; or a NumPy
-//! `.npy` array (the `npy` module), chosen by the file's extension ([`read_record`]).
-//! Every error names the file, and where it applies the column, the row (1-based, counting the
-//! header as row 1, as a spreadsheet does) and the offending text.
+//! A record is a table of channels sampled together. It is read from
+//! - delimited text: a header line of column names, then rows of numbers separated by `,`,
+//!   `;` or tabs (detected from the header, or given), read by the `csv` crate;
+//! - a NumPy `.npy` array, or one array of a `.npz` archive (samples × channels);
+//! - one numeric variable of a MATLAB `.mat` file (level 5, the format of `save -v7` and
+//!   `scipy.io.savemat`; `-v7.3` files are HDF5 and are refused with that advice);
+//! - the Universal File Format's dataset 58 (one function per channel, ASCII or binary 58b),
+//!   which also states the sampling rate and each channel's node and direction;
+//!
+//! chosen by the file's extension or by [`Format`] ([`read_record`]). The identified mode
+//! shapes can be written as dataset 55 ([`write_shapes_uff`]). Every error names the file,
+//! and where it applies the column, the row (1-based, counting the header as row 1, as a
+//! spreadsheet does), the dataset or variable, and the offending text.
 
-use std::io::{BufRead, Seek};
 use std::path::{Path, PathBuf};
 
 /// Errors of reading or writing records.
@@ -125,21 +132,213 @@ pub enum IoError {
         /// What is wrong.
         what: String,
     },
+    /// A Universal File that is not a record this reader takes: no dataset 58, a function
+    /// that is not a time response, complex or unevenly spaced values, channels of different
+    /// lengths or rates, data cut short.
+    #[error("{path}: {what}")]
+    Uff {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, naming the dataset (its place in the file and its first line).
+        what: String,
+    },
+    /// A MATLAB file that is not a level 5 MAT-file, or whose chosen variable is not a real
+    /// numeric matrix.
+    #[error("{path}: {what}")]
+    Mat {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, naming the variable.
+        what: String,
+    },
+    /// A file of several arrays (`.mat`, `.npz`) where the one asked for is missing, or none
+    /// was named and more than one could be the record.
+    #[error("{path}: {}", variable_message(.asked.as_deref(), .available))]
+    Variable {
+        /// The file.
+        path: PathBuf,
+        /// The name asked for, if one was.
+        asked: Option<String>,
+        /// The arrays the file holds that could be a record, with their shapes.
+        available: String,
+    },
+    /// A 2-D array with more columns than rows: a record is samples × channels, and this one
+    /// is most likely channels × samples.
+    #[error(
+        "{path}: the array is {rows} × {columns}; a record is samples × channels, so this looks transposed (save its transpose)"
+    )]
+    Transposed {
+        /// The file.
+        path: PathBuf,
+        /// Rows (taken as samples).
+        rows: usize,
+        /// Columns (taken as channels).
+        columns: usize,
+    },
+    /// No sampling rate: none given and the file states none; or one given that disagrees
+    /// with the file's.
+    #[error("{path}: {}", rate_message(*.given, *.stated))]
+    Rate {
+        /// The file.
+        path: PathBuf,
+        /// The rate given (Hz).
+        given: Option<f64>,
+        /// The rate the file states (Hz).
+        stated: Option<f64>,
+    },
+    /// Shapes that do not fit in a dataset 55 of 3-DOF translations.
+    #[error("{path}: {what}")]
+    ShapesUff {
+        /// The file to be written.
+        path: PathBuf,
+        /// What does not fit.
+        what: String,
+    },
 }
 
-mod npy;
-pub use npy::read_npy;
+fn rate_message(given: Option<f64>, stated: Option<f64>) -> String {
+    match (given, stated) {
+        (Some(g), Some(s)) => format!(
+            "a sampling rate of {g} Hz was given, but the file states {s} Hz (its sampling interval {:e} s)",
+            1.0 / s
+        ),
+        _ => "the file does not state its sampling rate: give it (`--fs`, or `fs=` in Python)"
+            .to_string(),
+    }
+}
 
-/// The record at `path`: a NumPy `.npy` array when its extension says so ([`read_npy`]), else
-/// delimited text with `delimiter` ([`read_csv_with`]).
-pub fn read_record(path: &Path, delimiter: Delimiter) -> Result<Table, IoError> {
-    let npy = path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("npy"));
-    if npy {
-        read_npy(path)
-    } else {
-        read_csv_with(path, delimiter)
+fn variable_message(asked: Option<&str>, available: &str) -> String {
+    match asked {
+        Some(a) => format!("no array `{a}` (the file holds: {available})"),
+        None if available.is_empty() => "no numeric array in the file".to_string(),
+        None => format!(
+            "the file holds several arrays ({available}); name the record's (`--variable`, or `variable=` in Python)"
+        ),
+    }
+}
+
+mod delimited;
+mod mat;
+mod npy;
+mod shapes_uff;
+mod uff;
+pub use delimited::{Delimiter, read_csv, read_csv_with, write_csv};
+pub use mat::read_mat;
+pub use npy::{read_npy, read_npz};
+pub use shapes_uff::{ShapeMode, write_shapes_uff};
+pub use uff::read_uff;
+
+/// A record file's format.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
+pub enum Format {
+    /// By the file's extension: `.npy`, `.npz`, `.mat`, `.uff`/`.unv`/`.uf`, anything else
+    /// delimited text.
+    #[default]
+    Auto,
+    /// Delimited text with a header line.
+    Csv,
+    /// A NumPy `.npy` array.
+    Npy,
+    /// A NumPy `.npz` archive of arrays.
+    Npz,
+    /// A MATLAB level 5 MAT-file.
+    Mat,
+    /// A Universal File of dataset 58 functions (ASCII or 58b).
+    Uff,
+}
+
+impl Format {
+    /// The format `path`'s extension says (delimited text when it says none of the others).
+    pub fn of_path(path: &Path) -> Format {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        match ext.as_deref() {
+            Some("npy") => Format::Npy,
+            Some("npz") => Format::Npz,
+            Some("mat") => Format::Mat,
+            Some("uff" | "unv" | "uf") => Format::Uff,
+            _ => Format::Csv,
+        }
+    }
+}
+
+/// How to read a record file: its format, the delimiter of delimited text, the array of a
+/// file that holds several.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+#[non_exhaustive]
+pub struct ReadOptions {
+    /// The file's format (by default, by its extension).
+    pub format: Format,
+    /// The cell separator of delimited text.
+    pub delimiter: Delimiter,
+    /// The variable of a `.mat` file or the array of a `.npz` archive; needed when the file
+    /// holds more than one that could be the record.
+    pub variable: Option<String>,
+}
+
+impl ReadOptions {
+    /// These options with `format`.
+    pub fn with_format(mut self, format: Format) -> Self {
+        self.format = format;
+        self
+    }
+    /// These options with `delimiter`.
+    pub fn with_delimiter(mut self, delimiter: Delimiter) -> Self {
+        self.delimiter = delimiter;
+        self
+    }
+    /// These options with the array `variable`.
+    pub fn with_variable(mut self, variable: Option<String>) -> Self {
+        self.variable = variable;
+        self
+    }
+}
+
+/// The record at `path`, read as `options` say (see the module's documentation).
+pub fn read_record(path: &Path, options: &ReadOptions) -> Result<Table, IoError> {
+    let format = match options.format {
+        Format::Auto => Format::of_path(path),
+        f => f,
+    };
+    let variable = options.variable.as_deref();
+    match format {
+        Format::Npy => read_npy(path),
+        Format::Npz => read_npz(path, variable),
+        Format::Mat => read_mat(path, variable),
+        Format::Uff => read_uff(path),
+        Format::Csv | Format::Auto => read_csv_with(path, options.delimiter),
+    }
+}
+
+/// Where a channel was measured: a node of the test geometry and a direction, as the
+/// Universal File Format numbers them (0 scalar, ±1 ±2 ±3 translations along X Y Z, ±4 ±5 ±6
+/// rotations about them).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct MeasurementPoint {
+    /// The node's number.
+    pub node: i64,
+    /// The direction.
+    pub direction: i32,
+}
+
+impl std::fmt::Display for MeasurementPoint {
+    /// `12+Z`, `3-X`, `7+RY`; a scalar point is its node alone.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let d = self.direction;
+        if d == 0 {
+            return write!(f, "{}", self.node);
+        }
+        let sign = if d > 0 { '+' } else { '-' };
+        let axis = ["X", "Y", "Z", "RX", "RY", "RZ"]
+            .get(d.unsigned_abs() as usize - 1)
+            .copied();
+        match axis {
+            Some(a) => write!(f, "{}{sign}{a}", self.node),
+            None => write!(f, "{}:{d}", self.node),
+        }
     }
 }
 
@@ -152,9 +351,44 @@ pub struct Table {
     pub columns: Vec<Vec<f64>>,
     /// Where the table came from.
     pub path: PathBuf,
+    /// The sampling rate the file states (Hz), if it states one (a Universal File does).
+    pub rate_hz: Option<f64>,
+    /// Where each column was measured, if the file says (a Universal File does).
+    pub points: Option<Vec<MeasurementPoint>>,
 }
 
 impl Table {
+    /// The table of `names` and `columns` read from `path` (stating no rate and no points),
+    /// or the first value that is not finite, named by its sample (1-based) and column.
+    pub fn of_finite(
+        path: &Path,
+        names: Vec<String>,
+        columns: Vec<Vec<f64>>,
+    ) -> Result<Table, IoError> {
+        for (name, column) in names.iter().zip(&columns) {
+            if let Some(s) = column.iter().position(|v| !v.is_finite()) {
+                return Err(IoError::NonFinite {
+                    path: path.to_path_buf(),
+                    row: s + 1,
+                    column: name.clone(),
+                    value: column[s],
+                });
+            }
+        }
+        Ok(Table::new(path, names, columns))
+    }
+
+    /// A table of `names` and `columns` read from `path`, stating no rate and no points.
+    pub fn new(path: &Path, names: Vec<String>, columns: Vec<Vec<f64>>) -> Table {
+        Table {
+            names,
+            columns,
+            path: path.to_path_buf(),
+            rate_hz: None,
+            points: None,
+        }
+    }
+
     /// The column with this name, or an error listing the available ones.
     pub fn column(&self, name: &str) -> Result<&[f64], IoError> {
         match self.names.iter().position(|n| n == name) {
@@ -175,6 +409,26 @@ impl Table {
         Ok(std::mem::take(&mut self.columns[i]))
     }
 
+    /// The sampling rate: the one `given`, which must agree with the file's if the file
+    /// states one (within the six significant digits a Universal File writes it with), else
+    /// the file's.
+    pub fn rate(&self, given: Option<f64>) -> Result<f64, IoError> {
+        match (given, self.rate_hz) {
+            (Some(g), Some(s)) if (g - s).abs() > 1e-5 * s => Err(IoError::Rate {
+                path: self.path.clone(),
+                given,
+                stated: self.rate_hz,
+            }),
+            (Some(g), _) => Ok(g),
+            (None, Some(s)) => Ok(s),
+            (None, None) => Err(IoError::Rate {
+                path: self.path.clone(),
+                given,
+                stated: None,
+            }),
+        }
+    }
+
     /// Number of rows.
     pub fn len(&self) -> usize {
         self.columns.first().map_or(0, Vec::len)
@@ -186,198 +440,6 @@ impl Table {
     }
 }
 
-/// The separator between a record's cells.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-#[non_exhaustive]
-pub enum Delimiter {
-    /// Whichever of `,` `;` and tab the header line uses most (outside quotes); a header with
-    /// none of them is one column.
-    #[default]
-    Auto,
-    /// `,`
-    Comma,
-    /// `;` (where a comma is the decimal mark, `1,5` reads as 1.5)
-    Semicolon,
-    /// A tab.
-    Tab,
-}
-
-impl Delimiter {
-    fn byte(self) -> Option<u8> {
-        match self {
-            Delimiter::Auto => None,
-            Delimiter::Comma => Some(b','),
-            Delimiter::Semicolon => Some(b';'),
-            Delimiter::Tab => Some(b'\t'),
-        }
-    }
-
-    /// The delimiter the header line uses most, outside double quotes.
-    fn detect(header: &[u8]) -> u8 {
-        let mut counts = [0usize; 3];
-        let mut quoted = false;
-        for &b in header {
-            match b {
-                b'"' => quoted = !quoted,
-                b',' if !quoted => counts[0] += 1,
-                b';' if !quoted => counts[1] += 1,
-                b'\t' if !quoted => counts[2] += 1,
-                _ => {}
-            }
-        }
-        let best = (0..3).max_by_key(|&i| (counts[i], 3 - i)).unwrap_or(0);
-        if counts[best] == 0 {
-            b','
-        } else {
-            [b',', b';', b'\t'][best]
-        }
-    }
-}
-
-/// A cell as a number: a plain float, or with `;` separating cells, a decimal comma.
-fn number(text: &str, delimiter: u8) -> Option<f64> {
-    text.parse().ok().or_else(|| {
-        (delimiter != b',' && text.matches(',').count() == 1)
-            .then(|| text.replace(',', ".").parse().ok())
-            .flatten()
-    })
-}
-
-/// [`read_csv_with`] with the delimiter detected.
-pub fn read_csv(path: &Path) -> Result<Table, IoError> {
-    read_csv_with(path, Delimiter::Auto)
-}
-
-/// Read a delimited file with a header line (RFC 4180, by the `csv` crate): cells separated by
-/// `delimiter`, any of them quoted, CRLF or LF line ends, a byte-order mark, spaces around the
-/// cells; empty lines are skipped. Every row must have one cell per column of the header, and
-/// every cell must be a finite number.
-pub fn read_csv_with(path: &Path, delimiter: Delimiter) -> Result<Table, IoError> {
-    let file_error = |source| IoError::File {
-        path: path.to_path_buf(),
-        source,
-    };
-    // The file is read as a stream (the record is kept once, as numbers, not also as text);
-    // its first non-blank line is read first to detect the delimiter, then it is read again
-    // from its start.
-    let file = std::fs::File::open(path).map_err(file_error)?;
-    let mut file = std::io::BufReader::with_capacity(1 << 16, file);
-    let first_line = first_line(&mut file, path)?;
-    file.rewind().map_err(file_error)?;
-    // A byte-order mark (spreadsheets write one) would become part of the first name.
-    if file
-        .fill_buf()
-        .map_err(file_error)?
-        .starts_with(b"\xEF\xBB\xBF")
-    {
-        file.consume(3);
-    }
-    let sep = delimiter
-        .byte()
-        .unwrap_or_else(|| Delimiter::detect(&first_line));
-    let mut reader = csv::ReaderBuilder::new()
-        .delimiter(sep)
-        .has_headers(false)
-        .flexible(true)
-        .trim(csv::Trim::All)
-        .from_reader(file);
-    let mut records = reader.records();
-    let csv_error = |e: csv::Error| {
-        let row = e.position().map_or(0, |p| p.line() as usize);
-        IoError::Malformed {
-            path: path.to_path_buf(),
-            row,
-            what: e.to_string(),
-        }
-    };
-    let header = loop {
-        match records.next() {
-            None => {
-                return Err(IoError::NoHeader {
-                    path: path.to_path_buf(),
-                });
-            }
-            Some(r) => {
-                let r = r.map_err(csv_error)?;
-                if !(r.len() == 1 && r[0].is_empty()) {
-                    break r;
-                }
-            }
-        }
-    };
-    let names: Vec<String> = header.iter().map(str::to_string).collect();
-    if let Some(column) = repeated(&names) {
-        return Err(IoError::DuplicateColumn {
-            path: path.to_path_buf(),
-            column: column.to_string(),
-        });
-    }
-    let mut columns: Vec<Vec<f64>> = vec![Vec::new(); names.len()];
-    for r in records {
-        let r = r.map_err(csv_error)?;
-        let row = r.position().map_or(0, |p| p.line() as usize);
-        if r.len() == 1 && r[0].is_empty() {
-            continue;
-        }
-        if r.len() != names.len() {
-            return Err(IoError::CellCount {
-                path: path.to_path_buf(),
-                row,
-                found: r.len(),
-                expected: names.len(),
-            });
-        }
-        for (c, t) in r.iter().enumerate() {
-            let v = number(t, sep).ok_or_else(|| IoError::NotANumber {
-                path: path.to_path_buf(),
-                row,
-                column: names[c].clone(),
-                text: t.to_string(),
-            })?;
-            if !v.is_finite() {
-                return Err(IoError::NonFinite {
-                    path: path.to_path_buf(),
-                    row,
-                    column: names[c].clone(),
-                    value: v,
-                });
-            }
-            columns[c].push(v);
-        }
-    }
-    if columns.first().is_none_or(Vec::is_empty) {
-        return Err(IoError::Empty {
-            path: path.to_path_buf(),
-        });
-    }
-    Ok(Table {
-        names,
-        columns,
-        path: path.to_path_buf(),
-    })
-}
-
-/// The first line of `file` (read from `path`) that is not blank, or why there is none.
-fn first_line(file: &mut impl BufRead, path: &Path) -> Result<Vec<u8>, IoError> {
-    let mut line = Vec::new();
-    loop {
-        line.clear();
-        let read = file.read_until(b'\n', &mut line);
-        if read.map_err(|source| IoError::File {
-            path: path.to_path_buf(),
-            source,
-        })? == 0
-        {
-            return Err(IoError::NoHeader {
-                path: path.to_path_buf(),
-            });
-        }
-        if !line.iter().all(u8::is_ascii_whitespace) {
-            return Ok(line);
-        }
-    }
-}
-
 /// The first name that appears twice in `names`, if any.
 pub fn repeated(names: &[String]) -> Option<&str> {
     names
@@ -385,38 +447,6 @@ pub fn repeated(names: &[String]) -> Option<&str> {
         .enumerate()
         .find(|(i, n)| names[..*i].contains(n))
         .map(|(_, n)| n.as_str())
-}
-
-/// Write columns of equal length under a header, comma-separated, numbers with 17
-/// significant digits (they read back bit-identical). Columns of different lengths are an
-/// error, not a file cut to the shortest.
-pub fn write_csv(path: &Path, names: &[&str], columns: &[&[f64]]) -> Result<(), IoError> {
-    let lengths: Vec<usize> = columns.iter().map(|c| c.len()).collect();
-    if names.len() != columns.len() || lengths.windows(2).any(|w| w[0] != w[1]) {
-        return Err(IoError::UnequalColumns {
-            path: path.to_path_buf(),
-            names: names.join(","),
-            lengths,
-        });
-    }
-    let err = |source| IoError::File {
-        path: path.to_path_buf(),
-        source,
-    };
-    let csv_err = |e: csv::Error| match e.into_kind() {
-        csv::ErrorKind::Io(source) => err(source),
-        other => err(std::io::Error::other(format!("{other:?}"))),
-    };
-    let file = std::fs::File::create(path).map_err(err)?;
-    let mut w = csv::Writer::from_writer(std::io::BufWriter::new(file));
-    w.write_record(names).map_err(csv_err)?;
-    let mut row = Vec::with_capacity(columns.len());
-    for i in 0..lengths.first().copied().unwrap_or(0) {
-        row.clear();
-        row.extend(columns.iter().map(|c| format!("{:e}", c[i])));
-        w.write_record(&row).map_err(csv_err)?;
-    }
-    w.flush().map_err(err)
 }
 
 /// Read an oscillator from a JSON file in the schema every report writes
@@ -461,126 +491,32 @@ pub fn data_dir() -> Option<PathBuf> {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
+pub(crate) mod test_files {
+    use std::path::PathBuf;
 
-    /// A path for the test file `name` in this process's temporary folder (the `.npy`
-    /// reader's tests write theirs there too).
-    pub(super) fn file_path(name: &str) -> PathBuf {
+    /// A path for the test file `name` in this process's temporary folder (every reader's
+    /// tests write theirs there).
+    pub(crate) fn file_path(name: &str) -> PathBuf {
         let dir = std::env::temp_dir().join(format!("hyst-io-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         dir.join(name)
     }
 
-    fn file(name: &str, text: &str) -> PathBuf {
-        let p = file_path(name);
-        std::fs::write(&p, text).unwrap();
-        p
-    }
-
-    /// What spreadsheets and other tools write reads as the plain file does: a byte-order
-    /// mark (invisible in an error, so `--columns y` failed against a header that printed as
-    /// `y`), quoted names, CRLF line ends, spaces after the commas.
-    #[test]
-    fn spreadsheet_exports_read_as_plain_files() {
-        let plain = read_csv(&file("plain.csv", "t,y\n0,1.5\n1,-2\n")).unwrap();
-        for (name, text) in [
-            ("bom.csv", "\u{feff}t,y\n0,1.5\n1,-2\n"),
-            ("quoted.csv", "\"t\",\"y\"\n0,1.5\n1,-2\n"),
-            ("crlf.csv", "t,y\r\n0,1.5\r\n1,-2\r\n"),
-            ("spaces.csv", "t, y\n0, 1.5\n1, -2\n\n"),
-        ] {
-            let t = read_csv(&file(name, text)).unwrap();
-            assert_eq!(t.names, plain.names, "{name}");
-            assert_eq!(t.columns, plain.columns, "{name}");
-        }
-    }
-
-    /// `;` and tab files, quoted numbers, a BOM and CRLF read as the plain file does; a
-    /// semicolon file may use a decimal comma.
-    #[test]
-    fn every_delimiter_and_quoting_reads_alike() {
-        let plain = read_csv(&file("plain2.csv", "t,y\n0,1.5\n1,-2\n")).unwrap();
-        for (name, text) in [
-            ("semi.csv", "t;y\n0;1.5\n1;-2\n"),
-            ("semi_decimal_comma.csv", "t;y\n0;1,5\n1;-2\n"),
-            ("tab.csv", "t\ty\n0\t1.5\n1\t-2\n"),
-            (
-                "quoted_numbers.csv",
-                "\"t\",\"y\"\n\"0\",\"1.5\"\n\"1\",\"-2\"\n",
-            ),
-            (
-                "all.csv",
-                "\u{feff}\"t\";\"y\"\r\n0;\"1,5\"\r\n\r\n1;-2\r\n",
-            ),
-        ] {
-            let t = read_csv(&file(name, text)).unwrap();
-            assert_eq!(t.names, plain.names, "{name}");
-            assert_eq!(t.columns, plain.columns, "{name}");
-        }
-        // Given explicitly, a delimiter the file does not use makes one column per line.
-        let e = read_csv_with(&file("semi2.csv", "t;y\n0;1.5\n"), Delimiter::Comma).unwrap_err();
-        assert!(e.to_string().contains("`0;1.5` is not a number"), "{e}");
-        // One column whose name has no separator in it is still a one-column file.
-        let t = read_csv(&file("one.csv", "y\n1\n2\n")).unwrap();
-        assert_eq!(t.names, ["y"]);
-        // A comma-separated file keeps a comma a separator, never a decimal mark.
-        let e = read_csv(&file("bad.csv", "t,y\n0,\"1,5\"\n")).unwrap_err();
-        assert!(e.to_string().contains("`1,5` is not a number"), "{e}");
-    }
-
-    /// Errors name the file, the row and what is wrong.
-    #[test]
-    fn malformed_files_are_named() {
-        let e = read_csv(&file("short_row.csv", "t,y\n0,1\n2\n")).unwrap_err();
-        assert!(
-            e.to_string()
-                .contains("row 3 has 1 cells, the header has 2"),
-            "{e}"
-        );
-        let e = read_csv(&file("nan.csv", "t,y\n0,NaN\n")).unwrap_err();
-        assert!(
-            e.to_string()
-                .contains("row 2, column `y`: value NaN is not finite"),
-            "{e}"
-        );
-        let e = read_csv(&file("bytes.csv", "t,y\n0,1\n")).map(|_| ());
-        assert!(e.is_ok());
-        std::fs::write(file("latin1.csv", ""), b"t,y\n0,\xff\n").unwrap();
-        let e = read_csv(&file_path("latin1.csv")).unwrap_err();
-        assert!(e.to_string().contains("latin1.csv: row 2"), "{e}");
-        let e = read_csv(&file("blank.csv", "\n \n")).unwrap_err();
-        assert!(matches!(e, IoError::NoHeader { .. }), "{e}");
-    }
-
-    /// Columns of different lengths are refused, not cut to the shortest.
-    #[test]
-    fn unequal_columns_are_not_written() {
-        let p = file_path("unequal.csv");
-        let e = write_csv(&p, &["a", "b"], &[&[1.0, 2.0], &[1.0]]).unwrap_err();
-        assert!(e.to_string().contains("lengths [2, 1]"), "{e}");
-        write_csv(&p, &["a", "b,c"], &[&[1.0, 0.1], &[2.0, 1e-300]]).unwrap();
-        let t = read_csv(&p).unwrap();
-        assert_eq!(t.names, ["a", "b,c"]);
-        assert_eq!(t.columns, [vec![1.0, 0.1], vec![2.0, 1e-300]]);
-    }
-
-    /// Arbitrary bytes never panic the reader.
-    mod fuzz {
-        use super::*;
-        use proptest::prelude::*;
-
-        proptest! {
-            #![proptest_config(ProptestConfig::with_cases(512))]
-            #[test]
-            fn any_bytes_read_or_fail_cleanly(bytes in proptest::collection::vec(any::<u8>(), 0..200)) {
-                let p = file_path(&format!("fuzz-{}.csv", std::thread::current().name().unwrap_or("t").replace("::", "_")));
-                std::fs::write(&p, &bytes).unwrap();
-                if let Ok(t) = read_csv(&p) {
-                    prop_assert!(t.columns.iter().all(|c| c.len() == t.len()));
-                    prop_assert!(t.columns.iter().flatten().all(|v| v.is_finite()));
-                }
+    /// A fuzz case: `bytes` with the bytes at `flips` replaced, cut after `cut` bytes (at
+    /// least one kept), and `tail` appended.
+    pub(crate) fn mutated(
+        mut bytes: Vec<u8>,
+        flips: &[(usize, u8)],
+        cut: usize,
+        tail: &[u8],
+    ) -> Vec<u8> {
+        for &(at, b) in flips {
+            if at < bytes.len() {
+                bytes[at] = b;
             }
         }
+        bytes.truncate(cut.max(1));
+        bytes.extend(tail);
+        bytes
     }
 }

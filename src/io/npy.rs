@@ -1,8 +1,10 @@
-//! NumPy `.npy` records: a 1-D array (one channel) or a 2-D array of samples × channels, of
-//! float64 or float32, little- or big-endian, in C or Fortran order, read by `npyz`. The
-//! columns are named by their index, `0`, `1`, …, as the command line's `--columns` then
-//! takes them. Every error names the file and what is wrong: the dtype, the shape, a length
-//! the file does not hold, a value that is not finite (with its sample, 1-based, and column).
+//! NumPy records: a `.npy` file, or one array of a `.npz` archive, holding a 1-D array (one
+//! channel) or a 2-D array of samples × channels, of float64 or float32, little- or
+//! big-endian, in C or Fortran order, read by `npyz` (and `zip` for the archive). The columns
+//! are named by their index, `0`, `1`, …, as the command line's `--columns` then takes them.
+//! Every error names the file (and the archive's array) and what is wrong: the dtype, the
+//! shape, a length the file does not hold, a value that is not finite (with its sample,
+//! 1-based, and column).
 
 use std::io::Read;
 use std::path::Path;
@@ -29,6 +31,74 @@ pub fn read_npy(path: &Path) -> Result<Table, IoError> {
     let file = std::fs::File::open(path).map_err(file_error)?;
     let npy = NpyFile::new(std::io::BufReader::new(file))
         .map_err(|e| bad(path, format!("not a NumPy .npy file ({e})")))?;
+    array_table(path, npy, size, "")
+}
+
+/// Read one array of the `.npz` archive at `path`: the one named `variable`, else the only
+/// array with more than one element (see the module's documentation).
+pub fn read_npz(path: &Path, variable: Option<&str>) -> Result<Table, IoError> {
+    let file_error = |source| IoError::File {
+        path: path.to_path_buf(),
+        source,
+    };
+    let file = std::fs::File::open(path).map_err(file_error)?;
+    let mut zip = zip::ZipArchive::new(std::io::BufReader::new(file))
+        .map_err(|e| bad(path, format!("not a NumPy .npz archive ({e})")))?;
+    // Each member's name and shape, from its header alone.
+    let mut arrays: Vec<(usize, String, Vec<u64>)> = Vec::new();
+    for i in 0..zip.len() {
+        let member = zip
+            .by_index(i)
+            .map_err(|e| bad(path, format!("archive member {i}: {e}")))?;
+        let member_name = member
+            .name()
+            .map_err(|e| bad(path, format!("archive member {i}: {e}")))?
+            .into_owned();
+        let Some(name) = member_name.strip_suffix(".npy").map(str::to_string) else {
+            continue;
+        };
+        let npy = NpyFile::new(member)
+            .map_err(|e| bad(path, format!("array `{name}`: not a NumPy array ({e})")))?;
+        arrays.push((i, name, npy.shape().to_vec()));
+    }
+    let listing = || {
+        arrays
+            .iter()
+            .map(|(_, n, s)| format!("{n} {s:?}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let chosen: Vec<&(usize, String, Vec<u64>)> = match variable {
+        Some(v) => arrays.iter().filter(|(_, n, _)| n == v).collect(),
+        None => arrays
+            .iter()
+            .filter(|(_, _, s)| s.iter().product::<u64>() > 1)
+            .collect(),
+    };
+    let &[(index, name, _)] = chosen.as_slice() else {
+        return Err(IoError::Variable {
+            path: path.to_path_buf(),
+            asked: variable.map(str::to_string),
+            available: listing(),
+        });
+    };
+    let member = zip
+        .by_index(*index)
+        .map_err(|e| bad(path, format!("array `{name}`: {e}")))?;
+    let size = member.size();
+    let npy = NpyFile::new(member)
+        .map_err(|e| bad(path, format!("array `{name}`: not a NumPy array ({e})")))?;
+    array_table(path, npy, size, &format!("array `{name}`: "))
+}
+
+/// The table of the array `npy`, whose file holds `size` bytes in all; `label` starts its
+/// errors (the archive's array).
+fn array_table<R: Read>(
+    path: &Path,
+    npy: NpyFile<R>,
+    size: u64,
+    label: &str,
+) -> Result<Table, IoError> {
     let shape = npy.shape().to_vec();
     let (n, l) = match shape[..] {
         [n] => (n, 1),
@@ -37,7 +107,7 @@ pub fn read_npy(path: &Path) -> Result<Table, IoError> {
             return Err(bad(
                 path,
                 format!(
-                    "the array has shape {shape:?}; a record is (samples,) or (samples, channels)"
+                    "{label}the array has shape {shape:?}; a record is (samples,) or (samples, channels)"
                 ),
             ));
         }
@@ -50,7 +120,7 @@ pub fn read_npy(path: &Path) -> Result<Table, IoError> {
             return Err(bad(
                 path,
                 format!(
-                    "dtype {} is not a float64 or float32 array",
+                    "{label}dtype {} is not a float64 or float32 array",
                     other.descr().trim()
                 ),
             ));
@@ -61,20 +131,43 @@ pub fn read_npy(path: &Path) -> Result<Table, IoError> {
             path: path.to_path_buf(),
         });
     }
+    // A (1, N) row is one channel, as a 1-D array is; other arrays of more columns than rows
+    // are most likely channels × samples.
+    if l > n && n > 1 {
+        return Err(IoError::Transposed {
+            path: path.to_path_buf(),
+            rows: n as usize,
+            columns: l as usize,
+        });
+    }
     // The header's shape against the file's size, before anything is allocated for it.
     let needed = n.checked_mul(l).and_then(|c| c.checked_mul(width));
     if needed.is_none_or(|b| b > size) {
         return Err(bad(
             path,
             format!(
-                "the header says {n} × {l} values of {width} bytes, more than the file's {size} bytes hold"
+                "{label}the header says {n} × {l} values of {width} bytes, more than the file's {size} bytes hold"
             ),
         ));
     }
-    let (n, l) = (n as usize, l as usize);
+    let (n, l) = if n == 1 {
+        (l as usize, 1)
+    } else {
+        (n as usize, l as usize)
+    };
     let fortran = npy.order() == Order::Fortran;
     let values =
-        read_values(npy, width).map_err(|e| bad(path, format!("reading the data: {e}")))?;
+        read_values(npy, width).map_err(|e| bad(path, format!("{label}reading the data: {e}")))?;
+    if values.len() != n.saturating_mul(l) {
+        return Err(bad(
+            path,
+            format!(
+                "{label}the header says {} values, the data hold {}",
+                n * l,
+                values.len()
+            ),
+        ));
+    }
     let at = |s: usize, c: usize| {
         if fortran || l == 1 {
             values[c * n + s]
@@ -83,24 +176,8 @@ pub fn read_npy(path: &Path) -> Result<Table, IoError> {
         }
     };
     let names: Vec<String> = (0..l).map(|c| c.to_string()).collect();
-    let mut columns = Vec::with_capacity(l);
-    for (c, name) in names.iter().enumerate() {
-        let column: Vec<f64> = (0..n).map(|s| at(s, c)).collect();
-        if let Some(s) = column.iter().position(|v| !v.is_finite()) {
-            return Err(IoError::NonFinite {
-                path: path.to_path_buf(),
-                row: s + 1,
-                column: name.clone(),
-                value: column[s],
-            });
-        }
-        columns.push(column);
-    }
-    Ok(Table {
-        names,
-        columns,
-        path: path.to_path_buf(),
-    })
+    let columns = (0..l).map(|c| (0..n).map(|s| at(s, c)).collect()).collect();
+    Table::of_finite(path, names, columns)
 }
 
 /// The array's values as f64, in the file's order.
@@ -132,7 +209,7 @@ mod tests {
     }
 
     fn write(name: &str, bytes: &[u8]) -> std::path::PathBuf {
-        let path = crate::io::tests::file_path(name);
+        let path = crate::io::test_files::file_path(name);
         std::fs::write(&path, bytes).unwrap();
         path
     }
@@ -246,6 +323,65 @@ mod tests {
         }
     }
 
+    /// An archive of `members` (name, bytes), deflated when `deflate`.
+    fn npz_bytes(members: &[(&str, Vec<u8>)], deflate: bool) -> Vec<u8> {
+        use std::io::Write;
+        let mut zip = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+        let method = if deflate {
+            zip::CompressionMethod::Deflated
+        } else {
+            zip::CompressionMethod::Stored
+        };
+        let opts = zip::write::SimpleFileOptions::default().compression_method(method);
+        for (name, bytes) in members {
+            zip.start_file(*name, opts).unwrap();
+            zip.write_all(bytes).unwrap();
+        }
+        zip.finish().unwrap().into_inner()
+    }
+
+    #[test]
+    fn an_npz_array_is_read_by_name_or_as_the_only_record() {
+        let y = npy_bytes(
+            "{'descr': '<f8', 'fortran_order': False, 'shape': (3, 2), }",
+            &le64(&[1.0, 10.0, 2.0, 20.0, 3.0, 30.0]),
+        );
+        let fs = npy_bytes(
+            "{'descr': '<f8', 'fortran_order': False, 'shape': (), }",
+            &le64(&[20.0]),
+        );
+        let want = [vec![1.0, 2.0, 3.0], vec![10.0, 20.0, 30.0]];
+        for deflate in [false, true] {
+            let p = write(
+                "two.npz",
+                &npz_bytes(&[("fs.npy", fs.clone()), ("y.npy", y.clone())], deflate),
+            );
+            assert_eq!(read_npz(&p, None).unwrap().columns, want);
+            assert_eq!(read_npz(&p, Some("y")).unwrap().columns, want);
+            let e = read_npz(&p, Some("z")).unwrap_err().to_string();
+            assert!(
+                e.contains("no array `z` (the file holds: fs [], y [3, 2])"),
+                "{e}"
+            );
+            // A 0-d array is not a record.
+            let e = read_npz(&p, Some("fs")).unwrap_err().to_string();
+            assert!(e.contains("array `fs`: the array has shape []"), "{e}");
+        }
+        let p = write(
+            "twice.npz",
+            &npz_bytes(&[("a.npy", y.clone()), ("b.npy", y)], false),
+        );
+        let e = read_npz(&p, None).unwrap_err().to_string();
+        assert!(
+            e.contains("holds several arrays (a [3, 2], b [3, 2])"),
+            "{e}"
+        );
+        let e = read_npz(&write("text.npz", b"t,y\n"), None)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("not a NumPy .npz archive"), "{e}");
+    }
+
     proptest::proptest! {
         /// No bytes make the reader panic: a valid header followed by anything, or a valid
         /// file with bytes changed anywhere, is read or refused with an error naming the file.
@@ -255,19 +391,34 @@ mod tests {
             flips in proptest::collection::vec((0usize..400, proptest::prelude::any::<u8>()), 0..6),
             cut in 0usize..400,
         ) {
-            let mut bytes = npy_bytes(
+            let bytes = npy_bytes(
                 "{'descr': '<f8', 'fortran_order': False, 'shape': (4, 2), }",
                 &le64(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0]),
             );
-            for (at, b) in flips {
-                if at < bytes.len() {
-                    bytes[at] = b;
-                }
-            }
-            bytes.truncate(cut.max(1));
-            bytes.extend(&tail);
+            let bytes = crate::io::test_files::mutated(bytes, &flips, cut, &tail);
             let path = write("fuzz.npy", &bytes);
             if let Err(e) = read_npy(&path) {
+                proptest::prop_assert!(e.to_string().starts_with(&path.display().to_string()));
+            }
+        }
+
+        /// Nor does any archive: a valid one (stored or deflated) with bytes changed anywhere,
+        /// cut anywhere and anything appended.
+        #[test]
+        fn any_archive_bytes_are_read_or_refused(
+            deflate in proptest::prelude::any::<bool>(),
+            tail in proptest::collection::vec(proptest::prelude::any::<u8>(), 0..100),
+            flips in proptest::collection::vec((0usize..500, proptest::prelude::any::<u8>()), 0..6),
+            cut in 0usize..500,
+        ) {
+            let y = npy_bytes(
+                "{'descr': '<f8', 'fortran_order': False, 'shape': (4, 2), }",
+                &le64(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0]),
+            );
+            let bytes = npz_bytes(&[("y.npy", y)], deflate);
+            let bytes = crate::io::test_files::mutated(bytes, &flips, cut, &tail);
+            let path = write("fuzz.npz", &bytes);
+            if let Err(e) = read_npz(&path, None) {
                 proptest::prop_assert!(e.to_string().starts_with(&path.display().to_string()));
             }
         }

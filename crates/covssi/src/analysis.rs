@@ -121,6 +121,55 @@ pub fn analyze_with_progress(
     })
 }
 
+impl ModalAnalysis {
+    /// The refinement when its modes are the ones to report: it ran, kept modes, and the
+    /// record follows its model (misfit at most [`MISFIT_LIMIT`]); `None` when SSI's modes
+    /// are the ones to report.
+    pub fn reported_refinement(&self) -> Option<&Refinement> {
+        self.refined
+            .as_ref()
+            .filter(|r| r.misfit <= MISFIT_LIMIT && !r.modes.is_empty())
+    }
+
+    /// The modes to report, as [`ModalAnalysis::reported_refinement`] chooses: the refined
+    /// modes with their shapes (`None` where the refinement gave none), else SSI's.
+    pub fn reported_modes(&self) -> Vec<ReportedMode> {
+        match self.reported_refinement() {
+            Some(r) => r
+                .modes
+                .iter()
+                .map(|m| ReportedMode {
+                    frequency_hz: m.frequency_hz,
+                    damping_ratio: m.damping_ratio,
+                    shape: m.shape.clone(),
+                })
+                .collect(),
+            None => self
+                .ssi
+                .modes
+                .iter()
+                .map(|m| ReportedMode {
+                    frequency_hz: m.frequency_hz,
+                    damping_ratio: m.damping_ratio,
+                    shape: Some(m.shape.clone()),
+                })
+                .collect(),
+        }
+    }
+}
+
+/// A mode as reported: the refinement's, or SSI's when the refinement does not hold.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReportedMode {
+    /// Natural frequency (Hz).
+    pub frequency_hz: f64,
+    /// Damping ratio.
+    pub damping_ratio: f64,
+    /// The shape, one entry per channel, its largest entry 1; `None` for a refined mode
+    /// whose shape the refinement could not give.
+    pub shape: Option<Vec<crate::Complex64>>,
+}
+
 /// A mode shape as "magnitude∠phase°" per entry (phase rounded to a degree), entries joined
 /// by `sep`: how reports print shapes.
 pub fn shape_text(shape: &[crate::Complex64], sep: &str) -> String {

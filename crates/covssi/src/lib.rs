@@ -63,7 +63,9 @@ pub mod svg;
 #[cfg(feature = "synth")]
 pub mod synth;
 
-pub use analysis::{AnalysisOptions, ModalAnalysis, analyze, analyze_with_progress, shape_text};
+pub use analysis::{
+    AnalysisOptions, ModalAnalysis, ReportedMode, analyze, analyze_with_progress, shape_text,
+};
 pub use corr::Correlations;
 pub use error::{SsiError, SsiOption};
 pub use identify::{

@@ -1,0 +1,348 @@
+//! Delimited text records: a header line of column names, then rows of numbers separated by
+//! `,`, `;` or tabs (detected from the header line, or given), read as a stream by the `csv`
+//! crate; and the writer of the tables the command line produces.
+
+use std::io::{BufRead, Seek};
+use std::path::Path;
+
+use super::{IoError, Table, repeated};
+
+/// The separator between a record's cells.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
+pub enum Delimiter {
+    /// Whichever of `,` `;` and tab the header line uses most (outside quotes); a header with
+    /// none of them is one column.
+    #[default]
+    Auto,
+    /// `,`
+    Comma,
+    /// `;` (where a comma is the decimal mark, `1,5` reads as 1.5)
+    Semicolon,
+    /// A tab.
+    Tab,
+}
+
+impl Delimiter {
+    fn byte(self) -> Option<u8> {
+        match self {
+            Delimiter::Auto => None,
+            Delimiter::Comma => Some(b','),
+            Delimiter::Semicolon => Some(b';'),
+            Delimiter::Tab => Some(b'\t'),
+        }
+    }
+
+    /// The delimiter the header line uses most, outside double quotes.
+    fn detect(header: &[u8]) -> u8 {
+        let mut counts = [0usize; 3];
+        let mut quoted = false;
+        for &b in header {
+            match b {
+                b'"' => quoted = !quoted,
+                b',' if !quoted => counts[0] += 1,
+                b';' if !quoted => counts[1] += 1,
+                b'\t' if !quoted => counts[2] += 1,
+                _ => {}
+            }
+        }
+        let best = (0..3).max_by_key(|&i| (counts[i], 3 - i)).unwrap_or(0);
+        if counts[best] == 0 {
+            b','
+        } else {
+            [b',', b';', b'\t'][best]
+        }
+    }
+}
+
+/// A cell as a number: a plain float, or with `;` separating cells, a decimal comma.
+fn number(text: &str, delimiter: u8) -> Option<f64> {
+    text.parse().ok().or_else(|| {
+        (delimiter != b',' && text.matches(',').count() == 1)
+            .then(|| text.replace(',', ".").parse().ok())
+            .flatten()
+    })
+}
+
+/// [`read_csv_with`] with the delimiter detected.
+pub fn read_csv(path: &Path) -> Result<Table, IoError> {
+    read_csv_with(path, Delimiter::Auto)
+}
+
+/// Read a delimited file with a header line (RFC 4180, by the `csv` crate): cells separated by
+/// `delimiter`, any of them quoted, CRLF or LF line ends, a byte-order mark, spaces around the
+/// cells; empty lines are skipped. Every row must have one cell per column of the header, and
+/// every cell must be a finite number.
+pub fn read_csv_with(path: &Path, delimiter: Delimiter) -> Result<Table, IoError> {
+    let file_error = |source| IoError::File {
+        path: path.to_path_buf(),
+        source,
+    };
+    // The file is read as a stream (the record is kept once, as numbers, not also as text);
+    // its first non-blank line is read first to detect the delimiter, then it is read again
+    // from its start.
+    let file = std::fs::File::open(path).map_err(file_error)?;
+    let mut file = std::io::BufReader::with_capacity(1 << 16, file);
+    let first_line = first_line(&mut file, path)?;
+    file.rewind().map_err(file_error)?;
+    // A byte-order mark (spreadsheets write one) would become part of the first name.
+    if file
+        .fill_buf()
+        .map_err(file_error)?
+        .starts_with(b"\xEF\xBB\xBF")
+    {
+        file.consume(3);
+    }
+    let sep = delimiter
+        .byte()
+        .unwrap_or_else(|| Delimiter::detect(&first_line));
+    let mut reader = csv::ReaderBuilder::new()
+        .delimiter(sep)
+        .has_headers(false)
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .from_reader(file);
+    let mut records = reader.records();
+    let csv_error = |e: csv::Error| {
+        let row = e.position().map_or(0, |p| p.line() as usize);
+        IoError::Malformed {
+            path: path.to_path_buf(),
+            row,
+            what: e.to_string(),
+        }
+    };
+    let header = loop {
+        match records.next() {
+            None => {
+                return Err(IoError::NoHeader {
+                    path: path.to_path_buf(),
+                });
+            }
+            Some(r) => {
+                let r = r.map_err(csv_error)?;
+                if !(r.len() == 1 && r[0].is_empty()) {
+                    break r;
+                }
+            }
+        }
+    };
+    let names: Vec<String> = header.iter().map(str::to_string).collect();
+    if let Some(column) = repeated(&names) {
+        return Err(IoError::DuplicateColumn {
+            path: path.to_path_buf(),
+            column: column.to_string(),
+        });
+    }
+    let mut columns: Vec<Vec<f64>> = vec![Vec::new(); names.len()];
+    for r in records {
+        let r = r.map_err(csv_error)?;
+        let row = r.position().map_or(0, |p| p.line() as usize);
+        if r.len() == 1 && r[0].is_empty() {
+            continue;
+        }
+        if r.len() != names.len() {
+            return Err(IoError::CellCount {
+                path: path.to_path_buf(),
+                row,
+                found: r.len(),
+                expected: names.len(),
+            });
+        }
+        for (c, t) in r.iter().enumerate() {
+            let v = number(t, sep).ok_or_else(|| IoError::NotANumber {
+                path: path.to_path_buf(),
+                row,
+                column: names[c].clone(),
+                text: t.to_string(),
+            })?;
+            if !v.is_finite() {
+                return Err(IoError::NonFinite {
+                    path: path.to_path_buf(),
+                    row,
+                    column: names[c].clone(),
+                    value: v,
+                });
+            }
+            columns[c].push(v);
+        }
+    }
+    if columns.first().is_none_or(Vec::is_empty) {
+        return Err(IoError::Empty {
+            path: path.to_path_buf(),
+        });
+    }
+    Ok(Table::new(path, names, columns))
+}
+
+/// The first line of `file` (read from `path`) that is not blank, or why there is none.
+fn first_line(file: &mut impl BufRead, path: &Path) -> Result<Vec<u8>, IoError> {
+    let mut line = Vec::new();
+    loop {
+        line.clear();
+        let read = file.read_until(b'\n', &mut line);
+        if read.map_err(|source| IoError::File {
+            path: path.to_path_buf(),
+            source,
+        })? == 0
+        {
+            return Err(IoError::NoHeader {
+                path: path.to_path_buf(),
+            });
+        }
+        if !line.iter().all(u8::is_ascii_whitespace) {
+            return Ok(line);
+        }
+    }
+}
+
+/// Write columns of equal length under a header, comma-separated, numbers with 17
+/// significant digits (they read back bit-identical). Columns of different lengths are an
+/// error, not a file cut to the shortest.
+pub fn write_csv(path: &Path, names: &[&str], columns: &[&[f64]]) -> Result<(), IoError> {
+    let lengths: Vec<usize> = columns.iter().map(|c| c.len()).collect();
+    if names.len() != columns.len() || lengths.windows(2).any(|w| w[0] != w[1]) {
+        return Err(IoError::UnequalColumns {
+            path: path.to_path_buf(),
+            names: names.join(","),
+            lengths,
+        });
+    }
+    let err = |source| IoError::File {
+        path: path.to_path_buf(),
+        source,
+    };
+    let csv_err = |e: csv::Error| match e.into_kind() {
+        csv::ErrorKind::Io(source) => err(source),
+        other => err(std::io::Error::other(format!("{other:?}"))),
+    };
+    let file = std::fs::File::create(path).map_err(err)?;
+    let mut w = csv::Writer::from_writer(std::io::BufWriter::new(file));
+    w.write_record(names).map_err(csv_err)?;
+    let mut row = Vec::with_capacity(columns.len());
+    for i in 0..lengths.first().copied().unwrap_or(0) {
+        row.clear();
+        row.extend(columns.iter().map(|c| format!("{:e}", c[i])));
+        w.write_record(&row).map_err(csv_err)?;
+    }
+    w.flush().map_err(err)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    use crate::io::test_files::file_path;
+    use std::path::PathBuf;
+
+    fn file(name: &str, text: &str) -> PathBuf {
+        let p = file_path(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    }
+
+    /// What spreadsheets and other tools write reads as the plain file does: a byte-order
+    /// mark (invisible in an error, so `--columns y` failed against a header that printed as
+    /// `y`), quoted names, CRLF line ends, spaces after the commas.
+    #[test]
+    fn spreadsheet_exports_read_as_plain_files() {
+        let plain = read_csv(&file("plain.csv", "t,y\n0,1.5\n1,-2\n")).unwrap();
+        for (name, text) in [
+            ("bom.csv", "\u{feff}t,y\n0,1.5\n1,-2\n"),
+            ("quoted.csv", "\"t\",\"y\"\n0,1.5\n1,-2\n"),
+            ("crlf.csv", "t,y\r\n0,1.5\r\n1,-2\r\n"),
+            ("spaces.csv", "t, y\n0, 1.5\n1, -2\n\n"),
+        ] {
+            let t = read_csv(&file(name, text)).unwrap();
+            assert_eq!(t.names, plain.names, "{name}");
+            assert_eq!(t.columns, plain.columns, "{name}");
+        }
+    }
+
+    /// `;` and tab files, quoted numbers, a BOM and CRLF read as the plain file does; a
+    /// semicolon file may use a decimal comma.
+    #[test]
+    fn every_delimiter_and_quoting_reads_alike() {
+        let plain = read_csv(&file("plain2.csv", "t,y\n0,1.5\n1,-2\n")).unwrap();
+        for (name, text) in [
+            ("semi.csv", "t;y\n0;1.5\n1;-2\n"),
+            ("semi_decimal_comma.csv", "t;y\n0;1,5\n1;-2\n"),
+            ("tab.csv", "t\ty\n0\t1.5\n1\t-2\n"),
+            (
+                "quoted_numbers.csv",
+                "\"t\",\"y\"\n\"0\",\"1.5\"\n\"1\",\"-2\"\n",
+            ),
+            (
+                "all.csv",
+                "\u{feff}\"t\";\"y\"\r\n0;\"1,5\"\r\n\r\n1;-2\r\n",
+            ),
+        ] {
+            let t = read_csv(&file(name, text)).unwrap();
+            assert_eq!(t.names, plain.names, "{name}");
+            assert_eq!(t.columns, plain.columns, "{name}");
+        }
+        // Given explicitly, a delimiter the file does not use makes one column per line.
+        let e = read_csv_with(&file("semi2.csv", "t;y\n0;1.5\n"), Delimiter::Comma).unwrap_err();
+        assert!(e.to_string().contains("`0;1.5` is not a number"), "{e}");
+        // One column whose name has no separator in it is still a one-column file.
+        let t = read_csv(&file("one.csv", "y\n1\n2\n")).unwrap();
+        assert_eq!(t.names, ["y"]);
+        // A comma-separated file keeps a comma a separator, never a decimal mark.
+        let e = read_csv(&file("bad.csv", "t,y\n0,\"1,5\"\n")).unwrap_err();
+        assert!(e.to_string().contains("`1,5` is not a number"), "{e}");
+    }
+
+    /// Errors name the file, the row and what is wrong.
+    #[test]
+    fn malformed_files_are_named() {
+        let e = read_csv(&file("short_row.csv", "t,y\n0,1\n2\n")).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("row 3 has 1 cells, the header has 2"),
+            "{e}"
+        );
+        let e = read_csv(&file("nan.csv", "t,y\n0,NaN\n")).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("row 2, column `y`: value NaN is not finite"),
+            "{e}"
+        );
+        let e = read_csv(&file("bytes.csv", "t,y\n0,1\n")).map(|_| ());
+        assert!(e.is_ok());
+        std::fs::write(file("latin1.csv", ""), b"t,y\n0,\xff\n").unwrap();
+        let e = read_csv(&file_path("latin1.csv")).unwrap_err();
+        assert!(e.to_string().contains("latin1.csv: row 2"), "{e}");
+        let e = read_csv(&file("blank.csv", "\n \n")).unwrap_err();
+        assert!(matches!(e, IoError::NoHeader { .. }), "{e}");
+    }
+
+    /// Columns of different lengths are refused, not cut to the shortest.
+    #[test]
+    fn unequal_columns_are_not_written() {
+        let p = file_path("unequal.csv");
+        let e = write_csv(&p, &["a", "b"], &[&[1.0, 2.0], &[1.0]]).unwrap_err();
+        assert!(e.to_string().contains("lengths [2, 1]"), "{e}");
+        write_csv(&p, &["a", "b,c"], &[&[1.0, 0.1], &[2.0, 1e-300]]).unwrap();
+        let t = read_csv(&p).unwrap();
+        assert_eq!(t.names, ["a", "b,c"]);
+        assert_eq!(t.columns, [vec![1.0, 0.1], vec![2.0, 1e-300]]);
+    }
+
+    /// Arbitrary bytes never panic the reader.
+    mod fuzz {
+        use super::*;
+        use proptest::prelude::*;
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(512))]
+            #[test]
+            fn any_bytes_read_or_fail_cleanly(bytes in proptest::collection::vec(any::<u8>(), 0..200)) {
+                let p = file_path(&format!("fuzz-{}.csv", std::thread::current().name().unwrap_or("t").replace("::", "_")));
+                std::fs::write(&p, &bytes).unwrap();
+                if let Ok(t) = read_csv(&p) {
+                    prop_assert!(t.columns.iter().all(|c| c.len() == t.len()));
+                    prop_assert!(t.columns.iter().flatten().all(|v| v.is_finite()));
+                }
+            }
+        }
+    }
+}
