@@ -1,19 +1,20 @@
 //! `cargo xtask test`: every test of the project, the README's test command.
 //!
 //! First `cargo test --workspace`; then the Python package: a virtual environment under
-//! `target/py-venv` (made on first use, with maturin, numpy and pytest from PyPI), the
-//! package built and installed into it from `crates/hyst-py` (`pip install`, maturin's release
-//! build), the `hyst` command built for the tests that compare with it, and pytest run on
-//! `crates/hyst-py/tests` (which also runs the code of `docs/python.md`). Fails on the first
-//! failure.
+//! `target/py-venv` (made on first use, with maturin, numpy, pytest, pyuff and scipy from
+//! PyPI), the package built and installed into it from `crates/hyst-py` (`pip install`,
+//! maturin's release build), the `hyst` command built for the tests that compare with it,
+//! and pytest run on `crates/hyst-py/tests` (which also runs the code of `docs/python.md`).
+//! Fails on the first failure.
 
 use std::path::Path;
 use std::process::Command;
 
 use crate::compare::run_ok as run;
 
-/// What the Python tests need besides the package.
-const PYTHON_NEEDS: [&str; 3] = ["maturin>=1.7,<2", "numpy", "pytest"];
+/// What the Python tests need besides the package (pyuff and scipy write the Universal and
+/// MATLAB files the readers are checked against).
+const PYTHON_NEEDS: [&str; 5] = ["maturin>=1.7,<2", "numpy", "pytest", "pyuff", "scipy"];
 
 /// `python -m pip install --quiet`, the arguments to follow.
 fn pip(python: &Path) -> Command {

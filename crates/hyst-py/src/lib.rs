@@ -12,7 +12,7 @@
 use std::borrow::Cow;
 
 use covssi::{AnalysisOptions, BlockRows, ModalAnalysis, RefineOptions, SsiOptions};
-use numpy::ndarray::{Array1, Array2};
+use numpy::ndarray::{Array1, Array2, ShapeBuilder};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -29,10 +29,7 @@ impl SsiResult {
     /// The refinement when its modes are the ones reported (it ran, found modes, and the
     /// record follows its model); `None` when SSI's are.
     fn refined(&self) -> Option<&covssi::Refinement> {
-        self.analysis
-            .refined
-            .as_ref()
-            .filter(|r| r.misfit <= covssi::MISFIT_LIMIT && !r.modes.is_empty())
+        self.analysis.reported_refinement()
     }
 
     /// One value per reported mode: `refined` of each refined mode, or `ssi` of each SSI mode.
@@ -216,6 +213,43 @@ impl SsiResult {
         covssi::svg::stabilization_svg(&self.analysis.ssi.diagram, max_frequency_hz, title)
     }
 
+    /// Write the reported modes' shapes as Universal File dataset 55 at `path`: one dataset
+    /// per mode (its complex eigenvalue, and per node the X, Y, Z entries). `points` places
+    /// each channel, as (node, direction) pairs in the Universal File's numbering (±1 ±2 ±3
+    /// for ±X ±Y ±Z; `hyst.read` gives a Universal File's); without them channel c is node
+    /// c + 1 along Z. A mode the refinement gave no shape is left out.
+    #[pyo3(signature = (path, points = None, description = None))]
+    fn write_shapes_uff(
+        &self,
+        path: std::path::PathBuf,
+        points: Option<Vec<(i64, i32)>>,
+        description: Option<&str>,
+    ) -> PyResult<()> {
+        let modes = self.analysis.reported_modes();
+        let shapes: Vec<hyst::io::ShapeMode<'_>> = modes
+            .iter()
+            .filter_map(|m| {
+                Some(hyst::io::ShapeMode {
+                    frequency_hz: m.frequency_hz,
+                    damping_ratio: m.damping_ratio,
+                    shape: m.shape.as_deref()?,
+                })
+            })
+            .collect();
+        let points: Option<Vec<hyst::io::MeasurementPoint>> = points.map(|p| {
+            p.into_iter()
+                .map(|(node, direction)| hyst::io::MeasurementPoint { node, direction })
+                .collect()
+        });
+        hyst::io::write_shapes_uff(
+            &path,
+            &shapes,
+            points.as_deref(),
+            description.unwrap_or(&self.record),
+        )
+        .map_err(|e| PyValueError::new_err(e.to_string()))
+    }
+
     /// The report `hyst ssi` prints.
     fn __str__(&self) -> String {
         self.analysis.to_string()
@@ -328,10 +362,76 @@ fn ssi(
     })
 }
 
+/// What `read_record` gives: the data (samples × channels), the column names, the sampling
+/// rate the file states, and each channel's (node, direction) if the file gives them.
+type RecordParts<'py> = (
+    Bound<'py, PyArray2<f64>>,
+    Vec<String>,
+    Option<f64>,
+    Option<Vec<(i64, i32)>>,
+);
+
+/// The record at `path`, read as `hyst ssi --input` reads it; see the Python wrapper
+/// `hyst.read`.
+#[pyfunction]
+#[pyo3(signature = (path, format = None, variable = None, delimiter = None))]
+fn read_record<'py>(
+    py: Python<'py>,
+    path: std::path::PathBuf,
+    format: Option<&str>,
+    variable: Option<String>,
+    delimiter: Option<&str>,
+) -> PyResult<RecordParts<'py>> {
+    use hyst::io::{Delimiter, Format, ReadOptions};
+    let format = match format {
+        None => Format::Auto,
+        Some("csv") => Format::Csv,
+        Some("npy") => Format::Npy,
+        Some("npz") => Format::Npz,
+        Some("mat") => Format::Mat,
+        Some("uff") => Format::Uff,
+        Some(other) => {
+            return Err(PyValueError::new_err(format!(
+                "format {other:?} is not one of \"csv\", \"npy\", \"npz\", \"mat\", \"uff\""
+            )));
+        }
+    };
+    let delimiter = match delimiter {
+        None => Delimiter::Auto,
+        Some(",") => Delimiter::Comma,
+        Some(";") => Delimiter::Semicolon,
+        Some("\t") => Delimiter::Tab,
+        Some(other) => {
+            return Err(PyValueError::new_err(format!(
+                "delimiter {other:?} is not one of \",\", \";\", \"\\t\""
+            )));
+        }
+    };
+    let opts = ReadOptions::default()
+        .with_format(format)
+        .with_delimiter(delimiter)
+        .with_variable(variable);
+    let table = py
+        .detach(|| hyst::io::read_record(&path, &opts))
+        .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let (n, l) = (table.len(), table.columns.len());
+    // Column-major, one column after another: the array is Fortran-ordered, which
+    // `hyst.ssi` then reads in place.
+    let flat: Vec<f64> = table.columns.concat();
+    let data = Array2::from_shape_vec((n, l).f(), flat)
+        .map_err(|e| PyValueError::new_err(e.to_string()))?
+        .into_pyarray(py);
+    let points = table
+        .points
+        .map(|p| p.iter().map(|q| (q.node, q.direction)).collect());
+    Ok((data, table.names, table.rate_hz, points))
+}
+
 /// The extension module: `hyst._hyst`.
 #[pymodule]
 fn _hyst(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ssi, m)?)?;
+    m.add_function(wrap_pyfunction!(read_record, m)?)?;
     m.add_class::<SsiResult>()?;
     Ok(())
 }

@@ -3,6 +3,7 @@
 debug, build). Missing, a test that needs them fails when `CI` is set and is skipped with a
 message otherwise."""
 
+import importlib
 import os
 import shutil
 from pathlib import Path
@@ -40,3 +41,14 @@ def hyst_bin():
     if found:
         return Path(found)
     _missing("the hyst command (cargo build --release --bin hyst, or set HYST_BIN)")
+
+
+def need(module):
+    """The module `module` (another program the tests compare with): missing, the tests that
+    import it fail when `CI` is set and are skipped with a message otherwise."""
+    try:
+        return importlib.import_module(module)
+    except ImportError:
+        if os.environ.get("CI"):
+            raise
+        pytest.skip(f"{module} is not installed: skipped (pip install it to run these tests)", allow_module_level=True)

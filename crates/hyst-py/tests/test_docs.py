@@ -12,8 +12,10 @@ def test_the_python_guide_runs(data_dir, tmp_path, monkeypatch, capsys):
     assert blocks, "docs/python.md has no python block"
     monkeypatch.setenv("HYST_DATA_DIR", str(data_dir))
     monkeypatch.chdir(tmp_path)
+    # The blocks run one after another in one namespace, as a reader pastes them.
+    namespace = {"__name__": "docs"}
     for code in blocks:
-        exec(compile(code, "docs/python.md", "exec"), {"__name__": "docs"})
+        exec(compile(code, "docs/python.md", "exec"), namespace)
     out = capsys.readouterr().out
     # The mode table: each refined mode within three of its standard errors of the truth
     # file's (an independent computation from the chain's matrices).
@@ -31,3 +33,4 @@ def test_the_python_guide_runs(data_dir, tmp_path, monkeypatch, capsys):
         assert mpc > 0.99
     assert "3 refined modes" in out
     assert (tmp_path / "diagram.svg").read_text().startswith("<svg")
+    assert "3 mode shapes written" in out

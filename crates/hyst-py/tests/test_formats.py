@@ -1,4 +1,5 @@
-"""Files written by other programs, read by the hyst command line."""
+"""NumPy files (np.save, np.savez) read by the hyst command line, and the helpers the other
+formats' tests share."""
 
 import json
 import subprocess
@@ -9,16 +10,30 @@ import pytest
 from test_ssi import read_record
 
 
-def ssi_document(hyst_bin, path, tmp_path, fs=20.0):
+FS = 20.0
+
+
+def hyst_ssi(hyst_bin, path, tmp_path, *flags, check=True):
+    """`hyst ssi` on `path` with `flags`; its JSON document (without the record's name), or
+    the failed run."""
     out = tmp_path / (path.name + ".json")
-    subprocess.run(
-        [str(hyst_bin), "ssi", "--input", str(path), "--fs", str(fs), "--json", str(out)],
-        check=True,
+    p = subprocess.run(
+        [str(hyst_bin), "ssi", "--input", str(path), "--json", str(out), *flags],
         capture_output=True,
+        text=True,
     )
+    if not check:
+        return p
+    assert p.returncode == 0, p.stderr
     doc = json.loads(out.read_text())
     doc.pop("record")
     return doc
+
+
+def csv_of(y, names, path):
+    """`y` as a CSV with every digit, its columns named `names`."""
+    np.savetxt(path, y, delimiter=",", fmt="%.17g", header=",".join(names), comments="")
+    return path
 
 
 @pytest.mark.parametrize("order", ["C", "F"])
@@ -28,9 +43,8 @@ def test_an_npy_written_by_numpy_gives_the_modes_of_the_csv(data_dir, hyst_bin, 
     y, _ = read_record(data_dir / "oma" / "data_3dof.csv")
     npy = tmp_path / "rec.npy"
     np.save(npy, np.asfortranarray(y) if order == "F" else np.ascontiguousarray(y))
-    csv = tmp_path / "rec.csv"
-    np.savetxt(csv, y, delimiter=",", fmt="%.17g", header="0,1,2", comments="")
-    assert ssi_document(hyst_bin, npy, tmp_path) == ssi_document(hyst_bin, csv, tmp_path)
+    csv = csv_of(y, ["0", "1", "2"], tmp_path / "rec.csv")
+    assert hyst_ssi(hyst_bin, npy, tmp_path, "--fs", str(FS)) == hyst_ssi(hyst_bin, csv, tmp_path, "--fs", str(FS))
 
 
 @pytest.mark.parametrize(
@@ -39,15 +53,21 @@ def test_an_npy_written_by_numpy_gives_the_modes_of_the_csv(data_dir, hyst_bin, 
         (np.arange(12, dtype=np.int64).reshape(6, 2), "dtype '<i8' is not a float64 or float32 array"),
         (np.zeros((2, 2, 2)), "shape [2, 2, 2]"),
         (np.array([1.0, np.nan, 2.0]), "row 2, column `0`: value NaN is not finite"),
+        (np.ones((3, 500)), "the array is 3 × 500"),
     ],
 )
 def test_a_bad_npy_is_refused_naming_the_file(hyst_bin, tmp_path, array, says):
     path = tmp_path / "bad.npy"
     np.save(path, array)
-    p = subprocess.run(
-        [str(hyst_bin), "ssi", "--input", str(path), "--fs", "10", "--json", str(tmp_path / "o.json")],
-        capture_output=True,
-        text=True,
-    )
+    p = hyst_ssi(hyst_bin, path, tmp_path, "--fs", "10", check=False)
     assert p.returncode != 0
     assert str(path) in p.stderr and says in p.stderr, p.stderr
+
+
+@pytest.mark.parametrize("save", ["savez", "savez_compressed"])
+def test_an_npz_written_by_numpy_gives_the_modes_of_the_csv(data_dir, hyst_bin, tmp_path, save):
+    y, _ = read_record(data_dir / "oma" / "data_3dof.csv")
+    npz = tmp_path / "rec.npz"
+    getattr(np, save)(npz, y=y, fs=np.float64(FS))
+    csv = csv_of(y, ["0", "1", "2"], tmp_path / "rec.csv")
+    assert hyst_ssi(hyst_bin, npz, tmp_path, "--fs", str(FS)) == hyst_ssi(hyst_bin, csv, tmp_path, "--fs", str(FS))

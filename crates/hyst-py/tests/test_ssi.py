@@ -134,12 +134,16 @@ def test_a_long_record_crosses_without_a_copy_per_channel():
 
 def test_the_type_stubs_name_what_the_package_has():
     """Every name the stubs (`hyst/__init__.pyi`) give exists, and every public attribute
-    of SsiResult is in them."""
+    of SsiResult and field of Record is in them."""
     import re
     from pathlib import Path
 
     stubs = (Path(hyst.__file__).parent / "__init__.pyi").read_text()
     stubbed = set(re.findall(r"def (\w+)\(", stubs))
-    assert "ssi" in stubbed and hasattr(hyst, "ssi")
+    functions = {"ssi", "read"}
+    assert functions <= stubbed and all(hasattr(hyst, f) for f in functions)
+    assert "class Record" in stubs and set(hyst.Record.__dataclass_fields__) == set(
+        re.findall(r"^    (\w+): ", stubs.split("class Record")[1].split("def ")[0], re.M)
+    )
     public = {n for n in dir(hyst.SsiResult) if not n.startswith("_")}
-    assert public == stubbed - {"ssi"}, (public ^ (stubbed - {"ssi"}))
+    assert public == stubbed - functions, (public ^ (stubbed - functions))

@@ -5,14 +5,85 @@
 with a stabilization diagram, then each mode refined by maximum likelihood on the whole record,
 with standard errors. The same library runs the command ``hyst ssi``; ``result.to_dict()`` is
 the JSON document ``hyst ssi --json`` writes.
+
+``hyst.read(path)`` reads a record as the command line does: CSV, NumPy ``.npy``/``.npz``,
+MATLAB ``.mat`` (level 5), Universal File datasets 58 (ASCII or 58b, with their sampling
+rate); ``result.write_shapes_uff(path)`` writes the mode shapes as dataset 55.
 """
+
+from dataclasses import dataclass as _dataclass
+from typing import List as _List, Optional as _Optional, Tuple as _Tuple
 
 import numpy as _np
 
 from . import _hyst
 from ._hyst import SsiResult
 
-__all__ = ["ssi", "SsiResult"]
+__all__ = ["read", "Record", "ssi", "SsiResult"]
+
+
+@_dataclass(frozen=True)
+class Record:
+    """A record read by :func:`hyst.read`.
+
+    Attributes
+    ----------
+    data : numpy.ndarray, shape (samples, channels)
+        The channels, float64, Fortran-ordered (``hyst.ssi`` reads its columns in place).
+    names : list of str
+        The channels' names: a CSV's header, ``"0", "1", ...`` for arrays, the point
+        (``"12+Z"``) for a Universal File.
+    fs : float or None
+        The sampling rate the file states (a Universal File's), else None.
+    points : list of (int, int) or None
+        Each channel's (node, direction) where the file gives them (a Universal File),
+        for ``SsiResult.write_shapes_uff``.
+    path : str
+        The file.
+    """
+
+    data: _np.ndarray
+    names: _List[str]
+    fs: _Optional[float]
+    points: _Optional[_List[_Tuple[int, int]]]
+    path: str
+
+
+def read(path, *, format=None, variable=None, delimiter=None):
+    """Read a record file as ``hyst ssi --input`` does.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    format : {"csv", "npy", "npz", "mat", "uff"}, optional
+        Its format; by default from its extension (``.npy``, ``.npz``, ``.mat``,
+        ``.uff``/``.unv``/``.uf``, anything else CSV).
+    variable : str, optional
+        The variable of a ``.mat`` file or the array of a ``.npz`` archive; needed when the
+        file holds more than one array of more than one element.
+    delimiter : {",", ";", "\\t"}, optional
+        The cell separator of a CSV (default: detected from the header line).
+
+    Returns
+    -------
+    Record
+        ``data`` (samples x channels), ``names``, ``fs`` (the file's rate, or None),
+        ``points``, ``path``.
+
+    Raises
+    ------
+    ValueError
+        With the library's message, naming the file and what is wrong (a truncated file, a
+        dataset that is not a time response, channels of different lengths or rates, a
+        value that is not finite, ...).
+    """
+    import os
+
+    data, names, fs, points = _hyst.read_record(
+        os.fspath(path), format=format, variable=variable, delimiter=delimiter
+    )
+    return Record(data=data, names=list(names), fs=fs, points=points, path=os.fspath(path))
 
 
 def ssi(

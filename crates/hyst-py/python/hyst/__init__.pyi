@@ -1,4 +1,6 @@
-from typing import Any, Literal, Optional, Sequence
+import os
+from dataclasses import dataclass
+from typing import Any, Literal, Optional, Sequence, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -35,6 +37,28 @@ class SsiResult:
     def stabilization_svg(
         self, title: str = ..., max_frequency_hz: Optional[float] = ...
     ) -> str: ...
+    def write_shapes_uff(
+        self,
+        path: Union[str, os.PathLike[str]],
+        points: Optional[Sequence[tuple[int, int]]] = ...,
+        description: Optional[str] = ...,
+    ) -> None: ...
+
+@dataclass(frozen=True)
+class Record:
+    data: npt.NDArray[np.float64]
+    names: list[str]
+    fs: Optional[float]
+    points: Optional[list[tuple[int, int]]]
+    path: str
+
+def read(
+    path: Union[str, os.PathLike[str]],
+    *,
+    format: Optional[Literal["csv", "npy", "npz", "mat", "uff"]] = ...,
+    variable: Optional[str] = ...,
+    delimiter: Optional[Literal[",", ";", "\t"]] = ...,
+) -> Record: ...
 
 def ssi(
     y: npt.ArrayLike,
