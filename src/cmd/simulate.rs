@@ -6,7 +6,7 @@ use clap::{Args, ValueEnum};
 use hyst::io::write_csv;
 use hyst::model::Oscillator;
 use hyst::sim::excitation::{Multisine, Sweep, white_noise};
-use hyst::sim::{self, Decimation, Input, Integrator, SimOptions};
+use hyst::sim::{self, Decimation, Integrator, SimOptions};
 
 use super::*;
 
@@ -148,19 +148,6 @@ pub(crate) fn generate(kind: ExcitationKind, a: &SignalArgs, fs: f64) -> Result<
     })
 }
 
-pub(crate) fn prime_factors(mut n: usize) -> Vec<usize> {
-    let mut f = Vec::new();
-    let mut p = 2;
-    while n > 1 {
-        while n.is_multiple_of(p) {
-            f.push(p);
-            n /= p;
-        }
-        p += 1;
-    }
-    f
-}
-
 pub(crate) fn excite(a: &ExcitationArgs) -> Result<(), Error> {
     let fs = check_fs(a.fs)?;
     let u = generate(a.excitation, &a.signal, fs)?;
@@ -200,21 +187,18 @@ pub(crate) fn run(a: &SimulateArgs) -> Result<(), Error> {
         },
         decimation: match a.decimation {
             DecimationArg::Sample => Decimation::Subsample,
-            DecimationArg::Fir => Decimation::Fir(prime_factors(a.oversample)),
+            DecimationArg::Fir => Decimation::fir_stages(a.oversample),
         },
         ..SimOptions::default()
     };
-    let band_limited = match (a.input_interpolation, &a.input) {
-        (Some(i), _) => i == InterpolationArg::BandLimited,
-        (None, from_file) => from_file.is_some(),
+    let kind = match (periodic, a.input_interpolation, &a.input) {
+        (true, _, _) => sim::InputKind::Periodic,
+        (false, Some(InterpolationArg::BandLimited), _) | (false, None, Some(_)) => {
+            sim::InputKind::BandLimited
+        }
+        (false, Some(InterpolationArg::Linear), _) | (false, None, None) => sim::InputKind::Linear,
     };
-    let mut y = if periodic {
-        sim::steady_state_period(&model, &u, fs, &opts, 1e-10, 200)?.y
-    } else if band_limited {
-        sim::simulate(&model, Input::BandLimited(&u), fs, u.len(), &opts)?
-    } else {
-        sim::simulate(&model, Input::Sampled(&u), fs, u.len(), &opts)?
-    };
+    let mut y = sim::response(&model, &u, fs, kind, &opts)?;
     if a.noise != 0.0 {
         sim::excitation::add_noise(&mut y, a.noise, a.noise_seed)?;
     }

@@ -11,6 +11,8 @@
 
 use std::borrow::Cow;
 
+mod ident;
+
 use covssi::{AnalysisOptions, BlockRows, ModalAnalysis, RefineOptions, SsiOptions};
 use numpy::ndarray::{Array1, Array2, ShapeBuilder};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2};
@@ -432,6 +434,11 @@ fn read_record<'py>(
 fn _hyst(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ssi, m)?)?;
     m.add_function(wrap_pyfunction!(read_record, m)?)?;
+    m.add_function(wrap_pyfunction!(ident::simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(ident::identify, m)?)?;
+    m.add_function(wrap_pyfunction!(ident::refine, m)?)?;
+    m.add_function(wrap_pyfunction!(ident::levels, m)?)?;
+    m.add_class::<ident::Report>()?;
     m.add_class::<SsiResult>()?;
     Ok(())
 }

@@ -24,6 +24,8 @@ pub mod excitation;
 mod kernel;
 
 pub use drift::simulate_drifting;
+mod record;
+pub use record::{InputKind, STEADY_STATE_MAX_PERIODS, STEADY_STATE_TOLERANCE, response};
 pub mod resample;
 
 /// Errors of simulation and signal generation.

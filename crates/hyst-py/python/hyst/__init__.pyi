@@ -44,6 +44,61 @@ class SsiResult:
         description: Optional[str] = ...,
     ) -> None: ...
 
+class Report:
+    def to_json(self) -> str: ...
+    def to_dict(self) -> dict[str, Any]: ...
+
+Model = Union[dict[str, Any], Literal["benchmark"]]
+Validation = Union[dict[str, Any], tuple[npt.ArrayLike, npt.ArrayLike]]
+
+def simulate(
+    model: Model,
+    u: npt.ArrayLike,
+    fs: float,
+    *,
+    input: Literal["band-limited", "linear", "periodic"] = ...,
+    oversample: int = ...,
+    integrator: Literal["rk4", "newmark"] = ...,
+    decimation: Literal["sample", "fir"] = ...,
+    noise: float = ...,
+    noise_seed: int = ...,
+) -> npt.NDArray[np.float64]: ...
+def identify(
+    y: npt.ArrayLike,
+    fs: float,
+    mass: float,
+    *,
+    damping: Literal["spectrum", "cluster"] = ...,
+    c: Optional[float] = ...,
+    excitation_band: Optional[tuple[float, float]] = ...,
+    period: Optional[int] = ...,
+    linearization: Optional[Literal["paper", "harmonic"]] = ...,
+    validate: Optional[Sequence[Validation]] = ...,
+    record: str = ...,
+) -> Report: ...
+def refine(
+    u: npt.ArrayLike,
+    y: npt.ArrayLike,
+    fs: float,
+    *,
+    mass: Optional[float] = ...,
+    start: Literal["linear", "zener", "bouc-wen"] = ...,
+    input_interpolation: Literal["band-limited", "linear"] = ...,
+    estimate: Optional[tuple[int, int]] = ...,
+    test: Optional[Sequence[tuple[int, int]]] = ...,
+    record: str = ...,
+) -> Report: ...
+def levels(
+    records: Union[Sequence[npt.ArrayLike], dict[str, npt.ArrayLike]],
+    fs: float,
+    mass: float,
+    *,
+    by_simulation: bool = ...,
+    data_periodic: bool = ...,
+    fit_exponent: bool = ...,
+    validate: Optional[Sequence[Validation]] = ...,
+) -> Report: ...
+
 @dataclass(frozen=True)
 class Record:
     data: npt.NDArray[np.float64]

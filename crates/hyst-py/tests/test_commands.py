@@ -1,0 +1,139 @@
+"""`hyst.simulate`, `identify`, `refine` and `levels` against the command line's `simulate`,
+`ident`, `refine` and `levels` on the same records: the same numbers, to the last bit, and the
+same JSON documents (the run time and the record's name aside)."""
+
+import json
+import subprocess
+
+import numpy as np
+import pytest
+
+import hyst
+
+FS = 750.0
+
+
+def run(hyst_bin, *args):
+    p = subprocess.run([str(hyst_bin), *map(str, args)], capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    return p
+
+
+def document(path):
+    return comparable(json.loads(path.read_text()))
+
+
+def comparable(doc):
+    """A report's document without what differs between two runs of the same computation:
+    the run time, and the record's name."""
+    if isinstance(doc, dict):
+        return {k: comparable(v) for k, v in doc.items() if k not in ("seconds", "record")}
+    if isinstance(doc, list):
+        return [comparable(v) for v in doc]
+    return doc
+
+
+def columns(path):
+    names = path.read_text().splitlines()[0].split(",")
+    data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    return {n: data[:, i] for i, n in enumerate(names)}
+
+
+@pytest.fixture(scope="module")
+def white(hyst_bin, tmp_path_factory):
+    """A 30 N white force of 2^14 samples (made by `hyst excite`) and the benchmark's
+    response to it, both from the command line."""
+    d = tmp_path_factory.mktemp("white")
+    run(hyst_bin, "excite", "--excitation", "white", "--rms", 30, "--samples", 16384,
+        "--seed", 7, "--fs", FS, "--out", d / "u.csv")
+    run(hyst_bin, "simulate", "--input", d / "u.csv", "--fs", FS, "--out", d / "uy.csv")
+    return d, columns(d / "uy.csv")
+
+
+@pytest.mark.parametrize(
+    "flags, kwargs",
+    [
+        ([], {}),
+        (["--input-interpolation", "linear"], {"input": "linear"}),
+        (["--periodic", "--integrator", "newmark", "--decimation", "fir"],
+         {"input": "periodic", "integrator": "newmark", "decimation": "fir"}),
+        (["--noise", "1e-6", "--noise-seed", "9"], {"noise": 1e-6, "noise_seed": 9}),
+    ],
+)
+def test_simulate_gives_the_commands_samples(hyst_bin, white, flags, kwargs):
+    d, uy = white
+    u = uy["u"][:4096]
+    np.savetxt(d / "u4k.csv", u, fmt="%.17g", header="u", comments="")
+    out = d / "sim.csv"
+    run(hyst_bin, "simulate", "--input", d / "u4k.csv", "--fs", FS, "--out", out, *flags)
+    # The command writes the shortest digits that read back to the same double.
+    assert np.array_equal(hyst.simulate("benchmark", u, FS, **kwargs), columns(out)["y"])
+
+
+def test_a_model_dict_simulates_as_the_params_file(hyst_bin, white, tmp_path):
+    d, uy = white
+    # Not the benchmark's numbers: a model of the schema `hyst_model::schema` documents.
+    model = {"mass": 2.0, "damping": 8.0, "stiffness": 6e4,
+             "bouc_wen": {"alpha": 4e4, "beta_gamma": 900.0, "beta_delta": -1200.0, "nu": 1.0}}
+    y = hyst.simulate(model, uy["u"][:2048], FS)
+    params = tmp_path / "m.json"
+    params.write_text(json.dumps(model))
+    np.savetxt(tmp_path / "u.csv", uy["u"][:2048], fmt="%.17g", header="u", comments="")
+    run(hyst_bin, "simulate", "--input", tmp_path / "u.csv", "--fs", FS, "--params", params,
+        "--out", tmp_path / "y.csv")
+    assert np.array_equal(y, columns(tmp_path / "y.csv")["y"])
+
+
+def test_identify_gives_the_commands_document(hyst_bin, white):
+    d, uy = white
+    run(hyst_bin, "ident", "--data", d / "uy.csv", "--fs", FS, "--mass", 2, "--json", d / "id.json")
+    report = hyst.identify(uy["y"], FS, 2.0)
+    assert comparable(report.to_dict()) == document(d / "id.json")
+    assert str(report).startswith("record: array")
+    # The identified model simulates as it is.
+    y = hyst.simulate(report.to_dict()["bouc_wen"], uy["u"][:1024], FS)
+    assert np.all(np.isfinite(y))
+
+
+def test_refine_gives_the_commands_document(hyst_bin, white):
+    d, uy = white
+    # The first 6144 samples: the loop's cost grows with the record.
+    u, y = uy["u"][:6144], uy["y"][:6144]
+    np.savetxt(d / "short.csv", np.column_stack([u, y]), delimiter=",", fmt="%.17g",
+               header="u,y", comments="")
+    run(hyst_bin, "refine", "--data", d / "short.csv", "--fs", FS, "--mass", 2, "--start",
+        "zener", "--json", d / "refine.json")
+    report = hyst.refine(u, y, FS, mass=2.0, start="zener")
+    assert comparable(report.to_dict()) == document(d / "refine.json")
+
+
+def test_levels_give_the_commands_document(hyst_bin, tmp_path):
+    paths, records = [], {}
+    for rms, seed in [(10, 21), (50, 22), (90, 23)]:
+        u = tmp_path / f"u{rms}.csv"
+        run(hyst_bin, "excite", "--excitation", "white", "--rms", rms, "--samples", 32768,
+            "--seed", seed, "--fs", FS, "--out", u)
+        p = tmp_path / f"y{rms}.csv"
+        run(hyst_bin, "simulate", "--input", u, "--fs", FS, "--out", p)
+        paths.append(p)
+        records[str(p)] = columns(p)["y"]
+    run(hyst_bin, "levels", "--data", *paths, "--fs", FS, "--mass", 2, "--json", tmp_path / "l.json")
+    report = hyst.levels(records, FS, 2.0)
+    assert comparable(report.to_dict()) == document(tmp_path / "l.json")
+
+
+@pytest.mark.parametrize(
+    "call, says",
+    [
+        (lambda: hyst.simulate({"mass": 2.0, "stiffnes": 1.0}, np.ones(8), FS), "unknown field `stiffnes`"),
+        (lambda: hyst.simulate("benchmark", np.ones(8), FS, integrator="euler"), 'integrator "euler" is not one of'),
+        (lambda: hyst.simulate("benchmark", np.ones(8), -1.0), "sampling rate must be > 0"),
+        (lambda: hyst.identify(np.zeros(4096), FS, 2.0), "constant"),
+        (lambda: hyst.refine(np.ones(10), np.ones(10), FS, start="cubic"), 'start "cubic" is not one of'),
+        (lambda: hyst.levels([np.ones(100)], FS, 2.0, validate=[{"u": [1.0], "x": [2.0]}]), "unknown keys ['x']"),
+    ],
+)
+def test_bad_input_raises_value_error_with_the_librarys_message(call, says):
+    with pytest.raises(ValueError) as e:
+        call()
+    assert says in str(e.value), str(e.value)
