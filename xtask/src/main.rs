@@ -21,6 +21,7 @@ mod deps;
 mod f16;
 mod growth;
 mod loop_battery;
+mod monitor;
 mod random_sweep;
 mod sizes;
 mod sweep;
@@ -691,6 +692,8 @@ enum Task {
     },
     /// The residual loop on records with undeclared effects (`loop_battery.rs`).
     LoopBattery(loop_battery::BatteryArgs),
+    /// Issue 33's synthetic monitoring campaign, identified and tracked (`monitor.rs`).
+    MonitorDemo(monitor::DemoArgs),
     /// Every test: `cargo test --workspace`, then the Python package's pytest (`test_all.rs`).
     Test,
     /// Fail if a workspace member declares a dependency its sources do not use (`deps.rs`).
@@ -742,6 +745,7 @@ fn main() {
         ),
         Task::F16 { out } => f16_cmd(out.as_deref()),
         Task::LoopBattery(a) => or_exit(loop_battery::run(&a)),
+        Task::MonitorDemo(a) => or_exit(monitor::run(&a)),
         Task::Test => or_exit(test_all::run_all()),
         Task::UnusedDeps => or_exit(deps::run()),
         Task::Sizes => {

@@ -140,7 +140,9 @@ impl ModalAnalysis {
                 .iter()
                 .map(|m| ReportedMode {
                     frequency_hz: m.frequency_hz,
+                    frequency_se_hz: m.frequency_se_hz,
                     damping_ratio: m.damping_ratio,
+                    damping_se: m.damping_se,
                     shape: m.shape.clone(),
                 })
                 .collect(),
@@ -150,7 +152,9 @@ impl ModalAnalysis {
                 .iter()
                 .map(|m| ReportedMode {
                     frequency_hz: m.frequency_hz,
+                    frequency_se_hz: None,
                     damping_ratio: m.damping_ratio,
+                    damping_se: None,
                     shape: Some(m.shape.clone()),
                 })
                 .collect(),
@@ -163,8 +167,12 @@ impl ModalAnalysis {
 pub struct ReportedMode {
     /// Natural frequency (Hz).
     pub frequency_hz: f64,
+    /// Its standard error (Hz): the refinement's; `None` for SSI's modes.
+    pub frequency_se_hz: Option<f64>,
     /// Damping ratio.
     pub damping_ratio: f64,
+    /// Its standard error: the refinement's; `None` for SSI's modes.
+    pub damping_se: Option<f64>,
     /// The shape, one entry per channel, its largest entry 1; `None` for a refined mode
     /// whose shape the refinement could not give.
     pub shape: Option<Vec<crate::Complex64>>,

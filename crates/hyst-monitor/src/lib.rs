@@ -1,0 +1,83 @@
+//! Structural health monitoring: the modes of many records of one structure tracked over
+//! time, and a change in them told from estimation noise and the environment's effect.
+//!
+//! One job, in three steps, each its own module, which [`track()`](fn@track) runs over a campaign's
+//! records (each identified by [`identify`], as `hyst ssi` does):
+//!
+//! * [`matching`]: a record's modes assigned one-to-one to a reference set, by frequency and
+//!   MAC. A pair is admissible when |f − f_ref| / f_ref ≤ Δf and MAC ≥ MAC_min; among
+//!   admissible pairs the assignment minimizes Σ (|f − f_ref| / (f_ref Δf) + (1 − MAC) /
+//!   (1 − MAC_min)) (Kuhn–Munkres), so a mode missing from a record, or one the reference does
+//!   not have, is said rather than forced onto another.
+//! * [`baseline`]: over a training period, each mode's frequency regressed on the covariates
+//!   (temperature, say): f_i = β₀ + Σ_j β_j x_ij + e_i with e_i = ε_i + η_i, ε_i the
+//!   estimation error (its standard error s_i known from the refinement) and η_i what the
+//!   covariates leave unexplained, of variance σ² estimated by the method of moments. A new
+//!   record's standardized residual is z = (f − f̂) / √(s² + σ² + x̃ᵀ Cov(β̂) x̃), where the last
+//!   term is the fit's own uncertainty at the record's covariates.
+//! * [`chart`]: a two-sided CUSUM of the standardized residuals, S⁺ = max(0, S⁺ + z − k),
+//!   S⁻ = max(0, S⁻ − z − k), an alarm when either passes h; its in-control average run
+//!   length (the false-alarm rate's inverse) from Siegmund's approximation.
+
+#![warn(missing_docs)]
+
+pub mod baseline;
+#[cfg(feature = "synth")]
+pub mod campaign;
+pub mod chart;
+pub mod matching;
+pub mod track;
+
+pub use baseline::{Baseline, fit_baseline};
+pub use chart::{Alarm, Cusum, Side};
+pub use matching::{Assignment, MatchOptions, ModeEstimate, match_modes};
+pub use track::{
+    Identified, ModeAlarm, RecordModes, TrackOptions, TrackReport, TrackRow, identify, track,
+};
+
+/// Errors of monitoring.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum MonitorError {
+    /// Too few training records for the regression on the covariates.
+    #[error(
+        "{records} training record(s) for {parameters} regression coefficients; need more records than coefficients"
+    )]
+    TooFewRecords {
+        /// Training records with the mode.
+        records: usize,
+        /// Coefficients of the regression (intercept and one per covariate).
+        parameters: usize,
+    },
+    /// Covariates that do not determine the regression (a constant or repeated covariate).
+    #[error(
+        "the covariates are collinear over the training period (a covariate constant, or one a combination of others)"
+    )]
+    Collinear,
+    /// A value that is not finite, or a standard error that is negative.
+    #[error("{what} of training record {index} is {value}")]
+    BadValue {
+        /// Which value.
+        what: &'static str,
+        /// 0-based record among those given.
+        index: usize,
+        /// The value.
+        value: f64,
+    },
+    /// Records and covariate rows of different counts.
+    #[error("{records} records but {rows} rows of covariates")]
+    CovariateRows {
+        /// Records.
+        records: usize,
+        /// Covariate rows.
+        rows: usize,
+    },
+    /// A CUSUM parameter out of range.
+    #[error("CUSUM {parameter} must be positive and finite, got {value}")]
+    ChartParameter {
+        /// `k` or `h`.
+        parameter: &'static str,
+        /// The value.
+        value: f64,
+    },
+}

@@ -1,0 +1,297 @@
+//! A campaign's records tracked: each record's modes matched to the reference, each mode's
+//! baseline fitted over the training records, the later records charted, alarms raised.
+
+use crate::MonitorError;
+use crate::baseline::{Baseline, fit_baseline};
+use crate::chart::{Cusum, Side};
+use crate::matching::{MatchOptions, ModeEstimate, match_modes};
+
+/// One record's identification, as the campaign's tracking takes it.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct RecordModes {
+    /// The record's name (a file, or a window of one).
+    pub name: String,
+    /// When it was recorded (s, on the campaign's clock).
+    pub time: f64,
+    /// The covariates at that time (the same ones, in the same order, for every record).
+    pub covariates: Vec<f64>,
+    /// The modes it gave, or why it gave none (a dead channel, a record too short).
+    pub outcome: Result<Identified, String>,
+}
+
+/// The modes a record gave.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Identified {
+    /// The reported modes.
+    pub modes: Vec<ModeEstimate>,
+    /// The refinement's misfit (above `covssi::MISFIT_LIMIT` the record does not follow the
+    /// model, and the modes are SSI's).
+    pub misfit: Option<f64>,
+}
+
+/// The modes of one record, identified by SSI-COV and refined as `hyst ssi` does.
+pub fn identify(
+    channels: &[&[f64]],
+    fs: f64,
+    opts: &covssi::AnalysisOptions,
+) -> Result<Identified, covssi::SsiError> {
+    let analysis = covssi::analyze(channels, fs, opts)?;
+    let modes = analysis
+        .reported_modes()
+        .into_iter()
+        .map(|m| ModeEstimate {
+            frequency_hz: m.frequency_hz,
+            frequency_se_hz: m.frequency_se_hz,
+            damping_ratio: m.damping_ratio,
+            damping_se: m.damping_se,
+            shape: m.shape,
+        })
+        .collect();
+    Ok(Identified {
+        modes,
+        misfit: analysis.refined.as_ref().map(|r| r.misfit),
+    })
+}
+
+/// How a campaign is tracked.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[non_exhaustive]
+pub struct TrackOptions {
+    /// When a record's mode is the reference's.
+    pub matching: MatchOptions,
+    /// The first this many records train the baselines (default 336: two weeks of hourly
+    /// records).
+    pub training: usize,
+    /// Without a reference given, it is the modes of the record with the most modes among
+    /// the first this many (default 24).
+    pub reference_pool: usize,
+    /// The chart of the standardized residuals.
+    pub chart: Cusum,
+}
+
+impl Default for TrackOptions {
+    fn default() -> Self {
+        TrackOptions {
+            matching: MatchOptions::default(),
+            training: 336,
+            reference_pool: 24,
+            chart: Cusum::default(),
+        }
+    }
+}
+
+/// One record × mode of the tidy table.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct TrackRow {
+    /// The record's place in the campaign (0-based).
+    pub record: usize,
+    /// Its name.
+    pub name: String,
+    /// Its time (s).
+    pub time: f64,
+    /// The reference mode (0-based).
+    pub mode: usize,
+    /// The record's estimate of it.
+    pub frequency_hz: f64,
+    /// Standard error (Hz), if any.
+    pub frequency_se_hz: Option<f64>,
+    /// Damping ratio.
+    pub damping_ratio: f64,
+    /// Standard error, if any.
+    pub damping_se: Option<f64>,
+    /// MAC to the reference's shape (NaN without shapes).
+    pub mac: f64,
+    /// The record's misfit is above the limit: its modes are SSI's.
+    pub misfit_flag: bool,
+    /// The standardized residual against the baseline (records after training).
+    pub z: Option<f64>,
+    /// An alarm this record raised on this mode.
+    pub alarm: Option<Side>,
+    /// The covariates.
+    pub covariates: Vec<f64>,
+}
+
+/// A change found: a mode's chart passed its limit.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct ModeAlarm {
+    /// The reference mode.
+    pub mode: usize,
+    /// The record that raised it.
+    pub record: usize,
+    /// Its time (s).
+    pub time: f64,
+    /// Which way the frequency moved.
+    pub side: Side,
+}
+
+/// What tracking a campaign found.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct TrackReport {
+    /// The reference modes.
+    pub reference: Vec<ModeEstimate>,
+    /// Record × mode.
+    pub rows: Vec<TrackRow>,
+    /// Records that gave no modes, and why.
+    pub skipped: Vec<(String, String)>,
+    /// Modes a record had that the reference does not: (record, frequency).
+    pub new_modes: Vec<(usize, f64)>,
+    /// Each reference mode's baseline (`None` with too few training records).
+    pub baselines: Vec<Option<Baseline>>,
+    /// Why a mode has no baseline.
+    pub baseline_errors: Vec<Option<String>>,
+    /// Each reference mode's share of the identified records that had it.
+    pub tracked: Vec<f64>,
+    /// The alarms, in time order.
+    pub alarms: Vec<ModeAlarm>,
+    /// The chart's in-control average run length (records per false alarm, per mode).
+    pub in_control_run_length: f64,
+}
+
+/// Track `records` (in time order) against `reference`, or against the reference the first
+/// records give.
+pub fn track(
+    records: &[RecordModes],
+    reference: Option<&[ModeEstimate]>,
+    opts: &TrackOptions,
+) -> Result<TrackReport, MonitorError> {
+    let reference: Vec<ModeEstimate> = match reference {
+        Some(r) => r.to_vec(),
+        None => records
+            .iter()
+            .take(opts.reference_pool.max(1))
+            .filter_map(|r| r.outcome.as_ref().ok())
+            .fold(None::<&Identified>, |best, r| match best {
+                Some(b) if b.modes.len() >= r.modes.len() => Some(b),
+                _ => Some(r),
+            })
+            .map(|r| r.modes.clone())
+            .unwrap_or_default(),
+    };
+    let misfit_limit = covssi::MISFIT_LIMIT;
+    let mut rows = Vec::new();
+    let mut skipped = Vec::new();
+    let mut new_modes = Vec::new();
+    let mut seen = vec![0usize; reference.len()];
+    let mut identified = 0usize;
+    for (i, r) in records.iter().enumerate() {
+        let id = match &r.outcome {
+            Ok(id) => id,
+            Err(why) => {
+                skipped.push((r.name.clone(), why.clone()));
+                continue;
+            }
+        };
+        identified += 1;
+        let a = match_modes(&reference, &id.modes, &opts.matching);
+        for (mode, m) in a.matched.iter().enumerate() {
+            let Some((j, mac)) = m else { continue };
+            seen[mode] += 1;
+            let e = &id.modes[*j];
+            rows.push(TrackRow {
+                record: i,
+                name: r.name.clone(),
+                time: r.time,
+                mode,
+                frequency_hz: e.frequency_hz,
+                frequency_se_hz: e.frequency_se_hz,
+                damping_ratio: e.damping_ratio,
+                damping_se: e.damping_se,
+                mac: *mac,
+                misfit_flag: id.misfit.is_some_and(|f| f > misfit_limit),
+                z: None,
+                alarm: None,
+                covariates: r.covariates.clone(),
+            });
+        }
+        new_modes.extend(a.new.iter().map(|&j| (i, id.modes[j].frequency_hz)));
+    }
+    let mut baselines = Vec::with_capacity(reference.len());
+    let mut baseline_errors = Vec::with_capacity(reference.len());
+    let mut alarms = Vec::new();
+    for mode in 0..reference.len() {
+        match chart_mode(&mut rows, mode, opts) {
+            Ok((b, found)) => {
+                baselines.push(Some(b));
+                baseline_errors.push(None);
+                alarms.extend(found);
+            }
+            Err(e) => {
+                baselines.push(None);
+                baseline_errors.push(Some(e.to_string()));
+            }
+        }
+    }
+    alarms.sort_by(|a, b| a.record.cmp(&b.record).then(a.mode.cmp(&b.mode)));
+    rows.sort_by(|a, b| a.record.cmp(&b.record).then(a.mode.cmp(&b.mode)));
+    let tracked = seen
+        .iter()
+        .map(|&s| s as f64 / identified.max(1) as f64)
+        .collect();
+    Ok(TrackReport {
+        reference,
+        rows,
+        skipped,
+        new_modes,
+        baselines,
+        baseline_errors,
+        tracked,
+        alarms,
+        in_control_run_length: opts.chart.in_control_run_length(),
+    })
+}
+
+/// Fit `mode`'s baseline on its training rows, standardize its later rows (setting their
+/// `z`) and chart them (setting `alarm`); the baseline and the alarms.
+fn chart_mode(
+    rows: &mut [TrackRow],
+    mode: usize,
+    opts: &TrackOptions,
+) -> Result<(Baseline, Vec<ModeAlarm>), MonitorError> {
+    let ours: Vec<usize> = (0..rows.len()).filter(|&k| rows[k].mode == mode).collect();
+    // Training: the mode's rows among the first records, with a standard error.
+    let train: Vec<usize> = ours
+        .iter()
+        .copied()
+        .filter(|&k| rows[k].record < opts.training && rows[k].frequency_se_hz.is_some())
+        .collect();
+    let f: Vec<f64> = train.iter().map(|&k| rows[k].frequency_hz).collect();
+    let se: Vec<f64> = train
+        .iter()
+        .map(|&k| rows[k].frequency_se_hz.unwrap_or(0.0))
+        .collect();
+    let x: Vec<Vec<f64>> = train.iter().map(|&k| rows[k].covariates.clone()).collect();
+    let b = fit_baseline(&f, &se, &x)?;
+    let later: Vec<usize> = ours
+        .iter()
+        .copied()
+        .filter(|&k| rows[k].record >= opts.training)
+        .collect();
+    let z: Vec<f64> = later
+        .iter()
+        .map(|&k| match rows[k].frequency_se_hz {
+            Some(s) => b.standardized(rows[k].frequency_hz, s, &rows[k].covariates),
+            None => f64::NAN,
+        })
+        .collect();
+    for (&k, &v) in later.iter().zip(&z) {
+        rows[k].z = v.is_finite().then_some(v);
+    }
+    let mut alarms = Vec::new();
+    for a in opts.chart.alarms(&z) {
+        let k = later[a.index];
+        rows[k].alarm = Some(a.side);
+        alarms.push(ModeAlarm {
+            mode,
+            record: rows[k].record,
+            time: rows[k].time,
+            side: a.side,
+        });
+    }
+    Ok((b, alarms))
+}

@@ -1,0 +1,141 @@
+//! `cargo xtask monitor-demo`: issue 33's synthetic monitoring campaign made, identified and
+//! tracked; prints the detection delay, the false alarms, how often each mode was tracked,
+//! and the run time.
+
+use std::time::Instant;
+
+use hyst_monitor::campaign::Campaign;
+use hyst_monitor::{RecordModes, Side, TrackOptions, identify, track};
+use rayon::prelude::*;
+
+/// The campaign's size, on the command line.
+#[derive(clap::Args, Debug)]
+pub struct DemoArgs {
+    /// Days recorded (the change comes on day 45 of the default 60).
+    #[arg(long, default_value_t = 60)]
+    days: usize,
+    /// Records per day.
+    #[arg(long, default_value_t = 24)]
+    per_day: usize,
+    /// The campaign's seed.
+    #[arg(long, default_value_t = 700_000)]
+    seed: u64,
+    /// The day the stiffness loss starts.
+    #[arg(long, default_value_t = 45.0)]
+    change_day: f64,
+}
+
+/// Peak resident memory so far (MB), from /proc (0 where there is none).
+fn peak_mb() -> f64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .and_then(|l| l.split_whitespace().nth(1))
+                .and_then(|v| v.parse::<f64>().ok())
+        })
+        .map_or(0.0, |kb| kb / 1024.0)
+}
+
+pub fn run(a: &DemoArgs) -> Result<(), String> {
+    let mut campaign = Campaign::default();
+    campaign.days = a.days;
+    campaign.per_day = a.per_day;
+    campaign.seed = a.seed;
+    if let Some(c) = campaign.change.as_mut() {
+        c.0 = a.change_day;
+    }
+    let n = campaign.len();
+    let analysis = covssi::AnalysisOptions::default().with_ssi(covssi::SsiOptions {
+        block_rows: covssi::BlockRows::Seconds(3.0),
+        ..covssi::SsiOptions::default()
+    });
+    let bar = indicatif::ProgressBar::new(n as u64);
+    let t0 = Instant::now();
+    let mut half_peak = 0.0;
+    let mut records: Vec<RecordModes> = Vec::with_capacity(n);
+    // In two halves, to see whether memory grows with the records done.
+    for range in [0..n / 2, n / 2..n] {
+        let part: Vec<RecordModes> = range
+            .into_par_iter()
+            .map(|i| {
+                let r = campaign.record(i);
+                let views: Vec<&[f64]> = r.channels.iter().map(|c| c.as_slice()).collect();
+                let outcome = identify(&views, campaign.fs, &analysis).map_err(|e| e.to_string());
+                bar.inc(1);
+                RecordModes {
+                    name: format!("record {i}"),
+                    time: r.time_s,
+                    covariates: vec![r.temperature],
+                    outcome,
+                }
+            })
+            .collect();
+        records.extend(part);
+        if half_peak == 0.0 {
+            half_peak = peak_mb();
+        }
+    }
+    bar.finish_and_clear();
+    let identify_s = t0.elapsed().as_secs_f64();
+    let mut opts = TrackOptions::default();
+    opts.training = (campaign.per_day * 14).min(n / 2);
+    let report = track(&records, None, &opts).map_err(|e| e.to_string())?;
+    let total_s = t0.elapsed().as_secs_f64();
+    println!(
+        "monitor_records {n} ({} days × {}/day, {} s at {} Hz, {} channels)",
+        campaign.days, campaign.per_day, campaign.seconds, campaign.fs, campaign.channels
+    );
+    for (j, (m, share)) in report.reference.iter().zip(&report.tracked).enumerate() {
+        println!(
+            "monitor_mode {j}: {:.4} Hz, tracked in {:.2} % of the records",
+            m.frequency_hz,
+            100.0 * share
+        );
+    }
+    println!("monitor_skipped {}", report.skipped.len());
+    let change = campaign.change;
+    let before: Vec<_> = report
+        .alarms
+        .iter()
+        .filter(|al| change.is_none_or(|(day, _, _)| al.time < day * 86400.0))
+        .collect();
+    println!("monitor_false_alarms {}", before.len());
+    for al in &before {
+        println!(
+            "  false alarm: mode {} at day {:.2} ({:?})",
+            al.mode,
+            al.time / 86400.0,
+            al.side
+        );
+    }
+    if let Some((day, mode, _)) = change {
+        let hit = report
+            .alarms
+            .iter()
+            .find(|al| al.mode == mode && al.side == Side::Down && al.time >= day * 86400.0);
+        match hit {
+            Some(al) => println!(
+                "monitor_detection_delay_h {:.1}",
+                (al.time / 86400.0 - day) * 24.0
+            ),
+            None => println!("monitor_detection_delay_h none (not detected)"),
+        }
+    }
+    println!(
+        "monitor_in_control_run_length {:.3e} records per mode",
+        report.in_control_run_length
+    );
+    println!("monitor_identify_s {identify_s:.1}");
+    println!("monitor_total_s {total_s:.1}");
+    println!(
+        "monitor_records_per_minute {:.1}",
+        n as f64 / identify_s * 60.0
+    );
+    println!(
+        "monitor_peak_mb_half {half_peak:.0} monitor_peak_mb_all {:.0}",
+        peak_mb()
+    );
+    Ok(())
+}
