@@ -10,6 +10,7 @@ pub use covssi;
 pub use hyst_ident as ident;
 pub use hyst_linearize as linearize;
 pub use hyst_model as model;
+pub use hyst_monitor as monitor;
 pub use hyst_sim as sim;
 
 pub mod figures;

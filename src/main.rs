@@ -21,6 +21,7 @@ fn main() -> ExitCode {
         Command::Refine(a) => cmd::refine::run(a),
         Command::Levels(a) => cmd::levels::run(a),
         Command::Frf(a) => cmd::frf::run(a),
+        Command::Track(a) => cmd::track::run(a),
     });
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -2114,3 +2114,68 @@ fn format_flag_rate_and_shapes_uff() {
     let nodes: Vec<&str> = lines[10..16].iter().step_by(2).copied().collect();
     assert_eq!(nodes, ["         1", "         2", "         3"]);
 }
+
+/// `hyst track` over windows of one record: every window's modes tracked; a second run
+/// finds every record done and gives the same report (records.jsonl is not extended); a run
+/// cut short (half the lines kept) continues with the rest; an empty folder is an error.
+#[test]
+fn track_windows_resumes_and_refuses_no_records() {
+    let Some(path) = common::data_file("oma/data_3dof.csv") else {
+        return;
+    };
+    let out = tmp("track");
+    let _ = std::fs::remove_dir_all(&out);
+    let args = [
+        "track",
+        "--input",
+        s(&path),
+        "--fs",
+        "20",
+        "--window",
+        "300",
+        "--columns",
+        "y1,y2,y3",
+        "--out",
+        s(&out),
+    ];
+    let (ok, first, err) = hyst(&args);
+    assert!(ok, "{err}");
+    assert!(
+        first.contains("3 reference mode(s); 10 record(s) with modes, 0 skipped"),
+        "{first}"
+    );
+    for m in 0..3 {
+        assert!(
+            first.contains(&format!("mode {m}: ")) && first.contains("tracked in 100.0 %"),
+            "{first}"
+        );
+    }
+    let jsonl = out.join("records.jsonl");
+    let lines = std::fs::read_to_string(&jsonl).unwrap();
+    assert_eq!(lines.lines().count(), 10);
+    let (ok, again, err) = hyst(&args);
+    assert!(ok, "{err}");
+    assert_eq!(again, first);
+    assert_eq!(std::fs::read_to_string(&jsonl).unwrap(), lines);
+    // Cut short: the first four records kept; the rest identified again, the same report.
+    let kept: String = lines.lines().take(4).map(|l| format!("{l}\n")).collect();
+    std::fs::write(&jsonl, kept).unwrap();
+    let (ok, resumed, err) = hyst(&args);
+    assert!(ok, "{err}");
+    assert_eq!(resumed, first);
+    assert_eq!(std::fs::read_to_string(&jsonl).unwrap().lines().count(), 10);
+    let table = std::fs::read_to_string(out.join("table.csv")).unwrap();
+    assert_eq!(table.lines().count(), 1 + 30);
+    let empty = tmp("track_empty");
+    std::fs::create_dir_all(&empty).unwrap();
+    let (ok, _, err) = hyst(&[
+        "track",
+        "--inputs",
+        s(&empty),
+        "--fs",
+        "20",
+        "--out",
+        s(&out),
+    ]);
+    assert!(!ok && err.contains("no records"), "{err}");
+}

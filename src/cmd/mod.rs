@@ -10,6 +10,7 @@ pub(crate) mod levels;
 pub(crate) mod refine;
 pub(crate) mod simulate;
 pub(crate) mod ssi;
+pub(crate) mod track;
 
 use frf as frf_cmd;
 use ident::IdentArgs;
@@ -168,6 +169,16 @@ pub(crate) enum Command {
     ///   hyst frf --input msine_level1.csv --fs 400 --force force --period 8192 --skip 8192 --band 6.8:7.8 --json torsion.json --svg torsion.svg
     #[command(verbatim_doc_comment, allow_negative_numbers = true)]
     Frf(frf_cmd::FrfArgs),
+    /// Structural health monitoring: many records identified as `hyst ssi` does (in
+    /// parallel, resumable), their modes tracked against a reference by frequency and MAC,
+    /// each mode's frequency modelled on the covariates over a training period, and a CUSUM
+    /// of the standardized residuals raising alarms on changes the covariates and the
+    /// estimation noise do not explain.
+    ///
+    /// Example:
+    ///   hyst track --inputs records/ --fs 25 --covariates temperature.csv --out monitoring
+    #[command(verbatim_doc_comment, allow_negative_numbers = true)]
+    Track(track::TrackArgs),
 }
 
 /// The command line's error: a library's, or a message naming the flag or file at fault
@@ -316,6 +327,7 @@ pub(crate) fn output_files(c: &Command) -> Vec<(&'static str, &std::path::Path)>
         Command::Refine(a) => vec![("--json", a.json.as_deref())],
         Command::Levels(a) => vec![("--json", a.json.as_deref())],
         Command::Frf(a) => a.output_files(),
+        Command::Track(_) => vec![],
     };
     v.into_iter().filter_map(|(f, p)| Some((f, p?))).collect()
 }

@@ -26,13 +26,15 @@ pub mod baseline;
 pub mod campaign;
 pub mod chart;
 pub mod matching;
+mod report;
 pub mod track;
 
 pub use baseline::{Baseline, fit_baseline};
 pub use chart::{Alarm, Cusum, Side};
 pub use matching::{Assignment, MatchOptions, ModeEstimate, match_modes};
 pub use track::{
-    Identified, ModeAlarm, RecordModes, TrackOptions, TrackReport, TrackRow, identify, track,
+    Identified, Loaded, ModeAlarm, RecordModes, TrackOptions, TrackReport, TrackRow, identify,
+    identify_records, track,
 };
 
 /// Errors of monitoring.

@@ -55,6 +55,62 @@ pub fn identify(
     })
 }
 
+/// A record as loaded for identification.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Loaded {
+    /// The channels.
+    pub channels: Vec<Vec<f64>>,
+    /// The sampling rate (Hz).
+    pub fs: f64,
+    /// When it was recorded (s).
+    pub time: f64,
+    /// Its covariates (NaN where missing).
+    pub covariates: Vec<f64>,
+}
+
+/// Identify the records `names` in parallel (rayon), one loaded at a time per worker:
+/// `load(i)` gives record i or why it cannot be read. A record named in `done` (an earlier,
+/// interrupted run's) is taken from there, not identified again; `finished` hears each newly
+/// identified record as it completes (to append it to a resumable output). The records come
+/// back in the order of `names`.
+pub fn identify_records(
+    names: &[String],
+    load: &(dyn Fn(usize) -> Result<Loaded, String> + Sync),
+    opts: &covssi::AnalysisOptions,
+    done: &[RecordModes],
+    finished: &(dyn Fn(&RecordModes) + Sync),
+) -> Vec<RecordModes> {
+    use rayon::prelude::*;
+    names
+        .par_iter()
+        .enumerate()
+        .map(|(i, name)| {
+            if let Some(r) = done.iter().find(|r| &r.name == name) {
+                return r.clone();
+            }
+            let r = match load(i) {
+                Ok(l) => {
+                    let views: Vec<&[f64]> = l.channels.iter().map(|c| c.as_slice()).collect();
+                    RecordModes {
+                        name: name.clone(),
+                        time: l.time,
+                        covariates: l.covariates,
+                        outcome: identify(&views, l.fs, opts).map_err(|e| e.to_string()),
+                    }
+                }
+                Err(why) => RecordModes {
+                    name: name.clone(),
+                    time: f64::NAN,
+                    covariates: Vec::new(),
+                    outcome: Err(why),
+                },
+            };
+            finished(&r);
+            r
+        })
+        .collect()
+}
+
 /// How a campaign is tracked.
 #[derive(Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -258,7 +314,11 @@ fn chart_mode(
     let train: Vec<usize> = ours
         .iter()
         .copied()
-        .filter(|&k| rows[k].record < opts.training && rows[k].frequency_se_hz.is_some())
+        .filter(|&k| {
+            rows[k].record < opts.training
+                && rows[k].frequency_se_hz.is_some()
+                && rows[k].covariates.iter().all(|v| v.is_finite())
+        })
         .collect();
     let f: Vec<f64> = train.iter().map(|&k| rows[k].frequency_hz).collect();
     let se: Vec<f64> = train
@@ -275,8 +335,11 @@ fn chart_mode(
     let z: Vec<f64> = later
         .iter()
         .map(|&k| match rows[k].frequency_se_hz {
-            Some(s) => b.standardized(rows[k].frequency_hz, s, &rows[k].covariates),
-            None => f64::NAN,
+            // A record without its covariates (NaN) is tracked but not charted.
+            Some(s) if rows[k].covariates.iter().all(|v| v.is_finite()) => {
+                b.standardized(rows[k].frequency_hz, s, &rows[k].covariates)
+            }
+            _ => f64::NAN,
         })
         .collect();
     for (&k, &v) in later.iter().zip(&z) {

@@ -1,0 +1,91 @@
+//! The text of a [`TrackReport`]: what `hyst track` prints.
+
+use std::fmt;
+
+use crate::chart::Side;
+use crate::track::TrackReport;
+
+impl fmt::Display for TrackReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let records: std::collections::BTreeSet<usize> =
+            self.rows.iter().map(|r| r.record).collect();
+        writeln!(
+            f,
+            "{} reference mode(s); {} record(s) with modes, {} skipped",
+            self.reference.len(),
+            records.len(),
+            self.skipped.len()
+        )?;
+        for (j, m) in self.reference.iter().enumerate() {
+            write!(
+                f,
+                "mode {j}: {:.4} Hz, damping {:.4}, tracked in {:.1} % of the records",
+                m.frequency_hz,
+                m.damping_ratio,
+                100.0 * self.tracked.get(j).copied().unwrap_or(0.0)
+            )?;
+            match (self.baselines.get(j), self.baseline_errors.get(j)) {
+                (Some(Some(b)), _) => {
+                    let slopes: Vec<String> = b.coefficients[1..]
+                        .iter()
+                        .map(|c| format!("{c:.3e}"))
+                        .collect();
+                    writeln!(
+                        f,
+                        "; baseline {:.4} Hz{}, unexplained {:.2e} Hz ({} training records)",
+                        b.coefficients[0],
+                        if slopes.is_empty() {
+                            String::new()
+                        } else {
+                            format!(" + [{}]·covariates", slopes.join(", "))
+                        },
+                        b.unexplained_sd_hz,
+                        b.records
+                    )?;
+                }
+                (_, Some(Some(e))) => writeln!(f, "; no baseline: {e}")?,
+                _ => writeln!(f)?,
+            }
+        }
+        for (name, why) in &self.skipped {
+            writeln!(f, "skipped {name}: {why}")?;
+        }
+        if !self.new_modes.is_empty() {
+            writeln!(
+                f,
+                "{} mode(s) outside the reference, in {} record(s)",
+                self.new_modes.len(),
+                self.new_modes
+                    .iter()
+                    .map(|m| m.0)
+                    .collect::<std::collections::BTreeSet<_>>()
+                    .len()
+            )?;
+        }
+        writeln!(
+            f,
+            "CUSUM of the standardized residuals: one false alarm per {:.3e} records per mode when nothing changes",
+            self.in_control_run_length
+        )?;
+        if self.alarms.is_empty() {
+            writeln!(f, "no alarm")?;
+        }
+        for a in &self.alarms {
+            let name = self
+                .rows
+                .iter()
+                .find(|r| r.record == a.record)
+                .map_or("?", |r| r.name.as_str());
+            let way = match a.side {
+                Side::Up => "rose",
+                Side::Down => "fell",
+            };
+            writeln!(
+                f,
+                "ALARM: mode {} {way} at record {name} (time {} s)",
+                a.mode, a.time
+            )?;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,337 @@
+//! `hyst track`: many records of one structure identified, their modes tracked, changes
+//! told from estimation noise.
+
+use std::collections::HashMap;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+use clap::Args;
+use hyst::monitor::{Loaded, RecordModes, TrackOptions, TrackReport};
+
+use super::*;
+
+#[derive(Args, Debug)]
+pub(crate) struct TrackArgs {
+    /// The records: files, or folders whose files are taken in name order.
+    #[arg(long, num_args = 1.., conflicts_with = "input")]
+    pub(crate) inputs: Vec<PathBuf>,
+    /// One long record cut into windows (with --window and --step).
+    #[arg(long, requires = "window")]
+    pub(crate) input: Option<PathBuf>,
+    /// Window length (s) of --input.
+    #[arg(long, value_name = "SECONDS")]
+    pub(crate) window: Option<f64>,
+    /// Step between windows (s); default the window (no overlap).
+    #[arg(long, value_name = "SECONDS")]
+    pub(crate) step: Option<f64>,
+    /// Sampling rate (Hz); a Universal File states its own.
+    #[arg(long)]
+    pub(crate) fs: Option<f64>,
+    /// Channels, comma-separated; default every column but `t` and `time`.
+    #[arg(long, value_delimiter = ',')]
+    pub(crate) columns: Option<Vec<String>>,
+    /// SSI's lag as a time (s): block rows covering it.
+    #[arg(long, default_value_t = 3.0)]
+    pub(crate) lag_seconds: f64,
+    /// Skip the maximum-likelihood refinement (then no standard errors, and no chart).
+    #[arg(long)]
+    pub(crate) no_refine: bool,
+    /// Covariates per record: a CSV with a column `record` (the file's name, or the window's
+    /// number from 0), an optional `time` (s) and one column per covariate.
+    #[arg(long)]
+    pub(crate) covariates: Option<PathBuf>,
+    /// The first this many records train the baselines (default: 336, at most half).
+    #[arg(long)]
+    pub(crate) training: Option<usize>,
+    /// Folder for `records.jsonl` (each record's modes, appended as they come: a run
+    /// interrupted continues where it stopped), `table.csv` (record × mode) and
+    /// `report.json`.
+    #[arg(long)]
+    pub(crate) out: PathBuf,
+}
+
+/// The records' names and how to load each.
+enum Sources {
+    Files(Vec<PathBuf>),
+    Windows {
+        table: hyst::io::Table,
+        fs: f64,
+        length: usize,
+        step: usize,
+        count: usize,
+    },
+}
+
+fn sources(a: &TrackArgs) -> Result<Sources, Error> {
+    if let Some(path) = &a.input {
+        let table = read_record(path)?;
+        let fs = check_fs(table.rate(a.fs)?)?;
+        let window = a.window.unwrap_or(0.0);
+        let step = a.step.unwrap_or(window);
+        let (length, step) = ((window * fs).round() as usize, (step * fs).round() as usize);
+        if length < 2 || step < 1 {
+            return Err(fail(format!(
+                "--window {window} s and --step {step} samples give no windows at {fs} Hz"
+            )));
+        }
+        let count = table.len().saturating_sub(length) / step + usize::from(table.len() >= length);
+        if count == 0 {
+            return Err(fail(format!(
+                "{}: {} rows hold no window of {length}",
+                path.display(),
+                table.len()
+            )));
+        }
+        return Ok(Sources::Windows {
+            table,
+            fs,
+            length,
+            step,
+            count,
+        });
+    }
+    let mut files = Vec::new();
+    for p in &a.inputs {
+        if p.is_dir() {
+            let mut inside: Vec<PathBuf> = std::fs::read_dir(p)
+                .map_err(|e| fail(format!("{}: {e}", p.display())))?
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.is_file())
+                .collect();
+            inside.sort();
+            files.extend(inside);
+        } else {
+            files.push(p.clone());
+        }
+    }
+    if files.is_empty() {
+        return Err(fail(
+            "no records: --inputs names no files (or only empty folders)",
+        ));
+    }
+    Ok(Sources::Files(files))
+}
+
+/// The covariates file: per record name, its time (if given) and covariates; and their names.
+type Covariates = (HashMap<String, (Option<f64>, Vec<f64>)>, Vec<String>);
+
+fn covariates(path: Option<&Path>) -> Result<Covariates, Error> {
+    let Some(path) = path else {
+        return Ok((HashMap::new(), Vec::new()));
+    };
+    // Names are text, so the file is read as text here, then each column as numbers.
+    let text =
+        std::fs::read_to_string(path).map_err(|e| fail(format!("{}: {e}", path.display())))?;
+    let mut lines = text.lines().filter(|l| !l.trim().is_empty());
+    let header: Vec<String> = lines
+        .next()
+        .ok_or_else(|| fail(format!("{}: empty", path.display())))?
+        .split(',')
+        .map(|s| s.trim().to_string())
+        .collect();
+    let at = header.iter().position(|h| h == "record").ok_or_else(|| {
+        fail(format!(
+            "{}: no column `record` (the header has: {})",
+            path.display(),
+            header.join(",")
+        ))
+    })?;
+    let time = header.iter().position(|h| h == "time");
+    let names: Vec<String> = header
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| *i != at && Some(*i) != time)
+        .map(|(_, h)| h.clone())
+        .collect();
+    let mut out = HashMap::new();
+    for (row, line) in lines.enumerate() {
+        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+        if cells.len() != header.len() {
+            return Err(fail(format!(
+                "{}: row {} has {} cells, the header has {}",
+                path.display(),
+                row + 2,
+                cells.len(),
+                header.len()
+            )));
+        }
+        let number = |i: usize| {
+            cells[i].parse::<f64>().map_err(|_| {
+                fail(format!(
+                    "{}: row {}, column `{}`: `{}` is not a number",
+                    path.display(),
+                    row + 2,
+                    header[i],
+                    cells[i]
+                ))
+            })
+        };
+        let t = time.map(number).transpose()?;
+        let values = (0..cells.len())
+            .filter(|&i| i != at && Some(i) != time)
+            .map(number)
+            .collect::<Result<Vec<f64>, Error>>()?;
+        out.insert(cells[at].to_string(), (t, values));
+    }
+    Ok((out, names))
+}
+
+/// The records an earlier run of the same --out finished.
+fn done_records(path: &Path) -> Vec<RecordModes> {
+    std::fs::read_to_string(path)
+        .map(|text| {
+            text.lines()
+                .filter_map(|l| serde_json::from_str(l).ok())
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
+    let sources = sources(a)?;
+    let (covs, cov_names) = covariates(a.covariates.as_deref())?;
+    let names: Vec<String> = match &sources {
+        Sources::Files(files) => files
+            .iter()
+            .map(|f| {
+                f.file_name().map_or_else(
+                    || f.display().to_string(),
+                    |n| n.to_string_lossy().into_owned(),
+                )
+            })
+            .collect(),
+        Sources::Windows { count, .. } => (0..*count).map(|i| i.to_string()).collect(),
+    };
+    if let Some(r) = hyst::io::repeated(&names) {
+        return Err(fail(format!("two records named {r}: each file once")));
+    }
+    std::fs::create_dir_all(&a.out).map_err(|e| fail(format!("{}: {e}", a.out.display())))?;
+    let jsonl = a.out.join("records.jsonl");
+    let done = done_records(&jsonl);
+    let file = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(&jsonl)
+        .map_err(|e| fail(format!("{}: {e}", jsonl.display())))?;
+    let writer = Mutex::new(std::io::BufWriter::new(file));
+    let bar = steps_bar();
+    bar.set_length(names.len() as u64);
+    bar.set_message("records identified");
+    let covariates_of = |name: &str, fallback_time: f64| match covs.get(name) {
+        Some((t, v)) => (t.unwrap_or(fallback_time), v.clone()),
+        None => (fallback_time, vec![f64::NAN; cov_names.len()]),
+    };
+    let load = |i: usize| -> Result<Loaded, String> {
+        let (channels, fs, start) = match &sources {
+            Sources::Files(files) => {
+                let mut t = read_record(&files[i]).map_err(|e| e.to_string())?;
+                let fs = t.rate(a.fs).map_err(|e| e.to_string())?;
+                let cols = channel_names(&t, a.columns.as_deref(), &[]);
+                let data = cols
+                    .iter()
+                    .map(|c| t.take_column(c).map_err(|e| e.to_string()))
+                    .collect::<Result<Vec<_>, _>>()?;
+                (data, fs, i as f64)
+            }
+            Sources::Windows {
+                table,
+                fs,
+                length,
+                step,
+                ..
+            } => {
+                let cols = channel_names(table, a.columns.as_deref(), &[]);
+                let from = i * step;
+                let data = cols
+                    .iter()
+                    .map(|c| {
+                        table
+                            .column(c)
+                            .map(|v| v[from..from + length].to_vec())
+                            .map_err(|e| e.to_string())
+                    })
+                    .collect::<Result<Vec<_>, _>>()?;
+                (data, *fs, from as f64 / fs)
+            }
+        };
+        let (time, covariates) = covariates_of(&names[i], start);
+        Ok(Loaded {
+            channels,
+            fs,
+            time,
+            covariates,
+        })
+    };
+    let analysis = hyst::covssi::AnalysisOptions::default()
+        .with_ssi(hyst::covssi::SsiOptions {
+            block_rows: hyst::covssi::BlockRows::Seconds(a.lag_seconds),
+            ..hyst::covssi::SsiOptions::default()
+        })
+        .with_refine((!a.no_refine).then(hyst::covssi::RefineOptions::default));
+    let finished = |r: &RecordModes| {
+        if let Ok(line) = serde_json::to_string(r)
+            && let Ok(mut w) = writer.lock()
+        {
+            let _ = writeln!(w, "{line}");
+            let _ = w.flush();
+        }
+        bar.inc(1);
+    };
+    bar.set_position(done.iter().filter(|d| names.contains(&d.name)).count() as u64);
+    let records = hyst::monitor::identify_records(&names, &load, &analysis, &done, &finished);
+    bar.finish_and_clear();
+    let mut opts = TrackOptions::default();
+    opts.training = a.training.unwrap_or(opts.training.min(names.len() / 2));
+    let report = hyst::monitor::track(&records, None, &opts).map_err(|e| fail(e.to_string()))?;
+    print!("{report}");
+    write_table(&a.out.join("table.csv"), &report, &cov_names)?;
+    hyst::report::write_json(&report, &a.out.join("report.json"))?;
+    Ok(())
+}
+
+/// The tidy table: one row per record × mode.
+fn write_table(path: &Path, report: &TrackReport, cov_names: &[String]) -> Result<(), Error> {
+    let mut w =
+        csv::Writer::from_path(path).map_err(|e| fail(format!("{}: {e}", path.display())))?;
+    let mut header: Vec<String> = [
+        "record",
+        "time_s",
+        "mode",
+        "frequency_hz",
+        "frequency_se_hz",
+        "damping_ratio",
+        "damping_se",
+        "mac",
+        "misfit_flag",
+        "z",
+        "alarm",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    header.extend(cov_names.iter().cloned());
+    let err = |e: csv::Error| fail(format!("{}: {e}", path.display()));
+    w.write_record(&header).map_err(err)?;
+    let opt = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:e}"));
+    for r in &report.rows {
+        let mut row = vec![
+            r.name.clone(),
+            format!("{}", r.time),
+            r.mode.to_string(),
+            format!("{:e}", r.frequency_hz),
+            opt(r.frequency_se_hz),
+            format!("{:e}", r.damping_ratio),
+            opt(r.damping_se),
+            format!("{:e}", r.mac),
+            r.misfit_flag.to_string(),
+            opt(r.z),
+            r.alarm
+                .map_or(String::new(), |s| format!("{s:?}").to_lowercase()),
+        ];
+        row.extend(r.covariates.iter().map(|v| format!("{v:e}")));
+        w.write_record(&row).map_err(err)?;
+    }
+    w.flush()
+        .map_err(|e| fail(format!("{}: {e}", path.display())))
+}
