@@ -26,7 +26,7 @@ pub(crate) struct Report {
 
 impl Report {
     /// The report of `report` on the record `record`, as the command line makes it.
-    fn of<T: Serialize + Display>(record: &str, report: T) -> PyResult<Report> {
+    pub(crate) fn of<T: Serialize + Display>(record: &str, report: T) -> PyResult<Report> {
         let report = hyst::report::FileReport::new(record, report);
         Ok(Report {
             text: report.to_string(),
@@ -60,7 +60,7 @@ impl Report {
     }
 }
 
-fn value_error(e: impl Display) -> PyErr {
+pub(crate) fn value_error(e: impl Display) -> PyErr {
     PyValueError::new_err(e.to_string())
 }
 

@@ -12,6 +12,7 @@
 use std::borrow::Cow;
 
 mod ident;
+mod monitor;
 
 use covssi::{AnalysisOptions, BlockRows, ModalAnalysis, RefineOptions, SsiOptions};
 use numpy::ndarray::{Array1, Array2, ShapeBuilder};
@@ -438,6 +439,7 @@ fn _hyst(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ident::identify, m)?)?;
     m.add_function(wrap_pyfunction!(ident::refine, m)?)?;
     m.add_function(wrap_pyfunction!(ident::levels, m)?)?;
+    m.add_function(wrap_pyfunction!(monitor::track, m)?)?;
     m.add_class::<ident::Report>()?;
     m.add_class::<SsiResult>()?;
     Ok(())

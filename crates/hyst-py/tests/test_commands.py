@@ -137,3 +137,18 @@ def test_bad_input_raises_value_error_with_the_librarys_message(call, says):
     with pytest.raises(ValueError) as e:
         call()
     assert says in str(e.value), str(e.value)
+
+
+def test_track_gives_the_commands_report(data_dir, hyst_bin, tmp_path):
+    """`hyst.track` on ten 300 s windows of the 3-DOF record, as arrays, and `hyst track`
+    on the same windows of the file: the same report (the record's name aside)."""
+    from test_ssi import read_record
+
+    y, _ = read_record(data_dir / "oma" / "data_3dof.csv")
+    out = tmp_path / "track"
+    run(hyst_bin, "track", "--input", data_dir / "oma" / "data_3dof.csv", "--fs", 20,
+        "--window", 300, "--columns", "y1,y2,y3", "--out", out)
+    windows = [y[i * 6000:(i + 1) * 6000] for i in range(10)]
+    report = hyst.track(windows, 20.0, times=[300.0 * i for i in range(10)])
+    assert comparable(report.to_dict()) == document(out / "report.json")
+    assert [round(m["frequency_hz"], 1) for m in report.to_dict()["reference"]] == [1.0, 2.8, 4.1]

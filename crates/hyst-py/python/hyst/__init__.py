@@ -24,7 +24,10 @@ import numpy as _np
 from . import _hyst
 from ._hyst import Report, SsiResult
 
-__all__ = ["identify", "levels", "read", "Record", "refine", "Report", "simulate", "ssi", "SsiResult"]
+__all__ = [
+    "identify", "levels", "read", "Record", "refine", "Report", "simulate", "ssi", "SsiResult",
+    "track",
+]
 
 
 @_dataclass(frozen=True)
@@ -382,4 +385,64 @@ def levels(records, fs, mass, *, by_simulation=False, data_periodic=False, fit_e
         named, float(fs), float(mass), by_simulation=bool(by_simulation),
         data_periodic=bool(data_periodic), fit_exponent=bool(fit_exponent),
         validate=_validations(validate),
+    )
+
+
+def track(records, fs, *, times=None, covariates=None, training=None, lag_seconds=3.0,
+          refine=True):
+    """Track the modes of many records of one structure (``hyst track``).
+
+    Each record is identified as :func:`ssi` does (in parallel), its modes matched to a
+    reference (the record with the most modes among the first 24) by frequency and MAC, each
+    mode's frequency regressed on the covariates over the training records, and a CUSUM of
+    the later records' standardized residuals raises alarms on changes the covariates and
+    the estimation noise do not explain (see docs/monitoring.md).
+
+    Parameters
+    ----------
+    records : list of array_like, each (samples, channels)
+        The records, in time order.
+    fs : float
+        Sampling rate (Hz).
+    times : list of float, optional
+        Each record's time (s); default its index.
+    covariates : array_like, shape (records, covariates), optional
+        E.g. the temperature at each record; NaN where missing (the record is then tracked
+        but not charted).
+    training : int, optional
+        The first this many records train the baselines (default 336, at most half).
+    lag_seconds : float
+        SSI's lag as a time (default 3 s).
+    refine : bool
+        The maximum-likelihood refinement (default True; without it there are no standard
+        errors and no chart).
+
+    Returns
+    -------
+    Report
+        ``str(report)`` as ``hyst track`` prints; ``report.to_dict()`` its ``report.json``:
+        ``reference``, ``rows`` (record x mode), ``skipped``, ``baselines``, ``alarms``,
+        ``tracked``, ``in_control_run_length``.
+    """
+    arrays = []
+    for i, r in enumerate(records):
+        a = _np.asarray(r, dtype=_np.float64)
+        if a.ndim == 1:
+            a = a.reshape(-1, 1)
+        if a.ndim != 2:
+            raise ValueError(f"record {i} must be (samples, channels), got shape {a.shape}")
+        arrays.append(a)
+    n = len(arrays)
+    t = [float(i) for i in range(n)] if times is None else [float(v) for v in times]
+    if covariates is None:
+        x = [[] for _ in range(n)]
+    else:
+        c = _np.asarray(covariates, dtype=_np.float64)
+        if c.ndim == 1:
+            c = c.reshape(-1, 1)
+        x = c.tolist()
+    return _hyst.track(
+        arrays, float(fs), times=t, covariates=x,
+        training=None if training is None else int(training),
+        lag_seconds=float(lag_seconds), refine=bool(refine),
     )

@@ -99,6 +99,17 @@ def levels(
     validate: Optional[Sequence[Validation]] = ...,
 ) -> Report: ...
 
+def track(
+    records: Sequence[npt.ArrayLike],
+    fs: float,
+    *,
+    times: Optional[Sequence[float]] = ...,
+    covariates: Optional[npt.ArrayLike] = ...,
+    training: Optional[int] = ...,
+    lag_seconds: float = ...,
+    refine: bool = ...,
+) -> Report: ...
+
 @dataclass(frozen=True)
 class Record:
     data: npt.NDArray[np.float64]

@@ -1,0 +1,70 @@
+//! `hyst.track` from Python: records given as arrays, identified and tracked by
+//! `hyst_monitor`, the report returned as `hyst track` prints and writes it.
+
+use numpy::PyReadonlyArray2;
+use pyo3::prelude::*;
+
+use hyst::monitor::{Loaded, TrackOptions};
+
+use crate::ident::{Report, value_error};
+
+/// Track the modes of `records` (each samples × channels); see the Python wrapper
+/// `hyst.track`.
+#[pyfunction]
+#[pyo3(signature = (records, fs, *, times, covariates, training, lag_seconds, refine))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn track(
+    py: Python<'_>,
+    records: Vec<PyReadonlyArray2<'_, f64>>,
+    fs: f64,
+    times: Vec<f64>,
+    covariates: Vec<Vec<f64>>,
+    training: Option<usize>,
+    lag_seconds: f64,
+    refine: bool,
+) -> PyResult<Report> {
+    let n = records.len();
+    if times.len() != n || covariates.len() != n {
+        return Err(value_error(format!(
+            "{n} records but {} times and {} rows of covariates",
+            times.len(),
+            covariates.len()
+        )));
+    }
+    // The columns copied out of the arrays while the GIL is held; then the work without it.
+    let data: Vec<Vec<Vec<f64>>> = records
+        .iter()
+        .map(|r| {
+            r.as_array()
+                .columns()
+                .into_iter()
+                .map(|c| c.to_vec())
+                .collect()
+        })
+        .collect();
+    let names: Vec<String> = (0..n).map(|i| i.to_string()).collect();
+    let analysis = covssi::AnalysisOptions::default()
+        .with_ssi(covssi::SsiOptions {
+            block_rows: covssi::BlockRows::Seconds(lag_seconds),
+            ..covssi::SsiOptions::default()
+        })
+        .with_refine(refine.then(covssi::RefineOptions::default));
+    let load = |i: usize| -> Result<Loaded, String> {
+        Ok(Loaded {
+            channels: data[i].clone(),
+            fs,
+            time: times[i],
+            covariates: covariates[i].clone(),
+        })
+    };
+    let mut opts = TrackOptions::default();
+    opts.training = training.unwrap_or(opts.training.min(n / 2));
+    let report = py
+        .detach(|| {
+            let identified =
+                hyst::monitor::identify_records(&names, &load, &analysis, &[], &|_| {});
+            hyst::monitor::track(&identified, None, &opts)
+        })
+        .map_err(value_error)?;
+    Report::of("records", report)
+}
