@@ -139,3 +139,39 @@ pub fn run(a: &DemoArgs) -> Result<(), String> {
     );
     Ok(())
 }
+
+/// `cargo xtask bench monitor`: issue 33's throughput figure. Four 1-hour records of the
+/// campaign's structure on 10 sensors at 100 Hz (360 000 × 10 samples), identified two at a
+/// time (the machine's two cores) as `hyst track` does; records per minute, and the peak
+/// memory against one record's size.
+pub fn bench() {
+    let mut campaign = Campaign::default();
+    campaign.fs = 100.0;
+    campaign.seconds = 3600.0;
+    campaign.channels = 10;
+    campaign.seed = 760_000;
+    let analysis = covssi::AnalysisOptions::default().with_ssi(covssi::SsiOptions {
+        block_rows: covssi::BlockRows::Seconds(3.0),
+        ..covssi::SsiOptions::default()
+    });
+    let records = 4;
+    let t0 = Instant::now();
+    let identified: Vec<usize> = (0..records)
+        .into_par_iter()
+        .map(|i| {
+            let r = campaign.record(i);
+            let views: Vec<&[f64]> = r.channels.iter().map(|c| c.as_slice()).collect();
+            identify(&views, campaign.fs, &analysis).map_or(0, |m| m.modes.len())
+        })
+        .collect();
+    let s = t0.elapsed().as_secs_f64();
+    let record_mb = 360_000.0 * 10.0 * 8.0 / 1e6;
+    println!(
+        "monitor_records_per_minute_1h_10ch_100hz {:.1} ({records} records in {s:.1} s, generation included; modes found {identified:?})",
+        records as f64 / s * 60.0
+    );
+    println!(
+        "monitor_peak_mb_1h_10ch_100hz {:.0} (one record is {record_mb:.0} MB; two in flight)",
+        peak_mb()
+    );
+}
