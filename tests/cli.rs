@@ -2166,6 +2166,13 @@ fn track_windows_resumes_and_refuses_no_records() {
     assert_eq!(std::fs::read_to_string(&jsonl).unwrap().lines().count(), 10);
     let table = std::fs::read_to_string(out.join("table.csv")).unwrap();
     assert_eq!(table.lines().count(), 1 + 30);
+    let rows = std::fs::read_to_string(out.join("table.jsonl")).unwrap();
+    assert_eq!(rows.lines().count(), 30);
+    let row: serde_json::Value = serde_json::from_str(rows.lines().next().unwrap()).unwrap();
+    assert_eq!(
+        (row["record"].as_u64(), row["mode"].as_u64()),
+        (Some(0), Some(0))
+    );
     let empty = tmp("track_empty");
     std::fs::create_dir_all(&empty).unwrap();
     let (ok, _, err) = hyst(&[

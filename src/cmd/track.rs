@@ -45,8 +45,8 @@ pub(crate) struct TrackArgs {
     #[arg(long)]
     pub(crate) training: Option<usize>,
     /// Folder for `records.jsonl` (each record's modes, appended as they come: a run
-    /// interrupted continues where it stopped), `table.csv` (record × mode) and
-    /// `report.json`.
+    /// interrupted continues where it stopped), `table.csv` and `table.jsonl` (record ×
+    /// mode) and `report.json`.
     #[arg(long)]
     pub(crate) out: PathBuf,
 }
@@ -286,8 +286,20 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
     let report = hyst::monitor::track(&records, None, &opts).map_err(|e| fail(e.to_string()))?;
     print!("{report}");
     write_table(&a.out.join("table.csv"), &report, &cov_names)?;
+    write_rows(&a.out.join("table.jsonl"), &report)?;
     hyst::report::write_json(&report, &a.out.join("report.json"))?;
     Ok(())
+}
+
+/// The tidy table as JSON lines: one `TrackRow` per line.
+fn write_rows(path: &Path, report: &TrackReport) -> Result<(), Error> {
+    let err = |e: std::io::Error| fail(format!("{}: {e}", path.display()));
+    let mut w = std::io::BufWriter::new(std::fs::File::create(path).map_err(err)?);
+    for r in &report.rows {
+        serde_json::to_writer(&mut w, r).map_err(|e| fail(format!("{}: {e}", path.display())))?;
+        writeln!(w).map_err(err)?;
+    }
+    w.flush().map_err(err)
 }
 
 /// The tidy table: one row per record × mode.

@@ -358,3 +358,46 @@ fn chart_mode(
     }
     Ok((b, alarms))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Records whose covariates are missing (NaN) are tracked but neither train nor are
+    /// charted; the others are.
+    #[test]
+    fn records_without_covariates_are_tracked_not_charted() {
+        let records: Vec<RecordModes> = (0..40)
+            .map(|i| {
+                let t = (i % 7) as f64;
+                let f = 2.0 + 0.01 * t + 1e-4 * ((i * 37 % 11) as f64 - 5.0);
+                let missing = i == 5 || i == 30;
+                RecordModes {
+                    name: i.to_string(),
+                    time: i as f64,
+                    covariates: vec![if missing { f64::NAN } else { t }],
+                    outcome: Ok(Identified {
+                        modes: vec![ModeEstimate {
+                            frequency_hz: f,
+                            frequency_se_hz: Some(1e-4),
+                            damping_ratio: 0.01,
+                            damping_se: Some(1e-3),
+                            shape: None,
+                        }],
+                        misfit: Some(0.01),
+                    }),
+                }
+            })
+            .collect();
+        let opts = TrackOptions {
+            training: 20,
+            ..TrackOptions::default()
+        };
+        let report = track(&records, None, &opts).unwrap();
+        assert_eq!(report.rows.len(), 40);
+        assert_eq!(report.baselines[0].as_ref().map(|b| b.records), Some(19));
+        let z = |i: usize| report.rows[i].z;
+        assert!(z(30).is_none() && z(29).is_some() && z(31).is_some());
+        assert!(report.alarms.is_empty(), "{:?}", report.alarms);
+    }
+}

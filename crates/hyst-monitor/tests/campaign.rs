@@ -82,6 +82,10 @@ fn a_broken_record_is_skipped_with_its_reason() {
                 if i == 2 {
                     ch[3][100] = f64::NAN;
                 }
+                // A record far shorter than the others.
+                if i == 4 {
+                    ch.iter_mut().for_each(|v| v.truncate(40));
+                }
             })
         })
         .collect();
@@ -90,14 +94,19 @@ fn a_broken_record_is_skipped_with_its_reason() {
     // temperature, which each mode says.
     opts.training = 3;
     let report = track(&records, None, &opts).unwrap();
-    assert_eq!(report.skipped.len(), 1);
+    assert_eq!(report.skipped.len(), 2, "{:?}", report.skipped);
     assert_eq!(report.skipped[0].0, "2");
     assert!(
         report.skipped[0].1.contains("not finite"),
         "{:?}",
         report.skipped
     );
-    assert_eq!(report.rows.iter().filter(|r| r.record == 2).count(), 0);
+    assert_eq!(report.skipped[1].0, "4");
+    println!("the short record: {}", report.skipped[1].1);
+    assert!(report.skipped[1].1.contains("40"), "{:?}", report.skipped);
+    for broken in [2, 4] {
+        assert_eq!(report.rows.iter().filter(|r| r.record == broken).count(), 0);
+    }
     assert!(
         report.baseline_errors.iter().all(|e| e
             .as_deref()
