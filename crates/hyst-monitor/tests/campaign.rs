@@ -67,8 +67,8 @@ fn a_short_campaign_finds_its_change_and_nothing_else() {
     }
 }
 
-/// A record with a dead (constant) channel or a NaN gives no modes: it is skipped with the
-/// reason, and the others are tracked.
+/// A record with a NaN, a dead (constant) channel, or far shorter than the others gives no
+/// modes: it is skipped with the reason, and the others are tracked.
 #[test]
 fn a_broken_record_is_skipped_with_its_reason() {
     let mut c = Campaign::default();
@@ -82,6 +82,10 @@ fn a_broken_record_is_skipped_with_its_reason() {
                 if i == 2 {
                     ch[3][100] = f64::NAN;
                 }
+                // A dead sensor: its channel constant.
+                if i == 3 {
+                    ch[1].iter_mut().for_each(|v| *v = 0.0);
+                }
                 // A record far shorter than the others.
                 if i == 4 {
                     ch.iter_mut().for_each(|v| v.truncate(40));
@@ -94,19 +98,32 @@ fn a_broken_record_is_skipped_with_its_reason() {
     // temperature, which each mode says.
     opts.training = 3;
     let report = track(&records, None, &opts).unwrap();
-    assert_eq!(report.skipped.len(), 2, "{:?}", report.skipped);
-    assert_eq!(report.skipped[0].0, "2");
+    // Each broken record skipped with what is wrong with it, the others tracked.
+    let skipped: Vec<(&str, &str)> = report
+        .skipped
+        .iter()
+        .map(|(n, why)| (n.as_str(), why.as_str()))
+        .collect();
+    assert_eq!(skipped.len(), 3, "{skipped:?}");
+    assert_eq!(skipped[0].0, "2");
     assert!(
-        report.skipped[0].1.contains("not finite"),
-        "{:?}",
-        report.skipped
+        skipped[0].1.contains("sample 100: value NaN is not finite"),
+        "{skipped:?}"
     );
-    assert_eq!(report.skipped[1].0, "4");
-    println!("the short record: {}", report.skipped[1].1);
-    assert!(report.skipped[1].1.contains("40"), "{:?}", report.skipped);
-    for broken in [2, 4] {
+    assert_eq!(skipped[1].0, "3");
+    assert!(
+        skipped[1].1.contains("channel 1 is constant"),
+        "{skipped:?}"
+    );
+    assert_eq!(skipped[2].0, "4");
+    assert!(
+        skipped[2].1.contains("40 samples are too few"),
+        "{skipped:?}"
+    );
+    for broken in [2, 3, 4] {
         assert_eq!(report.rows.iter().filter(|r| r.record == broken).count(), 0);
     }
+    assert_eq!(report.rows.iter().filter(|r| r.record == 5).count(), 4);
     assert!(
         report.baseline_errors.iter().all(|e| e
             .as_deref()
