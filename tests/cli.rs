@@ -2173,6 +2173,61 @@ fn track_windows_resumes_and_refuses_no_records() {
         (row["record"].as_u64(), row["mode"].as_u64()),
         (Some(0), Some(0))
     );
+    // A reference from `hyst ssi --json` on the whole record: its modes are the report's.
+    let modes = tmp("track_reference.json");
+    let (ok, _, err) = hyst(&[
+        "ssi",
+        "--input",
+        s(&path),
+        "--fs",
+        "20",
+        "--columns",
+        "y1,y2,y3",
+        "--lag-seconds",
+        "3",
+        "--json",
+        s(&modes),
+    ]);
+    assert!(ok, "{err}");
+    let mut with_ref = args.to_vec();
+    with_ref.extend(["--reference", s(&modes)]);
+    let (ok, _, err) = hyst(&with_ref);
+    assert!(ok, "{err}");
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&modes).unwrap()).unwrap();
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let f = |v: &serde_json::Value| v["frequency_hz"].as_f64().unwrap();
+    let want: Vec<f64> = doc["refined"]["modes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(f)
+        .collect();
+    let got: Vec<f64> = report["reference"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(f)
+        .collect();
+    assert_eq!(got, want);
+    let (ok, _, err) = hyst(&[
+        "track",
+        "--input",
+        s(&path),
+        "--fs",
+        "20",
+        "--window",
+        "300",
+        "--out",
+        s(&out),
+        "--reference",
+        s(&path),
+    ]);
+    assert!(
+        !ok && err.contains("--reference") && err.contains("not JSON"),
+        "{err}"
+    );
     let empty = tmp("track_empty");
     std::fs::create_dir_all(&empty).unwrap();
     let (ok, _, err) = hyst(&[

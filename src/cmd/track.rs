@@ -41,6 +41,10 @@ pub(crate) struct TrackArgs {
     /// number from 0), an optional `time` (s) and one column per covariate.
     #[arg(long)]
     pub(crate) covariates: Option<PathBuf>,
+    /// The reference modes: a `hyst ssi --json` document (its reported modes); default the
+    /// record with the most modes among the first 24.
+    #[arg(long)]
+    pub(crate) reference: Option<PathBuf>,
     /// The first this many records train the baselines (default: 336, at most half).
     #[arg(long)]
     pub(crate) training: Option<usize>,
@@ -177,6 +181,24 @@ fn covariates(path: Option<&Path>) -> Result<Covariates, Error> {
     Ok((out, names))
 }
 
+/// The reported modes of a `hyst ssi --json` document.
+fn reference_modes(path: &Path) -> Result<Vec<hyst::monitor::ModeEstimate>, Error> {
+    let text =
+        std::fs::read_to_string(path).map_err(|e| fail(format!("{}: {e}", path.display())))?;
+    let mut doc: serde_json::Value = serde_json::from_str(&text)
+        .map_err(|e| fail(format!("--reference {}: not JSON: {e}", path.display())))?;
+    if let Some(map) = doc.as_object_mut() {
+        map.remove("record");
+    }
+    let analysis: hyst::covssi::ModalAnalysis = serde_json::from_value(doc).map_err(|e| {
+        fail(format!(
+            "--reference {}: not a `hyst ssi --json` document: {e}",
+            path.display()
+        ))
+    })?;
+    Ok(hyst::monitor::reported_modes(&analysis))
+}
+
 /// The records an earlier run of the same --out finished.
 fn done_records(path: &Path) -> Vec<RecordModes> {
     std::fs::read_to_string(path)
@@ -283,7 +305,9 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
     bar.finish_and_clear();
     let mut opts = TrackOptions::default();
     opts.training = a.training.unwrap_or(opts.training.min(names.len() / 2));
-    let report = hyst::monitor::track(&records, None, &opts).map_err(|e| fail(e.to_string()))?;
+    let reference = a.reference.as_deref().map(reference_modes).transpose()?;
+    let report = hyst::monitor::track(&records, reference.as_deref(), &opts)
+        .map_err(|e| fail(e.to_string()))?;
     print!("{report}");
     write_table(&a.out.join("table.csv"), &report, &cov_names)?;
     write_rows(&a.out.join("table.jsonl"), &report)?;

@@ -34,7 +34,7 @@ pub use chart::{Alarm, Cusum, Side};
 pub use matching::{Assignment, MatchOptions, ModeEstimate, match_modes};
 pub use track::{
     Identified, Loaded, ModeAlarm, RecordModes, TrackOptions, TrackReport, TrackRow, identify,
-    identify_records, track,
+    identify_records, reported_modes, track,
 };
 
 /// Errors of monitoring.

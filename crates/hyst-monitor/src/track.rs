@@ -38,7 +38,16 @@ pub fn identify(
     opts: &covssi::AnalysisOptions,
 ) -> Result<Identified, covssi::SsiError> {
     let analysis = covssi::analyze(channels, fs, opts)?;
-    let modes = analysis
+    Ok(Identified {
+        modes: reported_modes(&analysis),
+        misfit: analysis.refined.as_ref().map(|r| r.misfit),
+    })
+}
+
+/// The modes an analysis reports (the refined ones when the refinement holds, else SSI's),
+/// as tracking takes them: a record's, or a reference's (`hyst ssi --json` read back).
+pub fn reported_modes(analysis: &covssi::ModalAnalysis) -> Vec<ModeEstimate> {
+    analysis
         .reported_modes()
         .into_iter()
         .map(|m| ModeEstimate {
@@ -48,11 +57,7 @@ pub fn identify(
             damping_se: m.damping_se,
             shape: m.shape,
         })
-        .collect();
-    Ok(Identified {
-        modes,
-        misfit: analysis.refined.as_ref().map(|r| r.misfit),
-    })
+        .collect()
 }
 
 /// A record as loaded for identification.
