@@ -33,7 +33,18 @@ pub fn chart(
     yl: &str,
     series: &[Series],
 ) -> Result<(), String> {
-    draw(path, title, xl, yl, series, false)
+    draw(path, title, xl, yl, series, false, false)
+}
+
+/// As [`chart`], each series as points only (a scatter of many records).
+pub fn scatter(
+    path: &Path,
+    title: &str,
+    xl: &str,
+    yl: &str,
+    series: &[Series],
+) -> Result<(), String> {
+    draw(path, title, xl, yl, series, false, true)
 }
 
 /// As [`chart`], with a log10 y axis (non-positive values skipped).
@@ -44,7 +55,7 @@ pub fn chart_log_y(
     yl: &str,
     series: &[Series],
 ) -> Result<(), String> {
-    draw(path, title, xl, yl, series, true)
+    draw(path, title, xl, yl, series, true, false)
 }
 
 fn draw(
@@ -54,6 +65,7 @@ fn draw(
     yl: &str,
     series: &[Series],
     log_y: bool,
+    points_only: bool,
 ) -> Result<(), String> {
     let tf = |y: f64| if log_y { y.log10() } else { y };
     let keep = |p: &(f64, f64)| p.0.is_finite() && p.1.is_finite() && (!log_y || p.1 > 0.0);
@@ -103,6 +115,13 @@ fn draw(
             .filter(keep)
             .map(|p| (p.0, tf(p.1)))
             .collect();
+        if points_only {
+            c.draw_series(data.iter().map(|&p| Circle::new(p, 2, color.filled())))
+                .map_err(|e| e.to_string())?
+                .label(name.as_str())
+                .legend(move |(x, y)| Circle::new((x + 7, y), 3, color.filled()));
+            continue;
+        }
         c.draw_series(LineSeries::new(data.clone(), color.stroke_width(2)))
             .map_err(|e| e.to_string())?
             .label(name.as_str())

@@ -2189,8 +2189,9 @@ fn track_windows_resumes_and_refuses_no_records() {
         s(&modes),
     ]);
     assert!(ok, "{err}");
+    let figures = tmp("track_figures");
     let mut with_ref = args.to_vec();
-    with_ref.extend(["--reference", s(&modes)]);
+    with_ref.extend(["--reference", s(&modes), "--svg-dir", s(&figures)]);
     let (ok, _, err) = hyst(&with_ref);
     assert!(ok, "{err}");
     let doc: serde_json::Value =
@@ -2211,6 +2212,15 @@ fn track_windows_resumes_and_refuses_no_records() {
         .map(f)
         .collect();
     assert_eq!(got, want);
+    for j in 0..3 {
+        for what in ["frequency", "damping"] {
+            let svg = std::fs::read_to_string(figures.join(format!("mode{j}_{what}.svg"))).unwrap();
+            assert!(
+                svg.starts_with("<svg") && svg.contains("standard error"),
+                "{j} {what}"
+            );
+        }
+    }
     let (ok, _, err) = hyst(&[
         "track",
         "--input",

@@ -53,6 +53,10 @@ pub(crate) struct TrackArgs {
     /// mode) and `report.json`.
     #[arg(long)]
     pub(crate) out: PathBuf,
+    /// Draw each mode's frequency and damping against time (± standard error, alarms in
+    /// red) and its frequency against the first covariate, as SVG into this folder.
+    #[arg(long)]
+    pub(crate) svg_dir: Option<PathBuf>,
 }
 
 /// The records' names and how to load each.
@@ -312,6 +316,9 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
     write_table(&a.out.join("table.csv"), &report, &cov_names)?;
     write_rows(&a.out.join("table.jsonl"), &report)?;
     hyst::report::write_json(&report, &a.out.join("report.json"))?;
+    if let Some(dir) = &a.svg_dir {
+        hyst::figures::track_figures(dir, &report, &cov_names).map_err(fail)?;
+    }
     Ok(())
 }
 

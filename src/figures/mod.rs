@@ -4,7 +4,9 @@
 mod ident;
 mod levels;
 mod residual;
+mod track;
 
 pub use ident::ident_figures;
 pub use levels::levels_figures;
 pub use residual::residual_figures;
+pub use track::track_figures;

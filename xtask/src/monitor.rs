@@ -1,6 +1,6 @@
 //! `cargo xtask monitor-demo`: issue 33's synthetic monitoring campaign made, identified and
 //! tracked; prints the detection delay, the false alarms, how often each mode was tracked,
-//! and the run time.
+//! and the run time, and draws each mode's figures into `target/monitor/`.
 
 use std::time::Instant;
 
@@ -137,6 +137,9 @@ pub fn run(a: &DemoArgs) -> Result<(), String> {
         "monitor_peak_mb_half {half_peak:.0} monitor_peak_mb_all {:.0}",
         peak_mb()
     );
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/monitor");
+    hyst::figures::track_figures(&dir, &report, &["temperature".to_string()])?;
+    println!("figures in {}", dir.display());
     Ok(())
 }
 

@@ -1,0 +1,89 @@
+//! The figures of `hyst track --svg-dir`.
+
+use crate::monitor::TrackReport;
+
+/// For each reference mode: its frequency and its damping against time (days) with ± one
+/// standard error and the alarms marked, and its frequency against the first covariate.
+pub fn track_figures(
+    dir: &std::path::Path,
+    r: &TrackReport,
+    covariate_names: &[String],
+) -> Result<(), String> {
+    use crate::plot::{colors, scatter};
+    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let day = |t: f64| t / 86400.0;
+    for (j, m) in r.reference.iter().enumerate() {
+        let rows: Vec<_> = r.rows.iter().filter(|row| row.mode == j).collect();
+        let se = |v: Option<f64>| v.unwrap_or(f64::NAN);
+        let series = |value: &dyn Fn(&crate::monitor::TrackRow) -> f64,
+                      spread: &dyn Fn(&crate::monitor::TrackRow) -> f64| {
+            vec![
+                (
+                    "estimate".to_string(),
+                    rows.iter().map(|w| (day(w.time), value(w))).collect(),
+                    colors::BLUE,
+                ),
+                (
+                    "± standard error".to_string(),
+                    rows.iter()
+                        .flat_map(|w| {
+                            [
+                                (day(w.time), value(w) - spread(w)),
+                                (day(w.time), value(w) + spread(w)),
+                            ]
+                        })
+                        .collect(),
+                    colors::GREY,
+                ),
+                (
+                    "alarm".to_string(),
+                    rows.iter()
+                        .filter(|w| w.alarm.is_some())
+                        .map(|w| (day(w.time), value(w)))
+                        .collect(),
+                    colors::RED,
+                ),
+            ]
+        };
+        scatter(
+            &dir.join(format!("mode{j}_frequency.svg")),
+            &format!("Mode {j} ({:.3} Hz): frequency", m.frequency_hz),
+            "time (days)",
+            "frequency (Hz)",
+            &series(&|w| w.frequency_hz, &|w| se(w.frequency_se_hz)),
+        )?;
+        scatter(
+            &dir.join(format!("mode{j}_damping.svg")),
+            &format!("Mode {j} ({:.3} Hz): damping", m.frequency_hz),
+            "time (days)",
+            "damping ratio",
+            &series(&|w| w.damping_ratio, &|w| se(w.damping_se)),
+        )?;
+        if let Some(name) = covariate_names.first() {
+            scatter(
+                &dir.join(format!("mode{j}_vs_{name}.svg")),
+                &format!("Mode {j}: frequency against {name}"),
+                name,
+                "frequency (Hz)",
+                &[
+                    (
+                        "records".to_string(),
+                        rows.iter()
+                            .filter_map(|w| w.covariates.first().map(|c| (*c, w.frequency_hz)))
+                            .collect(),
+                        colors::BLUE,
+                    ),
+                    (
+                        "alarm".to_string(),
+                        rows.iter()
+                            .filter(|w| w.alarm.is_some())
+                            .filter_map(|w| w.covariates.first().map(|c| (*c, w.frequency_hz)))
+                            .collect(),
+                        colors::RED,
+                    ),
+                ],
+            )?;
+        }
+    }
+    Ok(())
+}
