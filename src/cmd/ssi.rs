@@ -26,11 +26,29 @@ pub(crate) struct SsiArgs {
     /// Skip this many leading rows (e.g. a start-up transient).
     #[arg(long, default_value_t = 0)]
     pub(crate) skip: usize,
+    #[command(flatten)]
+    pub(crate) ssi: SsiFlags,
+    /// Write the modes, real poles and per-order poles as JSON here.
+    #[arg(long)]
+    pub(crate) json: PathBuf,
+    /// Draw the stabilization diagram as SVG here.
+    #[arg(long)]
+    pub(crate) svg: Option<PathBuf>,
+    /// Write the reported modes' shapes as Universal File dataset 55 here (one dataset per
+    /// mode: its complex eigenvalue and, per node, the X, Y, Z entries; channels of a Universal
+    /// File at their nodes and directions, others as nodes 1, 2, … along Z).
+    #[arg(long, value_name = "FILE")]
+    pub(crate) shapes_uff: Option<PathBuf>,
+}
+
+/// SSI's and the refinement's flags, shared by `hyst ssi` and `hyst track`.
+#[derive(Args, Debug)]
+pub(crate) struct SsiFlags {
     /// Block rows of the Toeplitz matrix (lags up to 2·N−1).
     #[arg(long, default_value_t = 20)]
     pub(crate) block_rows: usize,
     /// Instead of --block-rows: as many block rows as make the largest lag cover this many
-    /// seconds (after --decimate).
+    /// seconds (after any --decimate).
     #[arg(
         long,
         value_name = "SECONDS",
@@ -68,17 +86,6 @@ pub(crate) struct SsiArgs {
     /// Reference channels (0-based indices among --columns), comma-separated; default: all.
     #[arg(long, value_delimiter = ',')]
     pub(crate) references: Option<Vec<usize>>,
-    /// Write the modes, real poles and per-order poles as JSON here.
-    #[arg(long)]
-    pub(crate) json: PathBuf,
-    /// Draw the stabilization diagram as SVG here.
-    #[arg(long)]
-    pub(crate) svg: Option<PathBuf>,
-    /// Write the reported modes' shapes as Universal File dataset 55 here (one dataset per
-    /// mode: its complex eigenvalue and, per node, the X, Y, Z entries; channels of a Universal
-    /// File at their nodes and directions, others as nodes 1, 2, … along Z).
-    #[arg(long, value_name = "FILE")]
-    pub(crate) shapes_uff: Option<PathBuf>,
     /// Skip the maximum-likelihood refinement of the modes and real poles (on by default: it
     /// fits them to the whole record, gives each a standard error, and drops those the record
     /// does not support).
@@ -91,8 +98,23 @@ pub(crate) struct SsiArgs {
     pub(crate) no_joint: bool,
 }
 
+impl SsiFlags {
+    /// The analysis these flags ask for: SSI's options, and the refinement unless
+    /// `--no-refine`.
+    pub(crate) fn analysis(&self) -> hyst::covssi::AnalysisOptions {
+        use hyst::covssi::{AnalysisOptions, RefineOptions};
+        let refine = (!self.no_refine).then(|| RefineOptions {
+            joint: !self.no_joint,
+            ..RefineOptions::default()
+        });
+        AnalysisOptions::default()
+            .with_ssi(ssi_options(self))
+            .with_refine(refine)
+    }
+}
+
 /// SSI's options from the flags.
-fn ssi_options(a: &SsiArgs) -> hyst::covssi::SsiOptions {
+fn ssi_options(a: &SsiFlags) -> hyst::covssi::SsiOptions {
     use hyst::covssi::{BlockRows, SsiOptions, StabilityCriteria};
     let block_rows = match (a.lag_seconds, a.lag_periods.as_deref()) {
         (Some(t), _) => BlockRows::Seconds(t),
@@ -202,7 +224,7 @@ fn flag_error(
         };
         let flag = match option {
             // A lag given as a time is too short for the rate: say what it gave.
-            SsiOption::BlockRows => match ssi_options(a).block_rows {
+            SsiOption::BlockRows => match ssi_options(&a.ssi).block_rows {
                 BlockRows::Seconds(_) => return lag_too_short("--lag-seconds"),
                 BlockRows::Periods { .. } => return lag_too_short("--lag-periods"),
                 _ => Some(("--block-rows", "at least 2")),
@@ -251,7 +273,7 @@ fn flag_error(
 }
 
 pub(crate) fn run(a: &SsiArgs) -> Result<(), Error> {
-    use hyst::covssi::{self, AnalysisOptions, RefineOptions};
+    use hyst::covssi;
     let Channels {
         names,
         data,
@@ -261,13 +283,7 @@ pub(crate) fn run(a: &SsiArgs) -> Result<(), Error> {
     } = channels(a)?;
     let fs_used = fs / a.decimate as f64;
     let views: Vec<&[f64]> = data.iter().map(|c| c.as_slice()).collect();
-    let refine = (!a.no_refine).then(|| RefineOptions {
-        joint: !a.no_joint,
-        ..RefineOptions::default()
-    });
-    let opts = AnalysisOptions::default()
-        .with_ssi(ssi_options(a))
-        .with_refine(refine);
+    let opts = a.ssi.analysis();
     let bar = steps_bar();
     let analysis = covssi::analyze_with_progress(&views, fs_used, &opts, &|p| show(&bar, p));
     bar.finish_and_clear();

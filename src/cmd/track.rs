@@ -31,12 +31,9 @@ pub(crate) struct TrackArgs {
     /// Channels, comma-separated; default every column but `t` and `time`.
     #[arg(long, value_delimiter = ',')]
     pub(crate) columns: Option<Vec<String>>,
-    /// SSI's lag as a time (s): block rows covering it.
-    #[arg(long, default_value_t = 3.0)]
-    pub(crate) lag_seconds: f64,
-    /// Skip the maximum-likelihood refinement (then no standard errors, and no chart).
-    #[arg(long)]
-    pub(crate) no_refine: bool,
+    /// SSI's and the refinement's options, as `hyst ssi` takes them.
+    #[command(flatten)]
+    pub(crate) ssi: super::ssi::SsiFlags,
     /// Covariates per record: a CSV with a column `record` (the file's name, or the window's
     /// number from 0), an optional `time` (s) and one column per covariate.
     #[arg(long)]
@@ -289,12 +286,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
             covariates,
         })
     };
-    let analysis = hyst::covssi::AnalysisOptions::default()
-        .with_ssi(hyst::covssi::SsiOptions {
-            block_rows: hyst::covssi::BlockRows::Seconds(a.lag_seconds),
-            ..hyst::covssi::SsiOptions::default()
-        })
-        .with_refine((!a.no_refine).then(hyst::covssi::RefineOptions::default));
+    let analysis = a.ssi.analysis();
     let finished = |r: &RecordModes| {
         if let Ok(line) = serde_json::to_string(r)
             && let Ok(mut w) = writer.lock()

@@ -388,8 +388,8 @@ def levels(records, fs, mass, *, by_simulation=False, data_periodic=False, fit_e
     )
 
 
-def track(records, fs, *, times=None, covariates=None, training=None, lag_seconds=3.0,
-          refine=True):
+def track(records, fs, *, times=None, covariates=None, training=None, block_rows=None,
+          lag_seconds=None, refine=True):
     """Track the modes of many records of one structure (``hyst track``).
 
     Each record is identified as :func:`ssi` does (in parallel), its modes matched to a
@@ -411,8 +411,8 @@ def track(records, fs, *, times=None, covariates=None, training=None, lag_second
         but not charted).
     training : int, optional
         The first this many records train the baselines (default 336, at most half).
-    lag_seconds : float
-        SSI's lag as a time (default 3 s).
+    block_rows, lag_seconds : int or float, optional
+        SSI's lag, as for :func:`ssi` (default 20 block rows).
     refine : bool
         The maximum-likelihood refinement (default True; without it there are no standard
         errors and no chart).
@@ -444,5 +444,6 @@ def track(records, fs, *, times=None, covariates=None, training=None, lag_second
     return _hyst.track(
         arrays, float(fs), times=t, covariates=x,
         training=None if training is None else int(training),
-        lag_seconds=float(lag_seconds), refine=bool(refine),
+        block_rows=None if block_rows is None else int(block_rows),
+        lag_seconds=None if lag_seconds is None else float(lag_seconds), refine=bool(refine),
     )

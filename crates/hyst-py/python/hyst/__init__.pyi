@@ -106,7 +106,8 @@ def track(
     times: Optional[Sequence[float]] = ...,
     covariates: Optional[npt.ArrayLike] = ...,
     training: Optional[int] = ...,
-    lag_seconds: float = ...,
+    block_rows: Optional[int] = ...,
+    lag_seconds: Optional[float] = ...,
     refine: bool = ...,
 ) -> Report: ...
 
