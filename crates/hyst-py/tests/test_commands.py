@@ -152,3 +152,10 @@ def test_track_gives_the_commands_report(data_dir, hyst_bin, tmp_path):
     report = hyst.track(windows, 20.0, times=[300.0 * i for i in range(10)])
     assert comparable(report.to_dict()) == document(out / "report.json")
     assert [round(m["frequency_hz"], 1) for m in report.to_dict()["reference"]] == [1.0, 2.8, 4.1]
+    # The same windows as files (.npy), read by hyst.track itself.
+    paths = []
+    for i, w in enumerate(windows):
+        paths.append(tmp_path / f"w{i}.npy")
+        np.save(paths[-1], w)
+    from_files = hyst.track(paths, 20.0, times=[300.0 * i for i in range(10)])
+    assert comparable(from_files.to_dict()) == comparable(report.to_dict())

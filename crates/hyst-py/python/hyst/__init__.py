@@ -400,10 +400,10 @@ def track(records, fs, *, times=None, covariates=None, training=None, block_rows
 
     Parameters
     ----------
-    records : list of array_like, each (samples, channels)
-        The records, in time order.
-    fs : float
-        Sampling rate (Hz).
+    records : list of array_like (samples, channels), or of file paths
+        The records, in time order; a path is read as :func:`read` reads it.
+    fs : float or None
+        Sampling rate (Hz); None when the files state it (Universal Files).
     times : list of float, optional
         Each record's time (s); default its index.
     covariates : array_like, shape (records, covariates), optional
@@ -424,8 +424,18 @@ def track(records, fs, *, times=None, covariates=None, training=None, block_rows
         ``reference``, ``rows`` (record x mode), ``skipped``, ``baselines``, ``alarms``,
         ``tracked``, ``in_control_run_length``.
     """
+    import os
+
     arrays = []
     for i, r in enumerate(records):
+        if isinstance(r, (str, os.PathLike)):
+            # A file, read as hyst.read reads it; a Universal File brings its own rate.
+            rec = read(r)
+            if fs is None:
+                fs = rec.fs
+            elif rec.fs is not None and abs(rec.fs - float(fs)) > 1e-5 * rec.fs:
+                raise ValueError(f"{os.fspath(r)}: states {rec.fs} Hz, but fs={fs} was given")
+            r = rec.data
         a = _np.asarray(r, dtype=_np.float64)
         if a.ndim == 1:
             a = a.reshape(-1, 1)
@@ -441,6 +451,8 @@ def track(records, fs, *, times=None, covariates=None, training=None, block_rows
         if c.ndim == 1:
             c = c.reshape(-1, 1)
         x = c.tolist()
+    if fs is None:
+        raise ValueError("fs is needed: the records do not state their sampling rate")
     return _hyst.track(
         arrays, float(fs), times=t, covariates=x,
         training=None if training is None else int(training),

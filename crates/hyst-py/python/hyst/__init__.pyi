@@ -100,8 +100,8 @@ def levels(
 ) -> Report: ...
 
 def track(
-    records: Sequence[npt.ArrayLike],
-    fs: float,
+    records: Sequence[Union[npt.ArrayLike, str, os.PathLike[str]]],
+    fs: Optional[float],
     *,
     times: Optional[Sequence[float]] = ...,
     covariates: Optional[npt.ArrayLike] = ...,
