@@ -2238,6 +2238,27 @@ fn track_windows_resumes_and_refuses_no_records() {
         !ok && err.contains("--reference") && err.contains("not JSON"),
         "{err}"
     );
+    // Covariates by window number: they reach the table; one window without them.
+    let cov = write(
+        "track_cov.csv",
+        &(0..9).fold("record,time,temperature\n".to_string(), |t, i| {
+            t + &format!("{i},{},{}\n", 3600 * i, 10 + i)
+        }),
+    );
+    let mut with_cov = args.to_vec();
+    with_cov.extend(["--covariates", s(&cov)]);
+    let (ok, _, err) = hyst(&with_cov);
+    assert!(ok, "{err}");
+    let table = std::fs::read_to_string(out.join("table.csv")).unwrap();
+    assert!(
+        table.lines().next().unwrap().ends_with(",temperature"),
+        "{table}"
+    );
+    assert!(
+        table.lines().nth(4).unwrap().starts_with("1,3600,"),
+        "{table}"
+    );
+    assert!(table.lines().last().unwrap().ends_with(",NaN"), "{table}");
     let empty = tmp("track_empty");
     std::fs::create_dir_all(&empty).unwrap();
     let (ok, _, err) = hyst(&[

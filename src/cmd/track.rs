@@ -1,7 +1,6 @@
 //! `hyst track`: many records of one structure identified, their modes tracked, changes
 //! told from estimation noise.
 
-use std::collections::HashMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
@@ -96,90 +95,13 @@ fn sources(a: &TrackArgs) -> Result<Sources, Error> {
             count,
         });
     }
-    let mut files = Vec::new();
-    for p in &a.inputs {
-        if p.is_dir() {
-            let mut inside: Vec<PathBuf> = std::fs::read_dir(p)
-                .map_err(|e| fail(format!("{}: {e}", p.display())))?
-                .filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|p| p.is_file())
-                .collect();
-            inside.sort();
-            files.extend(inside);
-        } else {
-            files.push(p.clone());
-        }
-    }
+    let files = hyst::io::list_records(&a.inputs)?;
     if files.is_empty() {
         return Err(fail(
             "no records: --inputs names no files (or only empty folders)",
         ));
     }
     Ok(Sources::Files(files))
-}
-
-/// The covariates file: per record name, its time (if given) and covariates; and their names.
-type Covariates = (HashMap<String, (Option<f64>, Vec<f64>)>, Vec<String>);
-
-fn covariates(path: Option<&Path>) -> Result<Covariates, Error> {
-    let Some(path) = path else {
-        return Ok((HashMap::new(), Vec::new()));
-    };
-    // Names are text, so the file is read as text here, then each column as numbers.
-    let text =
-        std::fs::read_to_string(path).map_err(|e| fail(format!("{}: {e}", path.display())))?;
-    let mut lines = text.lines().filter(|l| !l.trim().is_empty());
-    let header: Vec<String> = lines
-        .next()
-        .ok_or_else(|| fail(format!("{}: empty", path.display())))?
-        .split(',')
-        .map(|s| s.trim().to_string())
-        .collect();
-    let at = header.iter().position(|h| h == "record").ok_or_else(|| {
-        fail(format!(
-            "{}: no column `record` (the header has: {})",
-            path.display(),
-            header.join(",")
-        ))
-    })?;
-    let time = header.iter().position(|h| h == "time");
-    let names: Vec<String> = header
-        .iter()
-        .enumerate()
-        .filter(|(i, _)| *i != at && Some(*i) != time)
-        .map(|(_, h)| h.clone())
-        .collect();
-    let mut out = HashMap::new();
-    for (row, line) in lines.enumerate() {
-        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
-        if cells.len() != header.len() {
-            return Err(fail(format!(
-                "{}: row {} has {} cells, the header has {}",
-                path.display(),
-                row + 2,
-                cells.len(),
-                header.len()
-            )));
-        }
-        let number = |i: usize| {
-            cells[i].parse::<f64>().map_err(|_| {
-                fail(format!(
-                    "{}: row {}, column `{}`: `{}` is not a number",
-                    path.display(),
-                    row + 2,
-                    header[i],
-                    cells[i]
-                ))
-            })
-        };
-        let t = time.map(number).transpose()?;
-        let values = (0..cells.len())
-            .filter(|&i| i != at && Some(i) != time)
-            .map(number)
-            .collect::<Result<Vec<f64>, Error>>()?;
-        out.insert(cells[at].to_string(), (t, values));
-    }
-    Ok((out, names))
 }
 
 /// The reported modes of a `hyst ssi --json` document.
@@ -213,7 +135,10 @@ fn done_records(path: &Path) -> Vec<RecordModes> {
 
 pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
     let sources = sources(a)?;
-    let (covs, cov_names) = covariates(a.covariates.as_deref())?;
+    let (covs, cov_names) = match &a.covariates {
+        Some(p) => hyst::io::read_covariates(p)?,
+        None => Default::default(),
+    };
     let names: Vec<String> = match &sources {
         Sources::Files(files) => files
             .iter()
@@ -241,6 +166,11 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
     let bar = steps_bar();
     bar.set_length(names.len() as u64);
     bar.set_message("records identified");
+    // Record i's start: its window's time, or its place among the files.
+    let start_of = |i: usize| match &sources {
+        Sources::Files(_) => i as f64,
+        Sources::Windows { fs, step, .. } => (i * step) as f64 / fs,
+    };
     let covariates_of = |name: &str, fallback_time: f64| match covs.get(name) {
         Some((t, v)) => (t.unwrap_or(fallback_time), v.clone()),
         None => (fallback_time, vec![f64::NAN; cov_names.len()]),
@@ -297,7 +227,12 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
         bar.inc(1);
     };
     bar.set_position(done.iter().filter(|d| names.contains(&d.name)).count() as u64);
-    let records = hyst::monitor::identify_records(&names, &load, &analysis, &done, &finished);
+    let mut records = hyst::monitor::identify_records(&names, &load, &analysis, &done, &finished);
+    // An earlier run's records keep their identification; their time and covariates are
+    // this run's (the covariates file may have changed).
+    for (i, r) in records.iter_mut().enumerate() {
+        (r.time, r.covariates) = covariates_of(&names[i], start_of(i));
+    }
     bar.finish_and_clear();
     let mut opts = TrackOptions::default();
     opts.training = a.training.unwrap_or(opts.training.min(names.len() / 2));

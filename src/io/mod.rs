@@ -217,11 +217,13 @@ fn variable_message(asked: Option<&str>, available: &str) -> String {
     }
 }
 
+mod covariates;
 mod delimited;
 mod mat;
 mod npy;
 mod shapes_uff;
 mod uff;
+pub use covariates::{Covariates, list_records, read_covariates};
 pub use delimited::{Delimiter, read_csv, read_csv_with, write_csv};
 pub use mat::read_mat;
 pub use npy::{read_npy, read_npz};
