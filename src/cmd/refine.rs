@@ -69,12 +69,13 @@ pub(crate) fn run(a: &RefineArgs) -> Result<(), Error> {
         .map_err(|e| fail(format!("{e} (refine needs the input too)")))?;
     let y = t.column(&a.output_column)?;
     let n = y.len();
+    let (default_estimate, default_tests) = residual::default_rows(n);
     let estimate = match &a.estimate {
         Some(r) => r.within("--estimate", n)?,
-        None => (0, 3 * n / 4),
+        None => default_estimate,
     };
     let tests: Vec<(usize, usize)> = if a.test.is_empty() {
-        vec![(3 * n / 4, n)]
+        default_tests
     } else {
         a.test
             .iter()

@@ -176,7 +176,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
         None => (fallback_time, vec![f64::NAN; cov_names.len()]),
     };
     let load = |i: usize| -> Result<Loaded, String> {
-        let (channels, fs, start) = match &sources {
+        let (channels, fs) = match &sources {
             Sources::Files(files) => {
                 let mut t = read_record(&files[i]).map_err(|e| e.to_string())?;
                 let fs = t.rate(a.fs).map_err(|e| e.to_string())?;
@@ -185,7 +185,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
                     .iter()
                     .map(|c| t.take_column(c).map_err(|e| e.to_string()))
                     .collect::<Result<Vec<_>, _>>()?;
-                (data, fs, i as f64)
+                (data, fs)
             }
             Sources::Windows {
                 table,
@@ -205,10 +205,10 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
                             .map_err(|e| e.to_string())
                     })
                     .collect::<Result<Vec<_>, _>>()?;
-                (data, *fs, from as f64 / fs)
+                (data, *fs)
             }
         };
-        let (time, covariates) = covariates_of(&names[i], start);
+        let (time, covariates) = covariates_of(&names[i], start_of(i));
         Ok(Loaded {
             channels,
             fs,

@@ -247,13 +247,9 @@ pub(crate) fn refine(
             )));
         }
     };
-    let n = y.len();
-    let estimate = estimate.unwrap_or((0, 3 * n / 4));
-    let tests = if test.is_empty() {
-        vec![(3 * n / 4, n)]
-    } else {
-        test
-    };
+    let (default_estimate, default_tests) = residual::default_rows(y.len());
+    let estimate = estimate.unwrap_or(default_estimate);
+    let tests = if test.is_empty() { default_tests } else { test };
     let rec = residual::Record {
         u: &u,
         y: &y,

@@ -226,7 +226,6 @@ fn bad_files_are_refused_naming_the_problem() {
     };
     let cut = double_lines(&v[..6]);
     let nan = double_lines(&[1.0, f64::NAN, 2.0]);
-    let bin: Vec<u8> = v.iter().flat_map(|x| x.to_le_bytes()).collect();
     let cases: Vec<(&str, Vec<u8>, &str)> = vec![
         ("text.uff", b"t,y\n0,1\n".to_vec(), "not a Universal File"),
         (
@@ -361,6 +360,27 @@ fn bad_files_are_refused_naming_the_problem() {
             .bytes(),
             "row 2, column `1+Z`: value NaN is not finite",
         ),
+    ];
+    assert_refused(cases);
+}
+
+/// Each case's file is refused with an error naming the file and saying `says`.
+fn assert_refused(cases: Vec<(&str, Vec<u8>, &str)>) {
+    for (name, bytes, says) in cases {
+        let path = write(name, &bytes);
+        let e = read_uff(&path).unwrap_err().to_string();
+        assert!(e.starts_with(&path.display().to_string()), "{e}");
+        assert!(e.contains(says), "{name}: {e}");
+    }
+}
+
+/// A 58b file cut inside its data, counting bytes its values do not fill, or in a float
+/// format other than IEEE 754 is refused naming the problem.
+#[test]
+fn bad_binary_files_are_refused_naming_the_problem() {
+    let v = ramp(8, 1.0);
+    let bin: Vec<u8> = v.iter().flat_map(|x| x.to_le_bytes()).collect();
+    let cases: Vec<(&str, Vec<u8>, &str)> = vec![
         (
             "binary_cut.uff",
             {
@@ -407,12 +427,7 @@ fn bad_files_are_refused_naming_the_problem() {
             "floating-point format 1",
         ),
     ];
-    for (name, bytes, says) in cases {
-        let path = write(name, &bytes);
-        let e = read_uff(&path).unwrap_err().to_string();
-        assert!(e.starts_with(&path.display().to_string()), "{e}");
-        assert!(e.contains(says), "{name}: {e}");
-    }
+    assert_refused(cases);
 }
 
 proptest::proptest! {

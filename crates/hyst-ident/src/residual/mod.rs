@@ -55,7 +55,7 @@ pub use fit::{
     Estimate, FIRST_WINDOW, InputInterpolation, Record, SE_BLOCK_ROWS, WARM_UP, fit, response,
     standard_errors, test_error,
 };
-pub use report::{RefineReport, refine_report};
+pub use report::{RefineReport, default_rows, refine_report};
 
 /// One step of the loop.
 #[derive(Debug, Clone, PartialEq)]

@@ -26,6 +26,12 @@ pub struct RefineReport {
     pub seconds: f64,
 }
 
+/// The rows a record of `n` samples is split into when none are given: the first 75 %
+/// estimates, the last 25 % tests.
+pub fn default_rows(n: usize) -> ((usize, usize), Vec<(usize, usize)>) {
+    ((0, 3 * n / 4), vec![(3 * n / 4, n)])
+}
+
 /// [`refine_record_with`] on `rec`, as a report with its rows and time.
 pub fn refine_report(
     rec: &Record<'_>,
