@@ -24,8 +24,8 @@ use ssi::SsiArgs;
 pub(crate) fn set_read_options(cli: &Cli) {
     READ_OPTIONS.get_or_init(|| {
         hyst::io::ReadOptions::default()
-            .with_format(cli.format.into())
-            .with_delimiter(cli.delimiter.into())
+            .with_format(cli.format)
+            .with_delimiter(cli.delimiter)
             .with_variable(cli.variable.clone())
     });
 }
@@ -42,69 +42,35 @@ pub(crate) struct Cli {
     pub(crate) command: Command,
     /// Format of every record read: by its extension by default (`.npy`, `.npz`, `.mat`,
     /// `.uff`/`.unv`/`.uf`; anything else delimited text).
-    #[arg(long, global = true, value_enum, default_value_t = FormatArg::Auto)]
-    pub(crate) format: FormatArg,
+    #[arg(long, global = true, default_value = "auto", value_parser = named(hyst::io::Format::NAMES, hyst::io::Format::description))]
+    pub(crate) format: hyst::io::Format,
     /// Cell separator of every CSV file read: detected from the header line by default.
-    #[arg(long, global = true, value_enum, default_value_t = DelimiterArg::Auto)]
-    pub(crate) delimiter: DelimiterArg,
+    #[arg(long, global = true, default_value = "auto", value_parser = named(hyst::io::Delimiter::NAMES, hyst::io::Delimiter::description))]
+    pub(crate) delimiter: hyst::io::Delimiter,
     /// The variable of a `.mat` file or the array of a `.npz` archive to read (needed when it
     /// holds more than one array of more than one element).
     #[arg(long, global = true, value_name = "NAME")]
     pub(crate) variable: Option<String>,
 }
 
-#[derive(Clone, Copy, Debug, Default, ValueEnum)]
-pub(crate) enum FormatArg {
-    /// By the file's extension.
-    #[default]
-    Auto,
-    /// Delimited text with a header line.
-    Csv,
-    /// A NumPy array (samples × channels).
-    Npy,
-    /// A NumPy archive (one array of it).
-    Npz,
-    /// A MATLAB level 5 MAT-file (one variable of it).
-    Mat,
-    /// A Universal File of dataset 58 functions, ASCII or binary (58b); the rate is the file's.
-    Uff,
-}
-
-impl From<FormatArg> for hyst::io::Format {
-    fn from(f: FormatArg) -> Self {
-        match f {
-            FormatArg::Auto => Self::Auto,
-            FormatArg::Csv => Self::Csv,
-            FormatArg::Npy => Self::Npy,
-            FormatArg::Npz => Self::Npz,
-            FormatArg::Mat => Self::Mat,
-            FormatArg::Uff => Self::Uff,
+/// A `--format` or `--delimiter` value: one of the library's names, each with its description
+/// in the help.
+fn named<T>(
+    names: &'static [&'static str],
+    description: fn(T) -> &'static str,
+) -> impl clap::builder::TypedValueParser<Value = T>
+where
+    T: std::str::FromStr<Err = hyst::io::IoError> + Clone + Send + Sync + 'static,
+{
+    use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+    let values = names.iter().map(move |&name| {
+        let value = PossibleValue::new(name);
+        match name.parse::<T>() {
+            Ok(t) => value.help(description(t)),
+            Err(_) => value,
         }
-    }
-}
-
-#[derive(Clone, Copy, Debug, Default, ValueEnum)]
-pub(crate) enum DelimiterArg {
-    /// Whichever of `,` `;` tab the header uses most.
-    #[default]
-    Auto,
-    /// `,`
-    Comma,
-    /// `;` (a decimal comma is read too)
-    Semicolon,
-    /// A tab.
-    Tab,
-}
-
-impl From<DelimiterArg> for hyst::io::Delimiter {
-    fn from(d: DelimiterArg) -> Self {
-        match d {
-            DelimiterArg::Auto => Self::Auto,
-            DelimiterArg::Comma => Self::Comma,
-            DelimiterArg::Semicolon => Self::Semicolon,
-            DelimiterArg::Tab => Self::Tab,
-        }
-    }
+    });
+    PossibleValuesParser::new(values).try_map(|s| s.parse::<T>())
 }
 
 /// How records are read, from `--format`, `--delimiter` and `--variable`, set once at start.

@@ -24,6 +24,20 @@ pub enum Delimiter {
 }
 
 impl Delimiter {
+    /// Every delimiter's name, as the command line's `--delimiter` takes it; Python's
+    /// `delimiter=` takes the character itself (`","`, `";"`, `"\t"`), which is read too.
+    pub const NAMES: &'static [&'static str] = &["auto", "comma", "semicolon", "tab"];
+
+    /// What the delimiter is, in a line (the command line's help).
+    pub fn description(self) -> &'static str {
+        match self {
+            Delimiter::Auto => "whichever of `,` `;` tab the header uses most",
+            Delimiter::Comma => "`,`",
+            Delimiter::Semicolon => "`;` (a decimal comma is read too)",
+            Delimiter::Tab => "a tab",
+        }
+    }
+
     fn byte(self) -> Option<u8> {
         match self {
             Delimiter::Auto => None,
@@ -52,6 +66,27 @@ impl Delimiter {
         } else {
             [b',', b';', b'\t'][best]
         }
+    }
+}
+
+impl std::str::FromStr for Delimiter {
+    type Err = IoError;
+
+    /// The delimiter of one of [`Delimiter::NAMES`], or of its character.
+    fn from_str(name: &str) -> Result<Self, IoError> {
+        Ok(match name {
+            "auto" => Delimiter::Auto,
+            "comma" | "," => Delimiter::Comma,
+            "semicolon" | ";" => Delimiter::Semicolon,
+            "tab" | "\t" => Delimiter::Tab,
+            _ => {
+                return Err(IoError::UnknownName {
+                    what: "delimiter",
+                    given: name.to_string(),
+                    allowed: Delimiter::NAMES,
+                });
+            }
+        })
     }
 }
 

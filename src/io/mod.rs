@@ -186,6 +186,16 @@ pub enum IoError {
         /// The rate the file states (Hz).
         stated: Option<f64>,
     },
+    /// A format or delimiter named by a name that is not one of them.
+    #[error("{what} `{given}` is not one of {}", .allowed.join(", "))]
+    UnknownName {
+        /// What was named: "format" or "delimiter".
+        what: &'static str,
+        /// The name given.
+        given: String,
+        /// The names allowed.
+        allowed: &'static [&'static str],
+    },
     /// Shapes that do not fit in a dataset 55 of 3-DOF translations.
     #[error("{path}: {what}")]
     ShapesUff {
@@ -251,6 +261,23 @@ pub enum Format {
 }
 
 impl Format {
+    /// Every format's name, as the command line's `--format` and Python's `format=` take it.
+    pub const NAMES: &'static [&'static str] = &["auto", "csv", "npy", "npz", "mat", "uff"];
+
+    /// What the format is, in a line (the command line's help).
+    pub fn description(self) -> &'static str {
+        match self {
+            Format::Auto => "by the file's extension",
+            Format::Csv => "delimited text with a header line",
+            Format::Npy => "a NumPy array (samples × channels)",
+            Format::Npz => "a NumPy archive (one array of it)",
+            Format::Mat => "a MATLAB level 5 MAT-file (one variable of it)",
+            Format::Uff => {
+                "a Universal File of dataset 58 functions, ASCII or binary (58b); the rate is the file's"
+            }
+        }
+    }
+
     /// The format `path`'s extension says (delimited text when it says none of the others).
     pub fn of_path(path: &Path) -> Format {
         let ext = path
@@ -264,6 +291,29 @@ impl Format {
             Some("uff" | "unv" | "uf") => Format::Uff,
             _ => Format::Csv,
         }
+    }
+}
+
+impl std::str::FromStr for Format {
+    type Err = IoError;
+
+    /// The format of one of [`Format::NAMES`].
+    fn from_str(name: &str) -> Result<Self, IoError> {
+        Ok(match name {
+            "auto" => Format::Auto,
+            "csv" => Format::Csv,
+            "npy" => Format::Npy,
+            "npz" => Format::Npz,
+            "mat" => Format::Mat,
+            "uff" => Format::Uff,
+            _ => {
+                return Err(IoError::UnknownName {
+                    what: "format",
+                    given: name.to_string(),
+                    allowed: Format::NAMES,
+                });
+            }
+        })
     }
 }
 
@@ -520,5 +570,34 @@ pub(crate) mod test_files {
         bytes.truncate(cut.max(1));
         bytes.extend(tail);
         bytes
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every listed name reads as a format and a delimiter; an unknown one is an error that
+    /// lists them.
+    #[test]
+    fn names_parse() {
+        for name in Format::NAMES {
+            assert!(name.parse::<Format>().is_ok(), "{name}");
+        }
+        for name in Delimiter::NAMES.iter().chain(&[",", ";", "\t"]) {
+            assert!(name.parse::<Delimiter>().is_ok(), "{name}");
+        }
+        assert_eq!("uff".parse::<Format>().ok(), Some(Format::Uff));
+        assert_eq!("\t".parse::<Delimiter>().ok(), Some(Delimiter::Tab));
+        let e = "xls".parse::<Format>().unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "format `xls` is not one of auto, csv, npy, npz, mat, uff"
+        );
+        let e = "|".parse::<Delimiter>().unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "delimiter `|` is not one of auto, comma, semicolon, tab"
+        );
     }
 }

@@ -386,30 +386,11 @@ fn read_record<'py>(
     delimiter: Option<&str>,
 ) -> PyResult<RecordParts<'py>> {
     use hyst::io::{Delimiter, Format, ReadOptions};
-    let format = match format {
-        None => Format::Auto,
-        Some("csv") => Format::Csv,
-        Some("npy") => Format::Npy,
-        Some("npz") => Format::Npz,
-        Some("mat") => Format::Mat,
-        Some("uff") => Format::Uff,
-        Some(other) => {
-            return Err(PyValueError::new_err(format!(
-                "format {other:?} is not one of \"csv\", \"npy\", \"npz\", \"mat\", \"uff\""
-            )));
-        }
-    };
-    let delimiter = match delimiter {
-        None => Delimiter::Auto,
-        Some(",") => Delimiter::Comma,
-        Some(";") => Delimiter::Semicolon,
-        Some("\t") => Delimiter::Tab,
-        Some(other) => {
-            return Err(PyValueError::new_err(format!(
-                "delimiter {other:?} is not one of \",\", \";\", \"\\t\""
-            )));
-        }
-    };
+    let named = |e: hyst::io::IoError| PyValueError::new_err(e.to_string());
+    let format: Format = format.map_or(Ok(Format::Auto), str::parse).map_err(named)?;
+    let delimiter: Delimiter = delimiter
+        .map_or(Ok(Delimiter::Auto), str::parse)
+        .map_err(named)?;
     let opts = ReadOptions::default()
         .with_format(format)
         .with_delimiter(delimiter)

@@ -185,5 +185,5 @@ def test_hyst_read_gives_the_record_and_its_rate_and_the_shapes_go_back_out(data
         assert np.allclose(s["r3"], r.shape[k], rtol=5e-6, atol=0)
     with pytest.raises(ValueError, match="no dataset 58"):
         hyst.read(out)
-    with pytest.raises(ValueError, match='format "xls" is not one of'):
+    with pytest.raises(ValueError, match='format `xls` is not one of auto, csv, npy, npz, mat, uff'):
         hyst.read(uff, format="xls")
