@@ -297,11 +297,11 @@ fn impossible_values_are_refused_up_front() {
                 "--period",
                 "600",
             ]),
-            "--excitation-band 500:600: 600 Hz is above the Nyquist frequency 375 Hz of --fs 750",
+            "--excitation-band 500:600 --period 600: excitation band 500..600 Hz reaches above the Nyquist frequency 375 Hz of 750 Hz",
         ),
         (
             ident(&["--mass", "2", "--excitation-band", "5:150", "--period", "0"]),
-            "--period must be at least 2 samples, got 0",
+            "--excitation-band 5:150 --period 0: the excitation's period must be at least 2 samples, got 0",
         ),
         (
             hyst(&[

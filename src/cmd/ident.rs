@@ -127,27 +127,18 @@ pub(crate) fn excitation_band(
             "--excitation-band needs --period (samples per period of the excitation)",
         )),
         (Some(b), Some(period)) => {
-            let (lo, hi) = (b.low_hz, b.high_hz);
-            // Options that can never give a flatness fit are refused before the pipeline
-            // runs, not reported in a note after it.
-            if period < 2 {
-                return Err(fail(format!(
-                    "--period must be at least 2 samples, got {period}"
-                )));
-            }
-            if let Some(fs) = a.fs.filter(|f| f.is_finite() && *f > 0.0)
-                && hi > fs / 2.0
-            {
-                return Err(fail(format!(
-                    "--excitation-band {b}: {hi} Hz is above the Nyquist frequency {} Hz of --fs {fs}",
-                    fs / 2.0
-                )));
-            }
-            Ok(Some(ExcitationBand {
-                low_hz: lo,
-                high_hz: hi,
+            let band = ExcitationBand {
+                low_hz: b.low_hz,
+                high_hz: b.high_hz,
                 period,
-            }))
+            };
+            // Options that can never give a flatness fit are refused before the record is
+            // read when the rate is given (the pipeline checks again with the file's rate).
+            if let Some(fs) = a.fs.filter(|f| f.is_finite() && *f > 0.0) {
+                band.check(fs)
+                    .map_err(|e| fail(format!("--excitation-band {b} --period {period}: {e}")))?;
+            }
+            Ok(Some(band))
         }
     }
 }

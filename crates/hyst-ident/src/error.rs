@@ -76,6 +76,25 @@ pub enum IdentError {
         /// The rate given.
         fs: f64,
     },
+    /// The excitation's period is too short to hold a band.
+    #[error("the excitation's period must be at least 2 samples, got {period}")]
+    PeriodTooShort {
+        /// Samples per period given.
+        period: usize,
+    },
+    /// The excitation band reaches above the Nyquist frequency.
+    #[error(
+        "excitation band {low_hz}..{high_hz} Hz reaches above the Nyquist frequency {} Hz of {fs} Hz",
+        fs / 2.0
+    )]
+    BandAboveNyquist {
+        /// Lower edge (Hz).
+        low_hz: f64,
+        /// Upper edge (Hz).
+        high_hz: f64,
+        /// Sampling rate (Hz).
+        fs: f64,
+    },
     /// The excitation band holds too few DFT bins of one period.
     #[error(
         "excitation band {low_hz}..{high_hz} Hz holds fewer than 9 DFT bins of a {period}-sample period at {fs} Hz"

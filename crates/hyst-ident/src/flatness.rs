@@ -53,6 +53,40 @@ impl ExcitationBand {
         }
     }
 
+    /// The DFT bins of one period that the band holds at `fs` Hz (rounded inward), or why the
+    /// band can never give a flatness fit: a period under 2 samples, a rate that is not
+    /// positive, edges not finite and ordered, an upper edge above the Nyquist frequency, or
+    /// fewer than 9 bins.
+    pub fn check(&self, fs: f64) -> Result<(usize, usize), IdentError> {
+        if self.period < 2 {
+            return Err(IdentError::PeriodTooShort {
+                period: self.period,
+            });
+        }
+        if !(fs.is_finite() && fs > 0.0) {
+            return Err(IdentError::BadRate { fs });
+        }
+        if self.high_hz > fs / 2.0 {
+            return Err(IdentError::BandAboveNyquist {
+                low_hz: self.low_hz,
+                high_hz: self.high_hz,
+                fs,
+            });
+        }
+        let (lo, hi) = self.bins(fs);
+        let ordered =
+            self.low_hz.is_finite() && self.high_hz.is_finite() && self.low_hz < self.high_hz;
+        if !ordered || hi < lo + 8 {
+            return Err(IdentError::BadBand {
+                low_hz: self.low_hz,
+                high_hz: self.high_hz,
+                fs,
+                period: self.period,
+            });
+        }
+        Ok((lo, hi))
+    }
+
     /// The DFT bins of one period lying inside the band (rounded inward).
     pub fn bins(&self, fs: f64) -> (usize, usize) {
         let df = fs / self.period as f64;
@@ -274,19 +308,7 @@ pub fn fit(
     starts: &[Oscillator],
 ) -> Result<FlatnessFit, IdentError> {
     use rayon::prelude::*;
-    if !(fs.is_finite() && fs > 0.0) {
-        return Err(IdentError::BadRate { fs });
-    }
-    let (lo, hi) = band.bins(fs);
-    let ordered = band.low_hz.is_finite() && band.high_hz.is_finite() && band.low_hz < band.high_hz;
-    if !ordered || hi < lo + 8 {
-        return Err(IdentError::BadBand {
-            low_hz: band.low_hz,
-            high_hz: band.high_hz,
-            fs,
-            period: band.period,
-        });
-    }
+    let (lo, hi) = band.check(fs)?;
     let (p, periods) = Period::new(y, fs, band.period)?;
     let fits: Vec<Result<FlatnessFit, IdentError>> = starts
         .par_iter()
@@ -587,6 +609,24 @@ mod tests {
             fit(&y, 0.0, &band, &[truth]),
             Err(IdentError::BadRate { .. })
         ));
+        let short = ExcitationBand { period: 1, ..band };
+        assert_eq!(
+            short.check(FS),
+            Err(IdentError::PeriodTooShort { period: 1 })
+        );
+        let high = ExcitationBand {
+            high_hz: 400.0,
+            ..band
+        };
+        let e = high.check(FS).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            format!(
+                "excitation band {}..400 Hz reaches above the Nyquist frequency 375 Hz of 750 Hz",
+                band.low_hz
+            )
+        );
+        assert_eq!(band.check(FS), Ok(band.bins(FS)));
         let zener = Oscillator::zener(
             2.0,
             10.0,

@@ -54,6 +54,11 @@ pub fn identify(y: &[f64], fs: f64, opts: &IdentOptions) -> Result<Identificatio
     if !(opts.mass.is_finite() && opts.mass > 0.0) {
         return Err(IdentError::NonPositiveMass { mass: opts.mass });
     }
+    // A band that can never give a flatness fit is refused before the work, not reported in
+    // a note after it.
+    if let Some(band) = &opts.excitation {
+        band.check(fs)?;
+    }
     let prepared = prepare(y, fs, opts)?;
     let ssi = run_ssi(&prepared, opts)?;
     let mut poles = select_poles(&ssi, &prepared, opts)?;

@@ -129,6 +129,11 @@ def test_levels_give_the_commands_document(hyst_bin, tmp_path):
         (lambda: hyst.simulate("benchmark", np.ones(8), FS, integrator="euler"), 'integrator "euler" is not one of'),
         (lambda: hyst.simulate("benchmark", np.ones(8), -1.0), "sampling rate must be > 0"),
         (lambda: hyst.identify(np.zeros(4096), FS, 2.0), "constant"),
+        (
+            lambda: hyst.identify(np.random.default_rng(5).standard_normal(4096), 750.0, 2.0,
+                                  excitation_band=(5.0, 400.0), period=1024),
+            "excitation band 5..400 Hz reaches above the Nyquist frequency 375 Hz of 750 Hz",
+        ),
         (lambda: hyst.refine(np.ones(10), np.ones(10), FS, start="cubic"), 'start "cubic" is not one of'),
         (lambda: hyst.levels([np.ones(100)], FS, 2.0, validate=[{"u": [1.0], "x": [2.0]}]), "unknown keys ['x']"),
     ],
