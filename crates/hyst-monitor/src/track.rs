@@ -74,10 +74,11 @@ pub struct Loaded {
 }
 
 /// Identify the records `names` in parallel (rayon), one loaded at a time per worker:
-/// `load(i)` gives record i or why it cannot be read. A record named in `done` (an earlier,
-/// interrupted run's) is taken from there, not identified again; `finished` hears each newly
-/// identified record as it completes (to append it to a resumable output). The records come
-/// back in the order of `names`.
+/// `load(i)` gives record i or why it cannot be read, and is called at most once for each i
+/// (so it may hand over data it holds). A record named in `done` (an earlier, interrupted
+/// run's) is taken from there, not identified again; `finished` hears each newly identified
+/// record as it completes (to append it to a resumable output). The records come back in the
+/// order of `names`.
 pub fn identify_records(
     names: &[String],
     load: &(dyn Fn(usize) -> Result<Loaded, String> + Sync),

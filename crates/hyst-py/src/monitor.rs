@@ -32,15 +32,18 @@ pub(crate) fn track(
             covariates.len()
         )));
     }
-    // The columns copied out of the arrays while the GIL is held; then the work without it.
-    let data: Vec<Vec<Vec<f64>>> = records
+    // The columns copied out of the arrays while the GIL is held; then the work without it,
+    // each record's copy handed over when it is loaded (once) and freed when it is done.
+    let data: Vec<std::sync::Mutex<Vec<Vec<f64>>>> = records
         .iter()
         .map(|r| {
-            r.as_array()
-                .columns()
-                .into_iter()
-                .map(|c| c.to_vec())
-                .collect()
+            std::sync::Mutex::new(
+                r.as_array()
+                    .columns()
+                    .into_iter()
+                    .map(|c| c.to_vec())
+                    .collect(),
+            )
         })
         .collect();
     let names: Vec<String> = (0..n).map(|i| i.to_string()).collect();
@@ -58,7 +61,7 @@ pub(crate) fn track(
         .with_refine(refine.then(covssi::RefineOptions::default));
     let load = |i: usize| -> Result<Loaded, String> {
         Ok(Loaded {
-            channels: data[i].clone(),
+            channels: std::mem::take(&mut *data[i].lock().map_err(|e| e.to_string())?),
             fs,
             time: times[i],
             covariates: covariates[i].clone(),
