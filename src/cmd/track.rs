@@ -44,6 +44,11 @@ pub(crate) struct TrackArgs {
     /// The first this many records train the baselines (default: 336, at most half).
     #[arg(long)]
     pub(crate) training: Option<usize>,
+    /// Chart the standardized residuals as they are, not the innovations of their
+    /// autoregression over the training records (which removes a slow effect the covariates
+    /// leave unexplained, and is p = 0, the residuals themselves, when there is none).
+    #[arg(long)]
+    pub(crate) no_whiten: bool,
     /// Folder for `records.jsonl` (each record's modes, appended as they come: a run
     /// interrupted continues where it stopped), `table.csv` and `table.jsonl` (record ×
     /// mode) and `report.json`.
@@ -236,6 +241,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
     bar.finish_and_clear();
     let mut opts = TrackOptions::default();
     opts.training = a.training.unwrap_or(opts.training.min(names.len() / 2));
+    opts.whiten = !a.no_whiten;
     let reference = a.reference.as_deref().map(reference_modes).transpose()?;
     let report = hyst::monitor::track(&records, reference.as_deref(), &opts)
         .map_err(|e| fail(e.to_string()))?;
@@ -275,6 +281,7 @@ fn write_table(path: &Path, report: &TrackReport, cov_names: &[String]) -> Resul
         "mac",
         "misfit_flag",
         "z",
+        "innovation",
         "alarm",
     ]
     .iter()
@@ -296,6 +303,7 @@ fn write_table(path: &Path, report: &TrackReport, cov_names: &[String]) -> Resul
             format!("{:e}", r.mac),
             r.misfit_flag.to_string(),
             opt(r.z),
+            opt(r.innovation),
             r.alarm
                 .map_or(String::new(), |s| format!("{s:?}").to_lowercase()),
         ];

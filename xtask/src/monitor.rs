@@ -23,6 +23,12 @@ pub struct DemoArgs {
     /// The day the stiffness loss starts.
     #[arg(long, default_value_t = 45.0)]
     change_day: f64,
+    /// The relative frequency change the temperature does not explain (standard deviation).
+    #[arg(long, default_value_t = 2e-4)]
+    unexplained: f64,
+    /// Its correlation time in hours (0: independent from record to record).
+    #[arg(long, default_value_t = 0.0)]
+    unexplained_hours: f64,
 }
 
 /// Peak resident memory so far (MB), from /proc (0 where there is none).
@@ -43,49 +49,28 @@ pub fn run(a: &DemoArgs) -> Result<(), String> {
     campaign.days = a.days;
     campaign.per_day = a.per_day;
     campaign.seed = a.seed;
+    campaign.unexplained = a.unexplained;
+    campaign.unexplained_hours = a.unexplained_hours;
     if let Some(c) = campaign.change.as_mut() {
         c.0 = a.change_day;
     }
     let n = campaign.len();
-    let analysis = covssi::AnalysisOptions::default().with_ssi(covssi::SsiOptions {
-        block_rows: covssi::BlockRows::Seconds(3.0),
-        ..covssi::SsiOptions::default()
-    });
-    let bar = indicatif::ProgressBar::new(n as u64);
     let t0 = Instant::now();
-    let mut half_peak = 0.0;
-    let mut records: Vec<RecordModes> = Vec::with_capacity(n);
-    // In two halves, to see whether memory grows with the records done.
-    for range in [0..n / 2, n / 2..n] {
-        let part: Vec<RecordModes> = range
-            .into_par_iter()
-            .map(|i| {
-                let r = campaign.record(i);
-                let views: Vec<&[f64]> = r.channels.iter().map(|c| c.as_slice()).collect();
-                let outcome = identify(&views, campaign.fs, &analysis).map_err(|e| e.to_string());
-                bar.inc(1);
-                RecordModes {
-                    name: format!("record {i}"),
-                    time: r.time_s,
-                    covariates: vec![r.temperature],
-                    outcome,
-                }
-            })
-            .collect();
-        records.extend(part);
-        if half_peak == 0.0 {
-            half_peak = peak_mb();
-        }
-    }
-    bar.finish_and_clear();
+    let (records, half_peak) = identify_campaign(&campaign);
     let identify_s = t0.elapsed().as_secs_f64();
     let mut opts = TrackOptions::default();
     opts.training = (campaign.per_day * 14).min(n / 2);
     let report = track(&records, None, &opts).map_err(|e| e.to_string())?;
     let total_s = t0.elapsed().as_secs_f64();
     println!(
-        "monitor_records {n} ({} days × {}/day, {} s at {} Hz, {} channels)",
-        campaign.days, campaign.per_day, campaign.seconds, campaign.fs, campaign.channels
+        "monitor_records {n} ({} days × {}/day, {} s at {} Hz, {} channels; unexplained {:e} correlated over {} h)",
+        campaign.days,
+        campaign.per_day,
+        campaign.seconds,
+        campaign.fs,
+        campaign.channels,
+        campaign.unexplained,
+        campaign.unexplained_hours
     );
     for (j, (m, share)) in report.reference.iter().zip(&report.tracked).enumerate() {
         println!(
@@ -102,6 +87,26 @@ pub fn run(a: &DemoArgs) -> Result<(), String> {
         .filter(|al| change.is_none_or(|(day, _, _)| al.time < day * 86400.0))
         .collect();
     println!("monitor_false_alarms {}", before.len());
+    // The same records charted without whitening, for comparison.
+    let mut raw_opts = opts.clone();
+    raw_opts.whiten = false;
+    let raw = track(&records, None, &raw_opts).map_err(|e| e.to_string())?;
+    let raw_before = raw
+        .alarms
+        .iter()
+        .filter(|al| change.is_none_or(|(day, _, _)| al.time < day * 86400.0))
+        .count();
+    println!("monitor_false_alarms_unwhitened {raw_before}");
+    for (j, m) in report.residual_models.iter().enumerate() {
+        if let Some(m) = m.as_ref().filter(|m| !m.coefficients.is_empty()) {
+            println!(
+                "  mode {j}: residuals AR({}) {:.2?}, innovations {:.2} SD",
+                m.coefficients.len(),
+                m.coefficients,
+                m.innovation_sd
+            );
+        }
+    }
     for al in &before {
         println!(
             "  false alarm: mode {} at day {:.2} ({:?})",
@@ -177,4 +182,41 @@ pub fn bench() {
         "monitor_peak_mb_1h_10ch_100hz {:.0} (one record is {record_mb:.0} MB; two in flight)",
         peak_mb()
     );
+}
+
+/// Every record of `campaign` identified, in two halves (to see whether memory grows with the
+/// records done); the records and the peak memory after the first half (MB).
+fn identify_campaign(campaign: &Campaign) -> (Vec<RecordModes>, f64) {
+    let n = campaign.len();
+    let analysis = covssi::AnalysisOptions::default().with_ssi(covssi::SsiOptions {
+        block_rows: covssi::BlockRows::Seconds(3.0),
+        ..covssi::SsiOptions::default()
+    });
+    let bar = indicatif::ProgressBar::new(n as u64);
+    let mut half_peak = 0.0;
+    let mut records: Vec<RecordModes> = Vec::with_capacity(n);
+    // In two halves, to see whether memory grows with the records done.
+    for range in [0..n / 2, n / 2..n] {
+        let part: Vec<RecordModes> = range
+            .into_par_iter()
+            .map(|i| {
+                let r = campaign.record(i);
+                let views: Vec<&[f64]> = r.channels.iter().map(|c| c.as_slice()).collect();
+                let outcome = identify(&views, campaign.fs, &analysis).map_err(|e| e.to_string());
+                bar.inc(1);
+                RecordModes {
+                    name: format!("record {i}"),
+                    time: r.time_s,
+                    covariates: vec![r.temperature],
+                    outcome,
+                }
+            })
+            .collect();
+        records.extend(part);
+        if half_peak == 0.0 {
+            half_peak = peak_mb();
+        }
+    }
+    bar.finish_and_clear();
+    (records, half_peak)
 }

@@ -7,7 +7,8 @@
 //! Record i is taken at t_i = i / per_day days. The temperature is
 //! T(t) = T₀ + A_d sin(2π t) + A_s sin(2π t / P_s) (a daily cycle and a seasonal swing); mode
 //! j's frequency is f_j (1 + a (T − T₀)) (1 + η_ij), with η_ij an environmental effect the
-//! temperature does not explain (white, of standard deviation `unexplained`), times
+//! temperature does not explain (of standard deviation `unexplained`; independent from record
+//! to record, or with `unexplained_hours` a first-order autoregression), times
 //! (1 + `change`) for the changed mode from `change_day` on. The excitation level is
 //! log-normal (its log's standard deviation `level_spread`); the sensors' noise has a fixed
 //! size, so its fraction of the response is `noise` / level. The temperature is measured with
@@ -41,6 +42,10 @@ pub struct Campaign {
     pub temperature_noise: f64,
     /// Standard deviation of the relative frequency change the temperature does not explain.
     pub unexplained: f64,
+    /// Its correlation time (hours): 0 makes it independent from record to record, τ > 0 a
+    /// first-order autoregression over the records with φ = e^{−Δt/τ} (an unmeasured slow
+    /// effect: moisture, the structure's temperature lagging the air's).
+    pub unexplained_hours: f64,
     /// Standard deviation of the log of the excitation level.
     pub level_spread: f64,
     /// The sensors' noise as a fraction of the response at level 1.
@@ -68,12 +73,26 @@ impl Default for Campaign {
             temperature_coefficient: -0.0015,
             temperature_noise: 0.2,
             unexplained: 2e-4,
+            unexplained_hours: 0.0,
             level_spread: 0.5,
             noise: 0.05,
             change: Some((45.0, 1, -0.005)),
             seed: 700_000,
         }
     }
+}
+
+/// The structure and its environment when a record is taken.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CampaignState {
+    /// When (s from the campaign's start).
+    pub time_s: f64,
+    /// The temperature as measured (°C).
+    pub temperature: f64,
+    /// The modes' true frequencies (Hz).
+    pub frequencies: Vec<f64>,
+    /// The excitation's level (the sensors' noise is `noise / level` of the response).
+    pub level: f64,
 }
 
 /// One record of a campaign, with what made it.
@@ -105,23 +124,53 @@ impl Campaign {
         i as f64 / self.per_day as f64
     }
 
-    /// Record `i`.
-    pub fn record(&self, i: usize) -> CampaignRecord {
-        let seed = self.seed + i as u64;
-        let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed ^ 0x5eed);
+    /// The unit-variance autoregressive effect of each mode at record `i` (`None` when the
+    /// effect is independent): √(1 − φ²) Σ_k φ^k w_{i−k}, the sum cut where φ^k < 10⁻⁴, each
+    /// w_m a standard normal drawn from its own seed, so that any record is made alone.
+    fn correlated_unexplained(&self, i: usize) -> Option<Vec<f64>> {
+        if self.unexplained_hours.is_nan() || self.unexplained_hours <= 0.0 {
+            return None;
+        }
+        let step_hours = 24.0 / self.per_day as f64;
+        let phi = (-step_hours / self.unexplained_hours).exp();
+        let terms = ((1e-4f64).ln() / phi.ln()).ceil().max(1.0) as i64;
+        let normal = Normal::new(0.0, 1.0).expect("unit normal");
+        let mut eta = vec![0.0; self.modes.len()];
+        let mut weight = (1.0 - phi * phi).sqrt();
+        for k in 0..terms {
+            let m = i as i64 - k;
+            let seed = (self.seed ^ 0xc0_ffee_u64).wrapping_add(m as u64);
+            let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+            for e in eta.iter_mut() {
+                *e += weight * normal.sample(&mut rng);
+            }
+            weight *= phi;
+        }
+        Some(eta)
+    }
+
+    /// The state of the structure and its environment at record `i`, without the record
+    /// itself (cheap: for tests of the tracking on known frequencies).
+    pub fn state(&self, i: usize) -> CampaignState {
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64((self.seed + i as u64) ^ 0x5eed);
         let normal = Normal::new(0.0, 1.0).expect("unit normal");
         let t = self.day(i);
         let (t0, daily, seasonal, period) = self.temperature;
         let two_pi = 2.0 * std::f64::consts::PI;
         let temp = t0 + daily * (two_pi * t).sin() + seasonal * (two_pi * t / period).sin();
+        let correlated = self.correlated_unexplained(i);
         let frequencies: Vec<f64> = self
             .modes
             .iter()
             .enumerate()
             .map(|(j, &(f, _))| {
+                // Drawn in any case, so that the other draws are those of an independent
+                // effect's campaign.
+                let independent = normal.sample(&mut rng);
+                let eta = correlated.as_ref().map_or(independent, |c| c[j]);
                 let mut f = f
                     * (1.0 + self.temperature_coefficient * (temp - t0))
-                    * (1.0 + self.unexplained * normal.sample(&mut rng));
+                    * (1.0 + self.unexplained * eta);
                 if let Some((day, mode, change)) = self.change
                     && t >= day
                     && mode == j
@@ -133,6 +182,18 @@ impl Campaign {
             .collect();
         let level = (self.level_spread * normal.sample(&mut rng)).exp();
         let measured = temp + self.temperature_noise * normal.sample(&mut rng);
+        CampaignState {
+            time_s: t * 86400.0,
+            temperature: measured,
+            frequencies,
+            level,
+        }
+    }
+
+    /// Record `i`.
+    pub fn record(&self, i: usize) -> CampaignRecord {
+        let state = self.state(i);
+        let level = state.level;
         let l = self.channels;
         let gains: Vec<Vec<f64>> = (0..l)
             .map(|c| {
@@ -147,7 +208,8 @@ impl Campaign {
                     .collect()
             })
             .collect();
-        let modes: Vec<(f64, f64)> = frequencies
+        let modes: Vec<(f64, f64)> = state
+            .frequencies
             .iter()
             .zip(&self.modes)
             .map(|(&f, &(_, z))| (f, z))
@@ -156,11 +218,11 @@ impl Campaign {
         let channels = ModalRecord::new(self.fs, &modes)
             .with_gains(gains)
             .with_noise(self.noise / level)
-            .generate(n, seed);
+            .generate(n, self.seed + i as u64);
         CampaignRecord {
-            time_s: t * 86400.0,
-            temperature: measured,
-            frequencies,
+            time_s: state.time_s,
+            temperature: state.temperature,
+            frequencies: state.frequencies,
             channels,
         }
     }

@@ -1,7 +1,7 @@
 //! Structural health monitoring: the modes of many records of one structure tracked over
 //! time, and a change in them told from estimation noise and the environment's effect.
 //!
-//! One job, in three steps, each its own module, which [`track()`](fn@track) runs over a campaign's
+//! One job, in four steps, each its own module, which [`track()`](fn@track) runs over a campaign's
 //! records (each identified by [`identify`], as `hyst ssi` does):
 //!
 //! * [`matching`]: a record's modes assigned one-to-one to a reference set, by frequency and
@@ -15,9 +15,14 @@
 //!   covariates leave unexplained, of variance σ² estimated by the method of moments. A new
 //!   record's standardized residual is z = (f − f̂) / √(s² + σ² + x̃ᵀ Cov(β̂) x̃), where the last
 //!   term is the fit's own uncertainty at the record's covariates.
-//! * [`chart`]: a two-sided CUSUM of the standardized residuals, S⁺ = max(0, S⁺ + z − k),
-//!   S⁻ = max(0, S⁻ − z − k), an alarm when either passes h; its in-control average run
-//!   length (the false-alarm rate's inverse) from Siegmund's approximation.
+//! * [`whiten`]: the residuals' correlation from record to record (a slow effect the
+//!   covariates leave unexplained) fitted over the training period by an autoregression
+//!   z_t = Σ_{k≤p} φ_k z_{t−k} + a_t, p ≤ 8 by BIC (0 when they are independent), and the
+//!   standardized innovations a_t / s_a passed on instead of the z.
+//! * [`chart`]: a two-sided CUSUM of those values v, S⁺ = max(0, S⁺ + v − k),
+//!   S⁻ = max(0, S⁻ − v − k), an alarm when either passes h; its in-control average run
+//!   length (the false-alarm rate's inverse) from Siegmund's approximation, which holds for
+//!   independent standard normal values.
 
 #![warn(missing_docs)]
 
@@ -28,6 +33,7 @@ pub mod chart;
 pub mod matching;
 mod report;
 pub mod track;
+pub mod whiten;
 
 pub use baseline::{Baseline, fit_baseline};
 pub use chart::{Alarm, Cusum, Side};
@@ -36,6 +42,7 @@ pub use track::{
     Identified, Loaded, ModeAlarm, RecordModes, TrackOptions, TrackReport, TrackRow, identify,
     identify_records, reported_modes, track,
 };
+pub use whiten::ResidualModel;
 
 /// Errors of monitoring.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

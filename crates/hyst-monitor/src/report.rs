@@ -42,6 +42,19 @@ impl fmt::Display for TrackReport {
                         b.unexplained_sd_hz,
                         b.records
                     )?;
+                    if let Some(Some(m)) = self.residual_models.get(j)
+                        && !m.coefficients.is_empty()
+                    {
+                        let phi: Vec<String> =
+                            m.coefficients.iter().map(|c| format!("{c:.2}")).collect();
+                        writeln!(
+                            f,
+                            "  its residuals are correlated from record to record: AR({}) [{}], innovations of {:.2} standard deviations charted",
+                            phi.len(),
+                            phi.join(", "),
+                            m.innovation_sd
+                        )?;
+                    }
                 }
                 (_, Some(Some(e))) => writeln!(f, "; no baseline: {e}")?,
                 _ => writeln!(f)?,
@@ -64,7 +77,7 @@ impl fmt::Display for TrackReport {
         }
         writeln!(
             f,
-            "CUSUM of the standardized residuals: one false alarm per {:.3e} records per mode when nothing changes",
+            "CUSUM of the standardized residuals (of their innovations where correlated): one false alarm per {:.3e} records per mode when nothing changes and the values charted are independent",
             self.in_control_run_length
         )?;
         if self.alarms.is_empty() {

@@ -5,6 +5,7 @@ use crate::MonitorError;
 use crate::baseline::{Baseline, fit_baseline};
 use crate::chart::{Cusum, Side};
 use crate::matching::{MatchOptions, ModeEstimate, match_modes};
+use crate::whiten::ResidualModel;
 
 /// One record's identification, as the campaign's tracking takes it.
 #[derive(Debug, Clone, PartialEq)]
@@ -132,6 +133,9 @@ pub struct TrackOptions {
     pub reference_pool: usize,
     /// The chart of the standardized residuals.
     pub chart: Cusum,
+    /// Chart the innovations of the residuals' autoregression over the training records
+    /// (default), not the residuals themselves: see [`crate::whiten`].
+    pub whiten: bool,
 }
 
 impl Default for TrackOptions {
@@ -141,6 +145,7 @@ impl Default for TrackOptions {
             training: 336,
             reference_pool: 24,
             chart: Cusum::default(),
+            whiten: true,
         }
     }
 }
@@ -171,6 +176,9 @@ pub struct TrackRow {
     pub misfit_flag: bool,
     /// The standardized residual against the baseline (records after training).
     pub z: Option<f64>,
+    /// What the chart was given: z less what the residuals before it predict, standardized
+    /// (z itself when the residuals are independent, or after a gap).
+    pub innovation: Option<f64>,
     /// An alarm this record raised on this mode.
     pub alarm: Option<Side>,
     /// The covariates.
@@ -207,6 +215,9 @@ pub struct TrackReport {
     pub baselines: Vec<Option<Baseline>>,
     /// Why a mode has no baseline.
     pub baseline_errors: Vec<Option<String>>,
+    /// Each mode's autoregression of its training residuals, whose innovations were charted
+    /// (`None` without a baseline).
+    pub residual_models: Vec<Option<ResidualModel>>,
     /// Each reference mode's share of the identified records that had it.
     pub tracked: Vec<f64>,
     /// The alarms, in time order.
@@ -267,6 +278,7 @@ pub fn track(
                 mac: *mac,
                 misfit_flag: id.misfit.is_some_and(|f| f > misfit_limit),
                 z: None,
+                innovation: None,
                 alarm: None,
                 covariates: r.covariates.clone(),
             });
@@ -275,17 +287,20 @@ pub fn track(
     }
     let mut baselines = Vec::with_capacity(reference.len());
     let mut baseline_errors = Vec::with_capacity(reference.len());
+    let mut residual_models = Vec::with_capacity(reference.len());
     let mut alarms = Vec::new();
     for mode in 0..reference.len() {
-        match chart_mode(&mut rows, mode, opts) {
-            Ok((b, found)) => {
+        match chart_mode(&mut rows, mode, records.len(), opts) {
+            Ok((b, model, found)) => {
                 baselines.push(Some(b));
                 baseline_errors.push(None);
+                residual_models.push(Some(model));
                 alarms.extend(found);
             }
             Err(e) => {
                 baselines.push(None);
                 baseline_errors.push(Some(e.to_string()));
+                residual_models.push(None);
             }
         }
     }
@@ -302,6 +317,7 @@ pub fn track(
         new_modes,
         baselines,
         baseline_errors,
+        residual_models,
         tracked,
         alarms,
         in_control_run_length: opts.chart.in_control_run_length(),
@@ -309,23 +325,29 @@ pub fn track(
 }
 
 /// Fit `mode`'s baseline on its training rows, standardize its later rows (setting their
-/// `z`) and chart them (setting `alarm`); the baseline and the alarms.
+/// `z`), whiten them by the training residuals' autoregression when `opts.whiten` (setting
+/// `innovation`) and chart them (setting `alarm`); the baseline, the residual model and the
+/// alarms. `records` counts the campaign's records: one missing the mode is a gap.
 fn chart_mode(
     rows: &mut [TrackRow],
     mode: usize,
+    records: usize,
     opts: &TrackOptions,
-) -> Result<(Baseline, Vec<ModeAlarm>), MonitorError> {
-    let ours: Vec<usize> = (0..rows.len()).filter(|&k| rows[k].mode == mode).collect();
-    // Training: the mode's rows among the first records, with a standard error.
-    let train: Vec<usize> = ours
-        .iter()
-        .copied()
-        .filter(|&k| {
-            rows[k].record < opts.training
-                && rows[k].frequency_se_hz.is_some()
-                && rows[k].covariates.iter().all(|v| v.is_finite())
-        })
-        .collect();
+) -> Result<(Baseline, ResidualModel, Vec<ModeAlarm>), MonitorError> {
+    // The mode's row of each record, if it has one with what the chart needs (a standard
+    // error and every covariate).
+    let mut row_of: Vec<Option<usize>> = vec![None; records];
+    for (k, r) in rows.iter().enumerate() {
+        if r.mode == mode
+            && r.record < records
+            && r.frequency_se_hz.is_some()
+            && r.covariates.iter().all(|v| v.is_finite())
+        {
+            row_of[r.record] = Some(k);
+        }
+    }
+    let training = opts.training.min(records);
+    let train: Vec<usize> = row_of[..training].iter().flatten().copied().collect();
     let f: Vec<f64> = train.iter().map(|&k| rows[k].frequency_hz).collect();
     let se: Vec<f64> = train
         .iter()
@@ -333,27 +355,40 @@ fn chart_mode(
         .collect();
     let x: Vec<Vec<f64>> = train.iter().map(|&k| rows[k].covariates.clone()).collect();
     let b = fit_baseline(&f, &se, &x)?;
-    let later: Vec<usize> = ours
+    // Each record's standardized residual, NaN where it has none (not charted: a record
+    // without its covariates is tracked all the same).
+    let z: Vec<f64> = row_of
         .iter()
-        .copied()
-        .filter(|&k| rows[k].record >= opts.training)
-        .collect();
-    let z: Vec<f64> = later
-        .iter()
-        .map(|&k| match rows[k].frequency_se_hz {
-            // A record without its covariates (NaN) is tracked but not charted.
-            Some(s) if rows[k].covariates.iter().all(|v| v.is_finite()) => {
-                b.standardized(rows[k].frequency_hz, s, &rows[k].covariates)
+        .map(|k| match k {
+            Some(k) => {
+                let r = &rows[*k];
+                b.standardized(
+                    r.frequency_hz,
+                    r.frequency_se_hz.unwrap_or(0.0),
+                    &r.covariates,
+                )
             }
-            _ => f64::NAN,
+            None => f64::NAN,
         })
         .collect();
-    for (&k, &v) in later.iter().zip(&z) {
-        rows[k].z = v.is_finite().then_some(v);
+    let (history, later) = z.split_at(training);
+    let model = if opts.whiten {
+        ResidualModel::fit(history)
+    } else {
+        ResidualModel::default()
+    };
+    let innovations = model.innovations(history, later);
+    for (i, (&v, &a)) in later.iter().zip(&innovations).enumerate() {
+        if let Some(k) = row_of[training + i] {
+            rows[k].z = v.is_finite().then_some(v);
+            rows[k].innovation = a.is_finite().then_some(a);
+        }
     }
     let mut alarms = Vec::new();
-    for a in opts.chart.alarms(&z) {
-        let k = later[a.index];
+    for a in opts.chart.alarms(&innovations) {
+        let Some(k) = row_of[training + a.index] else {
+            continue;
+        };
         rows[k].alarm = Some(a.side);
         alarms.push(ModeAlarm {
             mode,
@@ -362,7 +397,7 @@ fn chart_mode(
             side: a.side,
         });
     }
-    Ok((b, alarms))
+    Ok((b, model, alarms))
 }
 
 #[cfg(test)]

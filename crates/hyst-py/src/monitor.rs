@@ -11,7 +11,7 @@ use crate::ident::{Report, value_error};
 /// Track the modes of `records` (each samples × channels); see the Python wrapper
 /// `hyst.track`.
 #[pyfunction]
-#[pyo3(signature = (records, fs, *, times, covariates, training, block_rows, lag_seconds, refine))]
+#[pyo3(signature = (records, fs, *, times, covariates, training, block_rows, lag_seconds, refine, whiten))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn track(
     py: Python<'_>,
@@ -23,6 +23,7 @@ pub(crate) fn track(
     block_rows: Option<usize>,
     lag_seconds: Option<f64>,
     refine: bool,
+    whiten: bool,
 ) -> PyResult<Report> {
     let n = records.len();
     if times.len() != n || covariates.len() != n {
@@ -69,6 +70,7 @@ pub(crate) fn track(
     };
     let mut opts = TrackOptions::default();
     opts.training = training.unwrap_or(opts.training.min(n / 2));
+    opts.whiten = whiten;
     let report = py
         .detach(|| {
             let identified =

@@ -389,7 +389,7 @@ def levels(records, fs, mass, *, by_simulation=False, data_periodic=False, fit_e
 
 
 def track(records, fs, *, times=None, covariates=None, training=None, block_rows=None,
-          lag_seconds=None, refine=True):
+          lag_seconds=None, refine=True, whiten=True):
     """Track the modes of many records of one structure (``hyst track``).
 
     Each record is identified as :func:`ssi` does (in parallel), its modes matched to a
@@ -416,13 +416,17 @@ def track(records, fs, *, times=None, covariates=None, training=None, block_rows
     refine : bool
         The maximum-likelihood refinement (default True; without it there are no standard
         errors and no chart).
+    whiten : bool
+        Chart the innovations of the residuals' autoregression over the training records
+        (default True: a slow effect the covariates leave unexplained is then not taken for
+        a change), or the residuals as they are (``hyst track --no-whiten``).
 
     Returns
     -------
     Report
         ``str(report)`` as ``hyst track`` prints; ``report.to_dict()`` its ``report.json``:
         ``reference``, ``rows`` (record x mode), ``skipped``, ``baselines``, ``alarms``,
-        ``tracked``, ``in_control_run_length``.
+        ``residual_models``, ``tracked``, ``in_control_run_length``.
     """
     import os
 
@@ -458,4 +462,5 @@ def track(records, fs, *, times=None, covariates=None, training=None, block_rows
         training=None if training is None else int(training),
         block_rows=None if block_rows is None else int(block_rows),
         lag_seconds=None if lag_seconds is None else float(lag_seconds), refine=bool(refine),
+        whiten=bool(whiten),
     )

@@ -109,6 +109,7 @@ def track(
     block_rows: Optional[int] = ...,
     lag_seconds: Optional[float] = ...,
     refine: bool = ...,
+    whiten: bool = ...,
 ) -> Report: ...
 
 @dataclass(frozen=True)
