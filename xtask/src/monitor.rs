@@ -98,12 +98,13 @@ pub fn run(a: &DemoArgs) -> Result<(), String> {
         .count();
     println!("monitor_false_alarms_unwhitened {raw_before}");
     for (j, m) in report.residual_models.iter().enumerate() {
-        if let Some(m) = m.as_ref().filter(|m| !m.coefficients.is_empty()) {
+        if let Some(m) = m {
             println!(
-                "  mode {j}: residuals AR({}) {:.2?}, innovations {:.2} SD",
-                m.coefficients.len(),
-                m.coefficients,
-                m.innovation_sd
+                "  mode {j}: a slow effect of {:.2e} Hz, persistence {:.3} (−2 ln L down {:.1}); {:.0} % of a lasting change kept",
+                m.latent_var.sqrt(),
+                m.persistence,
+                m.deviance_drop,
+                100.0 * m.lasting_change_share
             );
         }
     }

@@ -42,6 +42,11 @@ pub struct Campaign {
     pub temperature_noise: f64,
     /// Standard deviation of the relative frequency change the temperature does not explain.
     pub unexplained: f64,
+    /// The structure's thermal time constant τ (hours): the frequencies follow the air's
+    /// temperature through a first-order lag, each cycle of period P damped by
+    /// 1/√(1 + (2πτ/P)²) and delayed by atan(2πτ/P)/(2π/P), while the covariate is the air's
+    /// temperature (0: no lag).
+    pub thermal_lag_hours: f64,
     /// Its correlation time (hours): 0 makes it independent from record to record, τ > 0 a
     /// first-order autoregression over the records with φ = e^{−Δt/τ} (an unmeasured slow
     /// effect: moisture, the structure's temperature lagging the air's).
@@ -74,6 +79,7 @@ impl Default for Campaign {
             temperature_noise: 0.2,
             unexplained: 2e-4,
             unexplained_hours: 0.0,
+            thermal_lag_hours: 0.0,
             level_spread: 0.5,
             noise: 0.05,
             change: Some((45.0, 1, -0.005)),
@@ -158,6 +164,12 @@ impl Campaign {
         let (t0, daily, seasonal, period) = self.temperature;
         let two_pi = 2.0 * std::f64::consts::PI;
         let temp = t0 + daily * (two_pi * t).sin() + seasonal * (two_pi * t / period).sin();
+        // The structure's temperature: each cycle through the lag's gain and phase.
+        let lagged = |amplitude: f64, period_days: f64| {
+            let wt = two_pi * self.thermal_lag_hours / 24.0 / period_days;
+            amplitude / (1.0 + wt * wt).sqrt() * (two_pi * t / period_days - wt.atan()).sin()
+        };
+        let structure = t0 + lagged(daily, 1.0) + lagged(seasonal, period);
         let correlated = self.correlated_unexplained(i);
         let frequencies: Vec<f64> = self
             .modes
@@ -169,7 +181,7 @@ impl Campaign {
                 let independent = normal.sample(&mut rng);
                 let eta = correlated.as_ref().map_or(independent, |c| c[j]);
                 let mut f = f
-                    * (1.0 + self.temperature_coefficient * (temp - t0))
+                    * (1.0 + self.temperature_coefficient * (structure - t0))
                     * (1.0 + self.unexplained * eta);
                 if let Some((day, mode, change)) = self.change
                     && t >= day

@@ -15,10 +15,11 @@
 //!   covariates leave unexplained, of variance σ² estimated by the method of moments. A new
 //!   record's standardized residual is z = (f − f̂) / √(s² + σ² + x̃ᵀ Cov(β̂) x̃), where the last
 //!   term is the fit's own uncertainty at the record's covariates.
-//! * [`whiten`]: the residuals' correlation from record to record (a slow effect the
-//!   covariates leave unexplained) fitted over the training period by an autoregression
-//!   z_t = Σ_{k≤p} φ_k z_{t−k} + a_t, p ≤ 8 by BIC (0 when they are independent), and the
-//!   standardized innovations a_t / s_a passed on instead of the z.
+//! * [`whiten`]: a slow effect the covariates leave unexplained, which makes the residuals
+//!   correlated from record to record, modelled over the training period as a latent
+//!   first-order autoregression under the white estimation noise (whose variance each
+//!   record's standard error gives), fitted by the Kalman filter's likelihood and kept when
+//!   BIC says so; the filter's standardized innovations are then passed on instead of the z.
 //! * [`chart`]: a two-sided CUSUM of those values v, S⁺ = max(0, S⁺ + v − k),
 //!   S⁻ = max(0, S⁻ − v − k), an alarm when either passes h; its in-control average run
 //!   length (the false-alarm rate's inverse) from Siegmund's approximation, which holds for

@@ -42,17 +42,13 @@ impl fmt::Display for TrackReport {
                         b.unexplained_sd_hz,
                         b.records
                     )?;
-                    if let Some(Some(m)) = self.residual_models.get(j)
-                        && !m.coefficients.is_empty()
-                    {
-                        let phi: Vec<String> =
-                            m.coefficients.iter().map(|c| format!("{c:.2}")).collect();
+                    if let Some(Some(m)) = self.residual_models.get(j) {
                         writeln!(
                             f,
-                            "  its residuals are correlated from record to record: AR({}) [{}], innovations of {:.2} standard deviations charted",
-                            phi.len(),
-                            phi.join(", "),
-                            m.innovation_sd
+                            "  a slow effect the covariates do not explain: {:.2e} Hz, correlation {:.3} from record to record; its filter's innovations charted, which keep {:.0} % of a lasting change once settled (a covariate that explains the effect keeps it all)",
+                            m.latent_var.sqrt(),
+                            m.persistence,
+                            100.0 * m.lasting_change_share
                         )?;
                     }
                 }
@@ -77,7 +73,7 @@ impl fmt::Display for TrackReport {
         }
         writeln!(
             f,
-            "CUSUM of the standardized residuals (of their innovations where correlated): one false alarm per {:.3e} records per mode when nothing changes and the values charted are independent",
+            "CUSUM of the standardized residuals (of their filter's innovations where a slow effect was found): one false alarm per {:.3e} records per mode when nothing changes and the values charted are independent",
             self.in_control_run_length
         )?;
         if self.alarms.is_empty() {

@@ -133,8 +133,9 @@ pub struct TrackOptions {
     pub reference_pool: usize,
     /// The chart of the standardized residuals.
     pub chart: Cusum,
-    /// Chart the innovations of the residuals' autoregression over the training records
-    /// (default), not the residuals themselves: see [`crate::whiten`].
+    /// Model a slow effect the covariates leave unexplained, when the training residuals
+    /// hold one, and chart the filter's innovations (default), not the residuals themselves:
+    /// see [`crate::whiten`].
     pub whiten: bool,
 }
 
@@ -176,8 +177,8 @@ pub struct TrackRow {
     pub misfit_flag: bool,
     /// The standardized residual against the baseline (records after training).
     pub z: Option<f64>,
-    /// What the chart was given: z less what the residuals before it predict, standardized
-    /// (z itself when the residuals are independent, or after a gap).
+    /// What the chart was given: the residual less what the slow effect's filter predicted
+    /// from the records before, standardized (z itself when the residuals are independent).
     pub innovation: Option<f64>,
     /// An alarm this record raised on this mode.
     pub alarm: Option<Side>,
@@ -215,8 +216,8 @@ pub struct TrackReport {
     pub baselines: Vec<Option<Baseline>>,
     /// Why a mode has no baseline.
     pub baseline_errors: Vec<Option<String>>,
-    /// Each mode's autoregression of its training residuals, whose innovations were charted
-    /// (`None` without a baseline).
+    /// Each mode's slow unexplained effect, whose filter's innovations were charted (`None`:
+    /// its residuals were independent, were charted as they are, or it has no baseline).
     pub residual_models: Vec<Option<ResidualModel>>,
     /// Each reference mode's share of the identified records that had it.
     pub tracked: Vec<f64>,
@@ -294,7 +295,7 @@ pub fn track(
             Ok((b, model, found)) => {
                 baselines.push(Some(b));
                 baseline_errors.push(None);
-                residual_models.push(Some(model));
+                residual_models.push(model);
                 alarms.extend(found);
             }
             Err(e) => {
@@ -325,15 +326,15 @@ pub fn track(
 }
 
 /// Fit `mode`'s baseline on its training rows, standardize its later rows (setting their
-/// `z`), whiten them by the training residuals' autoregression when `opts.whiten` (setting
-/// `innovation`) and chart them (setting `alarm`); the baseline, the residual model and the
-/// alarms. `records` counts the campaign's records: one missing the mode is a gap.
+/// `z`), whiten them by the slow unexplained effect's model when `opts.whiten` and the
+/// training residuals hold one (setting `innovation`) and chart them (setting `alarm`); the
+/// baseline, the slow effect's model and the alarms. `records` counts the campaign's records: one missing the mode is a gap.
 fn chart_mode(
     rows: &mut [TrackRow],
     mode: usize,
     records: usize,
     opts: &TrackOptions,
-) -> Result<(Baseline, ResidualModel, Vec<ModeAlarm>), MonitorError> {
+) -> Result<(Baseline, Option<ResidualModel>, Vec<ModeAlarm>), MonitorError> {
     // The mode's row of each record, if it has one with what the chart needs (a standard
     // error and every covariate).
     let mut row_of: Vec<Option<usize>> = vec![None; records];
@@ -371,13 +372,34 @@ fn chart_mode(
             None => f64::NAN,
         })
         .collect();
-    let (history, later) = z.split_at(training);
+    // The same as residuals (Hz) and the variances the baseline knows of (Hz²), for the
+    // slow effect's model.
+    let (r, n): (Vec<f64>, Vec<f64>) = row_of
+        .iter()
+        .map(|k| match k {
+            Some(k) => {
+                let row = &rows[*k];
+                let (fit, var) = b.predict(&row.covariates);
+                let se = row.frequency_se_hz.unwrap_or(0.0);
+                (row.frequency_hz - fit, se * se + var)
+            }
+            None => (f64::NAN, f64::NAN),
+        })
+        .unzip();
+    let later = &z[training..];
     let model = if opts.whiten {
-        ResidualModel::fit(history)
+        ResidualModel::fit(&r[..training], &n[..training])
     } else {
-        ResidualModel::default()
+        None
     };
-    let innovations = model.innovations(history, later);
+    let innovations = match &model {
+        Some(m) => m.innovations(
+            (&r[..training], &n[..training]),
+            &r[training..],
+            &n[training..],
+        ),
+        None => later.to_vec(),
+    };
     for (i, (&v, &a)) in later.iter().zip(&innovations).enumerate() {
         if let Some(k) = row_of[training + i] {
             rows[k].z = v.is_finite().then_some(v);

@@ -46,6 +46,10 @@ fn run(seed: u64, hours: f64, whiten: bool) -> (usize, Option<f64>) {
     c.seed = seed;
     c.unexplained = 1e-3;
     c.unexplained_hours = hours;
+    run_campaign(c, whiten)
+}
+
+fn run_campaign(c: Campaign, whiten: bool) -> (usize, Option<f64>) {
     let records: Vec<RecordModes> = (0..c.len()).map(|i| estimated(&c, i)).collect();
     let mut opts = TrackOptions::default();
     opts.whiten = whiten;
@@ -61,43 +65,100 @@ fn run(seed: u64, hours: f64, whiten: bool) -> (usize, Option<f64>) {
     (before, delay)
 }
 
-/// Forty 60-day campaigns (the default design: hourly records, a 0.5 % loss of mode 1 from
-/// day 45, two weeks of training), the unexplained effect of 0.1 % correlated over a day,
-/// as large as the estimation error. Charted as they are, the residuals raise 22–47 false
-/// alarms per campaign (seeds 9000011–9000040, on which these figures were measured before
-/// they were asserted); their innovations 0–2 (11 over the 30), and the loss is found 2–24 h
-/// after it starts on every campaign (raw: 3–6 h, when it is told from the alarms around
-/// it at all). Asserted: at least ten times fewer false alarms whitened, the loss found
-/// within two days on every campaign; and with an independent effect of the same size,
-/// whitening costs nothing (no more false alarms, the same delay within a few hours).
-#[test]
-fn correlated_residuals_are_whitened_before_the_chart() {
-    let (mut raw_alarms, mut white_alarms) = (0, 0);
-    for seed in 9_000_001..=9_000_040u64 {
-        let (raw, _) = run(seed, 24.0, false);
-        let (white, delay) = run(seed, 24.0, true);
-        println!("seed {seed}: false alarms {raw} raw, {white} whitened; found after {delay:?} h");
-        let delay = delay.unwrap_or_else(|| panic!("seed {seed}: the loss is not found"));
-        assert!(delay <= 48.0, "seed {seed}: {delay} h");
-        raw_alarms += raw;
-        white_alarms += white;
+/// Seeds of the campaigns each test runs (`HYST_CAMPAIGN_SEED` moves them: the figures in
+/// docs/monitoring.md are from other seeds than the ones the bounds were set on).
+fn seeds(first: u64, count: u64) -> impl Iterator<Item = u64> {
+    let base = std::env::var("HYST_CAMPAIGN_SEED")
+        .ok()
+        .and_then(|s| s.parse::<u64>().ok())
+        .unwrap_or(first);
+    base..base + count
+}
+
+/// (false alarms, losses found, longest delay in hours) over `campaigns`, charted raw and
+/// whitened; prints each.
+fn compare(what: &str, campaigns: impl Iterator<Item = Campaign>) -> [(usize, usize, f64); 2] {
+    let mut out = [(0, 0, 0.0f64); 2];
+    let mut count = 0;
+    for c in campaigns {
+        count += 1;
+        for (k, whiten) in [false, true].into_iter().enumerate() {
+            let (alarms, delay) = run_campaign(c.clone(), whiten);
+            out[k].0 += alarms;
+            if let Some(d) = delay {
+                out[k].1 += 1;
+                out[k].2 = out[k].2.max(d);
+            }
+            println!(
+                "{what}, seed {}, whiten {whiten}: {alarms} false alarm(s), found after {delay:?} h",
+                c.seed
+            );
+        }
     }
-    println!("false alarms over 40 campaigns: {raw_alarms} raw, {white_alarms} whitened");
-    assert!(
-        10 * white_alarms <= raw_alarms,
-        "{white_alarms} vs {raw_alarms}"
+    println!(
+        "{what}: {count} campaigns; raw {} false alarms, {} found (at most {} h); whitened {} false alarms, {} found (at most {} h)",
+        out[0].0, out[0].1, out[0].2, out[1].0, out[1].1, out[1].2
     );
-    for seed in 9_000_001..=9_000_010u64 {
+    out
+}
+
+/// Twenty 60-day campaigns (the default design: hourly records, a 0.5 % loss of mode 1 from
+/// day 45, two weeks of training) with 0.1 % of frequency unexplained and correlated over a
+/// day, as large as the estimation error. Charted as they are, the residuals raise dozens of
+/// false alarms per campaign; the filter's innovations about none, and the loss is still
+/// found on every campaign. Measured on three sets of twenty (seeds from 9000001, 9300001,
+/// 9400001): 760–781 false alarms raw against 0, 3 and 0 whitened, every loss found within
+/// 9 h. Asserted: at least fifty times fewer false alarms, every loss found within two days.
+#[test]
+fn a_slow_unexplained_effect_is_not_taken_for_a_change() {
+    let campaigns = seeds(9_000_001, 20).map(|seed| {
+        let mut c = Campaign::default();
+        c.seed = seed;
+        c.unexplained = 1e-3;
+        c.unexplained_hours = 24.0;
+        c
+    });
+    let [raw, white] = compare("slow effect", campaigns);
+    assert!(raw.0 >= 100, "the scenario: {raw:?}");
+    assert!(50 * white.0 <= raw.0, "{white:?} against {raw:?}");
+    assert!(white.1 == 20 && white.2 <= 48.0, "{white:?}");
+}
+
+/// The same design with the structure's temperature lagging the air's by a 3-hour time
+/// constant, the covariate the air's: a daily residual of ±0.29 % of frequency that the
+/// covariate cannot explain, outside the latent model's form. Whitened, no false alarm; but
+/// the loss is slower to tell from the swing it resembles. Measured on three sets of twenty
+/// (seeds from 9100001, 9300001, 9400001):
+/// 1563–1631 false alarms raw, 0 whitened; 19, 18 and 19 of the 20 losses found, within
+/// 63 h. Asserted: at least fifty times fewer false alarms, at least 16 of 20 losses found
+/// (with p = 0.93 per campaign, fewer than 16 has a chance under 1 %).
+#[test]
+fn a_thermal_lag_is_not_taken_for_a_change() {
+    let campaigns = seeds(9_100_001, 20).map(|seed| {
+        let mut c = Campaign::default();
+        c.seed = seed;
+        c.thermal_lag_hours = 3.0;
+        c
+    });
+    let [raw, white] = compare("thermal lag", campaigns);
+    assert!(raw.0 >= 100, "the scenario: {raw:?}");
+    assert!(50 * white.0 <= raw.0, "{white:?} against {raw:?}");
+    assert!(white.1 >= 16, "{white:?}");
+}
+
+/// With an independent unexplained effect of the same size the model is rarely kept (BIC's
+/// bar is passed by chance on a few per cent of modes), and whitening costs nothing: no
+/// more false alarms, the loss found as soon within an hour or two.
+#[test]
+fn independent_residuals_are_charted_as_they_are() {
+    for seed in seeds(9_000_001, 10) {
         let (raw, raw_delay) = run(seed, 0.0, false);
         let (white, delay) = run(seed, 0.0, true);
         println!(
             "independent, seed {seed}: {raw} / {white} false alarms, found after {raw_delay:?} / {delay:?} h"
         );
         assert!(white <= raw, "seed {seed}");
-        let (a, b) = (raw_delay.unwrap(), delay.unwrap());
-        assert!(
-            (a - b).abs() <= 3.0,
-            "seed {seed}: {a} h raw, {b} h whitened"
-        );
+        let (a, b) = (raw_delay.unwrap_or(f64::NAN), delay.unwrap_or(f64::NAN));
+        assert!(b <= a + 2.0, "seed {seed}: {a} h raw, {b} h whitened");
     }
 }
