@@ -44,9 +44,9 @@ pub(crate) struct TrackArgs {
     /// The first this many records train the baselines (default: 336, at most half).
     #[arg(long)]
     pub(crate) training: Option<usize>,
-    /// Chart the standardized residuals as they are, not the innovations of their
-    /// autoregression over the training records (which removes a slow effect the covariates
-    /// leave unexplained, and is p = 0, the residuals themselves, when there is none).
+    /// Chart the standardized residuals as they are, even when the training records show a
+    /// slow effect the covariates leave unexplained (by default its model's filter is run
+    /// and its innovations charted, so that the effect is not taken for a change).
     #[arg(long)]
     pub(crate) no_whiten: bool,
     /// Folder for `records.jsonl` (each record's modes, appended as they come: a run

@@ -19,7 +19,9 @@
 //! filter runs on through the later records and the chart is given its standardized
 //! innovations v_t/√F_t, v_t = r_t − φ η̂_{t−1}, F_t their variance: independent and standard
 //! normal when the model holds. A record missing the mode is a gap the filter predicts
-//! across. A lasting change then enters the innovations fully at first and less as the
+//! across; an innovation beyond 5 standard deviations is charted but not let move the
+//! filter's estimate (an outlier would otherwise pull it, and the records after it would
+//! look off the other way). A lasting change then enters the innovations fully at first and less as the
 //! filter takes it for the slow effect: a change is slower to tell from a wandering
 //! environment, as it must be.
 
@@ -44,6 +46,10 @@ pub struct ResidualModel {
     /// the chart's reference value (half a standard deviation) may never be.
     pub lasting_change_share: f64,
 }
+
+/// Innovations beyond this many standard deviations (a chance of 6·10⁻⁷ under the model)
+/// are outliers: charted, but not let move the filter's estimate of the effect.
+const GATE: f64 = 5.0;
 
 /// Fewest training residuals for a fit.
 const FEWEST: usize = 50;
@@ -175,10 +181,16 @@ impl ResidualModel {
             let f = p + nt + self.white_var;
             let v = rt - m;
             total += f.ln() + v * v / f;
+            innovation(v / f.sqrt());
+            // An outlier (a record's estimate far off, with too small a standard error) is
+            // charted but does not move the effect's estimate: followed, it would make the
+            // next records look off the other way.
+            if v * v > GATE * GATE * f {
+                continue;
+            }
             let gain = p / f;
             m += gain * v;
             p *= 1.0 - gain;
-            innovation(v / f.sqrt());
         }
         *state = (m, p);
         total
@@ -281,6 +293,10 @@ mod tests {
         // The first: v = 1, F = λ + n = 2.
         assert!((a[0] - 1.0 / 2f64.sqrt()).abs() < 1e-12, "{a:?}");
         assert_eq!(ResidualModel::fit(&[0.5; 20], &[1.0; 20]), None);
+        // An outlier is charted, and the record after it sees the filter as before it.
+        let a = m.innovations((&[], &[]), &[0.0, 40.0, 0.0], &[1.0; 3]);
+        let b = m.innovations((&[], &[]), &[0.0, f64::NAN, 0.0], &[1.0; 3]);
+        assert!(a[1] > 20.0 && a[2] == b[2], "{a:?} {b:?}");
         // The settled share against the filter run on a step: the innovations of a step of
         // 1 after a long run of zeros settle at the share (times √F).
         let steps: Vec<f64> = (0..400).map(|t| if t < 200 { 0.0 } else { 1.0 }).collect();

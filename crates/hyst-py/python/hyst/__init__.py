@@ -417,9 +417,9 @@ def track(records, fs, *, times=None, covariates=None, training=None, block_rows
         The maximum-likelihood refinement (default True; without it there are no standard
         errors and no chart).
     whiten : bool
-        Chart the innovations of the residuals' autoregression over the training records
-        (default True: a slow effect the covariates leave unexplained is then not taken for
-        a change), or the residuals as they are (``hyst track --no-whiten``).
+        Where the training records show a slow effect the covariates leave unexplained,
+        chart its model's filter's innovations (default True: the effect is then not taken
+        for a change), or the residuals as they are always (``hyst track --no-whiten``).
 
     Returns
     -------
