@@ -80,6 +80,10 @@ pub fn run(a: &DemoArgs) -> Result<(), String> {
         );
     }
     println!("monitor_skipped {}", report.skipped.len());
+    println!(
+        "monitor_split {} (record × mode held twice with one shape, not tracked there)",
+        report.split.len()
+    );
     let change = campaign.change;
     let before: Vec<_> = report
         .alarms

@@ -59,6 +59,20 @@ impl fmt::Display for TrackReport {
         for (name, why) in &self.skipped {
             writeln!(f, "skipped {name}: {why}")?;
         }
+        if !self.split.is_empty() {
+            let mut per_mode = vec![0usize; self.reference.len()];
+            for &(_, mode) in &self.split {
+                if let Some(c) = per_mode.get_mut(mode) {
+                    *c += 1;
+                }
+            }
+            for (mode, count) in per_mode.iter().enumerate().filter(|(_, c)| **c > 0) {
+                writeln!(
+                    f,
+                    "mode {mode} held twice, with one shape, in {count} record(s): which is the mode cannot be told, so it is not tracked there"
+                )?;
+            }
+        }
         if !self.new_modes.is_empty() {
             writeln!(
                 f,

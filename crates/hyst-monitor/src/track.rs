@@ -212,6 +212,9 @@ pub struct TrackReport {
     pub skipped: Vec<(String, String)>,
     /// Modes a record had that the reference does not: (record, frequency).
     pub new_modes: Vec<(usize, f64)>,
+    /// (record, reference mode) where the record held the mode twice, with one shape (see
+    /// [`Assignment::split`](crate::Assignment::split)): not tracked there.
+    pub split: Vec<(usize, usize)>,
     /// Each reference mode's baseline (`None` with too few training records).
     pub baselines: Vec<Option<Baseline>>,
     /// Why a mode has no baseline.
@@ -251,6 +254,7 @@ pub fn track(
     let mut rows = Vec::new();
     let mut skipped = Vec::new();
     let mut new_modes = Vec::new();
+    let mut split = Vec::new();
     let mut seen = vec![0usize; reference.len()];
     let mut identified = 0usize;
     for (i, r) in records.iter().enumerate() {
@@ -285,6 +289,7 @@ pub fn track(
             });
         }
         new_modes.extend(a.new.iter().map(|&j| (i, id.modes[j].frequency_hz)));
+        split.extend(a.split.iter().map(|&mode| (i, mode)));
     }
     let mut baselines = Vec::with_capacity(reference.len());
     let mut baseline_errors = Vec::with_capacity(reference.len());
@@ -316,6 +321,7 @@ pub fn track(
         rows,
         skipped,
         new_modes,
+        split,
         baselines,
         baseline_errors,
         residual_models,

@@ -426,7 +426,7 @@ def track(records, fs, *, times=None, covariates=None, training=None, block_rows
     Report
         ``str(report)`` as ``hyst track`` prints; ``report.to_dict()`` its ``report.json``:
         ``reference``, ``rows`` (record x mode), ``skipped``, ``baselines``, ``alarms``,
-        ``residual_models``, ``tracked``, ``in_control_run_length``.
+        ``split``, ``residual_models``, ``tracked``, ``in_control_run_length``.
     """
     import os
 
