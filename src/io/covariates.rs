@@ -4,7 +4,8 @@
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-use super::IoError;
+use super::delimited::DelimitedRows;
+use super::{Delimiter, IoError};
 
 /// Per record name, its time (s, if the file gives one) and its covariates; and the
 /// covariates' names.
@@ -32,28 +33,13 @@ pub fn list_records(paths: &[PathBuf]) -> Result<Vec<PathBuf>, IoError> {
     Ok(files)
 }
 
-/// Read a covariates file: a CSV whose header names a column `record` (the record's file
-/// name, or its window's number), optionally `time` (s), and one column per covariate; every
-/// other cell a number.
+/// Read a covariates file: delimited text read as a record's CSV is (see
+/// [`read_csv_with`](super::read_csv_with)) whose header names a column `record` (the record's
+/// file name, or its window's number), optionally `time` (s), and one column per covariate;
+/// every other cell a number (NaN where a covariate is missing).
 pub fn read_covariates(path: &Path) -> Result<Covariates, IoError> {
-    let table = |what: String| IoError::Malformed {
-        path: path.to_path_buf(),
-        row: 0,
-        what,
-    };
-    let text = std::fs::read_to_string(path).map_err(|source| IoError::File {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    let mut lines = text.lines().filter(|l| !l.trim().is_empty());
-    let header: Vec<String> = lines
-        .next()
-        .ok_or_else(|| IoError::NoHeader {
-            path: path.to_path_buf(),
-        })?
-        .split(',')
-        .map(|s| s.trim().to_string())
-        .collect();
+    let rows = DelimitedRows::open(path, Delimiter::Auto)?;
+    let (header, sep) = (rows.names.clone(), rows.sep);
     let at = header
         .iter()
         .position(|h| h == "record")
@@ -63,26 +49,16 @@ pub fn read_covariates(path: &Path) -> Result<Covariates, IoError> {
             available: header.join(","),
         })?;
     let time = header.iter().position(|h| h == "time");
-    let names: Vec<String> = header
-        .iter()
-        .enumerate()
-        .filter(|(i, _)| *i != at && Some(*i) != time)
-        .map(|(_, h)| h.clone())
+    let is_covariate = |i: usize| i != at && Some(i) != time;
+    let names: Vec<String> = (0..header.len())
+        .filter(|&i| is_covariate(i))
+        .map(|i| header[i].clone())
         .collect();
     let mut out = HashMap::new();
-    for (k, line) in lines.enumerate() {
-        let row = k + 2;
-        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
-        if cells.len() != header.len() {
-            return Err(IoError::CellCount {
-                path: path.to_path_buf(),
-                row,
-                found: cells.len(),
-                expected: header.len(),
-            });
-        }
+    for r in rows {
+        let (row, cells) = r?;
         let number = |i: usize| {
-            cells[i].parse::<f64>().map_err(|_| IoError::NotANumber {
+            super::delimited::number(&cells[i], sep).ok_or_else(|| IoError::NotANumber {
                 path: path.to_path_buf(),
                 row,
                 column: header[i].clone(),
@@ -91,11 +67,15 @@ pub fn read_covariates(path: &Path) -> Result<Covariates, IoError> {
         };
         let t = time.map(number).transpose()?;
         let values = (0..cells.len())
-            .filter(|&i| i != at && Some(i) != time)
+            .filter(|&i| is_covariate(i))
             .map(number)
             .collect::<Result<Vec<f64>, IoError>>()?;
         if out.insert(cells[at].to_string(), (t, values)).is_some() {
-            return Err(table(format!("record `{}` is listed twice", cells[at])));
+            return Err(IoError::Malformed {
+                path: path.to_path_buf(),
+                row,
+                what: format!("record `{}` is listed twice", &cells[at]),
+            });
         }
     }
     Ok((out, names))
@@ -113,6 +93,10 @@ mod tests {
         let (map, names) = read_covariates(&p).unwrap();
         assert_eq!(names, ["temperature"]);
         assert_eq!(map["b.csv"], (Some(3600.0), vec![11.0]));
+        // Read as a record's CSV is: a spreadsheet's semicolons and decimal commas, quotes.
+        std::fs::write(&p, "record;temperature\n\"a;1.csv\";10,5\n").unwrap();
+        let (map, _) = read_covariates(&p).unwrap();
+        assert_eq!(map["a;1.csv"], (None, vec![10.5]));
         for (text, says) in [
             ("name,t\na,1\n", "no column `record`"),
             (
@@ -121,7 +105,7 @@ mod tests {
             ),
             (
                 "record,temperature\na,1\na,2\n",
-                "record `a` is listed twice",
+                "row 3: record `a` is listed twice",
             ),
             ("record,temperature\na\n", "row 2 has 1 cells"),
         ] {

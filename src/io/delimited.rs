@@ -91,7 +91,7 @@ impl std::str::FromStr for Delimiter {
 }
 
 /// A cell as a number: a plain float, or with `;` separating cells, a decimal comma.
-fn number(text: &str, delimiter: u8) -> Option<f64> {
+pub(super) fn number(text: &str, delimiter: u8) -> Option<f64> {
     text.parse().ok().or_else(|| {
         (delimiter != b',' && text.matches(',').count() == 1)
             .then(|| text.replace(',', ".").parse().ok())
@@ -109,80 +109,11 @@ pub fn read_csv(path: &Path) -> Result<Table, IoError> {
 /// cells; empty lines are skipped. Every row must have one cell per column of the header, and
 /// every cell must be a finite number.
 pub fn read_csv_with(path: &Path, delimiter: Delimiter) -> Result<Table, IoError> {
-    let file_error = |source| IoError::File {
-        path: path.to_path_buf(),
-        source,
-    };
-    // The file is read as a stream (the record is kept once, as numbers, not also as text);
-    // its first non-blank line is read first to detect the delimiter, then it is read again
-    // from its start.
-    let file = std::fs::File::open(path).map_err(file_error)?;
-    let mut file = std::io::BufReader::with_capacity(1 << 16, file);
-    let first_line = first_line(&mut file, path)?;
-    file.rewind().map_err(file_error)?;
-    // A byte-order mark (spreadsheets write one) would become part of the first name.
-    if file
-        .fill_buf()
-        .map_err(file_error)?
-        .starts_with(b"\xEF\xBB\xBF")
-    {
-        file.consume(3);
-    }
-    let sep = delimiter
-        .byte()
-        .unwrap_or_else(|| Delimiter::detect(&first_line));
-    let mut reader = csv::ReaderBuilder::new()
-        .delimiter(sep)
-        .has_headers(false)
-        .flexible(true)
-        .trim(csv::Trim::All)
-        .from_reader(file);
-    let mut records = reader.records();
-    let csv_error = |e: csv::Error| {
-        let row = e.position().map_or(0, |p| p.line() as usize);
-        IoError::Malformed {
-            path: path.to_path_buf(),
-            row,
-            what: e.to_string(),
-        }
-    };
-    let header = loop {
-        match records.next() {
-            None => {
-                return Err(IoError::NoHeader {
-                    path: path.to_path_buf(),
-                });
-            }
-            Some(r) => {
-                let r = r.map_err(csv_error)?;
-                if !(r.len() == 1 && r[0].is_empty()) {
-                    break r;
-                }
-            }
-        }
-    };
-    let names: Vec<String> = header.iter().map(str::to_string).collect();
-    if let Some(column) = repeated(&names) {
-        return Err(IoError::DuplicateColumn {
-            path: path.to_path_buf(),
-            column: column.to_string(),
-        });
-    }
+    let rows = DelimitedRows::open(path, delimiter)?;
+    let (names, sep) = (rows.names.clone(), rows.sep);
     let mut columns: Vec<Vec<f64>> = vec![Vec::new(); names.len()];
-    for r in records {
-        let r = r.map_err(csv_error)?;
-        let row = r.position().map_or(0, |p| p.line() as usize);
-        if r.len() == 1 && r[0].is_empty() {
-            continue;
-        }
-        if r.len() != names.len() {
-            return Err(IoError::CellCount {
-                path: path.to_path_buf(),
-                row,
-                found: r.len(),
-                expected: names.len(),
-            });
-        }
+    for r in rows {
+        let (row, r) = r?;
         for (c, t) in r.iter().enumerate() {
             let v = number(t, sep).ok_or_else(|| IoError::NotANumber {
                 path: path.to_path_buf(),
@@ -207,6 +138,107 @@ pub fn read_csv_with(path: &Path, delimiter: Delimiter) -> Result<Table, IoError
         });
     }
     Ok(Table::new(path, names, columns))
+}
+
+/// A delimited file opened for reading (see [`read_csv_with`] for what is read): its header's
+/// names and its delimiter, then its rows as an iterator of (row, cells), the row 1-based
+/// with the header as row 1, blank lines skipped, each row checked to have one cell per
+/// column.
+pub(super) struct DelimitedRows {
+    /// The header's names, none twice.
+    pub(super) names: Vec<String>,
+    /// The delimiter, given or detected.
+    pub(super) sep: u8,
+    path: std::path::PathBuf,
+    records: csv::StringRecordsIntoIter<std::io::BufReader<std::fs::File>>,
+}
+
+impl DelimitedRows {
+    /// Open `path`, its delimiter `delimiter` or detected from its header line, and read the
+    /// header.
+    pub(super) fn open(path: &Path, delimiter: Delimiter) -> Result<Self, IoError> {
+        let file_error = |source| IoError::File {
+            path: path.to_path_buf(),
+            source,
+        };
+        // The file is read as a stream (a record is kept once, as numbers, not also as text);
+        // its first non-blank line is read first to detect the delimiter, then it is read
+        // again from its start.
+        let file = std::fs::File::open(path).map_err(file_error)?;
+        let mut file = std::io::BufReader::with_capacity(1 << 16, file);
+        let first_line = first_line(&mut file, path)?;
+        file.rewind().map_err(file_error)?;
+        // A byte-order mark (spreadsheets write one) would become part of the first name.
+        if file
+            .fill_buf()
+            .map_err(file_error)?
+            .starts_with(b"\xEF\xBB\xBF")
+        {
+            file.consume(3);
+        }
+        let sep = delimiter
+            .byte()
+            .unwrap_or_else(|| Delimiter::detect(&first_line));
+        let mut rows = DelimitedRows {
+            names: Vec::new(),
+            sep,
+            path: path.to_path_buf(),
+            records: csv::ReaderBuilder::new()
+                .delimiter(sep)
+                .has_headers(false)
+                .flexible(true)
+                .trim(csv::Trim::All)
+                .from_reader(file)
+                .into_records(),
+        };
+        let header = rows.next_cells().ok_or_else(|| IoError::NoHeader {
+            path: path.to_path_buf(),
+        })??;
+        rows.names = header.iter().map(str::to_string).collect();
+        if let Some(column) = repeated(&rows.names) {
+            return Err(IoError::DuplicateColumn {
+                path: path.to_path_buf(),
+                column: column.to_string(),
+            });
+        }
+        Ok(rows)
+    }
+
+    /// The next line that is not blank, as cells.
+    fn next_cells(&mut self) -> Option<Result<csv::StringRecord, IoError>> {
+        loop {
+            match self.records.next()? {
+                Err(e) => {
+                    return Some(Err(IoError::Malformed {
+                        path: self.path.clone(),
+                        row: e.position().map_or(0, |p| p.line() as usize),
+                        what: e.to_string(),
+                    }));
+                }
+                Ok(r) if r.len() == 1 && r[0].is_empty() => continue,
+                Ok(r) => return Some(Ok(r)),
+            }
+        }
+    }
+}
+
+impl Iterator for DelimitedRows {
+    type Item = Result<(usize, csv::StringRecord), IoError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        Some(self.next_cells()?.and_then(|r| {
+            let row = r.position().map_or(0, |p| p.line() as usize);
+            if r.len() != self.names.len() {
+                return Err(IoError::CellCount {
+                    path: self.path.clone(),
+                    row,
+                    found: r.len(),
+                    expected: self.names.len(),
+                });
+            }
+            Ok((row, r))
+        }))
+    }
 }
 
 /// The first line of `file` (read from `path`) that is not blank, or why there is none.
