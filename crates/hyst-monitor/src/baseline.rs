@@ -37,8 +37,16 @@ impl Baseline {
     /// The standardized residual z = (f − f̂) / √(s² + σ² + var f̂) of a record whose
     /// frequency `f` has standard error `se` at covariates `x`.
     pub fn standardized(&self, f: f64, se: f64, x: &[f64]) -> f64 {
+        self.residual(f, se, x).2
+    }
+
+    /// The residual f − f̂ (Hz), its variance known without σ, s² + var f̂ (Hz²), and the
+    /// standardized residual ([`Baseline::standardized`]).
+    pub fn residual(&self, f: f64, se: f64, x: &[f64]) -> (f64, f64, f64) {
         let (fit, var) = self.predict(x);
-        (f - fit) / (se * se + self.unexplained_sd_hz.powi(2) + var).sqrt()
+        let r = f - fit;
+        let z = r / (se * se + self.unexplained_sd_hz.powi(2) + var).sqrt();
+        (r, se * se + var, z)
     }
 }
 

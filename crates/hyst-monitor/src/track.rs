@@ -362,36 +362,19 @@ fn chart_mode(
         .collect();
     let x: Vec<Vec<f64>> = train.iter().map(|&k| rows[k].covariates.clone()).collect();
     let b = fit_baseline(&f, &se, &x)?;
-    // Each record's standardized residual, NaN where it has none (not charted: a record
-    // without its covariates is tracked all the same).
-    let z: Vec<f64> = row_of
-        .iter()
-        .map(|k| match k {
-            Some(k) => {
-                let r = &rows[*k];
-                b.standardized(
-                    r.frequency_hz,
-                    r.frequency_se_hz.unwrap_or(0.0),
-                    &r.covariates,
-                )
-            }
-            None => f64::NAN,
-        })
-        .collect();
-    // The same as residuals (Hz) and the variances the baseline knows of (Hz²), for the
-    // slow effect's model.
-    let (r, n): (Vec<f64>, Vec<f64>) = row_of
-        .iter()
-        .map(|k| match k {
-            Some(k) => {
-                let row = &rows[*k];
-                let (fit, var) = b.predict(&row.covariates);
-                let se = row.frequency_se_hz.unwrap_or(0.0);
-                (row.frequency_hz - fit, se * se + var)
-            }
-            None => (f64::NAN, f64::NAN),
-        })
-        .unzip();
+    // Each record's residual (Hz) and the variance the baseline knows of (Hz²), for the
+    // slow effect's model, and its standardized residual z; NaN where it has none (not
+    // charted: a record without its covariates is tracked all the same).
+    let mut r = vec![f64::NAN; records];
+    let mut n = vec![f64::NAN; records];
+    let mut z = vec![f64::NAN; records];
+    for (t, k) in row_of.iter().enumerate() {
+        if let Some(k) = k {
+            let row = &rows[*k];
+            let se = row.frequency_se_hz.unwrap_or(0.0);
+            (r[t], n[t], z[t]) = b.residual(row.frequency_hz, se, &row.covariates);
+        }
+    }
     let later = &z[training..];
     let model = if opts.whiten {
         ResidualModel::fit(&r[..training], &n[..training])
