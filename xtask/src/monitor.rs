@@ -85,22 +85,24 @@ pub fn run(a: &DemoArgs) -> Result<(), String> {
         report.split.len()
     );
     let change = campaign.change;
-    let before: Vec<_> = report
-        .alarms
-        .iter()
-        .filter(|al| change.is_none_or(|(day, _, _)| al.time < day * 86400.0))
-        .collect();
+    // The alarms before the change: false ones.
+    let false_alarms = |r: &hyst_monitor::TrackReport| -> Vec<hyst_monitor::ModeAlarm> {
+        r.alarms
+            .iter()
+            .filter(|al| change.is_none_or(|(day, _, _)| al.time < day * 86400.0))
+            .cloned()
+            .collect()
+    };
+    let before = false_alarms(&report);
     println!("monitor_false_alarms {}", before.len());
     // The same records charted without whitening, for comparison.
     let mut raw_opts = opts.clone();
     raw_opts.whiten = false;
     let raw = track(&records, None, &raw_opts).map_err(|e| e.to_string())?;
-    let raw_before = raw
-        .alarms
-        .iter()
-        .filter(|al| change.is_none_or(|(day, _, _)| al.time < day * 86400.0))
-        .count();
-    println!("monitor_false_alarms_unwhitened {raw_before}");
+    println!(
+        "monitor_false_alarms_unwhitened {}",
+        false_alarms(&raw).len()
+    );
     for (j, m) in report.residual_models.iter().enumerate() {
         if let Some(m) = m {
             println!(
