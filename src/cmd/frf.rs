@@ -51,6 +51,11 @@ pub struct FrfArgs {
 }
 
 impl FrfArgs {
+    /// The record this command reads.
+    pub(crate) fn input_file(&self) -> &std::path::Path {
+        &self.input
+    }
+
     /// The files this command will write, with the flag that names each.
     pub(crate) fn output_files(&self) -> Vec<(&'static str, Option<&std::path::Path>)> {
         vec![

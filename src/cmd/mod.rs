@@ -298,10 +298,49 @@ pub(crate) fn output_files(c: &Command) -> Vec<(&'static str, &std::path::Path)>
     v.into_iter().filter_map(|(f, p)| Some((f, p?))).collect()
 }
 
-/// An output file whose folder does not exist is refused before any work: writing it would
-/// otherwise fail only after a refinement or a simulation that can take minutes. (Folders
-/// given by `--svg-dir` are made.)
+/// The files a command reads, with the flag that names each.
+pub(crate) fn input_files(c: &Command) -> Vec<(&'static str, &std::path::Path)> {
+    fn one<'a>(
+        flag: &'static str,
+        p: Option<&'a std::path::PathBuf>,
+    ) -> Option<(&'static str, &'a std::path::Path)> {
+        p.map(|p| (flag, p.as_path()))
+    }
+    fn many<'a>(
+        flag: &'static str,
+        v: &'a [std::path::PathBuf],
+    ) -> Vec<(&'static str, &'a std::path::Path)> {
+        v.iter().map(|p| (flag, p.as_path())).collect()
+    }
+    let mut v: Vec<(&'static str, &std::path::Path)> = Vec::new();
+    match c {
+        Command::Simulate(a) => {
+            v.extend(one("--input", a.input.as_ref()));
+            v.extend(one("--params", a.params.as_ref()));
+        }
+        Command::Excite(_) => {}
+        Command::Ssi(a) => v.push(("--input", &a.input)),
+        Command::Ident(a) => {
+            v.extend(one("--data", a.data.as_ref()));
+            v.extend(many("--validate", &a.validate));
+        }
+        Command::Refine(a) => v.push(("--data", &a.data)),
+        Command::Levels(a) => {
+            v.extend(many("--data", &a.data));
+            v.extend(many("--validate", &a.validate));
+        }
+        Command::Frf(a) => v.push(("--input", a.input_file())),
+        Command::Track(_) => {}
+    }
+    v
+}
+
+/// An output file that is one of the command's inputs, or another output, is refused before
+/// anything is read (writing it would destroy the record); one whose folder does not exist
+/// is refused before any work: writing it would otherwise fail only after a refinement or a
+/// simulation that can take minutes. (Folders given by `--svg-dir` are made.)
 pub(crate) fn check_output_folders(c: &Command) -> Result<(), Error> {
+    hyst::io::check_outputs(&input_files(c), &output_files(c))?;
     for (flag, path) in output_files(c) {
         let folder = match path.parent() {
             Some(d) if !d.as_os_str().is_empty() => d,

@@ -194,6 +194,17 @@ impl DelimitedRows {
         let header = rows.next_cells().ok_or_else(|| IoError::NoHeader {
             path: path.to_path_buf(),
         })??;
+        // A first line of numbers only is data, not names: taking it as the header would lose
+        // a row and name the channels by numbers, silently.
+        if header.iter().all(|t| number(t, sep).is_some()) {
+            return Err(IoError::HeaderOfNumbers {
+                path: path.to_path_buf(),
+                line: header
+                    .iter()
+                    .collect::<Vec<_>>()
+                    .join(&*(sep as char).to_string()),
+            });
+        }
         rows.names = header.iter().map(str::to_string).collect();
         if let Some(column) = repeated(&rows.names) {
             return Err(IoError::DuplicateColumn {
@@ -380,6 +391,17 @@ mod tests {
         assert!(e.to_string().contains("latin1.csv: row 2"), "{e}");
         let e = read_csv(&file("blank.csv", "\n \n")).unwrap_err();
         assert!(matches!(e, IoError::NoHeader { .. }), "{e}");
+        // A headerless file: its first row was taken as the names (a row lost, the channels
+        // named `0.12` and `3.4e-2`), silently.
+        for (name, text) in [
+            ("headerless.csv", "0.12,3.4e-2\n0.2,0.1\n"),
+            ("headerless.tsv", "0.12\t3.4e-2\n0.2\t0.1\n"),
+            ("headerless_semicolon.csv", "0,12;3;4\n1;2;3\n"),
+        ] {
+            let e = read_csv(&file(name, text)).unwrap_err();
+            assert!(matches!(e, IoError::HeaderOfNumbers { .. }), "{name}: {e}");
+            assert!(e.to_string().contains("no header line; add one"), "{e}");
+        }
     }
 
     /// Columns of different lengths are refused, not cut to the shortest.

@@ -28,6 +28,38 @@ pub enum IoError {
         /// What the operating system said.
         source: std::io::Error,
     },
+    /// An output path names a file the command reads: writing it would destroy the input.
+    #[error(
+        "{output_flag} {path} is the file {input_flag} reads: writing it would overwrite the input; choose another path"
+    )]
+    OutputIsInput {
+        /// The output's flag (`--json`).
+        output_flag: String,
+        /// The input's flag (`--input`).
+        input_flag: String,
+        /// The path.
+        path: PathBuf,
+    },
+    /// Two outputs name one file: the second would overwrite the first.
+    #[error("{first_flag} and {second_flag} both name {path}: each output needs its own file")]
+    OutputsCollide {
+        /// The first output's flag.
+        first_flag: String,
+        /// The second output's flag.
+        second_flag: String,
+        /// The path.
+        path: PathBuf,
+    },
+    /// The first line holds numbers only: the file has no header line of names.
+    #[error(
+        "{path}: the first line `{line}` is numbers, not column names: the file has no header line; add one naming the columns (e.g. `t,y1,y2`), or save the array as .npy"
+    )]
+    HeaderOfNumbers {
+        /// The file.
+        path: PathBuf,
+        /// The first line, as read.
+        line: String,
+    },
     /// The file has no header line.
     #[error("{path}: the file is empty (no header line)")]
     NoHeader {
@@ -231,12 +263,14 @@ mod covariates;
 mod delimited;
 mod mat;
 mod npy;
+mod paths;
 mod shapes_uff;
 mod uff;
 pub use covariates::{Covariates, list_records, read_covariates};
 pub use delimited::{Delimiter, read_csv, read_csv_with, write_csv};
 pub use mat::read_mat;
 pub use npy::{read_npy, read_npz};
+pub use paths::check_outputs;
 pub use shapes_uff::{ShapeMode, write_shapes_uff};
 pub use uff::read_uff;
 
