@@ -969,7 +969,7 @@ fn ssi_option_out_of_range_names_its_flag() {
         (
             "--decimate",
             "20",
-            "sine.csv: columns y, decimated by 20 to 20 of 400 rows: 20 samples are too few",
+            "sine.csv: columns y, decimated by 20 to 0.5 Hz: 20 samples are too few",
         ),
         ("--df", "-1", "--df must be positive and finite, got -1"),
         ("--dzeta", "0", "--dzeta must be positive and finite, got 0"),
@@ -1001,8 +1001,12 @@ fn ssi_lags_as_a_time_or_as_periods() {
         args.extend_from_slice(&["--json", s(&json)]);
         let (ok, out, err) = hyst(&args);
         assert!(ok, "{lag:?}: {err}");
+        // After the line on the decimation (none: the record's band reaches 62 % of Nyquist).
         assert!(
-            out.starts_with("101 block rows: correlations up to lag 201 (20.1000 s at 10 Hz)"),
+            out.starts_with("not decimated: ")
+                && out.contains(
+                    "\n101 block rows: correlations up to lag 201 (20.1000 s at 10 Hz)\n"
+                ),
             "{lag:?}: {out}"
         );
         let v: serde_json::Value =

@@ -20,9 +20,11 @@ pub(crate) struct SsiArgs {
     /// a warning for columns named like a force: `u`, `force`, `input`, `excitation`, `load`).
     #[arg(long, value_delimiter = ',')]
     pub(crate) columns: Option<Vec<String>>,
-    /// Decimate by this factor first (MATLAB-style FIR decimation).
-    #[arg(long, default_value_t = 1)]
-    pub(crate) decimate: usize,
+    /// Decimate by this factor first (an ideal low-pass below the new Nyquist, then every
+    /// FACTOR-th sample); default: read from the record's spectrum (said in the report), 1
+    /// keeps the rate.
+    #[arg(long, value_name = "FACTOR")]
+    pub(crate) decimate: Option<usize>,
     /// Skip this many leading rows (e.g. a start-up transient).
     #[arg(long, default_value_t = 0)]
     pub(crate) skip: usize,
@@ -44,9 +46,11 @@ pub(crate) struct SsiArgs {
 /// SSI's and the refinement's flags, shared by `hyst ssi` and `hyst track`.
 #[derive(Args, Debug)]
 pub(crate) struct SsiFlags {
-    /// Block rows of the Toeplitz matrix (lags up to 2·N−1).
-    #[arg(long, default_value_t = 20)]
-    pub(crate) block_rows: usize,
+    /// Block rows of the Toeplitz matrix (lags up to 2·N−1); default: read from the record,
+    /// enough for ten periods of its lowest spectral peak within a size budget (said in the
+    /// report).
+    #[arg(long)]
+    pub(crate) block_rows: Option<usize>,
     /// Instead of --block-rows: as many block rows as make the largest lag cover this many
     /// seconds (after any --decimate).
     #[arg(
@@ -122,7 +126,7 @@ fn ssi_options(a: &SsiFlags) -> hyst::covssi::SsiOptions {
             count,
             frequency_hz,
         },
-        _ => BlockRows::Count(a.block_rows),
+        _ => a.block_rows.map_or(BlockRows::Auto, BlockRows::Count),
     };
     SsiOptions {
         block_rows,
@@ -139,21 +143,19 @@ fn ssi_options(a: &SsiFlags) -> hyst::covssi::SsiOptions {
     }
 }
 
-/// The channels to analyse, after `--skip` and `--decimate`.
+/// The channels to analyse, after `--skip`.
 struct Channels {
     names: Vec<String>,
     data: Vec<Vec<f64>>,
-    /// Rows after `--skip`, before `--decimate`.
-    rows: usize,
     /// The sampling rate, `--fs` or the file's.
     fs: f64,
     /// Where each channel was measured, if the file says.
     points: Option<Vec<hyst::io::MeasurementPoint>>,
 }
 
-/// The channels to analyse, after `--skip` and `--decimate`, with their names.
+/// The channels to analyse, after `--skip`, with their names.
 fn channels(a: &SsiArgs) -> Result<Channels, Error> {
-    if a.decimate == 0 {
+    if a.decimate == Some(0) {
         return Err(fail("--decimate must be at least 1, got 0"));
     }
     if let Some(fs) = a.fs {
@@ -184,9 +186,6 @@ fn channels(a: &SsiArgs) -> Result<Channels, Error> {
     for n in &names {
         let mut c = t.take_column(n)?;
         c.drain(..a.skip);
-        if a.decimate > 1 {
-            c = hyst::sim::resample::decimate(&c, a.decimate);
-        }
         channels.push(c);
     }
     // Every name is the table's now: each channel's point, if the file gives them.
@@ -199,7 +198,6 @@ fn channels(a: &SsiArgs) -> Result<Channels, Error> {
     Ok(Channels {
         names,
         data: channels,
-        rows: rows - a.skip,
         fs,
         points,
     })
@@ -208,13 +206,7 @@ fn channels(a: &SsiArgs) -> Result<Channels, Error> {
 /// covssi's error in the words of the command line: an option out of range named by the
 /// flag that set it, anything else with the file and columns it came from (and the
 /// decimation, which may be what made the record too short or constant).
-fn flag_error(
-    a: &SsiArgs,
-    e: hyst::covssi::SsiError,
-    names: &[String],
-    fs_used: f64,
-    rows: (usize, usize),
-) -> Error {
+fn flag_error(a: &SsiArgs, e: hyst::covssi::SsiError, names: &[String], fs_used: f64) -> Error {
     use hyst::covssi::{BlockRows, SsiError, SsiOption};
     if let SsiError::InvalidOption { option, value } = &e {
         let lag_too_short = |flag: &str| {
@@ -257,13 +249,9 @@ fn flag_error(
             return fail(format!("{flag} must be {needed}, got {value}"));
         }
     }
-    let decimated = if a.decimate > 1 {
-        format!(
-            ", decimated by {} to {} of {} rows",
-            a.decimate, rows.0, rows.1
-        )
-    } else {
-        String::new()
+    let decimated = match a.decimate {
+        Some(r) if r > 1 => format!(", decimated by {r} to {fs_used} Hz"),
+        _ => String::new(),
     };
     fail(format!(
         "{}: columns {}{decimated}: {e}",
@@ -277,18 +265,19 @@ pub(crate) fn run(a: &SsiArgs) -> Result<(), Error> {
     let Channels {
         names,
         data,
-        rows,
         fs,
         points,
     } = channels(a)?;
-    let fs_used = fs / a.decimate as f64;
     let views: Vec<&[f64]> = data.iter().map(|c| c.as_slice()).collect();
-    let opts = a.ssi.analysis();
+    let decimation = a
+        .decimate
+        .map_or(covssi::Decimation::Auto, covssi::Decimation::Factor);
+    let opts = a.ssi.analysis().with_decimation(decimation);
     let bar = steps_bar();
-    let analysis = covssi::analyze_with_progress(&views, fs_used, &opts, &|p| show(&bar, p));
+    let analysis = covssi::analyze_with_progress(&views, fs, &opts, &|p| show(&bar, p));
     bar.finish_and_clear();
-    let rows = (views.first().map_or(0, |c| c.len()), rows);
-    let mut analysis = analysis.map_err(|e| flag_error(a, e, &names, fs_used, rows))?;
+    let fs_used = fs / a.decimate.unwrap_or(1) as f64;
+    let mut analysis = analysis.map_err(|e| flag_error(a, e, &names, fs_used))?;
     analysis.channels = names;
     let report = hyst::report::FileReport::new(a.input.display().to_string(), analysis);
     print!("{}", report.report);

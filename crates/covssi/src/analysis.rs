@@ -4,16 +4,38 @@
 
 use std::fmt;
 
+use rayon::prelude::*;
+
+use crate::plausibility::{NotReported, not_physical};
 use crate::progress::Progress;
 use crate::refine::{MISFIT_LIMIT, SAME_MODE_DISTANCE};
-use crate::{RefineOptions, Refinement, SsiError, SsiOptions, SsiResult, identify, mac};
+use crate::{
+    LagLimit, RecordSurvey, RefineOptions, Refinement, SsiError, SsiOption, SsiOptions, SsiResult,
+    identify, mac,
+};
 
-/// Options of [`analyze`]: SSI's, and the refinement's (`None`: SSI alone).
+/// Whether the record is decimated before the analysis.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
+pub enum Decimation {
+    /// Read from the record's spectrum ([`RecordSurvey::decimation`]): by the largest factor
+    /// that keeps 2.5 times the band holding 99 % of its power, and every spectral peak,
+    /// below the new Nyquist. The default.
+    #[default]
+    Auto,
+    /// By this factor (1: not decimated).
+    Factor(usize),
+}
+
+/// Options of [`analyze`]: the decimation, SSI's, and the refinement's (`None`: SSI alone).
 #[derive(Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[cfg_attr(feature = "serde", serde(default, deny_unknown_fields))]
 #[non_exhaustive]
 pub struct AnalysisOptions {
+    /// The decimation before SSI ([`crate::decimate`]). Default: [`Decimation::Auto`].
+    pub decimation: Decimation,
     /// SSI's options.
     pub ssi: SsiOptions,
     /// The refinement's options; `None` skips it. Default: on, with its defaults.
@@ -23,13 +45,33 @@ pub struct AnalysisOptions {
 impl Default for AnalysisOptions {
     fn default() -> Self {
         AnalysisOptions {
+            decimation: Decimation::Auto,
             ssi: SsiOptions::default(),
             refine: Some(RefineOptions::default()),
         }
     }
 }
 
+/// How the record was decimated before the analysis.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct DecimationReport {
+    /// The factor (1: not decimated).
+    pub factor: usize,
+    /// The record's own rate (Hz); [`ModalAnalysis::fs_hz`] is this over `factor`.
+    pub recorded_fs_hz: f64,
+    /// The survey of the record at its own rate that chose the factor
+    /// ([`Decimation::Auto`]); `None` when the options gave it.
+    pub survey: Option<RecordSurvey>,
+}
+
 impl AnalysisOptions {
+    /// These options with the decimation set to `decimation`.
+    pub fn with_decimation(mut self, decimation: Decimation) -> Self {
+        self.decimation = decimation;
+        self
+    }
+
     /// These options with SSI's set to `ssi`.
     pub fn with_ssi(mut self, ssi: SsiOptions) -> Self {
         self.ssi = ssi;
@@ -51,8 +93,10 @@ pub struct ModalAnalysis {
     /// The channels' names, in the order given: their indices from [`analyze`]; a caller
     /// that knows their names sets them (they head the shapes in the text).
     pub channels: Vec<String>,
-    /// The sampling rate analysed (Hz).
+    /// The sampling rate analysed (Hz): the record's over the decimation factor.
     pub fs_hz: f64,
+    /// How the record was decimated first.
+    pub decimation: DecimationReport,
     /// SSI's result.
     #[cfg_attr(feature = "serde", serde(flatten))]
     pub ssi: SsiResult,
@@ -64,12 +108,16 @@ pub struct ModalAnalysis {
     /// Why the refinement asked for gave no result (e.g. a record too short for the modes SSI
     /// found): SSI's result stands, and the report says so rather than failing.
     pub not_refined: Option<String>,
+    /// The refined modes and real poles that are not physical (damped at the limit, at
+    /// Nyquist or 0 Hz, a real pole outside the band, a standard error above the value):
+    /// kept in the fit, not reported ([`crate::plausibility`]).
+    pub not_reported: Vec<NotReported>,
 }
 
-/// SSI on the channels `y` sampled at `fs` Hz, then the refinement of its modes and real
-/// poles when `opts.refine` asks for it and SSI found any. An error of SSI is this
-/// function's; an error of the refinement leaves SSI's result, with
-/// [`ModalAnalysis::not_refined`] saying why.
+/// The channels `y` sampled at `fs` Hz decimated as `opts.decimation` says, SSI on them,
+/// then the refinement of its modes and real poles when `opts.refine` asks for it and SSI
+/// found any. An error of SSI is this function's; an error of the refinement leaves SSI's
+/// result, with [`ModalAnalysis::not_refined`] saying why.
 pub fn analyze(y: &[&[f64]], fs: f64, opts: &AnalysisOptions) -> Result<ModalAnalysis, SsiError> {
     analyze_with_progress(y, fs, opts, &|_| {})
 }
@@ -82,6 +130,36 @@ pub fn analyze_with_progress(
     opts: &AnalysisOptions,
     progress: &dyn Fn(Progress),
 ) -> Result<ModalAnalysis, SsiError> {
+    crate::identify::check_fs(fs)?;
+    let (n, _) = crate::identify::check_channels(y)?;
+    let (factor, survey) = match opts.decimation {
+        Decimation::Factor(0) => {
+            return Err(SsiError::InvalidOption {
+                option: SsiOption::Decimation,
+                value: 0.0,
+            });
+        }
+        Decimation::Factor(r) => (r, None),
+        Decimation::Auto => {
+            let s = crate::survey(y, fs)?;
+            (s.decimation(n), Some(s))
+        }
+    };
+    let decimated: Vec<Vec<f64>> = if factor > 1 {
+        y.par_iter()
+            .map(|c| crate::decimate::decimate(c, factor))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let views: Vec<&[f64]> = if factor > 1 {
+        decimated.iter().map(|c| c.as_slice()).collect()
+    } else {
+        y.to_vec()
+    };
+    let y = views.as_slice();
+    let recorded_fs = fs;
+    let fs = fs / factor as f64;
     progress(Progress {
         done: 0,
         total: 1,
@@ -111,13 +189,23 @@ pub fn analyze_with_progress(
         }
         _ => (None, None),
     };
+    let samples = y.first().map_or(0, |c| c.len());
+    let not_reported = refined.as_ref().map_or_else(Vec::new, |r| {
+        not_physical(r, fs, samples, opts.ssi.max_damping)
+    });
     Ok(ModalAnalysis {
         channels: (0..y.len()).map(|c| c.to_string()).collect(),
         fs_hz: fs,
+        decimation: DecimationReport {
+            factor,
+            recorded_fs_hz: recorded_fs,
+            survey,
+        },
         ssi,
         mac,
         refined,
         not_refined,
+        not_reported,
     })
 }
 
@@ -126,24 +214,40 @@ impl ModalAnalysis {
     /// record follows its model (misfit at most [`MISFIT_LIMIT`]); `None` when SSI's modes
     /// are the ones to report.
     pub fn reported_refinement(&self) -> Option<&Refinement> {
-        self.refined
-            .as_ref()
-            .filter(|r| r.misfit <= MISFIT_LIMIT && !r.modes.is_empty())
+        self.refined.as_ref().filter(|r| {
+            r.misfit <= MISFIT_LIMIT && (0..r.modes.len()).any(|i| self.is_reported(i, false))
+        })
+    }
+
+    /// Whether the refined mode (`real_pole` false) or real pole `index` is physical, and so
+    /// reported (see [`ModalAnalysis::not_reported`]).
+    pub fn is_reported(&self, index: usize, real_pole: bool) -> bool {
+        !self
+            .not_reported
+            .iter()
+            .any(|n| n.index == index && n.real_pole == real_pole)
     }
 
     /// The modes to report, as [`ModalAnalysis::reported_refinement`] chooses: the refined
-    /// modes with their shapes (`None` where the refinement gave none), else SSI's.
+    /// modes that are physical, each with its refined shape, or its SSI mode's where the
+    /// refinement gave none; else SSI's.
     pub fn reported_modes(&self) -> Vec<ReportedMode> {
         match self.reported_refinement() {
             Some(r) => r
                 .modes
                 .iter()
-                .map(|m| ReportedMode {
-                    frequency_hz: m.frequency_hz,
-                    frequency_se_hz: m.frequency_se_hz,
-                    damping_ratio: m.damping_ratio,
-                    damping_se: m.damping_se,
-                    shape: m.shape.clone(),
+                .enumerate()
+                .filter(|(i, _)| self.is_reported(*i, false))
+                .map(|(_, m)| {
+                    let ssi_shape = m.source.map(|s| self.ssi.modes[s].shape.clone());
+                    ReportedMode {
+                        frequency_hz: m.frequency_hz,
+                        frequency_se_hz: m.frequency_se_hz,
+                        damping_ratio: m.damping_ratio,
+                        damping_se: m.damping_se,
+                        shape_from_ssi: m.shape.is_none() && ssi_shape.is_some(),
+                        shape: m.shape.clone().or(ssi_shape),
+                    }
                 })
                 .collect(),
             None => self
@@ -156,6 +260,7 @@ impl ModalAnalysis {
                     damping_ratio: m.damping_ratio,
                     damping_se: None,
                     shape: Some(m.shape.clone()),
+                    shape_from_ssi: true,
                 })
                 .collect(),
         }
@@ -174,8 +279,10 @@ pub struct ReportedMode {
     /// Its standard error: the refinement's; `None` for SSI's modes.
     pub damping_se: Option<f64>,
     /// The shape, one entry per channel, its largest entry 1; `None` for a refined mode
-    /// whose shape the refinement could not give.
+    /// the refinement gave no shape and SSI no mode near it.
     pub shape: Option<Vec<crate::Complex64>>,
+    /// Whether `shape` is SSI's (the mode's SSI mode's, where the refinement gave none).
+    pub shape_from_ssi: bool,
 }
 
 /// A mode shape as "magnitude∠phase°" per entry (phase rounded to a degree), entries joined
@@ -190,6 +297,13 @@ pub fn shape_text(shape: &[crate::Complex64], sep: &str) -> String {
         })
         .collect::<Vec<_>>()
         .join(sep)
+}
+
+/// A rate or frequency with at most four decimals, trailing zeros dropped (64, 85.3333).
+fn rate_text(v: f64) -> String {
+    let t = format!("{v:.4}");
+    let t = t.trim_end_matches('0').trim_end_matches('.');
+    t.to_string()
 }
 
 /// A standard error to four decimals, or in exponent form beyond 1e5 (a real pole far
@@ -208,14 +322,41 @@ fn se_text(v: Option<f64>) -> String {
 impl ModalAnalysis {
     fn fmt_ssi(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let res = &self.ssi;
+        self.fmt_decimation(f)?;
         let largest_lag = 2 * res.block_rows - 1;
-        writeln!(
+        write!(
             f,
             "{} block rows: correlations up to lag {largest_lag} ({:.4} s at {} Hz)",
             res.block_rows,
             largest_lag as f64 / self.fs_hz,
-            self.fs_hz
+            rate_text(self.fs_hz)
         )?;
+        match &res.auto_lag {
+            None => writeln!(f)?,
+            Some(lag) => match (lag.lowest_peak_hz, lag.periods) {
+                (Some(peak), Some(periods)) => {
+                    let limit = match lag.limited_by {
+                        Some(LagLimit::MatrixSize) => format!(
+                            "; fewer than {} to keep the Toeplitz matrix within {} rows (give --references or --lag-seconds)",
+                            crate::survey::LAG_PERIODS,
+                            crate::survey::MAX_TOEPLITZ_ROWS
+                        ),
+                        Some(LagLimit::RecordLength) => {
+                            "; fewer, to keep the lag within an eighth of the record".into()
+                        }
+                        _ => String::new(),
+                    };
+                    writeln!(
+                        f,
+                        ", {periods:.1} periods of the record's lowest spectral peak ({peak:.4} Hz){limit}"
+                    )?
+                }
+                _ => writeln!(
+                    f,
+                    ": the record's spectrum shows no peak to size the lag by"
+                )?,
+            },
+        }
         if !res.modes.is_empty() || !res.real_poles.is_empty() {
             writeln!(
                 f,
@@ -278,6 +419,36 @@ impl ModalAnalysis {
         Ok(())
     }
 
+    fn fmt_decimation(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let d = &self.decimation;
+        match (&d.survey, d.factor) {
+            (Some(s), 1) => writeln!(
+                f,
+                "not decimated: 99 % of the record's power lies below {:.4} Hz, {:.0} % of Nyquist ({} Hz)",
+                s.band_hz,
+                100.0 * s.band_hz / (s.fs_hz / 2.0),
+                rate_text(s.fs_hz / 2.0)
+            ),
+            (Some(s), r) => writeln!(
+                f,
+                "decimated by {r} from {} Hz to {} Hz (read from the record: 99 % of its power lies below {:.4} Hz{}; --decimate 1 keeps the rate)",
+                rate_text(d.recorded_fs_hz),
+                rate_text(self.fs_hz),
+                s.band_hz,
+                s.peaks_hz.last().map_or(String::new(), |p| format!(
+                    ", its highest spectral peak at {p:.4} Hz"
+                ))
+            ),
+            (None, 1) => Ok(()),
+            (None, r) => writeln!(
+                f,
+                "decimated by {r} from {} Hz to {} Hz",
+                rate_text(d.recorded_fs_hz),
+                rate_text(self.fs_hz)
+            ),
+        }
+    }
+
     fn fmt_refined(&self, f: &mut fmt::Formatter<'_>, r: &Refinement) -> fmt::Result {
         let res = &self.ssi;
         writeln!(
@@ -287,7 +458,10 @@ impl ModalAnalysis {
             r.fitted_by(),
             r.penalty
         )?;
-        for m in &r.modes {
+        for (i, m) in r.modes.iter().enumerate() {
+            if !self.is_reported(i, false) {
+                continue;
+            }
             let ssi = m.source.map_or_else(
                 || {
                     format!(
@@ -325,6 +499,13 @@ impl ModalAnalysis {
                     se.join(", "),
                     mpc
                 )?;
+            } else if let Some(s) = m.source.filter(|_| self.channels.len() > 1) {
+                writeln!(
+                    f,
+                    "     shape {}  (SSI's: the refinement gives shapes only from a joint fit, and this one was of {})",
+                    shape_text(&res.modes[s].shape, "  "),
+                    r.fitted_by()
+                )?;
             }
         }
         for d in &r.dropped {
@@ -334,7 +515,10 @@ impl ModalAnalysis {
                 d.frequency_hz, d.evidence
             )?;
         }
-        for p in &r.real_poles {
+        for (i, p) in r.real_poles.iter().enumerate() {
+            if !self.is_reported(i, true) {
+                continue;
+            }
             writeln!(
                 f,
                 "real pole {:.4} ± {} rad/s  (evidence {:.0}, above {:.1}; SSI real pole at {:.4})",
@@ -352,6 +536,21 @@ impl ModalAnalysis {
                 d.lambda, d.evidence, r.real_pole_penalty
             )?;
         }
+        for n in &self.not_reported {
+            let what = if n.real_pole {
+                format!("real pole {:.4e} rad/s", r.real_poles[n.index].lambda)
+            } else {
+                let m = &r.modes[n.index];
+                format!("{:.4} Hz, damping {:.4}", m.frequency_hz, m.damping_ratio)
+            };
+            let why: Vec<String> = n.reasons.iter().map(|w| w.to_string()).collect();
+            writeln!(
+                f,
+                "not a {}: {what} ({}); kept in the fit, not reported",
+                if n.real_pole { "real pole" } else { "mode" },
+                why.join("; ")
+            )?;
+        }
         if r.misfit > MISFIT_LIMIT {
             writeln!(
                 f,
@@ -359,6 +558,13 @@ impl ModalAnalysis {
                  the excitation may not be broadband random (e.g. a multisine), or the record \
                  holds what the model lacks; trust the SSI modes above instead",
                 r.misfit, MISFIT_LIMIT
+            )
+        } else if !self.not_reported.is_empty() {
+            writeln!(
+                f,
+                "misfit {:.3}, within {MISFIT_LIMIT}, but only with the {} estimate(s) above that are not physical: the model spends poles on what it lacks; the modes reported are the others",
+                r.misfit,
+                self.not_reported.len()
             )
         } else {
             writeln!(f, "misfit {:.3} (the record follows the model)", r.misfit)
@@ -420,8 +626,21 @@ mod tests {
         .unwrap();
         assert_eq!(a.refined.as_ref(), Some(&by_hand));
         let text = a.to_string();
+        // The decimation and the lag read from the record, said first.
         assert!(
-            text.starts_with("20 block rows: correlations up to lag 39"),
+            text.starts_with("not decimated: 99 % of the record's power"),
+            "{text}"
+        );
+        let i = a.ssi.block_rows;
+        assert!(
+            text.contains(&format!(
+                "{i} block rows: correlations up to lag {}",
+                2 * i - 1
+            )),
+            "{text}"
+        );
+        assert!(
+            text.contains("periods of the record's lowest spectral peak"),
             "{text}"
         );
         let none = analyze(&[&y], fs, &opts.clone().with_refine(None)).unwrap();

@@ -42,6 +42,8 @@ pub enum SsiOption {
     MaxIterations,
     /// `RefineOptions::tolerance`.
     Tolerance,
+    /// `AnalysisOptions::decimation`: a factor of 0.
+    Decimation,
 }
 
 impl SsiOption {
@@ -67,6 +69,7 @@ impl SsiOption {
             SsiOption::ClusterTolerance => "cluster_tolerance",
             SsiOption::MaxIterations => "max_iterations",
             SsiOption::Tolerance => "tolerance",
+            SsiOption::Decimation => "decimation",
         }
     }
 }

@@ -3,8 +3,8 @@
 
 use crate::linalg::{self, C64, Dense};
 use crate::{
-    Correlations, Mode, Pole, RealPoleCluster, SsiError, SsiOption, SsiOptions, Stability, corr,
-    stabilize,
+    AutoLag, Correlations, Mode, Pole, RealPoleCluster, RecordSurvey, SsiError, SsiOption,
+    SsiOptions, Stability, corr, stabilize,
 };
 use rayon::prelude::*;
 
@@ -69,8 +69,13 @@ pub struct SsiResult {
     pub modes: Vec<Mode>,
     /// Clusters of stable real poles, by increasing magnitude.
     pub real_poles: Vec<RealPoleCluster>,
-    /// Remarks, e.g. why no mode was found.
+    /// Remarks, e.g. why no mode was found, or a lag shorter than a mode's period.
     pub notes: Vec<String>,
+    /// How the block rows were read from the record ([`crate::BlockRows::Auto`]); `None`
+    /// when the options gave them.
+    pub auto_lag: Option<AutoLag>,
+    /// The record's survey, when the options left anything to it.
+    pub survey: Option<RecordSurvey>,
 }
 
 /// Check the channels (equal lengths, finite, not constant) and return their length and means,
@@ -212,7 +217,15 @@ pub const MIN_CORRELATION: f64 = 1e-290;
 pub fn identify(y: &[&[f64]], fs: f64, opts: &SsiOptions) -> Result<SsiResult, SsiError> {
     check_fs(fs)?;
     let (n, means) = check_channels(y)?;
-    let i = opts.block_rows.resolve(fs)?;
+    let refs = references(opts, y.len())?;
+    let (i, auto) = match opts.block_rows.resolve(fs)? {
+        Some(i) => (i, None),
+        None => {
+            let s = crate::survey(y, fs)?;
+            let (i, lag) = s.block_rows(n, y.len(), refs.len());
+            (i, Some((s, lag)))
+        }
+    };
     // 2i lags (0 … 2i − 1) need 2i + 1 samples; saturating, so that a count too large for
     // any record (a lag time of years) is reported as too short rather than wrapping round.
     let lags = i.saturating_mul(2);
@@ -224,9 +237,16 @@ pub fn identify(y: &[&[f64]], fs: f64, opts: &SsiOptions) -> Result<SsiResult, S
             needed: lags.saturating_add(1),
         });
     }
-    let refs = references(opts, y.len())?;
     let corr = corr::estimate_centred(y, &refs, lags, &means);
-    identify_from_correlations(&corr, fs, i, opts)
+    match auto {
+        None => identify_from_correlations(&corr, fs, i, opts),
+        Some((survey, lag)) => {
+            let mut res = identify_with_order_cap(&corr, fs, i, opts, survey.max_order())?;
+            res.auto_lag = Some(lag);
+            res.survey = Some(survey);
+            Ok(res)
+        }
+    }
 }
 
 /// Identify from given correlations (at least `2·block_rows` lags), e.g. exact ones.
@@ -235,6 +255,18 @@ pub fn identify_from_correlations(
     fs: f64,
     block_rows: usize,
     opts: &SsiOptions,
+) -> Result<SsiResult, SsiError> {
+    identify_with_order_cap(corr, fs, block_rows, opts, 40)
+}
+
+/// [`identify_from_correlations`], the largest order at most `order_cap` when the options
+/// leave it open.
+fn identify_with_order_cap(
+    corr: &Correlations,
+    fs: f64,
+    block_rows: usize,
+    opts: &SsiOptions,
+    order_cap: usize,
 ) -> Result<SsiResult, SsiError> {
     check_fs(fs)?;
     let i = block_rows;
@@ -246,7 +278,7 @@ pub fn identify_from_correlations(
     let rank = s.iter().filter(|&&v| v > s0 * 1e-12).count();
     let max_order = match opts.max_order {
         Some(m) => m,
-        None => rank.min(40),
+        None => rank.min(order_cap),
     };
     if max_order > rank || max_order == 0 {
         return Err(SsiError::OrderAboveRank {
@@ -290,7 +322,8 @@ pub fn identify_from_correlations(
         channels: l,
     };
     stabilize::label(&mut diagram, opts);
-    let (modes, real_poles, notes) = stabilize::cluster(&diagram, opts);
+    let (modes, real_poles, mut notes) = stabilize::cluster(&diagram, opts);
+    notes.extend(lag_notes(&modes, i, fs));
     Ok(SsiResult {
         block_rows: i,
         singular_values: s,
@@ -298,7 +331,28 @@ pub fn identify_from_correlations(
         modes,
         real_poles,
         notes,
+        auto_lag: None,
+        survey: None,
     })
+}
+
+/// A note for each mode whose period is longer than the largest lag 2i − 1: its
+/// correlation is seen over less than one period, and its estimate is biased (a damping of
+/// several percent where the record's is a fraction of one).
+fn lag_notes(modes: &[Mode], i: usize, fs: f64) -> Vec<String> {
+    let lag_s = (2 * i - 1) as f64 / fs;
+    modes
+        .iter()
+        .filter(|m| m.frequency_hz * lag_s < 1.0)
+        .map(|m| {
+            format!(
+                "the largest lag ({lag_s:.3} s) is shorter than one period of the mode at {:.4} Hz ({:.3} s): its estimate is not to be trusted; give a lag of several periods (ten: {:.1} s)",
+                m.frequency_hz,
+                1.0 / m.frequency_hz,
+                10.0 / m.frequency_hz
+            )
+        })
+        .collect()
 }
 
 /// The correlations' channels and references, when they hold `2·i` lags of that shape and

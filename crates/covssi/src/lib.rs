@@ -51,20 +51,24 @@ struct ReadmeDoctests;
 
 mod analysis;
 pub mod corr;
+pub mod decimate;
 mod error;
 mod identify;
 mod linalg;
 mod options;
+pub mod plausibility;
 pub mod progress;
 pub mod refine;
 mod stabilize;
+pub mod survey;
 #[cfg(feature = "svg")]
 pub mod svg;
 #[cfg(feature = "synth")]
 pub mod synth;
 
 pub use analysis::{
-    AnalysisOptions, ModalAnalysis, ReportedMode, analyze, analyze_with_progress, shape_text,
+    AnalysisOptions, Decimation, DecimationReport, ModalAnalysis, ReportedMode, analyze,
+    analyze_with_progress, shape_text,
 };
 pub use corr::Correlations;
 pub use error::{SsiError, SsiOption};
@@ -74,9 +78,11 @@ pub use identify::{
 };
 pub use linalg::C64 as Complex64;
 pub use options::{BlockRows, SsiOptions, StabilityCriteria};
+pub use plausibility::{NotPhysical, NotReported};
 pub use progress::Progress;
 pub use refine::{
     DroppedMode, DroppedRealPole, MISFIT_LIMIT, RefineOptions, RefinedMode, RefinedRealPole,
     Refinement, refine, refine_with_real_poles,
 };
 pub use stabilize::{Mode, Pole, PoleStatus, RealPoleCluster, Rejection, Stability, mac, mpc};
+pub use survey::{AutoLag, LagLimit, RecordSurvey, survey};

@@ -7,6 +7,9 @@ use crate::{SsiError, SsiOption};
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum BlockRows {
+    /// Read from the record: enough that the largest lag covers ten periods of its lowest
+    /// spectral peak, within a size budget ([`survey`](mod@crate::survey) says how). The default.
+    Auto,
     /// Exactly this many.
     Count(usize),
     /// Enough that the largest lag 2i−1 covers this many seconds.
@@ -22,9 +25,11 @@ pub enum BlockRows {
 }
 
 impl BlockRows {
-    /// The number of block rows at sampling rate `fs`.
-    pub fn resolve(&self, fs: f64) -> Result<usize, SsiError> {
+    /// The number of block rows at sampling rate `fs`; `None` for [`BlockRows::Auto`], which
+    /// needs the record ([`RecordSurvey::block_rows`](crate::RecordSurvey::block_rows)).
+    pub fn resolve(&self, fs: f64) -> Result<Option<usize>, SsiError> {
         let i = match *self {
+            BlockRows::Auto => return Ok(None),
             BlockRows::Count(i) => i,
             BlockRows::Seconds(t) => {
                 if !(t.is_finite() && t > 0.0) {
@@ -62,7 +67,7 @@ impl BlockRows {
                 value: i as f64,
             });
         }
-        Ok(i)
+        Ok(Some(i))
     }
 }
 
@@ -98,9 +103,10 @@ impl Default for StabilityCriteria {
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[cfg_attr(feature = "serde", serde(default, deny_unknown_fields))]
 pub struct SsiOptions {
-    /// Block rows of the Toeplitz matrix. Default: 20.
+    /// Block rows of the Toeplitz matrix. Default: [`BlockRows::Auto`], read from the record.
     pub block_rows: BlockRows,
-    /// Largest model order; default: the numerical rank of the Toeplitz matrix, at most 40.
+    /// Largest model order; default: the numerical rank of the Toeplitz matrix, at most 40
+    /// (with [`BlockRows::Auto`], at most four per spectral peak when there are more than ten).
     pub max_order: Option<usize>,
     /// Orders run `order_step, 2·order_step, …`; 1 keeps odd orders, where a real pole can
     /// appear. Default: 1.
@@ -121,7 +127,7 @@ pub struct SsiOptions {
 impl Default for SsiOptions {
     fn default() -> Self {
         SsiOptions {
-            block_rows: BlockRows::Count(20),
+            block_rows: BlockRows::Auto,
             max_order: None,
             order_step: 1,
             criteria: StabilityCriteria::default(),

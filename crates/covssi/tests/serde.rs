@@ -2,7 +2,7 @@
 //! it was written, a pole's label is its status's name, and an unknown option is refused.
 
 use covssi::synth::ModalRecord;
-use covssi::{AnalysisOptions, ModalAnalysis, SsiOptions, analyze};
+use covssi::{AnalysisOptions, BlockRows, ModalAnalysis, SsiOptions, analyze};
 
 fn analysis() -> ModalAnalysis {
     let y = ModalRecord::new(20.0, &[(1.5, 0.02), (4.0, 0.03)])
@@ -14,7 +14,10 @@ fn analysis() -> ModalAnalysis {
         .with_noise(0.05)
         .generate(8192, 21);
     let v: Vec<&[f64]> = y.iter().map(Vec::as_slice).collect();
+    // Fixed block rows: the JSON's form is the subject here, not the defaults (with those
+    // read from the record SSI also keeps a third, weak mode, and the indices move).
     let opts = AnalysisOptions::default().with_ssi(SsiOptions {
+        block_rows: BlockRows::Count(20),
         max_order: Some(20),
         ..SsiOptions::default()
     });

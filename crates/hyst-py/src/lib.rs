@@ -288,7 +288,7 @@ fn columns<'a>(y: &'a numpy::ndarray::ArrayView2<'a, f64>) -> Vec<Cow<'a, [f64]>
 /// channels) sampled at `fs` Hz; see the Python wrapper `hyst.ssi` for the options.
 #[pyfunction]
 #[pyo3(signature = (
-    y, fs, *, block_rows = None, lag_seconds = None, max_order = None, order_step = 1,
+    y, fs, *, block_rows = None, lag_seconds = None, decimate = None, max_order = None, order_step = 1,
     references = None, df = None, dzeta = None, dmac = None, dreal = None, refine = true,
     joint = true, channels = None, record = "array"
 ))]
@@ -299,6 +299,7 @@ fn ssi(
     fs: f64,
     block_rows: Option<usize>,
     lag_seconds: Option<f64>,
+    decimate: Option<usize>,
     max_order: Option<usize>,
     order_step: usize,
     references: Option<Vec<usize>>,
@@ -346,6 +347,7 @@ fn ssi(
         ..SsiOptions::default()
     };
     let opts = AnalysisOptions::default()
+        .with_decimation(decimate.map_or(covssi::Decimation::Auto, covssi::Decimation::Factor))
         .with_ssi(ssi)
         .with_refine(refine.then(|| RefineOptions {
             joint,

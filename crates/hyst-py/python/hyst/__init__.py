@@ -100,6 +100,7 @@ def ssi(
     *,
     block_rows=None,
     lag_seconds=None,
+    decimate=None,
     max_order=None,
     order_step=1,
     references=None,
@@ -123,15 +124,20 @@ def ssi(
     fs : float
         Sampling rate (Hz).
     block_rows : int, optional
-        Block rows of the Toeplitz matrix of correlations (default 20): correlations up to
-        lag ``2 * block_rows - 1`` are used. The lowest mode should have at least a period
-        within that lag.
+        Block rows of the Toeplitz matrix of correlations: correlations up to lag
+        ``2 * block_rows - 1`` are used. Default: read from the record, enough for ten
+        periods of its lowest spectral peak within a size budget (the report says how).
     lag_seconds : float, optional
         The same as a time: enough block rows that the largest lag covers this many
         seconds, ceil((lag_seconds * fs + 1) / 2). Not with ``block_rows``.
+    decimate : int, optional
+        Decimate by this factor first (an ideal low-pass below the new Nyquist, then every
+        ``decimate``-th sample). Default: read from the record's spectrum (the report says
+        how); 1 keeps the rate.
     max_order : int, optional
         Largest model order of the stabilization diagram (default: the Toeplitz matrix's
-        numerical rank, at most 40).
+        numerical rank, at most 40, or four per spectral peak when the record shows more
+        than ten and the block rows are read from it).
     order_step : int
         Orders run ``order_step, 2 * order_step, ...`` (default 1: odd orders too, where a
         real pole can appear).
@@ -176,10 +182,11 @@ def ssi(
     return _hyst.ssi(
         a,
         float(fs),
-        block_rows=block_rows,
+        block_rows=_count(block_rows, "block_rows", 2),
         lag_seconds=lag_seconds,
-        max_order=max_order,
-        order_step=order_step,
+        decimate=_count(decimate, "decimate", 1),
+        max_order=_count(max_order, "max_order", 1),
+        order_step=_count(order_step, "order_step", 1),
         references=None if references is None else [int(r) for r in references],
         df=df,
         dzeta=dzeta,
@@ -190,6 +197,17 @@ def ssi(
         channels=None if channels is None else [str(c) for c in channels],
         record=str(record),
     )
+
+
+def _count(v, name, least):
+    """An optional whole-number option as an int of at least ``least``, else ValueError."""
+    if v is None:
+        return None
+    if isinstance(v, bool) or int(v) != v:
+        raise ValueError(f"{name} must be a whole number, got {v!r}")
+    if int(v) < least:
+        raise ValueError(f"{name} must be at least {least}, got {v!r}")
+    return int(v)
 
 
 def _vector(x, what):

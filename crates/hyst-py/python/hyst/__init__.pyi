@@ -134,6 +134,7 @@ def ssi(
     *,
     block_rows: Optional[int] = ...,
     lag_seconds: Optional[float] = ...,
+    decimate: Optional[int] = ...,
     max_order: Optional[int] = ...,
     order_step: int = ...,
     references: Optional[Sequence[int]] = ...,
