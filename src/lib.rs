@@ -18,5 +18,6 @@ pub mod io;
 pub mod plot;
 
 pub mod report;
+pub mod store;
 
 pub use covssi::shape_text;

@@ -2276,3 +2276,110 @@ fn track_windows_resumes_and_refuses_no_records() {
     ]);
     assert!(!ok && err.contains("no records"), "{err}");
 }
+
+/// `hyst track` on files never serves a stale or wrong result: a run resumed with another
+/// `--fs` gives what a fresh run with it gives (it served the first run's 1.0 Hz where the
+/// fresh run gives 2.0); records are taken in natural order (rec_2 before rec_10); a record
+/// with the channels in another order is matched by name, one with other channels skipped
+/// with the reason; a torn last line of the store is repaired; the run's own outputs inside
+/// the input folder are not read as records; a live lock on `--out` refuses a second run.
+#[test]
+fn track_files_resume_only_what_is_unchanged() {
+    let Some(path) = common::data_file("oma/data_3dof.csv") else {
+        return;
+    };
+    let t = hyst::io::read_csv(&path).unwrap();
+    let dir = tmp("track_files");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let col = |c: &str| t.column(c).unwrap().to_vec();
+    let (y1, y2, y3) = (col("y1"), col("y2"), col("y3"));
+    for k in 1..=10 {
+        let r = (k - 1) * 6000..k * 6000;
+        let (names, cols): (Vec<&str>, Vec<&[f64]>) = match k {
+            // Another order of the same channels, and a record missing one.
+            4 => (
+                vec!["y2", "y1", "y3"],
+                vec![&y2[r.clone()], &y1[r.clone()], &y3[r]],
+            ),
+            7 => (vec!["y1", "y2"], vec![&y1[r.clone()], &y2[r]]),
+            _ => (
+                vec!["y1", "y2", "y3"],
+                vec![&y1[r.clone()], &y2[r.clone()], &y3[r]],
+            ),
+        };
+        hyst::io::write_csv(&dir.join(format!("rec_{k}.csv")), &names, &cols).unwrap();
+    }
+    // --out the input folder itself: the run's own files (the store, the tables, the
+    // report, the lock) are not records.
+    let out = dir.clone();
+    let files: Vec<PathBuf> = (1..=10).map(|k| dir.join(format!("rec_{k}.csv"))).collect();
+    let run = |fs: &str, out: &Path, inputs: &[&str]| {
+        let mut args = vec!["track", "--inputs"];
+        args.extend_from_slice(inputs);
+        args.extend(["--fs", fs, "--training", "4", "--out", s(out)]);
+        let (ok, text, err) = hyst(&args);
+        assert!(ok, "{err}");
+        text
+    };
+    let folder = [s(&dir)];
+    let first = run("20", &out, &folder);
+    assert!(first.contains("10 records, in natural order"), "{first}");
+    assert!(first.contains("1 skipped"), "{first}");
+    let table = std::fs::read_to_string(out.join("table.csv")).unwrap();
+    let order: Vec<&str> = table
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').next().unwrap())
+        .collect();
+    let mut seen: Vec<&str> = order.clone();
+    seen.dedup();
+    assert_eq!(
+        seen,
+        [
+            "rec_1.csv",
+            "rec_2.csv",
+            "rec_3.csv",
+            "rec_4.csv",
+            "rec_5.csv",
+            "rec_6.csv",
+            "rec_8.csv",
+            "rec_9.csv",
+            "rec_10.csv"
+        ],
+        "{table}"
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let skipped = report.to_string();
+    assert!(
+        skipped.contains("differ from the first record's y1,y2,y3"),
+        "{skipped}"
+    );
+    // The same run again (its outputs now in the input folder): the same report.
+    assert_eq!(run("20", &out, &folder), first);
+    // Another rate: every record identified again, as a fresh run does.
+    let fresh = tmp("track_files_fresh");
+    let _ = std::fs::remove_dir_all(&fresh);
+    let at40 = run("40", &out, &folder);
+    let listed: Vec<&str> = files.iter().map(|f| s(f)).collect();
+    assert_eq!(at40, run("40", &fresh, &listed));
+    assert_ne!(at40, first);
+    // A torn last line (a run killed mid-write): repaired, the same report.
+    let store = out.join("records.jsonl");
+    let mut text = std::fs::read_to_string(&store).unwrap();
+    text.push_str("{\"key\":\"0\",\"name\":\"rec_");
+    std::fs::write(&store, text).unwrap();
+    assert_eq!(run("40", &out, &folder), at40);
+    assert!(
+        std::fs::read_to_string(&store)
+            .unwrap()
+            .lines()
+            .all(|l| serde_json::from_str::<serde_json::Value>(l).is_ok())
+    );
+    // A lock held by a live process (this test's) refuses a second run.
+    std::fs::write(out.join(".lock"), std::process::id().to_string()).unwrap();
+    let (ok, _, err) = hyst(&["track", "--inputs", s(&dir), "--fs", "20", "--out", s(&out)]);
+    assert!(!ok && err.contains("another `hyst track`"), "{err}");
+    std::fs::remove_file(out.join(".lock")).unwrap();
+}

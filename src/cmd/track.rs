@@ -100,7 +100,9 @@ fn sources(a: &TrackArgs) -> Result<Sources, Error> {
             count,
         });
     }
-    let files = hyst::io::list_records(&a.inputs)?;
+    // The run's own outputs are not records, should --out be an input folder.
+    let mut files = hyst::io::list_records(&a.inputs)?;
+    files.retain(|f| !hyst::store::is_output(&a.out, f));
     if files.is_empty() {
         return Err(fail(
             "no records: --inputs names no files (or only empty folders)",
@@ -127,23 +129,33 @@ fn reference_modes(path: &Path) -> Result<Vec<hyst::monitor::ModeEstimate>, Erro
     Ok(hyst::monitor::reported_modes(&analysis))
 }
 
-/// The records an earlier run of the same --out finished.
-fn done_records(path: &Path) -> Vec<RecordModes> {
-    std::fs::read_to_string(path)
-        .map(|text| {
-            text.lines()
-                .filter_map(|l| serde_json::from_str(l).ok())
-                .collect()
-        })
-        .unwrap_or_default()
-}
-
 pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
-    let sources = sources(a)?;
+    let mut sources = sources(a)?;
     let (covs, cov_names) = match &a.covariates {
         Some(p) => hyst::io::read_covariates(p)?,
         None => Default::default(),
     };
+    // The training period and the chart need the records in time order: the covariates'
+    // times when they give one for every record, else the names' natural order.
+    if let Sources::Files(files) = &mut sources {
+        let time = |f: &PathBuf| {
+            f.file_name()
+                .and_then(|n| covs.get(n.to_string_lossy().as_ref()))
+                .and_then(|(t, _)| *t)
+        };
+        if !covs.is_empty() && files.iter().all(|f| time(f).is_some()) {
+            files.sort_by(|x, y| time(x).unwrap_or(0.0).total_cmp(&time(y).unwrap_or(0.0)));
+            println!(
+                "{} records, in the order of their time in the covariates file",
+                files.len()
+            );
+        } else {
+            println!(
+                "{} records, in natural order of their names (rec_2 before rec_10)",
+                files.len()
+            );
+        }
+    }
     let names: Vec<String> = match &sources {
         Sources::Files(files) => files
             .iter()
@@ -159,15 +171,38 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
     if let Some(r) = hyst::io::repeated(&names) {
         return Err(fail(format!("two records named {r}: each file once")));
     }
-    std::fs::create_dir_all(&a.out).map_err(|e| fail(format!("{}: {e}", a.out.display())))?;
-    let jsonl = a.out.join("records.jsonl");
-    let done = done_records(&jsonl);
-    let file = std::fs::OpenOptions::new()
-        .create(true)
-        .append(true)
-        .open(&jsonl)
-        .map_err(|e| fail(format!("{}: {e}", jsonl.display())))?;
-    let writer = Mutex::new(std::io::BufWriter::new(file));
+    let store = hyst::store::CampaignStore::open(&a.out)?;
+    // What makes each record's result: its source, the rate and channels asked for, and the
+    // analysis options; a stored result made otherwise is identified again.
+    let analysis = a.ssi.analysis();
+    let settings = format!("{:?}|{:?}|{analysis:?}", a.fs, a.columns);
+    let keys: Vec<String> = match &sources {
+        Sources::Files(files) => files
+            .iter()
+            .map(|f| hyst::store::record_key(&hyst::store::file_source(f), &settings))
+            .collect(),
+        Sources::Windows { length, step, .. } => {
+            let whole = a
+                .input
+                .as_deref()
+                .map(hyst::store::file_source)
+                .unwrap_or_default();
+            (0..names.len())
+                .map(|i| {
+                    hyst::store::record_key(
+                        &format!("{whole}|{}|{length}|{step}", i * step),
+                        &settings,
+                    )
+                })
+                .collect()
+        }
+    };
+    let done: Vec<RecordModes> = names
+        .iter()
+        .zip(&keys)
+        .filter_map(|(n, k)| store.cached(n, k).cloned())
+        .collect();
+    let store_error = Mutex::new(None);
     let bar = steps_bar();
     bar.set_length(names.len() as u64);
     bar.set_message("records identified");
@@ -180,12 +215,38 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
         Some((t, v)) => (t.unwrap_or(fallback_time), v.clone()),
         None => (fallback_time, vec![f64::NAN; cov_names.len()]),
     };
+    // Without --columns, the first record's channels are every record's.
+    let first_channels = match (&sources, &a.columns) {
+        (Sources::Files(files), None) => files
+            .first()
+            .and_then(|f| read_record(f).ok())
+            .map(|t| channel_names(&t, None, &[])),
+        _ => None,
+    };
     let load = |i: usize| -> Result<Loaded, String> {
         let (channels, fs) = match &sources {
             Sources::Files(files) => {
                 let mut t = read_record(&files[i]).map_err(|e| e.to_string())?;
                 let fs = t.rate(a.fs).map_err(|e| e.to_string())?;
-                let cols = channel_names(&t, a.columns.as_deref(), &[]);
+                let mut cols = channel_names(&t, a.columns.as_deref(), &[]);
+                // Every record's channels are the first record's, matched by name: another
+                // order is put right, another set is skipped (its shapes would be compared
+                // entry by entry with the wrong channels).
+                if let Some(first) = &first_channels
+                    && &cols != first
+                {
+                    let (mut x, mut y) = (cols.clone(), first.clone());
+                    x.sort();
+                    y.sort();
+                    if x != y {
+                        return Err(format!(
+                            "its channels {} differ from the first record's {}: skipped (--columns chooses the channels)",
+                            cols.join(","),
+                            first.join(",")
+                        ));
+                    }
+                    cols = first.clone();
+                }
                 let data = cols
                     .iter()
                     .map(|c| t.take_column(c).map_err(|e| e.to_string()))
@@ -221,13 +282,12 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
             covariates,
         })
     };
-    let analysis = a.ssi.analysis();
     let finished = |r: &RecordModes| {
-        if let Ok(line) = serde_json::to_string(r)
-            && let Ok(mut w) = writer.lock()
+        if let Some(i) = names.iter().position(|n| n == &r.name)
+            && let Err(e) = store.append(&keys[i], r)
+            && let Ok(mut first) = store_error.lock()
         {
-            let _ = writeln!(w, "{line}");
-            let _ = w.flush();
+            first.get_or_insert(e);
         }
         bar.inc(1);
     };
@@ -239,6 +299,16 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
         (r.time, r.covariates) = covariates_of(&names[i], start_of(i));
     }
     bar.finish_and_clear();
+    if let Some(e) = store_error.into_inner().ok().flatten() {
+        return Err(e.into());
+    }
+    store.rewrite(
+        &keys
+            .iter()
+            .cloned()
+            .zip(records.iter().cloned())
+            .collect::<Vec<_>>(),
+    )?;
     let mut opts = TrackOptions::default();
     opts.training = a.training.unwrap_or(opts.training.min(names.len() / 2));
     opts.whiten = !a.no_whiten;

@@ -11,7 +11,8 @@ use super::{Delimiter, IoError};
 /// covariates' names.
 pub type Covariates = (HashMap<String, (Option<f64>, Vec<f64>)>, Vec<String>);
 
-/// The files `paths` name: each file as given, each folder's files in name order.
+/// The files `paths` name: each file as given, each folder's files in natural name order
+/// (`rec_2` before `rec_10`).
 pub fn list_records(paths: &[PathBuf]) -> Result<Vec<PathBuf>, IoError> {
     let mut files = Vec::new();
     for p in paths {
@@ -24,7 +25,9 @@ pub fn list_records(paths: &[PathBuf]) -> Result<Vec<PathBuf>, IoError> {
                 .filter_map(|e| e.ok().map(|e| e.path()))
                 .filter(|p| p.is_file())
                 .collect();
-            inside.sort();
+            inside.sort_by(|a, b| {
+                crate::store::natural_cmp(&a.to_string_lossy(), &b.to_string_lossy())
+            });
             files.extend(inside);
         } else {
             files.push(p.clone());

@@ -50,6 +50,16 @@ pub enum IoError {
         /// The path.
         path: PathBuf,
     },
+    /// Another run holds the campaign store's lock.
+    #[error(
+        "{path}: another `hyst track` (process {pid}) is writing this --out folder; wait for it, or give another --out"
+    )]
+    StoreLocked {
+        /// The lock file.
+        path: PathBuf,
+        /// The process holding it.
+        pid: u32,
+    },
     /// The first line holds numbers only: the file has no header line of names.
     #[error(
         "{path}: the first line `{line}` is numbers, not column names: the file has no header line; add one naming the columns (e.g. `t,y1,y2`), or save the array as .npy"
