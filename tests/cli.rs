@@ -267,6 +267,13 @@ fn invalid_parameters() {
     let p = write("bad2.json", r#"{"mass": 1, "damping": 1}"#);
     let err = simulate_fails(&["--input", s(&u), "--fs", "750", "--params", s(&p)]);
     assert!(err.contains("stiffness"), "{err}");
+    // An array was read by position, as mass, damping, stiffness, …
+    let p = write("array.json", "[2, 10, 50000]");
+    let err = simulate_fails(&["--input", s(&u), "--fs", "750", "--params", s(&p)]);
+    assert!(
+        err.contains("must be a JSON object") && err.contains("an array"),
+        "{err}"
+    );
 }
 
 /// Values that can never work are refused with the program's own words before any work:

@@ -76,3 +76,25 @@ fn input_and_output_of_different_lengths() {
         "{e}"
     );
 }
+
+/// Test rows that overlap the estimation rows are refused: the same rows for both reported a
+/// "held-out" gain on rows the fit had seen.
+#[test]
+fn test_rows_must_not_overlap_the_estimate() {
+    let u: Vec<f64> = (0..4000).map(|k| (0.37 * k as f64).sin()).collect();
+    let y = u.clone();
+    let rec = Record {
+        u: &u,
+        y: &y,
+        fs: 100.0,
+        interpolation: InputInterpolation::BandLimited,
+    };
+    for test in [(0, 3000), (2000, 4000), (500, 1500)] {
+        let e = residual::refine_record(&rec, Some(1.0), Start::Linear, (0, 3000), &[test])
+            .unwrap_err();
+        assert!(
+            e.to_string().contains("overlap the estimation rows 0:3000"),
+            "{test:?}: {e}"
+        );
+    }
+}

@@ -570,6 +570,20 @@ pub fn read_oscillator(spec: &Path) -> Result<hyst_model::Oscillator, IoError> {
             .pointer(ptr)
             .ok_or_else(|| params(format!("nothing at `#{ptr}`")))?,
     };
+    // serde reads a struct from an array too, by position: [1, 10, 5e4, …] would silently
+    // become mass, damping, stiffness in whatever order the fields are declared.
+    if !value.is_object() {
+        return Err(params(format!(
+            "the model must be a JSON object of named parameters ({{\"mass\": …}}), not {}",
+            match value {
+                serde_json::Value::Array(_) => "an array",
+                serde_json::Value::String(_) => "a string",
+                serde_json::Value::Number(_) => "a number",
+                serde_json::Value::Bool(_) => "a boolean",
+                _ => "null",
+            }
+        )));
+    }
     serde_json::from_value(value.clone()).map_err(|e| params(e.to_string()))
 }
 

@@ -1,5 +1,5 @@
 //! NumPy records: a `.npy` file, or one array of a `.npz` archive, holding a 1-D array (one
-//! channel) or a 2-D array of samples × channels, of float64 or float32, little- or
+//! channel) or a 2-D array of samples × channels, of float64, float32 or integers, little- or
 //! big-endian, in C or Fortran order, read by `npyz` (and `zip` for the archive). The columns
 //! are named by their index, `0`, `1`, …, as the command line's `--columns` then takes them.
 //! Every error names the file (and the archive's array) and what is wrong: the dtype, the
@@ -112,15 +112,21 @@ fn array_table<R: Read>(
             ));
         }
     };
-    let width = match npy.dtype() {
-        DType::Plain(t) if t.type_char() == TypeChar::Float && matches!(t.size_field(), 4 | 8) => {
-            t.size_field()
+    // Integers (an acquisition's counts) are read as the numbers they are; above 2^53 an
+    // int64 or uint64 rounds to the nearest double.
+    let (kind, width) = match npy.dtype() {
+        DType::Plain(t)
+            if (t.type_char() == TypeChar::Float && matches!(t.size_field(), 4 | 8))
+                || (matches!(t.type_char(), TypeChar::Int | TypeChar::Uint)
+                    && matches!(t.size_field(), 1 | 2 | 4 | 8)) =>
+        {
+            (t.type_char(), t.size_field())
         }
         other => {
             return Err(bad(
                 path,
                 format!(
-                    "{label}dtype {} is not a float64 or float32 array",
+                    "{label}dtype {} is not a float or integer array",
                     other.descr().trim()
                 ),
             ));
@@ -156,8 +162,8 @@ fn array_table<R: Read>(
         (n as usize, l as usize)
     };
     let fortran = npy.order() == Order::Fortran;
-    let values =
-        read_values(npy, width).map_err(|e| bad(path, format!("{label}reading the data: {e}")))?;
+    let values = read_values(npy, kind, width)
+        .map_err(|e| bad(path, format!("{label}reading the data: {e}")))?;
     if values.len() != n.saturating_mul(l) {
         return Err(bad(
             path,
@@ -181,12 +187,30 @@ fn array_table<R: Read>(
 }
 
 /// The array's values as f64, in the file's order.
-fn read_values<R: Read>(npy: NpyFile<R>, width: u64) -> std::io::Result<Vec<f64>> {
-    if width == 4 {
-        Ok(npy.into_vec::<f32>()?.into_iter().map(f64::from).collect())
-    } else {
-        npy.into_vec::<f64>()
+fn read_values<R: Read>(npy: NpyFile<R>, kind: TypeChar, width: u64) -> std::io::Result<Vec<f64>> {
+    fn all<T: Into<f64>>(v: Vec<T>) -> Vec<f64> {
+        v.into_iter().map(Into::into).collect()
     }
+    Ok(match (kind, width) {
+        (TypeChar::Float, 4) => all(npy.into_vec::<f32>()?),
+        (TypeChar::Float, _) => npy.into_vec::<f64>()?,
+        (TypeChar::Int, 1) => all(npy.into_vec::<i8>()?),
+        (TypeChar::Int, 2) => all(npy.into_vec::<i16>()?),
+        (TypeChar::Int, 4) => all(npy.into_vec::<i32>()?),
+        (TypeChar::Int, _) => npy
+            .into_vec::<i64>()?
+            .into_iter()
+            .map(|v| v as f64)
+            .collect(),
+        (_, 1) => all(npy.into_vec::<u8>()?),
+        (_, 2) => all(npy.into_vec::<u16>()?),
+        (_, 4) => all(npy.into_vec::<u32>()?),
+        (_, _) => npy
+            .into_vec::<u64>()?
+            .into_iter()
+            .map(|v| v as f64)
+            .collect(),
+    })
 }
 
 #[cfg(test)]
@@ -260,6 +284,43 @@ mod tests {
         ))
         .unwrap();
         assert_eq!(t.columns, [vec![7.0, 8.0]]);
+        // Integers, as the README says they are read: int16 counts, a uint8, a big-endian
+        // int64 beside them.
+        let i16s: Vec<u8> = [-3i16, 1000, 7, -8]
+            .iter()
+            .flat_map(|x| x.to_le_bytes())
+            .collect();
+        let t = read_npy(&write(
+            "i2.npy",
+            &npy_bytes(
+                "{'descr': '<i2', 'fortran_order': False, 'shape': (2, 2), }",
+                &i16s,
+            ),
+        ))
+        .unwrap();
+        assert_eq!(t.columns, [vec![-3.0, 7.0], vec![1000.0, -8.0]]);
+        let t = read_npy(&write(
+            "u1.npy",
+            &npy_bytes(
+                "{'descr': '|u1', 'fortran_order': False, 'shape': (3,), }",
+                &[0, 200, 255],
+            ),
+        ))
+        .unwrap();
+        assert_eq!(t.columns, [vec![0.0, 200.0, 255.0]]);
+        let i64s: Vec<u8> = [-5i64, 1 << 40]
+            .iter()
+            .flat_map(|x| x.to_be_bytes())
+            .collect();
+        let t = read_npy(&write(
+            "i8.npy",
+            &npy_bytes(
+                "{'descr': '>i8', 'fortran_order': False, 'shape': (2,), }",
+                &i64s,
+            ),
+        ))
+        .unwrap();
+        assert_eq!(t.columns, [vec![-5.0, (1u64 << 40) as f64]]);
     }
 
     #[test]
@@ -267,12 +328,12 @@ mod tests {
         let cases: [(&str, Vec<u8>, &str); 7] = [
             ("text.npy", b"t,y\n1,2\n".to_vec(), "not a NumPy .npy file"),
             (
-                "int.npy",
+                "complex.npy",
                 npy_bytes(
-                    "{'descr': '<i8', 'fortran_order': False, 'shape': (2,), }",
+                    "{'descr': '<c16', 'fortran_order': False, 'shape': (1,), }",
                     &le64(&[1.0, 2.0]),
                 ),
-                "dtype '<i8' is not a float64 or float32 array",
+                "dtype '<c16' is not a float or integer array",
             ),
             (
                 "3d.npy",

@@ -34,6 +34,17 @@ pub enum IdentError {
         /// The pipeline's notes on its poles.
         notes: String,
     },
+    /// The mass is so large or small that the model's stiffness, m·ω² up to Nyquist, leaves
+    /// what double precision computes with.
+    #[error(
+        "mass {mass:e} kg is beyond what the model can be computed with: its stiffness up to Nyquist would be m·(π·fs)² = {stiffness:e} N/m (double precision works up to about 1e150); give the mass in other units"
+    )]
+    MassOutOfRange {
+        /// The mass (kg).
+        mass: f64,
+        /// m·(π·fs)² (N/m).
+        stiffness: f64,
+    },
     /// The mass is not a positive finite number.
     #[error("mass must be > 0 kg, got {mass}")]
     NonPositiveMass {
@@ -196,6 +207,21 @@ pub enum IdentError {
         start: usize,
         /// One past the last estimation row.
         end: usize,
+    },
+    /// A test range of the residual loop overlaps the estimation rows: a gain on rows the fit
+    /// saw is not held out.
+    #[error(
+        "test rows {test_start}:{test_end} overlap the estimation rows {estimate_start}:{estimate_end}: the held-out test needs rows the fit never sees"
+    )]
+    TestOverlapsEstimate {
+        /// First test row.
+        test_start: usize,
+        /// One past the last test row.
+        test_end: usize,
+        /// First estimation row.
+        estimate_start: usize,
+        /// One past the last estimation row.
+        estimate_end: usize,
     },
     /// A test range of the residual loop is too short for its held-out test.
     #[error(

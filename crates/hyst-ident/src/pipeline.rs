@@ -54,6 +54,15 @@ pub fn identify(y: &[f64], fs: f64, opts: &IdentOptions) -> Result<Identificatio
     if !(opts.mass.is_finite() && opts.mass > 0.0) {
         return Err(IdentError::NonPositiveMass { mass: opts.mass });
     }
+    // --mass 1e300 gave a damping of 1e301, an infinite implied input and a Bouc-Wen model
+    // "kept" with it: a mass whose stiffness scale leaves double precision is refused.
+    let stiffness = opts.mass * (std::f64::consts::PI * fs).powi(2);
+    if !(opts.mass >= 1e-150 && stiffness <= 1e150) {
+        return Err(IdentError::MassOutOfRange {
+            mass: opts.mass,
+            stiffness,
+        });
+    }
     // A band that can never give a flatness fit is refused before the work, not reported in
     // a note after it.
     if let Some(band) = &opts.excitation {
@@ -171,6 +180,30 @@ pub fn fit_zener_spectrum(
                 sel.c_source
             ));
             None
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A mass whose stiffness scale leaves double precision is refused before any work (it
+    /// gave a damping of 1e301 and an infinite implied input, and a Bouc-Wen model "kept").
+    #[test]
+    fn an_absurd_mass_is_refused() {
+        let y: Vec<f64> = (0..4096).map(|k| (0.3 * k as f64).sin()).collect();
+        for mass in [1e300, 1e-200] {
+            let opts = IdentOptions {
+                mass,
+                ..IdentOptions::default()
+            };
+            let e = identify(&y, 750.0, &opts).unwrap_err();
+            assert!(matches!(e, IdentError::MassOutOfRange { .. }), "{e}");
+            assert!(
+                e.to_string().contains("give the mass in other units"),
+                "{e}"
+            );
         }
     }
 }

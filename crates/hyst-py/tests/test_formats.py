@@ -47,10 +47,22 @@ def test_an_npy_written_by_numpy_gives_the_modes_of_the_csv(data_dir, hyst_bin, 
     assert hyst_ssi(hyst_bin, npy, tmp_path, "--fs", str(FS)) == hyst_ssi(hyst_bin, csv, tmp_path, "--fs", str(FS))
 
 
+@pytest.mark.parametrize("dtype", ["int16", "int32", "uint16"])
+def test_an_integer_npy_is_read_as_its_numbers(data_dir, hyst_bin, tmp_path, dtype):
+    """The 3-DOF record as an acquisition's counts (scaled and rounded to integers, as numpy
+    stores them): the same document as the same counts written as CSV."""
+    y, _ = read_record(data_dir / "oma" / "data_3dof.csv")
+    counts = np.round(y / np.abs(y).max() * 3000.0) + (5000 if dtype.startswith("u") else 0)
+    npy = tmp_path / "counts.npy"
+    np.save(npy, counts.astype(dtype))
+    csv = csv_of(counts, ["0", "1", "2"], tmp_path / "counts.csv")
+    assert hyst_ssi(hyst_bin, npy, tmp_path, "--fs", str(FS)) == hyst_ssi(hyst_bin, csv, tmp_path, "--fs", str(FS))
+
+
 @pytest.mark.parametrize(
     "array, says",
     [
-        (np.arange(12, dtype=np.int64).reshape(6, 2), "dtype '<i8' is not a float64 or float32 array"),
+        (np.ones(6, dtype=np.complex128), "dtype '<c16' is not a float or integer array"),
         (np.zeros((2, 2, 2)), "shape [2, 2, 2]"),
         (np.array([1.0, np.nan, 2.0]), "row 2, column `0`: value NaN is not finite"),
         (np.ones((3, 500)), "the array is 3 × 500"),

@@ -89,6 +89,11 @@ def test_errors_are_value_errors_with_the_librarys_message(hyst_bin, tmp_path):
         (np.full((4096, 1), np.nan), {}, "finite"),
         (np.ones((4096, 2)), {"block_rows": 10, "lag_seconds": 1.0}, "not both"),
         (np.random.default_rng(1).standard_normal((4096, 2)), {"block_rows": 1}, "block"),
+        # PyO3 raised OverflowError for a negative count; the documented error is ValueError.
+        (np.random.default_rng(1).standard_normal((4096, 2)), {"block_rows": -1}, "block_rows must be at least 2"),
+        (np.random.default_rng(1).standard_normal((4096, 2)), {"decimate": 0}, "decimate must be at least 1"),
+        # Complex values lost their imaginary part with only numpy's warning.
+        (np.ones((4096, 2)) * (1 + 1j), {}, "complex"),
         (np.random.default_rng(1).standard_normal((4096, 2)), {"references": [5]}, "5"),
         (np.zeros((2, 3, 4)), {}, "shape"),
         (np.ones((4096, 2)), {"channels": ["a"]}, "channel"),
@@ -97,6 +102,17 @@ def test_errors_are_value_errors_with_the_librarys_message(hyst_bin, tmp_path):
 def test_bad_input_is_a_value_error_naming_it(y, kwargs, says):
     with pytest.raises(ValueError, match=says):
         hyst.ssi(y, 10.0, **kwargs)
+
+
+def test_track_refuses_what_the_command_line_refuses():
+    """No records, a rate of 0 and complex records ran (or lost their imaginary part)."""
+    y = np.random.default_rng(2).standard_normal((2000, 2))
+    with pytest.raises(ValueError, match="no records"):
+        hyst.track([], 10.0)
+    with pytest.raises(ValueError, match="fs must be a positive finite rate"):
+        hyst.track([y, y], 0.0)
+    with pytest.raises(ValueError, match="record 1 is complex"):
+        hyst.track([y, y * 1j], 10.0)
 
 
 PEAK = """

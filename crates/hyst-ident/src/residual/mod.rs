@@ -169,7 +169,15 @@ fn check_rows((start, end): (usize, usize), samples: usize) -> Result<(), IdentE
 }
 
 /// Each test range must hold the blocks of the held-out test.
-fn check_test_rows(tests: &[(usize, usize)]) -> Result<(), IdentError> {
+fn check_test_rows(tests: &[(usize, usize)], estimate: (usize, usize)) -> Result<(), IdentError> {
+    if let Some(r) = tests.iter().find(|r| r.0 < estimate.1 && estimate.0 < r.1) {
+        return Err(IdentError::TestOverlapsEstimate {
+            test_start: r.0,
+            test_end: r.1,
+            estimate_start: estimate.0,
+            estimate_end: estimate.1,
+        });
+    }
     let needed = heldout::BLOCKS_PER_RANGE * heldout::MIN_BLOCK_ROWS;
     match tests.iter().find(|r| r.1 - r.0 < needed) {
         Some(r) => Err(IdentError::TestTooShort {
@@ -236,7 +244,7 @@ pub fn refine_with(
     for &range in std::iter::once(&estimate).chain(tests) {
         check_rows(range, rec.y.len())?;
     }
-    check_test_rows(tests)?;
+    check_test_rows(tests, estimate)?;
     let prep = Prepared::new(rec);
     let rec = &prep;
     let errs = |m: &Oscillator| held_out_errors(m, rec, tests);
@@ -707,7 +715,7 @@ pub fn refine_record_with(
     for &range in tests {
         check_rows(range, rec.y.len())?;
     }
-    check_test_rows(tests)?;
+    check_test_rows(tests, estimate)?;
     let opts = crate::IdentOptions {
         mass: mass.unwrap_or(1.0),
         ..crate::IdentOptions::default()

@@ -174,7 +174,7 @@ def ssi(
         With the library's message: a record too short or constant, an option out of
         range, a non-finite value.
     """
-    a = _np.asarray(y, dtype=_np.float64)
+    a = _real(y, "y")
     if a.ndim == 1:
         a = a.reshape(-1, 1)
     if a.ndim != 2:
@@ -210,8 +210,18 @@ def _count(v, name, least):
     return int(v)
 
 
+def _real(x, what):
+    """``x`` as a float64 array; complex values are refused (converting them drops the
+    imaginary part with only a warning)."""
+    if _np.iscomplexobj(x):
+        raise ValueError(
+            f"{what} is complex: give real values (np.real(...) or np.abs(...), as the data mean)"
+        )
+    return _np.asarray(x, dtype=_np.float64)
+
+
 def _vector(x, what):
-    a = _np.ascontiguousarray(_np.asarray(x, dtype=_np.float64))
+    a = _np.ascontiguousarray(_real(x, what))
     if a.ndim != 1:
         raise ValueError(f"{what} must be one-dimensional (samples,), got shape {a.shape}")
     return a
@@ -458,13 +468,15 @@ def track(records, fs, *, times=None, covariates=None, training=None, block_rows
             elif rec.fs is not None and abs(rec.fs - float(fs)) > 1e-5 * rec.fs:
                 raise ValueError(f"{os.fspath(r)}: states {rec.fs} Hz, but fs={fs} was given")
             r = rec.data
-        a = _np.asarray(r, dtype=_np.float64)
+        a = _real(r, f"record {i}")
         if a.ndim == 1:
             a = a.reshape(-1, 1)
         if a.ndim != 2:
             raise ValueError(f"record {i} must be (samples, channels), got shape {a.shape}")
         arrays.append(a)
     n = len(arrays)
+    if n == 0:
+        raise ValueError("no records: give at least one array or file")
     t = [float(i) for i in range(n)] if times is None else [float(v) for v in times]
     if covariates is None:
         x = [[] for _ in range(n)]
@@ -475,6 +487,8 @@ def track(records, fs, *, times=None, covariates=None, training=None, block_rows
         x = c.tolist()
     if fs is None:
         raise ValueError("fs is needed: the records do not state their sampling rate")
+    if not (float(fs) > 0.0 and _np.isfinite(float(fs))):
+        raise ValueError(f"fs must be a positive finite rate (Hz), got {fs}")
     return _hyst.track(
         arrays, float(fs), times=t, covariates=x,
         training=None if training is None else int(training),
