@@ -1,6 +1,6 @@
 //! Delimited text records: a header line of column names, then rows of numbers separated by
-//! `,`, `;` or tabs (detected from the header line, or given), read as a stream by the `csv`
-//! crate; and the writer of the tables the command line produces.
+//! `,`, `;`, tabs or runs of spaces (detected from the header line, or given), read as a
+//! stream by the `csv` crate; and the writer of the tables the command line produces.
 
 use std::io::{BufRead, Seek};
 use std::path::Path;
@@ -12,7 +12,8 @@ use super::{IoError, Table, repeated};
 #[non_exhaustive]
 pub enum Delimiter {
     /// Whichever of `,` `;` and tab the header line uses most (outside quotes); a header with
-    /// none of them is one column.
+    /// none of them is split at runs of spaces (a `.dat` file's columns), and one without
+    /// spaces either is one column.
     #[default]
     Auto,
     /// `,`
@@ -21,20 +22,23 @@ pub enum Delimiter {
     Semicolon,
     /// A tab.
     Tab,
+    /// One or more spaces (leading and trailing ones ignored).
+    Spaces,
 }
 
 impl Delimiter {
     /// Every delimiter's name, as the command line's `--delimiter` takes it; Python's
     /// `delimiter=` takes the character itself (`","`, `";"`, `"\t"`), which is read too.
-    pub const NAMES: &'static [&'static str] = &["auto", "comma", "semicolon", "tab"];
+    pub const NAMES: &'static [&'static str] = &["auto", "comma", "semicolon", "tab", "spaces"];
 
     /// What the delimiter is, in a line (the command line's help).
     pub fn description(self) -> &'static str {
         match self {
-            Delimiter::Auto => "whichever of `,` `;` tab the header uses most",
+            Delimiter::Auto => "whichever of `,` `;` tab the header uses most, else runs of spaces",
             Delimiter::Comma => "`,`",
             Delimiter::Semicolon => "`;` (a decimal comma is read too)",
             Delimiter::Tab => "a tab",
+            Delimiter::Spaces => "one or more spaces",
         }
     }
 
@@ -44,6 +48,7 @@ impl Delimiter {
             Delimiter::Comma => Some(b','),
             Delimiter::Semicolon => Some(b';'),
             Delimiter::Tab => Some(b'\t'),
+            Delimiter::Spaces => Some(b' '),
         }
     }
 
@@ -62,7 +67,13 @@ impl Delimiter {
         }
         let best = (0..3).max_by_key(|&i| (counts[i], 3 - i)).unwrap_or(0);
         if counts[best] == 0 {
-            b','
+            // Names separated by spaces only: a `.dat` file's columns.
+            let text = String::from_utf8_lossy(header);
+            if text.split_whitespace().count() > 1 {
+                b' '
+            } else {
+                b','
+            }
         } else {
             [b',', b';', b'\t'][best]
         }
@@ -79,6 +90,7 @@ impl std::str::FromStr for Delimiter {
             "comma" | "," => Delimiter::Comma,
             "semicolon" | ";" => Delimiter::Semicolon,
             "tab" | "\t" => Delimiter::Tab,
+            "spaces" | " " => Delimiter::Spaces,
             _ => {
                 return Err(IoError::UnknownName {
                     what: "delimiter",
@@ -227,6 +239,19 @@ impl DelimitedRows {
                     }));
                 }
                 Ok(r) if r.len() == 1 && r[0].is_empty() => continue,
+                // Runs of spaces separate one cell from the next: the empty cells between
+                // them (and before a leading space) are not cells.
+                Ok(r) if self.sep == b' ' => {
+                    let mut cells = csv::StringRecord::new();
+                    for c in r.iter().filter(|c| !c.is_empty()) {
+                        cells.push_field(c);
+                    }
+                    if cells.is_empty() {
+                        continue;
+                    }
+                    cells.set_position(r.position().cloned());
+                    return Some(Ok(cells));
+                }
                 Ok(r) => return Some(Ok(r)),
             }
         }
@@ -369,6 +394,30 @@ mod tests {
         assert!(e.to_string().contains("`1,5` is not a number"), "{e}");
     }
 
+    /// A `.dat` file of columns separated by runs of spaces (leading ones too) is read by
+    /// its header's names; `--delimiter spaces` says so explicitly.
+    #[test]
+    fn space_separated_columns_are_read() {
+        let p = file(
+            "spaces.dat",
+            "  t    y1  y2\n0  1.5   -2\n\n 0.1 2.5e-1    3\n",
+        );
+        for d in [Delimiter::Auto, Delimiter::Spaces] {
+            let t = read_csv_with(&p, d).unwrap();
+            assert_eq!(t.names, ["t", "y1", "y2"]);
+            assert_eq!(
+                t.columns,
+                [vec![0.0, 0.1], vec![1.5, 0.25], vec![-2.0, 3.0]]
+            );
+        }
+        let e = read_csv(&file("spaces_short.dat", "a b\n1 2\n3\n")).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("row 3 has 1 cells, the header has 2"),
+            "{e}"
+        );
+    }
+
     /// Errors name the file, the row and what is wrong.
     #[test]
     fn malformed_files_are_named() {
@@ -397,6 +446,7 @@ mod tests {
             ("headerless.csv", "0.12,3.4e-2\n0.2,0.1\n"),
             ("headerless.tsv", "0.12\t3.4e-2\n0.2\t0.1\n"),
             ("headerless_semicolon.csv", "0,12;3;4\n1;2;3\n"),
+            ("headerless.dat", "  0.12   3.4e-2\n 0.2  0.1\n"),
         ] {
             let e = read_csv(&file(name, text)).unwrap_err();
             assert!(matches!(e, IoError::HeaderOfNumbers { .. }), "{name}: {e}");

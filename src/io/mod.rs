@@ -655,7 +655,7 @@ mod tests {
         let e = "|".parse::<Delimiter>().unwrap_err();
         assert_eq!(
             e.to_string(),
-            "delimiter `|` is not one of auto, comma, semicolon, tab"
+            "delimiter `|` is not one of auto, comma, semicolon, tab, spaces"
         );
     }
 }
