@@ -50,6 +50,20 @@ pub enum IoError {
         /// The path.
         path: PathBuf,
     },
+    /// The record would take more memory than the machine has free.
+    #[error(
+        "{path}: reading it takes about {} MB, more than the {} MB of memory free: cut it into shorter records (e.g. `hyst track --input` with --window), or free memory",
+        needed / 1_000_000,
+        available / 1_000_000
+    )]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// Bytes its reading needs at least.
+        needed: u64,
+        /// Bytes of memory free.
+        available: u64,
+    },
     /// Another run holds the campaign store's lock.
     #[error(
         "{path}: another `hyst track` (process {pid}) is writing this --out folder; wait for it, or give another --out"
@@ -400,6 +414,7 @@ pub fn read_record(path: &Path, options: &ReadOptions) -> Result<Table, IoError>
         f => f,
     };
     let variable = options.variable.as_deref();
+    check_fits_in_memory(path, format)?;
     match format {
         Format::Npy => read_npy(path),
         Format::Npz => read_npz(path, variable),
@@ -407,6 +422,48 @@ pub fn read_record(path: &Path, options: &ReadOptions) -> Result<Table, IoError>
         Format::Uff => read_uff(path),
         Format::Csv | Format::Auto => read_csv_with(path, options.delimiter),
     }
+}
+
+/// Bytes of memory a record read from a file of `bytes` bytes of `format` takes at its peak,
+/// at least: a `.npy` file's values are read, then laid out as columns (twice its size); a text
+/// file's numbers take about as many bytes as their text (a 17-digit number and its comma,
+/// 18 bytes of text, are 8 bytes of double; a short one fewer of text than of double).
+fn peak_bytes(bytes: u64, format: Format) -> u64 {
+    match format {
+        Format::Npy => bytes.saturating_mul(2),
+        _ => bytes,
+    }
+}
+
+/// A record too large for the memory this machine has free is refused before it is read
+/// (it was read whole, until the system ran out): Linux's `MemAvailable`; elsewhere no check.
+fn check_fits_in_memory(path: &Path, format: Format) -> Result<(), IoError> {
+    let Ok(meta) = std::fs::metadata(path) else {
+        // The reader says what is wrong with the path.
+        return Ok(());
+    };
+    let available = std::fs::read_to_string("/proc/meminfo").ok().and_then(|t| {
+        t.lines()
+            .find_map(|l| l.strip_prefix("MemAvailable:"))
+            .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok())
+            .map(|kb| kb * 1024)
+    });
+    match available {
+        Some(free) => fits(path, peak_bytes(meta.len(), format), free),
+        None => Ok(()),
+    }
+}
+
+/// [`check_fits_in_memory`]'s decision: `needed` bytes against `free`.
+fn fits(path: &Path, needed: u64, free: u64) -> Result<(), IoError> {
+    if needed > free {
+        return Err(IoError::TooLarge {
+            path: path.to_path_buf(),
+            needed,
+            available: free,
+        });
+    }
+    Ok(())
 }
 
 /// Where a channel was measured: a node of the test geometry and a direction, as the
@@ -634,6 +691,24 @@ pub(crate) mod test_files {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A record larger than the free memory is refused naming both sizes; one that fits,
+    /// and this machine's real check on a small file, pass.
+    #[test]
+    fn a_record_beyond_free_memory_is_refused() {
+        let p = Path::new("huge.csv");
+        let e = fits(p, peak_bytes(30_000_000_000, Format::Csv), 20_000_000_000).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("huge.csv: reading it takes about 30000 MB, more than the 20000 MB"),
+            "{e}"
+        );
+        assert!(fits(p, peak_bytes(6_000_000_000, Format::Npy), 20_000_000_000).is_ok());
+        assert!(fits(p, peak_bytes(12_000_000_000, Format::Npy), 20_000_000_000).is_err());
+        let small = test_files::file_path("fits.csv");
+        std::fs::write(&small, "y\n1\n2\n").unwrap();
+        check_fits_in_memory(&small, Format::Csv).unwrap();
+    }
 
     /// Every listed name reads as a format and a delimiter; an unknown one is an error that
     /// lists them.
