@@ -223,7 +223,9 @@ def run_covssi(hyst, y, br, tmp, extra=()):
     np.savetxt(csv, y, delimiter=",", header=",".join(names), comments="", fmt="%.17g")
     out = os.path.join(tmp, "rec.json")
     subprocess.run(
-        [hyst, "ssi", "--input", csv, "--fs", str(FS), "--block-rows", str(br),
+        # The tools analyse the record at its own rate: so does covssi here (its default
+        # decimation is read from the record).
+        [hyst, "ssi", "--input", csv, "--fs", str(FS), "--decimate", "1", "--block-rows", str(br),
          "--max-order", str(MAX_ORDER), "--df", str(DF), "--dzeta", str(DZ),
          "--dmac", str(DMAC), "--json", out, *extra],
         check=True, stdout=subprocess.DEVNULL,

@@ -1,7 +1,8 @@
 """pyOMA2's and koma's SSI-cov identification of one CSV record, for `cargo xtask bench command`.
 
 Reads the record (not timed), then runs pyOMA2's cov_R SSI and koma's covssi with the settings
-`hyst ssi` uses by default (20 block rows, orders up to 40) and prints the median wall time of
+`cargo xtask bench command` gives `hyst ssi` (20 block rows, orders up to 40, no decimation;
+its defaults read a longer lag from this record) and prints the median wall time of
 three runs of each in seconds, one line per tool: `pyoma2 S` and `koma S`.
 Usage: ssi_timing.py RECORD.csv [FS]
 """
