@@ -1,6 +1,7 @@
 //! `hyst track`: many records of one structure identified, their modes tracked, changes
 //! told from estimation noise.
 
+use std::collections::HashMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
@@ -129,80 +130,148 @@ fn reference_modes(path: &Path) -> Result<Vec<hyst::monitor::ModeEstimate>, Erro
     Ok(hyst::monitor::reported_modes(&analysis))
 }
 
+/// Put `files` in time order: the covariates' times when they give one for every record,
+/// else the names' natural order (as listed); and say which.
+fn order_files(files: &mut [PathBuf], covs: &HashMap<String, (Option<f64>, Vec<f64>)>) {
+    let time = |f: &PathBuf| {
+        f.file_name()
+            .and_then(|n| covs.get(n.to_string_lossy().as_ref()))
+            .and_then(|(t, _)| *t)
+    };
+    if !covs.is_empty() && files.iter().all(|f| time(f).is_some()) {
+        files.sort_by(|x, y| time(x).unwrap_or(0.0).total_cmp(&time(y).unwrap_or(0.0)));
+        println!(
+            "{} records, in the order of their time in the covariates file",
+            files.len()
+        );
+    } else {
+        println!(
+            "{} records, in natural order of their names (rec_2 before rec_10)",
+            files.len()
+        );
+    }
+}
+
+impl Sources {
+    /// Each record's name: its file's, or its window's number.
+    fn names(&self) -> Vec<String> {
+        match self {
+            Sources::Files(files) => files
+                .iter()
+                .map(|f| {
+                    f.file_name().map_or_else(
+                        || f.display().to_string(),
+                        |n| n.to_string_lossy().into_owned(),
+                    )
+                })
+                .collect(),
+            Sources::Windows { count, .. } => (0..*count).map(|i| i.to_string()).collect(),
+        }
+    }
+
+    /// The key of each record's result ([`hyst::store::record_key`]) under `settings`.
+    fn keys(&self, a: &TrackArgs, settings: &str) -> Vec<String> {
+        match self {
+            Sources::Files(files) => files
+                .iter()
+                .map(|f| hyst::store::record_key(&hyst::store::file_source(f), settings))
+                .collect(),
+            Sources::Windows {
+                length,
+                step,
+                count,
+                ..
+            } => {
+                let whole = a
+                    .input
+                    .as_deref()
+                    .map(hyst::store::file_source)
+                    .unwrap_or_default();
+                (0..*count)
+                    .map(|i| {
+                        hyst::store::record_key(
+                            &format!("{whole}|{}|{length}|{step}", i * step),
+                            settings,
+                        )
+                    })
+                    .collect()
+            }
+        }
+    }
+
+    /// Record i's channels and rate. A file's channels are `first`'s (the first record's,
+    /// without --columns), matched by name: another order is put right, another set is
+    /// skipped (its shapes would be compared entry by entry with the wrong channels).
+    fn channels(
+        &self,
+        i: usize,
+        a: &TrackArgs,
+        first: Option<&[String]>,
+    ) -> Result<(Vec<Vec<f64>>, f64), String> {
+        match self {
+            Sources::Files(files) => {
+                let mut t = read_record(&files[i]).map_err(|e| e.to_string())?;
+                let fs = t.rate(a.fs).map_err(|e| e.to_string())?;
+                let mut cols = channel_names(&t, a.columns.as_deref(), &[]);
+                if let Some(first) = first
+                    && cols != first
+                {
+                    let (mut x, mut y) = (cols.clone(), first.to_vec());
+                    x.sort();
+                    y.sort();
+                    if x != y {
+                        return Err(format!(
+                            "its channels {} differ from the first record's {}: skipped (--columns chooses the channels)",
+                            cols.join(","),
+                            first.join(",")
+                        ));
+                    }
+                    cols = first.to_vec();
+                }
+                let data = cols
+                    .iter()
+                    .map(|c| t.take_column(c).map_err(|e| e.to_string()))
+                    .collect::<Result<Vec<_>, _>>()?;
+                Ok((data, fs))
+            }
+            Sources::Windows {
+                table,
+                fs,
+                length,
+                step,
+                ..
+            } => {
+                let cols = channel_names(table, a.columns.as_deref(), &[]);
+                let from = i * step;
+                let data = cols
+                    .iter()
+                    .map(|c| {
+                        table
+                            .column(c)
+                            .map(|v| v[from..from + length].to_vec())
+                            .map_err(|e| e.to_string())
+                    })
+                    .collect::<Result<Vec<_>, _>>()?;
+                Ok((data, *fs))
+            }
+        }
+    }
+}
+
 pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
     let mut sources = sources(a)?;
     let (covs, cov_names) = match &a.covariates {
         Some(p) => hyst::io::read_covariates(p)?,
         None => Default::default(),
     };
-    // The training period and the chart need the records in time order: the covariates'
-    // times when they give one for every record, else the names' natural order.
     if let Sources::Files(files) = &mut sources {
-        let time = |f: &PathBuf| {
-            f.file_name()
-                .and_then(|n| covs.get(n.to_string_lossy().as_ref()))
-                .and_then(|(t, _)| *t)
-        };
-        if !covs.is_empty() && files.iter().all(|f| time(f).is_some()) {
-            files.sort_by(|x, y| time(x).unwrap_or(0.0).total_cmp(&time(y).unwrap_or(0.0)));
-            println!(
-                "{} records, in the order of their time in the covariates file",
-                files.len()
-            );
-        } else {
-            println!(
-                "{} records, in natural order of their names (rec_2 before rec_10)",
-                files.len()
-            );
-        }
+        order_files(files, &covs);
     }
-    let names: Vec<String> = match &sources {
-        Sources::Files(files) => files
-            .iter()
-            .map(|f| {
-                f.file_name().map_or_else(
-                    || f.display().to_string(),
-                    |n| n.to_string_lossy().into_owned(),
-                )
-            })
-            .collect(),
-        Sources::Windows { count, .. } => (0..*count).map(|i| i.to_string()).collect(),
-    };
+    let names = sources.names();
     if let Some(r) = hyst::io::repeated(&names) {
         return Err(fail(format!("two records named {r}: each file once")));
     }
     let store = hyst::store::CampaignStore::open(&a.out)?;
-    // What makes each record's result: its source, the rate and channels asked for, and the
-    // analysis options; a stored result made otherwise is identified again.
-    let analysis = a.ssi.analysis();
-    let settings = format!("{:?}|{:?}|{analysis:?}", a.fs, a.columns);
-    let keys: Vec<String> = match &sources {
-        Sources::Files(files) => files
-            .iter()
-            .map(|f| hyst::store::record_key(&hyst::store::file_source(f), &settings))
-            .collect(),
-        Sources::Windows { length, step, .. } => {
-            let whole = a
-                .input
-                .as_deref()
-                .map(hyst::store::file_source)
-                .unwrap_or_default();
-            (0..names.len())
-                .map(|i| {
-                    hyst::store::record_key(
-                        &format!("{whole}|{}|{length}|{step}", i * step),
-                        &settings,
-                    )
-                })
-                .collect()
-        }
-    };
-    let done: Vec<RecordModes> = names
-        .iter()
-        .zip(&keys)
-        .filter_map(|(n, k)| store.cached(n, k).cloned())
-        .collect();
-    let store_error = Mutex::new(None);
     let bar = steps_bar();
     bar.set_length(names.len() as u64);
     bar.set_message("records identified");
@@ -224,56 +293,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
         _ => None,
     };
     let load = |i: usize| -> Result<Loaded, String> {
-        let (channels, fs) = match &sources {
-            Sources::Files(files) => {
-                let mut t = read_record(&files[i]).map_err(|e| e.to_string())?;
-                let fs = t.rate(a.fs).map_err(|e| e.to_string())?;
-                let mut cols = channel_names(&t, a.columns.as_deref(), &[]);
-                // Every record's channels are the first record's, matched by name: another
-                // order is put right, another set is skipped (its shapes would be compared
-                // entry by entry with the wrong channels).
-                if let Some(first) = &first_channels
-                    && &cols != first
-                {
-                    let (mut x, mut y) = (cols.clone(), first.clone());
-                    x.sort();
-                    y.sort();
-                    if x != y {
-                        return Err(format!(
-                            "its channels {} differ from the first record's {}: skipped (--columns chooses the channels)",
-                            cols.join(","),
-                            first.join(",")
-                        ));
-                    }
-                    cols = first.clone();
-                }
-                let data = cols
-                    .iter()
-                    .map(|c| t.take_column(c).map_err(|e| e.to_string()))
-                    .collect::<Result<Vec<_>, _>>()?;
-                (data, fs)
-            }
-            Sources::Windows {
-                table,
-                fs,
-                length,
-                step,
-                ..
-            } => {
-                let cols = channel_names(table, a.columns.as_deref(), &[]);
-                let from = i * step;
-                let data = cols
-                    .iter()
-                    .map(|c| {
-                        table
-                            .column(c)
-                            .map(|v| v[from..from + length].to_vec())
-                            .map_err(|e| e.to_string())
-                    })
-                    .collect::<Result<Vec<_>, _>>()?;
-                (data, *fs)
-            }
-        };
+        let (channels, fs) = sources.channels(i, a, first_channels.as_deref())?;
         let (time, covariates) = covariates_of(&names[i], start_of(i));
         Ok(Loaded {
             channels,
@@ -282,6 +302,19 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
             covariates,
         })
     };
+    // What the options leave to the record (the decimation, the lag) is read once, from
+    // the first record that loads, and kept for every record: each is analysed alike.
+    // What makes each record's result: its source, the rate and channels asked for, and the
+    // analysis options; a stored result made otherwise is identified again.
+    let analysis = resolved_analysis(&a.ssi.analysis(), &names, &load);
+    let settings = format!("{:?}|{:?}|{analysis:?}", a.fs, a.columns);
+    let keys = sources.keys(a, &settings);
+    let done: Vec<RecordModes> = names
+        .iter()
+        .zip(&keys)
+        .filter_map(|(n, k)| store.cached(n, k).cloned())
+        .collect();
+    let store_error = Mutex::new(None);
     let finished = |r: &RecordModes| {
         if let Some(i) = names.iter().position(|n| n == &r.name)
             && let Err(e) = store.append(&keys[i], r)
@@ -323,6 +356,36 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
         hyst::figures::track_figures(dir, &report, &cov_names).map_err(fail)?;
     }
     Ok(())
+}
+
+/// `analysis` with what it leaves to the record read from the campaign's first readable
+/// record ([`hyst::monitor::campaign_analysis`]), and said.
+fn resolved_analysis(
+    analysis: &hyst::covssi::AnalysisOptions,
+    names: &[String],
+    load: &dyn Fn(usize) -> Result<Loaded, String>,
+) -> hyst::covssi::AnalysisOptions {
+    let resolve = |i: usize| {
+        let l = load(i).ok()?;
+        let views: Vec<&[f64]> = l.channels.iter().map(|c| c.as_slice()).collect();
+        analysis.resolved_for(&views, l.fs).ok()
+    };
+    let (fixed, from) = hyst::monitor::campaign_analysis(analysis, names.len(), &resolve);
+    if let Some(i) = from.filter(|_| fixed != *analysis) {
+        let factor = match fixed.decimation {
+            hyst::covssi::Decimation::Factor(r) => r,
+            _ => 1,
+        };
+        let rows = match fixed.ssi.block_rows {
+            hyst::covssi::BlockRows::Count(i) => i.to_string(),
+            _ => "the given".into(),
+        };
+        println!(
+            "analysis read from record {}: decimated by {factor}, {rows} block rows; kept for every record",
+            names[i]
+        );
+    }
+    fixed
 }
 
 /// The tidy table as JSON lines: one `TrackRow` per line.

@@ -72,6 +72,44 @@ impl AnalysisOptions {
         self
     }
 
+    /// These options with what they leave to the record ([`Decimation::Auto`],
+    /// [`BlockRows::Auto`](crate::BlockRows::Auto)) read from `y` sampled at `fs` Hz, as
+    /// [`analyze`] would read them, and fixed: for a campaign of records of one structure,
+    /// read once (from its first record) and kept for every record, so that each record is
+    /// analysed alike. (A largest order left open stays at most 40: the four per spectral
+    /// peak that [`BlockRows::Auto`](crate::BlockRows::Auto) allows beyond ten peaks is
+    /// not carried over.)
+    pub fn resolved_for(&self, y: &[&[f64]], fs: f64) -> Result<AnalysisOptions, SsiError> {
+        crate::identify::check_fs(fs)?;
+        let (n, _) = crate::identify::check_channels(y)?;
+        let mut opts = self.clone();
+        let survey = crate::survey(y, fs)?;
+        let factor = match self.decimation {
+            Decimation::Auto => survey.decimation(n),
+            Decimation::Factor(r) => r,
+        };
+        opts.decimation = Decimation::Factor(factor);
+        if self.ssi.block_rows == crate::BlockRows::Auto {
+            let decimated: Vec<Vec<f64>>;
+            let (views, rows, s) = if factor > 1 {
+                decimated = y
+                    .iter()
+                    .map(|c| crate::decimate::decimate(c, factor))
+                    .collect();
+                let v: Vec<&[f64]> = decimated.iter().map(|c| c.as_slice()).collect();
+                let rows = v.first().map_or(0, |c| c.len());
+                let s = crate::survey(&v, fs / factor as f64)?;
+                (v.len(), rows, s)
+            } else {
+                (y.len(), n, survey)
+            };
+            let refs = self.ssi.references.as_ref().map_or(views, Vec::len);
+            let (i, _) = s.block_rows(rows, views, refs);
+            opts.ssi.block_rows = crate::BlockRows::Count(i);
+        }
+        Ok(opts)
+    }
+
     /// These options with SSI's set to `ssi`.
     pub fn with_ssi(mut self, ssi: SsiOptions) -> Self {
         self.ssi = ssi;
@@ -449,6 +487,44 @@ impl ModalAnalysis {
         }
     }
 
+    /// The estimates that are not physical, each with its reason, and whether the record
+    /// follows the model.
+    fn fmt_fit_quality(&self, f: &mut fmt::Formatter<'_>, r: &Refinement) -> fmt::Result {
+        for n in &self.not_reported {
+            let what = if n.real_pole {
+                format!("real pole {:.4e} rad/s", r.real_poles[n.index].lambda)
+            } else {
+                let m = &r.modes[n.index];
+                format!("{:.4} Hz, damping {:.4}", m.frequency_hz, m.damping_ratio)
+            };
+            let why: Vec<String> = n.reasons.iter().map(|w| w.to_string()).collect();
+            writeln!(
+                f,
+                "not a {}: {what} ({}); kept in the fit, not reported",
+                if n.real_pole { "real pole" } else { "mode" },
+                why.join("; ")
+            )?;
+        }
+        if r.misfit > MISFIT_LIMIT {
+            writeln!(
+                f,
+                "warning: the record does not follow the refinement's model (misfit {:.3} > {}): \
+                 the excitation may not be broadband random (e.g. a multisine), or the record \
+                 holds what the model lacks; trust the SSI modes above instead",
+                r.misfit, MISFIT_LIMIT
+            )
+        } else if !self.not_reported.is_empty() {
+            writeln!(
+                f,
+                "misfit {:.3}, within {MISFIT_LIMIT}, but only with the {} estimate(s) above that are not physical: the model spends poles on what it lacks; the modes reported are the others",
+                r.misfit,
+                self.not_reported.len()
+            )
+        } else {
+            writeln!(f, "misfit {:.3} (the record follows the model)", r.misfit)
+        }
+    }
+
     fn fmt_refined(&self, f: &mut fmt::Formatter<'_>, r: &Refinement) -> fmt::Result {
         let res = &self.ssi;
         writeln!(
@@ -536,39 +612,7 @@ impl ModalAnalysis {
                 d.lambda, d.evidence, r.real_pole_penalty
             )?;
         }
-        for n in &self.not_reported {
-            let what = if n.real_pole {
-                format!("real pole {:.4e} rad/s", r.real_poles[n.index].lambda)
-            } else {
-                let m = &r.modes[n.index];
-                format!("{:.4} Hz, damping {:.4}", m.frequency_hz, m.damping_ratio)
-            };
-            let why: Vec<String> = n.reasons.iter().map(|w| w.to_string()).collect();
-            writeln!(
-                f,
-                "not a {}: {what} ({}); kept in the fit, not reported",
-                if n.real_pole { "real pole" } else { "mode" },
-                why.join("; ")
-            )?;
-        }
-        if r.misfit > MISFIT_LIMIT {
-            writeln!(
-                f,
-                "warning: the record does not follow the refinement's model (misfit {:.3} > {}): \
-                 the excitation may not be broadband random (e.g. a multisine), or the record \
-                 holds what the model lacks; trust the SSI modes above instead",
-                r.misfit, MISFIT_LIMIT
-            )
-        } else if !self.not_reported.is_empty() {
-            writeln!(
-                f,
-                "misfit {:.3}, within {MISFIT_LIMIT}, but only with the {} estimate(s) above that are not physical: the model spends poles on what it lacks; the modes reported are the others",
-                r.misfit,
-                self.not_reported.len()
-            )
-        } else {
-            writeln!(f, "misfit {:.3} (the record follows the model)", r.misfit)
-        }
+        self.fmt_fit_quality(f, r)
     }
 }
 
@@ -645,6 +689,40 @@ mod tests {
         );
         let none = analyze(&[&y], fs, &opts.clone().with_refine(None)).unwrap();
         assert!(none.refined.is_none() && none.not_refined.is_none());
+    }
+
+    /// The options resolved on a record give that record the very analysis the automatic
+    /// ones give it (the same decimation and block rows, the same modes), and fix them for
+    /// the next record.
+    #[test]
+    fn resolved_options_analyse_the_record_as_the_automatic_ones() {
+        // A 3 Hz resonance (damping 2 %) at 200 Hz driven by a pseudo-random sequence.
+        let fs = 200.0;
+        let mut state = 99u64;
+        let mut y = vec![0.0; 40000];
+        let w = 2.0 * std::f64::consts::PI * 3.0 / fs;
+        let r = (-0.02 * w).exp();
+        for k in 2..y.len() {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let e = (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+            y[k] = 2.0 * r * w.cos() * y[k - 1] - r * r * y[k - 2] + e;
+        }
+        let auto = AnalysisOptions::default().with_refine(None);
+        let fixed = auto.resolved_for(&[&y], fs).unwrap();
+        let a = analyze(&[&y], fs, &auto).unwrap();
+        assert_eq!(fixed.decimation, Decimation::Factor(a.decimation.factor));
+        assert_eq!(
+            fixed.ssi.block_rows,
+            crate::BlockRows::Count(a.ssi.block_rows)
+        );
+        assert!(
+            a.decimation.factor > 1,
+            "a 3 Hz record at 200 Hz is decimated"
+        );
+        let b = analyze(&[&y], fs, &fixed).unwrap();
+        assert_eq!(b.ssi.modes, a.ssi.modes);
     }
 
     /// A record long enough for SSI but too short to refine its modes: SSI's result stands,

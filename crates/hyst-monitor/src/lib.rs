@@ -40,8 +40,8 @@ pub use baseline::{Baseline, fit_baseline};
 pub use chart::{Alarm, Cusum, Side};
 pub use matching::{Assignment, MatchOptions, ModeEstimate, match_modes};
 pub use track::{
-    Identified, Loaded, ModeAlarm, RecordModes, TrackOptions, TrackReport, TrackRow, identify,
-    identify_records, reported_modes, track,
+    Identified, Loaded, ModeAlarm, RecordModes, TrackOptions, TrackReport, TrackRow,
+    campaign_analysis, identify, identify_records, reported_modes, track,
 };
 pub use whiten::ResidualModel;
 

@@ -61,6 +61,21 @@ pub fn reported_modes(analysis: &covssi::ModalAnalysis) -> Vec<ModeEstimate> {
         .collect()
 }
 
+/// The campaign's analysis: `opts` with what it leaves to the record (the decimation, the
+/// lag) read from the first of the first 24 records that `resolve` can read it from
+/// (`resolve(i)`: record i's [`covssi::AnalysisOptions::resolved_for`], `None` when it cannot
+/// be read or analysed), and kept for every record, so that each is analysed alike; with the
+/// record it came from. `opts` as given when none can.
+pub fn campaign_analysis(
+    opts: &covssi::AnalysisOptions,
+    records: usize,
+    resolve: &dyn Fn(usize) -> Option<covssi::AnalysisOptions>,
+) -> (covssi::AnalysisOptions, Option<usize>) {
+    (0..records.min(24))
+        .find_map(|i| resolve(i).map(|o| (o, Some(i))))
+        .unwrap_or_else(|| (opts.clone(), None))
+}
+
 /// A record as loaded for identification.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Loaded {

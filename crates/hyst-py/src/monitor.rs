@@ -68,6 +68,14 @@ pub(crate) fn track(
             covariates: covariates[i].clone(),
         })
     };
+    // As `hyst track`: what the options leave to the record read once, from the first
+    // record that gives it, and kept for every record.
+    let resolve = |i: usize| {
+        let held = data[i].lock().ok()?;
+        let views: Vec<&[f64]> = held.iter().map(|c| c.as_slice()).collect();
+        analysis.resolved_for(&views, fs).ok()
+    };
+    let (analysis, _) = hyst::monitor::campaign_analysis(&analysis, n, &resolve);
     let mut opts = TrackOptions::default();
     opts.training = training.unwrap_or(opts.training.min(n / 2));
     opts.whiten = whiten;
