@@ -2390,3 +2390,12 @@ fn track_files_resume_only_what_is_unchanged() {
     assert!(!ok && err.contains("another `hyst track`"), "{err}");
     std::fs::remove_file(out.join(".lock")).unwrap();
 }
+
+/// `hyst ssi` without `--json` prints its report and writes nothing (it refused to run).
+#[test]
+fn ssi_prints_without_json() {
+    let p = write_two_sines();
+    let (ok, out, err) = hyst(&["ssi", "--input", s(&p), "--fs", "10", "--no-refine"]);
+    assert!(ok, "{err}");
+    assert!(out.contains("block rows: correlations up to lag"), "{out}");
+}

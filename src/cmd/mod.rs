@@ -285,7 +285,7 @@ pub(crate) fn output_files(c: &Command) -> Vec<(&'static str, &std::path::Path)>
         Command::Simulate(a) => vec![("--out", Some(&a.out))],
         Command::Excite(a) => vec![("--out", Some(&a.out))],
         Command::Ssi(a) => vec![
-            ("--json", Some(&a.json)),
+            ("--json", a.json.as_deref()),
             ("--svg", a.svg.as_deref()),
             ("--shapes-uff", a.shapes_uff.as_deref()),
         ],

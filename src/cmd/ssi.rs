@@ -30,9 +30,10 @@ pub(crate) struct SsiArgs {
     pub(crate) skip: usize,
     #[command(flatten)]
     pub(crate) ssi: SsiFlags,
-    /// Write the modes, real poles and per-order poles as JSON here.
+    /// Write the modes, real poles and per-order poles as JSON here (optional: the report is
+    /// printed either way).
     #[arg(long)]
-    pub(crate) json: PathBuf,
+    pub(crate) json: Option<PathBuf>,
     /// Draw the stabilization diagram as SVG here.
     #[arg(long)]
     pub(crate) svg: Option<PathBuf>,
@@ -281,7 +282,9 @@ pub(crate) fn run(a: &SsiArgs) -> Result<(), Error> {
     analysis.channels = names;
     let report = hyst::report::FileReport::new(a.input.display().to_string(), analysis);
     print!("{}", report.report);
-    report.write_json(&a.json)?;
+    if let Some(json) = &a.json {
+        report.write_json(json)?;
+    }
     if let Some(svg) = &a.svg {
         let title = format!("Stabilization diagram: {}", a.input.display());
         std::fs::write(
