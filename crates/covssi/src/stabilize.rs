@@ -611,7 +611,7 @@ pub(crate) fn cluster(
             "no pole was stable in frequency and damping at any order: no mode found (try more block rows, a higher order, or looser thresholds)".to_string()
         } else {
             format!(
-                "{n_osc} stable poles, but no cluster reached {min_size} members: no mode found"
+                "{n_osc} stable poles, but no cluster reached {min_size} members: no mode found (too few orders agree on any one pole; a lag shorter than the modes' periods does that: give more block rows or --lag-seconds)"
             )
         });
     }
