@@ -207,8 +207,16 @@ impl DelimitedRows {
             path: path.to_path_buf(),
         })??;
         // A first line of numbers only is data, not names: taking it as the header would lose
-        // a row and name the channels by numbers, silently.
-        if header.iter().all(|t| number(t, sep).is_some()) {
+        // a row and name the channels by numbers, silently. Columns named by their index
+        // (`0,1,2` or `1,2,3`, as the readers of arrays name them) are names.
+        let indices: Vec<Option<usize>> = header.iter().map(|t| t.parse().ok()).collect();
+        let by_index = |first: usize| {
+            indices
+                .iter()
+                .enumerate()
+                .all(|(k, v)| *v == Some(k + first))
+        };
+        if header.iter().all(|t| number(t, sep).is_some()) && !by_index(0) && !by_index(1) {
             return Err(IoError::HeaderOfNumbers {
                 path: path.to_path_buf(),
                 line: header
@@ -440,6 +448,11 @@ mod tests {
         assert!(e.to_string().contains("latin1.csv: row 2"), "{e}");
         let e = read_csv(&file("blank.csv", "\n \n")).unwrap_err();
         assert!(matches!(e, IoError::NoHeader { .. }), "{e}");
+        // Columns named by their index are names, not data.
+        let t = read_csv(&file("indexed.csv", "0,1,2\n1.5,2,3\n")).unwrap();
+        assert_eq!(t.names, ["0", "1", "2"]);
+        let t = read_csv(&file("indexed1.csv", "1;2\n0,5;2\n")).unwrap();
+        assert_eq!(t.names, ["1", "2"]);
         // A headerless file: its first row was taken as the names (a row lost, the channels
         // named `0.12` and `3.4e-2`), silently.
         for (name, text) in [
