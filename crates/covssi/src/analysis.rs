@@ -514,9 +514,15 @@ impl ModalAnalysis {
                 r.misfit, MISFIT_LIMIT
             )
         } else if !self.not_reported.is_empty() {
+            // Which modes stand: the refined ones that are physical, or SSI's when none is.
+            let reported = if self.reported_refinement().is_some() {
+                "the refined modes reported are the others"
+            } else {
+                "no refined mode is physical, so the SSI modes above are the ones reported"
+            };
             writeln!(
                 f,
-                "misfit {:.3}, within {MISFIT_LIMIT}, but only with the {} estimate(s) above that are not physical: the model spends poles on what it lacks; the modes reported are the others",
+                "misfit {:.3}, within {MISFIT_LIMIT}, but only with the {} estimate(s) above that are not physical: the model spends poles on what it lacks; {reported}",
                 r.misfit,
                 self.not_reported.len()
             )
