@@ -1,4 +1,4 @@
-//! The whole modal analysis of a record in one call: SSI ([`identify`]), the MAC between its
+//! The whole modal analysis of a record in one call: SSI ([`identify`](crate::identify())), the MAC between its
 //! modes, then the maximum-likelihood refinement ([`refine_with_real_poles`]), as one report
 //! that prints as text ([`std::fmt::Display`]) and serializes (feature `serde`).
 
@@ -11,7 +11,7 @@ use crate::progress::Progress;
 use crate::refine::{MISFIT_LIMIT, SAME_MODE_DISTANCE};
 use crate::{
     LagLimit, RecordSurvey, RefineOptions, Refinement, SsiError, SsiOption, SsiOptions, SsiResult,
-    identify, mac,
+    mac,
 };
 
 /// Whether the record is decimated before the analysis.
@@ -52,6 +52,38 @@ impl Default for AnalysisOptions {
     }
 }
 
+/// The decimation factor `decimation` gives for the checked channels `y` (`checked`: their
+/// length and means) at `fs` Hz, and the survey that chose it ([`Decimation::Auto`]).
+fn decimation_of(
+    y: &[&[f64]],
+    fs: f64,
+    (n, means): &(usize, Vec<f64>),
+    decimation: Decimation,
+) -> Result<(usize, Option<RecordSurvey>), SsiError> {
+    match decimation {
+        Decimation::Factor(0) => Err(SsiError::InvalidOption {
+            option: SsiOption::Decimation,
+            value: 0.0,
+        }),
+        Decimation::Factor(r) => Ok((r, None)),
+        Decimation::Auto => {
+            let s = crate::survey::surveyed(y, fs, means, *n);
+            Ok((s.decimation(*n), Some(s)))
+        }
+    }
+}
+
+/// Every channel of `y` decimated by `factor` ([`crate::decimate`], in parallel); none when
+/// `factor` is 1 (the channels are used as they are).
+fn decimate_all(y: &[&[f64]], factor: usize) -> Vec<Vec<f64>> {
+    if factor <= 1 {
+        return Vec::new();
+    }
+    y.par_iter()
+        .map(|c| crate::decimate::decimate(c, factor))
+        .collect()
+}
+
 /// How the record was decimated before the analysis.
 #[derive(Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -81,31 +113,22 @@ impl AnalysisOptions {
     /// not carried over.)
     pub fn resolved_for(&self, y: &[&[f64]], fs: f64) -> Result<AnalysisOptions, SsiError> {
         crate::identify::check_fs(fs)?;
-        let (n, _) = crate::identify::check_channels(y)?;
+        let checked = crate::identify::check_channels(y)?;
+        let (factor, survey) = decimation_of(y, fs, &checked, self.decimation)?;
         let mut opts = self.clone();
-        let survey = crate::survey(y, fs)?;
-        let factor = match self.decimation {
-            Decimation::Auto => survey.decimation(n),
-            Decimation::Factor(r) => r,
-        };
         opts.decimation = Decimation::Factor(factor);
         if self.ssi.block_rows == crate::BlockRows::Auto {
-            let decimated: Vec<Vec<f64>>;
-            let (views, rows, s) = if factor > 1 {
-                decimated = y
-                    .iter()
-                    .map(|c| crate::decimate::decimate(c, factor))
-                    .collect();
-                let v: Vec<&[f64]> = decimated.iter().map(|c| c.as_slice()).collect();
-                let rows = v.first().map_or(0, |c| c.len());
-                let s = crate::survey(&v, fs / factor as f64)?;
-                (v.len(), rows, s)
+            let decimated = decimate_all(y, factor);
+            let choice = if factor > 1 {
+                let views: Vec<&[f64]> = decimated.iter().map(|c| c.as_slice()).collect();
+                let (n, means) = crate::identify::check_channels(&views)?;
+                let fs = fs / factor as f64;
+                crate::identify::block_rows_for(&views, fs, (n, &means), &self.ssi, None)?
             } else {
-                (y.len(), n, survey)
+                let (n, means) = &checked;
+                crate::identify::block_rows_for(y, fs, (*n, means), &self.ssi, survey)?
             };
-            let refs = self.ssi.references.as_ref().map_or(views, Vec::len);
-            let (i, _) = s.block_rows(rows, views, refs);
-            opts.ssi.block_rows = crate::BlockRows::Count(i);
+            opts.ssi.block_rows = crate::BlockRows::Count(choice.block_rows);
         }
         Ok(opts)
     }
@@ -169,27 +192,9 @@ pub fn analyze_with_progress(
     progress: &dyn Fn(Progress),
 ) -> Result<ModalAnalysis, SsiError> {
     crate::identify::check_fs(fs)?;
-    let (n, _) = crate::identify::check_channels(y)?;
-    let (factor, survey) = match opts.decimation {
-        Decimation::Factor(0) => {
-            return Err(SsiError::InvalidOption {
-                option: SsiOption::Decimation,
-                value: 0.0,
-            });
-        }
-        Decimation::Factor(r) => (r, None),
-        Decimation::Auto => {
-            let s = crate::survey(y, fs)?;
-            (s.decimation(n), Some(s))
-        }
-    };
-    let decimated: Vec<Vec<f64>> = if factor > 1 {
-        y.par_iter()
-            .map(|c| crate::decimate::decimate(c, factor))
-            .collect()
-    } else {
-        Vec::new()
-    };
+    let checked = crate::identify::check_channels(y)?;
+    let (factor, survey) = decimation_of(y, fs, &checked, opts.decimation)?;
+    let decimated = decimate_all(y, factor);
     let views: Vec<&[f64]> = if factor > 1 {
         decimated.iter().map(|c| c.as_slice()).collect()
     } else {
@@ -198,12 +203,15 @@ pub fn analyze_with_progress(
     let y = views.as_slice();
     let recorded_fs = fs;
     let fs = fs / factor as f64;
+    // Undecimated, the survey that found no reason to decimate is the one SSI's lag is read
+    // from: not made twice.
+    let known = survey.clone().filter(|_| factor == 1);
     progress(Progress {
         done: 0,
         total: 1,
         what: "SSI",
     });
-    let ssi = identify(y, fs, &opts.ssi)?;
+    let ssi = crate::identify::identify_surveyed(y, fs, &opts.ssi, known)?;
     let mac = ssi
         .modes
         .iter()
@@ -661,7 +669,7 @@ mod tests {
             ..SsiOptions::default()
         });
         let a = analyze(&[&y], fs, &opts).unwrap();
-        let ssi = identify(&[&y], fs, &opts.ssi).unwrap();
+        let ssi = crate::identify(&[&y], fs, &opts.ssi).unwrap();
         assert_eq!(a.ssi, ssi);
         assert_eq!(a.channels, vec!["0".to_string()]);
         assert_eq!(a.mac.len(), ssi.modes.len());

@@ -215,17 +215,64 @@ pub const MIN_CORRELATION: f64 = 1e-290;
 ///
 /// The channels' means are removed first.
 pub fn identify(y: &[&[f64]], fs: f64, opts: &SsiOptions) -> Result<SsiResult, SsiError> {
+    identify_surveyed(y, fs, opts, None)
+}
+
+/// The block rows and reference channels SSI uses on a record, and, when read from the
+/// record, its survey and how the lag was chosen.
+pub(crate) struct LagChoice {
+    /// Block rows.
+    pub(crate) block_rows: usize,
+    /// Reference channels (indices).
+    pub(crate) references: Vec<usize>,
+    /// With [`crate::BlockRows::Auto`]: the survey and the lag it gave.
+    pub(crate) auto: Option<(RecordSurvey, AutoLag)>,
+}
+
+/// The block rows `opts` give for the checked channels `y` (`n` samples each, of means
+/// `means`) at `fs` Hz, with the reference channels; read from the record
+/// ([`crate::BlockRows::Auto`]: from `known`, its survey when the caller has it, else surveyed
+/// here), with that survey and how the lag was chosen.
+pub(crate) fn block_rows_for(
+    y: &[&[f64]],
+    fs: f64,
+    (n, means): (usize, &[f64]),
+    opts: &SsiOptions,
+    known: Option<RecordSurvey>,
+) -> Result<LagChoice, SsiError> {
+    let references = references(opts, y.len())?;
+    Ok(match opts.block_rows.resolve(fs)? {
+        Some(block_rows) => LagChoice {
+            block_rows,
+            references,
+            auto: None,
+        },
+        None => {
+            let s = known.unwrap_or_else(|| crate::survey::surveyed(y, fs, means, n));
+            let (block_rows, lag) = s.block_rows(n, y.len(), references.len());
+            LagChoice {
+                block_rows,
+                references,
+                auto: Some((s, lag)),
+            }
+        }
+    })
+}
+
+/// [`identify`], with the record's survey when the caller has made it (not made again).
+pub(crate) fn identify_surveyed(
+    y: &[&[f64]],
+    fs: f64,
+    opts: &SsiOptions,
+    known: Option<RecordSurvey>,
+) -> Result<SsiResult, SsiError> {
     check_fs(fs)?;
     let (n, means) = check_channels(y)?;
-    let refs = references(opts, y.len())?;
-    let (i, auto) = match opts.block_rows.resolve(fs)? {
-        Some(i) => (i, None),
-        None => {
-            let s = crate::survey(y, fs)?;
-            let (i, lag) = s.block_rows(n, y.len(), refs.len());
-            (i, Some((s, lag)))
-        }
-    };
+    let LagChoice {
+        block_rows: i,
+        references: refs,
+        auto,
+    } = block_rows_for(y, fs, (n, &means), opts, known)?;
     // 2i lags (0 … 2i − 1) need 2i + 1 samples; saturating, so that a count too large for
     // any record (a lag time of years) is reported as too short rather than wrapping round.
     let lags = i.saturating_mul(2);
@@ -349,7 +396,7 @@ fn lag_notes(modes: &[Mode], i: usize, fs: f64) -> Vec<String> {
                 "the largest lag ({lag_s:.3} s) is shorter than one period of the mode at {:.4} Hz ({:.3} s): its estimate is not to be trusted; give a lag of several periods (ten: {:.1} s)",
                 m.frequency_hz,
                 1.0 / m.frequency_hz,
-                10.0 / m.frequency_hz
+                crate::survey::LAG_PERIODS / m.frequency_hz
             )
         })
         .collect()

@@ -106,7 +106,12 @@ pub struct AutoLag {
 pub fn survey(y: &[&[f64]], fs: f64) -> Result<RecordSurvey, SsiError> {
     crate::identify::check_fs(fs)?;
     let (n, means) = crate::identify::check_channels(y)?;
-    let p = averaged_spectrum(y, &means, n);
+    Ok(surveyed(y, fs, &means, n))
+}
+
+/// [`survey`] of channels already checked: `n` samples each, of means `means`.
+pub(crate) fn surveyed(y: &[&[f64]], fs: f64, means: &[f64], n: usize) -> RecordSurvey {
+    let p = averaged_spectrum(y, means, n);
     let len = 2 * (p.len() - 1);
     let df = fs / len as f64;
     // Bins 0 and 1 hold the mean and the drift the Hann window leaks.
@@ -121,12 +126,12 @@ pub fn survey(y: &[&[f64]], fs: f64) -> Result<RecordSurvey, SsiError> {
         }
     }
     let peaks_hz = peaks(&p).into_iter().map(|k| k as f64 * df).collect();
-    Ok(RecordSurvey {
+    RecordSurvey {
         fs_hz: fs,
         resolution_hz: df,
         band_hz: band_bin as f64 * df,
         peaks_hz,
-    })
+    }
 }
 
 impl RecordSurvey {
