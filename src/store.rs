@@ -14,7 +14,8 @@
 //! - **Rewritten whole** at the end of a run with exactly that run's records (through a
 //!   temporary file renamed over the store), so that it never holds a record twice.
 
-use std::io::{Read, Seek, SeekFrom, Write};
+use std::collections::HashMap;
+use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
 use hyst_monitor::RecordModes;
@@ -50,18 +51,30 @@ pub fn is_output(out: &Path, file: &Path) -> bool {
 }
 
 /// A stored line: the key and the record.
-#[derive(serde::Serialize, serde::Deserialize)]
+#[derive(serde::Deserialize)]
 struct Stored {
     key: String,
     #[serde(flatten)]
     record: RecordModes,
 }
 
+/// A line of the store, as written: the key beside the record's own fields.
+fn stored_line(key: &str, record: &RecordModes) -> serde_json::Result<String> {
+    #[derive(serde::Serialize)]
+    struct Line<'a> {
+        key: &'a str,
+        #[serde(flatten)]
+        record: &'a RecordModes,
+    }
+    serde_json::to_string(&Line { key, record })
+}
+
 /// The store of one `--out` folder, locked for this process while it lives.
 pub struct CampaignStore {
     path: PathBuf,
     lock: PathBuf,
-    stored: Vec<(String, RecordModes)>,
+    /// Each stored record by name, with its key.
+    stored: HashMap<String, (String, RecordModes)>,
 }
 
 fn file_error(path: &Path) -> impl Fn(std::io::Error) -> IoError + '_ {
@@ -78,44 +91,28 @@ impl CampaignStore {
         std::fs::create_dir_all(dir).map_err(file_error(dir))?;
         let lock = take_lock(dir)?;
         let path = dir.join("records.jsonl");
-        let mut store = CampaignStore {
-            path,
-            lock,
-            stored: Vec::new(),
-        };
-        store.repair()?;
-        let text = match std::fs::read_to_string(&store.path) {
-            Ok(t) => t,
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => String::new(),
-            Err(e) => return Err(file_error(&store.path)(e)),
-        };
+        let text = read_repaired(&path)?;
         // Later lines of a record replace earlier ones; lines of an older layout (no key)
         // are not read, so their records are identified again.
-        for stored in text
+        let stored = text
             .lines()
             .filter_map(|l| serde_json::from_str::<Stored>(l).ok())
-        {
-            store.stored.retain(|(_, r)| r.name != stored.record.name);
-            store.stored.push((stored.key, stored.record));
-        }
-        Ok(store)
+            .map(|s| (s.record.name.clone(), (s.key, s.record)))
+            .collect();
+        Ok(CampaignStore { path, lock, stored })
     }
 
     /// The stored result of the record `name` made with `key`, if it succeeded.
     pub fn cached(&self, name: &str, key: &str) -> Option<&RecordModes> {
         self.stored
-            .iter()
-            .find(|(k, r)| r.name == name && k == key && r.outcome.is_ok())
+            .get(name)
+            .filter(|(k, r)| k == key && r.outcome.is_ok())
             .map(|(_, r)| r)
     }
 
     /// Append one record made with `key` (a line, flushed: a run killed later keeps it).
     pub fn append(&self, key: &str, record: &RecordModes) -> Result<(), IoError> {
-        let line = serde_json::to_string(&Stored {
-            key: key.to_string(),
-            record: record.clone(),
-        })
-        .map_err(|e| file_error(&self.path)(e.into()))?;
+        let line = stored_line(key, record).map_err(|e| file_error(&self.path)(e.into()))?;
         let mut f = std::fs::OpenOptions::new()
             .create(true)
             .append(true)
@@ -125,46 +122,20 @@ impl CampaignStore {
             .map_err(file_error(&self.path))
     }
 
-    /// Replace the store with exactly `records` (each with its key): written to a temporary
-    /// file in the folder, then renamed over the store.
-    pub fn rewrite(&self, records: &[(String, RecordModes)]) -> Result<(), IoError> {
+    /// Replace the store with exactly `records`, each made with the key beside it in `keys`:
+    /// written to a temporary file in the folder, then renamed over the store.
+    pub fn rewrite(&self, keys: &[String], records: &[RecordModes]) -> Result<(), IoError> {
         let tmp = self.path.with_extension("jsonl.tmp");
         {
             let mut w =
                 std::io::BufWriter::new(std::fs::File::create(&tmp).map_err(file_error(&tmp))?);
-            for (key, record) in records {
-                let line = serde_json::to_string(&Stored {
-                    key: key.clone(),
-                    record: record.clone(),
-                })
-                .map_err(|e| file_error(&tmp)(e.into()))?;
+            for (key, record) in keys.iter().zip(records) {
+                let line = stored_line(key, record).map_err(|e| file_error(&tmp)(e.into()))?;
                 writeln!(w, "{line}").map_err(file_error(&tmp))?;
             }
             w.flush().map_err(file_error(&tmp))?;
         }
         std::fs::rename(&tmp, &self.path).map_err(file_error(&self.path))
-    }
-
-    /// Cut the store after its last complete line.
-    fn repair(&mut self) -> Result<(), IoError> {
-        let mut f = match std::fs::OpenOptions::new()
-            .read(true)
-            .write(true)
-            .open(&self.path)
-        {
-            Ok(f) => f,
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
-            Err(e) => return Err(file_error(&self.path)(e)),
-        };
-        let mut bytes = Vec::new();
-        f.read_to_end(&mut bytes).map_err(file_error(&self.path))?;
-        if bytes.last().is_none_or(|&b| b == b'\n') {
-            return Ok(());
-        }
-        let keep = bytes.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
-        f.set_len(keep as u64).map_err(file_error(&self.path))?;
-        f.seek(SeekFrom::End(0)).map_err(file_error(&self.path))?;
-        Ok(())
     }
 }
 
@@ -172,6 +143,29 @@ impl Drop for CampaignStore {
     fn drop(&mut self) {
         let _ = std::fs::remove_file(&self.lock);
     }
+}
+
+/// The store's text at `path` (empty when there is none yet), its torn last line (a run
+/// killed mid-write) cut from the file first, so that the next line appended starts a line
+/// of its own.
+fn read_repaired(path: &Path) -> Result<String, IoError> {
+    let mut f = match std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .open(path)
+    {
+        Ok(f) => f,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(String::new()),
+        Err(e) => return Err(file_error(path)(e)),
+    };
+    let mut bytes = Vec::new();
+    f.read_to_end(&mut bytes).map_err(file_error(path))?;
+    if bytes.last().is_some_and(|&b| b != b'\n') {
+        let keep = bytes.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
+        f.set_len(keep as u64).map_err(file_error(path))?;
+        bytes.truncate(keep);
+    }
+    Ok(String::from_utf8_lossy(&bytes).into_owned())
 }
 
 /// Take `dir/.lock` for this process: refused while another live process holds it.
@@ -239,40 +233,6 @@ pub fn file_source(path: &Path) -> String {
     format!("{}|{size:?}|{modified:?}", canon.display())
 }
 
-/// Order of names as a person reads them: runs of digits compared as numbers (`rec_2`
-/// before `rec_10`), the rest as text.
-pub fn natural_cmp(a: &str, b: &str) -> std::cmp::Ordering {
-    let (mut x, mut y) = (a.as_bytes(), b.as_bytes());
-    loop {
-        match (x.first(), y.first()) {
-            (None, None) => return a.cmp(b),
-            (None, _) => return std::cmp::Ordering::Less,
-            (_, None) => return std::cmp::Ordering::Greater,
-            (Some(p), Some(q)) if p.is_ascii_digit() && q.is_ascii_digit() => {
-                let dx = x.iter().take_while(|c| c.is_ascii_digit()).count();
-                let dy = y.iter().take_while(|c| c.is_ascii_digit()).count();
-                let (nx, ny) = (trim_zeros(&x[..dx]), trim_zeros(&y[..dy]));
-                let o = nx.len().cmp(&ny.len()).then_with(|| nx.cmp(ny));
-                if o != std::cmp::Ordering::Equal {
-                    return o;
-                }
-                (x, y) = (&x[dx..], &y[dy..]);
-            }
-            (Some(p), Some(q)) => {
-                if p != q {
-                    return p.cmp(q);
-                }
-                (x, y) = (&x[1..], &y[1..]);
-            }
-        }
-    }
-}
-
-fn trim_zeros(d: &[u8]) -> &[u8] {
-    let z = d.iter().take_while(|&&c| c == b'0').count();
-    &d[z.min(d.len().saturating_sub(1))..]
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -321,7 +281,7 @@ mod tests {
         s.append("k1", &record("d", true)).unwrap();
         let text = std::fs::read_to_string(&p).unwrap();
         assert!(text.ends_with("\n") && text.lines().count() == 3, "{text}");
-        s.rewrite(&[("k9".into(), record("d", true))]).unwrap();
+        s.rewrite(&["k9".into()], &[record("d", true)]).unwrap();
         drop(s);
         let s = CampaignStore::open(&dir).unwrap();
         assert!(s.cached("d", "k9").is_some() && s.cached("a", "k1").is_none());
@@ -330,10 +290,7 @@ mod tests {
     }
 
     #[test]
-    fn names_in_natural_order() {
-        let mut v = vec!["rec_10", "rec_2", "rec_1", "rec_02b", "a"];
-        v.sort_by(|a, b| natural_cmp(a, b));
-        assert_eq!(v, vec!["a", "rec_1", "rec_2", "rec_02b", "rec_10"]);
+    fn keys_differ_with_what_makes_them() {
         assert_ne!(record_key("a", "b"), record_key("a", "c"));
         assert_ne!(record_key("ab", ""), record_key("a", "b"));
     }

@@ -315,9 +315,14 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
         .filter_map(|(n, k)| store.cached(n, k).cloned())
         .collect();
     let store_error = Mutex::new(None);
+    let key_of: HashMap<&str, &str> = names
+        .iter()
+        .zip(&keys)
+        .map(|(n, k)| (n.as_str(), k.as_str()))
+        .collect();
     let finished = |r: &RecordModes| {
-        if let Some(i) = names.iter().position(|n| n == &r.name)
-            && let Err(e) = store.append(&keys[i], r)
+        if let Some(key) = key_of.get(r.name.as_str())
+            && let Err(e) = store.append(key, r)
             && let Ok(mut first) = store_error.lock()
         {
             first.get_or_insert(e);
@@ -335,13 +340,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
     if let Some(e) = store_error.into_inner().ok().flatten() {
         return Err(e.into());
     }
-    store.rewrite(
-        &keys
-            .iter()
-            .cloned()
-            .zip(records.iter().cloned())
-            .collect::<Vec<_>>(),
-    )?;
+    store.rewrite(&keys, &records)?;
     let mut opts = TrackOptions::default();
     opts.training = a.training.unwrap_or(opts.training.min(names.len() / 2));
     opts.whiten = !a.no_whiten;

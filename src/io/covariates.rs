@@ -25,15 +25,47 @@ pub fn list_records(paths: &[PathBuf]) -> Result<Vec<PathBuf>, IoError> {
                 .filter_map(|e| e.ok().map(|e| e.path()))
                 .filter(|p| p.is_file())
                 .collect();
-            inside.sort_by(|a, b| {
-                crate::store::natural_cmp(&a.to_string_lossy(), &b.to_string_lossy())
-            });
+            inside.sort_by(|a, b| natural_cmp(&a.to_string_lossy(), &b.to_string_lossy()));
             files.extend(inside);
         } else {
             files.push(p.clone());
         }
     }
     Ok(files)
+}
+
+/// Order of names as a person reads them: runs of digits compared as numbers (`rec_2`
+/// before `rec_10`), the rest as text.
+pub(crate) fn natural_cmp(a: &str, b: &str) -> std::cmp::Ordering {
+    let (mut x, mut y) = (a.as_bytes(), b.as_bytes());
+    loop {
+        match (x.first(), y.first()) {
+            (None, None) => return a.cmp(b),
+            (None, _) => return std::cmp::Ordering::Less,
+            (_, None) => return std::cmp::Ordering::Greater,
+            (Some(p), Some(q)) if p.is_ascii_digit() && q.is_ascii_digit() => {
+                let dx = x.iter().take_while(|c| c.is_ascii_digit()).count();
+                let dy = y.iter().take_while(|c| c.is_ascii_digit()).count();
+                let (nx, ny) = (trim_zeros(&x[..dx]), trim_zeros(&y[..dy]));
+                let o = nx.len().cmp(&ny.len()).then_with(|| nx.cmp(ny));
+                if o != std::cmp::Ordering::Equal {
+                    return o;
+                }
+                (x, y) = (&x[dx..], &y[dy..]);
+            }
+            (Some(p), Some(q)) => {
+                if p != q {
+                    return p.cmp(q);
+                }
+                (x, y) = (&x[1..], &y[1..]);
+            }
+        }
+    }
+}
+
+fn trim_zeros(d: &[u8]) -> &[u8] {
+    let z = d.iter().take_while(|&&c| c == b'0').count();
+    &d[z.min(d.len().saturating_sub(1))..]
 }
 
 /// Read a covariates file: delimited text read as a record's CSV is (see
@@ -88,6 +120,13 @@ pub fn read_covariates(path: &Path) -> Result<Covariates, IoError> {
 mod tests {
     use super::*;
     use crate::io::test_files::file_path;
+
+    #[test]
+    fn names_in_natural_order() {
+        let mut v = vec!["rec_10", "rec_2", "rec_1", "rec_02b", "a"];
+        v.sort_by(|a, b| natural_cmp(a, b));
+        assert_eq!(v, vec!["a", "rec_1", "rec_2", "rec_02b", "rec_10"]);
+    }
 
     #[test]
     fn covariates_are_read_by_record_and_bad_files_named() {
