@@ -1137,7 +1137,7 @@ fn ident_refines_the_pair_and_real_pole_of_a_record_under_random_excitation() {
     let (ok, out, err) = ident_zener(&record, &["--skip", "8192"]);
     assert!(ok, "{err}");
     assert!(out.contains("note: pair and real pole refined"), "{out}");
-    assert!(out.contains("zener: "), "{out}");
+    assert!(out.contains("zener model: "), "{out}");
 }
 
 #[test]
@@ -1189,7 +1189,7 @@ fn ident_finds_c_from_a_record_under_a_white_force() {
     assert!(!out.contains("(Zener spectral fit"), "{out}");
     let (ok, out, err) = ident_zener(&record, &["--c", "10"]);
     assert!(ok, "{err}");
-    assert!(out.contains("c = 10.000 (given)"), "{out}");
+    assert!(out.contains("c = 10.000 N·s/m (given)"), "{out}");
     let (ok, _, err) = ident_zener(&record, &["--c=-1"]);
     assert!(!ok);
     assert!(

@@ -39,14 +39,14 @@ pub struct FrfArgs {
     #[arg(long, default_value_t = 1)]
     modes: usize,
     /// Write the modes, their standard errors and the fit's misfit as JSON here.
-    #[arg(long)]
+    #[arg(help_heading = "Output files", long)]
     json: Option<PathBuf>,
     /// Draw the measured and fitted response magnitudes over the band (SVG) here.
-    #[arg(long)]
+    #[arg(help_heading = "Output files", long)]
     svg: Option<PathBuf>,
     /// Write the outputs as they would be under a force of flat spectrum (CSV, the same
     /// column names), e.g. to compare `hyst ssi` on them with `hyst ssi` on the measured ones.
-    #[arg(long)]
+    #[arg(help_heading = "Output files", long)]
     write_flat: Option<PathBuf>,
 }
 

@@ -81,10 +81,10 @@ pub(crate) struct IdentArgs {
     #[arg(long)]
     pub(crate) period: Option<usize>,
     /// Write the results as JSON here.
-    #[arg(long)]
+    #[arg(help_heading = "Output files", long)]
     pub(crate) json: Option<PathBuf>,
     /// Write figures (SVG) into this folder.
-    #[arg(long)]
+    #[arg(help_heading = "Output files", long)]
     pub(crate) svg_dir: Option<PathBuf>,
 }
 

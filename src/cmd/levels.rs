@@ -33,10 +33,10 @@ pub(crate) struct LevelsArgs {
     #[arg(long)]
     pub(crate) data_periodic: bool,
     /// Write the results as JSON here.
-    #[arg(long)]
+    #[arg(help_heading = "Output files", long)]
     pub(crate) json: Option<PathBuf>,
     /// Write figures (SVG) into this folder: each level's k∞ and Ω beside the model's.
-    #[arg(long)]
+    #[arg(help_heading = "Output files", long)]
     pub(crate) svg_dir: Option<PathBuf>,
     /// Then fit the model by simulation (indirect inference): the Bouc-Wen model whose
     /// simulated records give the same Zener fits as the records. Removes the Gaussian

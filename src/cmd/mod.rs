@@ -42,14 +42,19 @@ pub(crate) struct Cli {
     pub(crate) command: Command,
     /// Format of every record read: by its extension by default (`.npy`, `.npz`, `.mat`,
     /// `.uff`/`.unv`/`.uf`; anything else delimited text).
-    #[arg(long, global = true, default_value = "auto", value_parser = named(hyst::io::Format::NAMES, hyst::io::Format::description))]
+    #[arg(long, global = true, help_heading = "Reading records (every command)", default_value = "auto", value_parser = named(hyst::io::Format::NAMES, hyst::io::Format::description))]
     pub(crate) format: hyst::io::Format,
     /// Cell separator of every CSV file read: detected from the header line by default.
-    #[arg(long, global = true, default_value = "auto", value_parser = named(hyst::io::Delimiter::NAMES, hyst::io::Delimiter::description))]
+    #[arg(long, global = true, help_heading = "Reading records (every command)", default_value = "auto", value_parser = named(hyst::io::Delimiter::NAMES, hyst::io::Delimiter::description))]
     pub(crate) delimiter: hyst::io::Delimiter,
     /// The variable of a `.mat` file or the array of a `.npz` archive to read (needed when it
     /// holds more than one array of more than one element).
-    #[arg(long, global = true, value_name = "NAME")]
+    #[arg(
+        long,
+        global = true,
+        help_heading = "Reading records (every command)",
+        value_name = "NAME"
+    )]
     pub(crate) variable: Option<String>,
 }
 

@@ -49,11 +49,11 @@ pub(crate) struct RefineArgs {
     #[arg(long)]
     pub(crate) test: Vec<super::args::RowRange>,
     /// Write the report as JSON here.
-    #[arg(long)]
+    #[arg(help_heading = "Output files", long)]
     pub(crate) json: Option<PathBuf>,
     /// Write figures (SVG) into this folder: residual spectra before/after, time overlays,
     /// and the restoring-force surface of the baseline's residual with its two sections.
-    #[arg(long)]
+    #[arg(help_heading = "Output files", long)]
     pub(crate) svg_dir: Option<PathBuf>,
 }
 

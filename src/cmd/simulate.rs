@@ -55,7 +55,7 @@ pub(crate) struct ExcitationArgs {
     #[arg(long, default_value_t = 750.0)]
     pub(crate) fs: f64,
     /// Output CSV file.
-    #[arg(long)]
+    #[arg(help_heading = "Output files", long)]
     pub(crate) out: PathBuf,
 }
 
@@ -128,7 +128,7 @@ pub(crate) struct SimulateArgs {
     #[arg(long, default_value_t = 2)]
     pub(crate) noise_seed: u64,
     /// Output CSV file (`u,y`).
-    #[arg(long)]
+    #[arg(help_heading = "Output files", long)]
     pub(crate) out: PathBuf,
 }
 

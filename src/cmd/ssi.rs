@@ -32,20 +32,21 @@ pub(crate) struct SsiArgs {
     pub(crate) ssi: SsiFlags,
     /// Write the modes, real poles and per-order poles as JSON here (optional: the report is
     /// printed either way).
-    #[arg(long)]
+    #[arg(help_heading = "Output files", long)]
     pub(crate) json: Option<PathBuf>,
     /// Draw the stabilization diagram as SVG here.
-    #[arg(long)]
+    #[arg(help_heading = "Output files", long)]
     pub(crate) svg: Option<PathBuf>,
     /// Write the reported modes' shapes as Universal File dataset 55 here (one dataset per
     /// mode: its complex eigenvalue and, per node, the X, Y, Z entries; channels of a Universal
     /// File at their nodes and directions, others as nodes 1, 2, … along Z).
-    #[arg(long, value_name = "FILE")]
+    #[arg(help_heading = "Output files", long, value_name = "FILE")]
     pub(crate) shapes_uff: Option<PathBuf>,
 }
 
 /// SSI's and the refinement's flags, shared by `hyst ssi` and `hyst track`.
 #[derive(Args, Debug)]
+#[command(next_help_heading = "SSI and its refinement")]
 pub(crate) struct SsiFlags {
     /// Block rows of the Toeplitz matrix (lags up to 2·N−1); default: read from the record,
     /// enough for ten periods of its lowest spectral peak within a size budget (said in the
@@ -70,7 +71,8 @@ pub(crate) struct SsiFlags {
         conflicts_with = "block_rows"
     )]
     pub(crate) lag_periods: Option<Vec<f64>>,
-    /// Largest model order (default: the Toeplitz rank, at most 40).
+    /// Largest model order; default: 40, or four per spectral peak when the record shows
+    /// more than ten, at most the Toeplitz rank.
     #[arg(long)]
     pub(crate) max_order: Option<usize>,
     /// Model order step.

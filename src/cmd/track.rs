@@ -53,11 +53,11 @@ pub(crate) struct TrackArgs {
     /// Folder for `records.jsonl` (each record's modes, appended as they come: a run
     /// interrupted continues where it stopped), `table.csv` and `table.jsonl` (record ×
     /// mode) and `report.json`.
-    #[arg(long)]
+    #[arg(help_heading = "Output files", long)]
     pub(crate) out: PathBuf,
     /// Draw each mode's frequency and damping against time (± standard error, alarms in
     /// red) and its frequency against the first covariate, as SVG into this folder.
-    #[arg(long)]
+    #[arg(help_heading = "Output files", long)]
     pub(crate) svg_dir: Option<PathBuf>,
 }
 

@@ -417,7 +417,7 @@ impl ModalAnalysis {
             };
             writeln!(
                 f,
-                "mode {:>9.4} ± {:.4} Hz  damping {:.4} ± {:.4}  ({} poles{span})",
+                "mode {:>9.4} ± {:.4} Hz  damping ratio {:.4} ± {:.4}  ({} poles{span})",
                 m.frequency_hz,
                 m.frequency_std_hz,
                 m.damping_ratio,
@@ -503,7 +503,10 @@ impl ModalAnalysis {
                 format!("real pole {:.4e} rad/s", r.real_poles[n.index].lambda)
             } else {
                 let m = &r.modes[n.index];
-                format!("{:.4} Hz, damping {:.4}", m.frequency_hz, m.damping_ratio)
+                format!(
+                    "{:.4} Hz, damping ratio {:.4}",
+                    m.frequency_hz, m.damping_ratio
+                )
             };
             let why: Vec<String> = n.reasons.iter().map(|w| w.to_string()).collect();
             writeln!(
@@ -563,7 +566,7 @@ impl ModalAnalysis {
             );
             writeln!(
                 f,
-                "mode {:>9.4} ± {} Hz  damping {:.4} ± {}  (evidence {:.0}; {ssi})",
+                "mode {:>9.4} ± {} Hz  damping ratio {:.4} ± {}  (evidence {:.0}; {ssi})",
                 m.frequency_hz,
                 se_text(m.frequency_se_hz),
                 m.damping_ratio,

@@ -87,7 +87,7 @@ pub fn select_poles(
                 (
                     -2.0 * opts.mass * med,
                     format!(
-                        "low-damping cluster ({} poles, median Re λ = {med:.3})",
+                        "c = −2m·Re λ of a low-damping cluster: {} poles, median Re λ = {med:.3} rad/s",
                         re.len()
                     ),
                 )

@@ -260,7 +260,7 @@ impl IdentReport {
                 f,
                 "zener spectral fit (white force, {} frequencies up to {:.1} Hz, misfit {:.3}): \
                  c = {:.3} ± {:.3} N s/m{held}, k = {:.1} ± {:.1} N/m, k_inf = {:.1} ± {:.1} N/m, \
-                 omega = {:.3} ± {:.3} rad/s; force density {:.4e} ± {:.1e} N^2 s, noise std {:.3e}",
+                 omega = {:.3} ± {:.3} rad/s; force density {:.4e} ± {:.1e} N^2 s, measurement noise std {:.3e} m",
                 z.bins,
                 z.max_frequency_hz,
                 z.misfit,
@@ -278,10 +278,17 @@ impl IdentReport {
             )?;
         }
         if let Some(fl) = &id.flatness {
+            let band = self.options.excitation.map_or(String::new(), |b| {
+                format!(
+                    " of the {}-sample period ({}–{} Hz)",
+                    b.period, b.low_hz, b.high_hz
+                )
+            });
             writeln!(
                 f,
-                "flatness fit: {} periods averaged (aperiodicity {}), bins {}..={}, spread of |U| \
-                 over the band {:.3} dB -> {:.3} dB in {} iterations, implied input RMS {:.3} N",
+                "flatness fit: {} periods averaged (aperiodicity {}: last period against the first), \
+                 DFT bins {}–{}{band}, spread of the implied input's |U| over the band {:.3} dB -> \
+                 {:.3} dB in {} iterations, implied input RMS {:.3} N",
                 fl.periods,
                 fl.aperiodicity
                     .map_or("-".to_string(), |a| format!("{a:.3}")),
@@ -298,21 +305,33 @@ impl IdentReport {
 
     fn fmt_validation(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let route = self.bouc_wen_route.map_or("none", BoucWenRoute::name);
+        if !self.validation.is_empty() {
+            writeln!(
+                f,
+                "validation error ε below: eq. (39) of the paper, the RMS of simulated − measured \
+                 output over the measured output's range"
+            )?;
+        }
         for c in &self.candidates {
             let tag = if Some(c.route) == self.bouc_wen_route {
                 " (kept)"
             } else {
                 ""
             };
-            writeln!(f, "bouc_wen [{}]{tag}: {}", c.route.name(), c.model)?;
+            writeln!(f, "bouc_wen model [{}]{tag}: {}", c.route.name(), c.model)?;
             for (r, s) in self.validation.iter().zip(&c.validation) {
-                writeln!(f, "  validation {}: {}", r.record, eps_text(Some(s)))?;
+                writeln!(
+                    f,
+                    "  validation error ε on {}: {}",
+                    r.record,
+                    eps_text(Some(s))
+                )?;
             }
         }
         for r in &self.validation {
             writeln!(
                 f,
-                "validation {} ({}): linear {}, zener {}, bouc_wen [{route}] {}",
+                "validation error ε on {} ({}): linear {}, zener {}, bouc_wen [{route}] {}",
                 r.record,
                 if r.periodic {
                     "one steady-state period"
@@ -337,21 +356,28 @@ impl fmt::Display for IdentReport {
         let p = &id.prepared;
         writeln!(
             f,
-            "prepared: fs {} Hz (decimation {}), dominant {:.2} Hz, sigma_x {:.3e}, skewness {:.3}, kurtosis {:.3}",
+            "prepared: sampling rate {} Hz (decimated by {}), dominant frequency {:.2} Hz, displacement std σx {:.3e} m, skewness {:.3}, kurtosis {:.3} (3 for a Gaussian)",
             p.fs, p.decimation, p.dominant_hz, p.sigma_x, p.skewness, p.kurtosis
         )?;
         let real = id
             .poles
             .real
-            .map_or("none".to_string(), |r| format!("{r:.4} rad/s"));
+            .map_or("none".to_string(), |r| format!("λ = {r:.4} rad/s"));
+        let pair = id.poles.pair;
         writeln!(
             f,
-            "pair {:.4} rad/s, real pole {real}, c = {:.3} ({})",
-            id.poles.pair, id.poles.c, id.poles.c_source
+            "poles: oscillating pair λ = {:.4} ± {:.4}i rad/s ({:.4} Hz, damping ratio {:.4}), \
+             real pole {real}; viscous damping c = {:.3} N·s/m ({})",
+            pair.re,
+            pair.im.abs(),
+            pair.norm() / (2.0 * std::f64::consts::PI),
+            -pair.re / pair.norm(),
+            id.poles.c,
+            id.poles.c_source
         )?;
-        writeln!(f, "linear: {}", self.linear)?;
+        writeln!(f, "linear model: {}", self.linear)?;
         if let Some(z) = &self.zener {
-            writeln!(f, "zener: {z}")?;
+            writeln!(f, "zener model: {z}")?;
         }
         self.fmt_fits(f)?;
         self.fmt_validation(f)?;

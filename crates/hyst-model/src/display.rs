@@ -1,6 +1,7 @@
-//! The oscillator as one line of text, in the schema's key names
-//! (`mass 2, damping 10, stiffness 50000, bouc_wen {alpha 50000, beta_gamma 800, …}`), each
-//! number to six significant digits; extra terms that are off are not written.
+//! The oscillator as one line of text, in the schema's key names, each number to six
+//! significant digits with its SI unit (`mass 2 kg, damping 10 N·s/m, stiffness 50000 N/m,
+//! bouc_wen {alpha 50000 N/m, beta_gamma 800 1/N, …}`); extra terms that are off are not
+//! written.
 
 use std::fmt;
 
@@ -29,45 +30,60 @@ pub fn six_digits(v: f64) -> String {
     }
 }
 
+/// The unit of βγ and βδ, N^−ν: `1/N` for ν = 1.
+fn per_force(nu: f64) -> String {
+    if nu == 1.0 {
+        "1/N".into()
+    } else {
+        format!("N^-{}", six_digits(nu))
+    }
+}
+
 impl fmt::Display for Oscillator {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let s = six_digits;
         write!(
             f,
-            "mass {}, damping {}, stiffness {}",
+            "mass {} kg, damping {} N·s/m, stiffness {} N/m",
             s(self.mass),
             s(self.damping),
             s(self.stiffness)
         )?;
         match self.restoring {
             Restoring::None => {}
-            Restoring::BoucWen(b) => write!(
-                f,
-                ", bouc_wen {{alpha {}, beta_gamma {}, beta_delta {}, nu {}}}",
-                s(b.alpha),
-                s(b.beta_gamma()),
-                s(b.beta_delta()),
-                s(b.nu)
-            )?,
-            Restoring::Zener(z) => {
-                write!(f, ", zener {{k_inf {}, omega {}}}", s(z.k_inf), s(z.omega))?
+            Restoring::BoucWen(b) => {
+                let u = per_force(b.nu);
+                write!(
+                    f,
+                    ", bouc_wen {{alpha {} N/m, beta_gamma {} {u}, beta_delta {} {u}, nu {}}}",
+                    s(b.alpha),
+                    s(b.beta_gamma()),
+                    s(b.beta_delta()),
+                    s(b.nu)
+                )?
             }
+            Restoring::Zener(z) => write!(
+                f,
+                ", zener {{k_inf {} N/m, omega {} rad/s}}",
+                s(z.k_inf),
+                s(z.omega)
+            )?,
         }
         let e = &self.extras;
-        for (key, v) in [
-            ("cubic_stiffness", e.cubic_stiffness),
-            ("quadratic_stiffness", e.quadratic_stiffness),
-            ("quadratic_damping", e.quadratic_damping),
-            ("offset", e.offset),
+        for (key, v, unit) in [
+            ("cubic_stiffness", e.cubic_stiffness, "N/m³"),
+            ("quadratic_stiffness", e.quadratic_stiffness, "N/m²"),
+            ("quadratic_damping", e.quadratic_damping, "N·s²/m²"),
+            ("offset", e.offset, "N"),
         ] {
             if v != 0.0 {
-                write!(f, ", {key} {}", s(v))?;
+                write!(f, ", {key} {} {unit}", s(v))?;
             }
         }
         if let Some(c) = e.clearance {
             write!(
                 f,
-                ", clearance {{stiffness {}, gap {}}}",
+                ", clearance {{stiffness {} N/m, gap {} m}}",
                 s(c.stiffness),
                 s(c.gap)
             )?;
@@ -75,7 +91,7 @@ impl fmt::Display for Oscillator {
         if let Some(c) = e.coulomb {
             write!(
                 f,
-                ", coulomb {{force {}, smoothing_velocity {}}}",
+                ", coulomb {{force {} N, smoothing_velocity {} m/s}}",
                 s(c.force),
                 s(c.smoothing_velocity)
             )?;
@@ -85,11 +101,11 @@ impl fmt::Display for Oscillator {
                 .iter()
                 .zip(sf.coefficients)
                 .filter(|(_, c)| *c != 0.0)
-                .map(|(t, c)| format!("{t} {}", s(c)))
+                .map(|(t, c)| format!("{t} {} N", s(c)))
                 .collect();
             write!(
                 f,
-                ", surface {{x_scale {}, v_scale {}, {}}}",
+                ", surface {{x_scale {} m, v_scale {} m/s, {}}}",
                 s(sf.x_scale),
                 s(sf.v_scale),
                 terms.join(", ")
@@ -98,7 +114,7 @@ impl fmt::Display for Oscillator {
         if let Some(m) = e.second_mass {
             write!(
                 f,
-                ", second_mass {{mass {}, stiffness {}, damping {}}}",
+                ", second_mass {{mass {} kg, stiffness {} N/m, damping {} N·s/m}}",
                 s(m.mass),
                 s(m.stiffness),
                 s(m.damping)
@@ -127,8 +143,8 @@ mod tests {
         let text = Oscillator::benchmark().to_string();
         assert_eq!(
             text,
-            "mass 2, damping 10, stiffness 50000, bouc_wen {alpha 50000, beta_gamma 800, \
-             beta_delta -1100, nu 1}"
+            "mass 2 kg, damping 10 N·s/m, stiffness 50000 N/m, bouc_wen {alpha 50000 N/m, \
+             beta_gamma 800 1/N, beta_delta -1100 1/N, nu 1}"
         );
     }
 }
