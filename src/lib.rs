@@ -18,6 +18,7 @@ pub mod io;
 pub mod plot;
 
 pub mod report;
+pub mod settings;
 pub mod store;
 
 pub use covssi::shape_text;

@@ -7,6 +7,8 @@ pub(crate) mod args;
 pub(crate) mod frf;
 pub(crate) mod ident;
 pub(crate) mod levels;
+#[cfg(test)]
+mod parity;
 pub(crate) mod refine;
 pub(crate) mod simulate;
 pub(crate) mod ssi;

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use clap::Args;
 
 use super::*;
+use hyst::settings::{SettingsError, SsiSettings};
 
 #[derive(Args, Debug)]
 pub(crate) struct SsiArgs {
@@ -20,11 +21,6 @@ pub(crate) struct SsiArgs {
     /// a warning for columns named like a force: `u`, `force`, `input`, `excitation`, `load`).
     #[arg(long, value_delimiter = ',')]
     pub(crate) columns: Option<Vec<String>>,
-    /// Decimate by this factor first (an ideal low-pass below the new Nyquist, then every
-    /// FACTOR-th sample); default: read from the record's spectrum (said in the report), 1
-    /// keeps the rate.
-    #[arg(long, value_name = "FACTOR")]
-    pub(crate) decimate: Option<usize>,
     /// Skip this many leading rows (e.g. a start-up transient).
     #[arg(long, default_value_t = 0)]
     pub(crate) skip: usize,
@@ -48,6 +44,11 @@ pub(crate) struct SsiArgs {
 #[derive(Args, Debug)]
 #[command(next_help_heading = "SSI and its refinement")]
 pub(crate) struct SsiFlags {
+    /// Decimate by this factor first (an ideal low-pass below the new Nyquist, then every
+    /// FACTOR-th sample); default: read from the record's spectrum (said in the report), 1
+    /// keeps the rate.
+    #[arg(long, value_name = "FACTOR")]
+    pub(crate) decimate: Option<usize>,
     /// Block rows of the Toeplitz matrix (lags up to 2·N−1); default: read from the record,
     /// enough for ten periods of its lowest spectral peak within a size budget (said in the
     /// report).
@@ -106,43 +107,38 @@ pub(crate) struct SsiFlags {
 }
 
 impl SsiFlags {
-    /// The analysis these flags ask for: SSI's options, and the refinement unless
-    /// `--no-refine`.
-    pub(crate) fn analysis(&self) -> hyst::covssi::AnalysisOptions {
-        use hyst::covssi::{AnalysisOptions, RefineOptions};
-        let refine = (!self.no_refine).then(|| RefineOptions {
-            joint: !self.no_joint,
-            ..RefineOptions::default()
-        });
-        AnalysisOptions::default()
-            .with_ssi(ssi_options(self))
-            .with_refine(refine)
+    /// The settings these flags give, field by field ([`SsiSettings`]: the same set as
+    /// `hyst.ssi`'s keywords; a test below checks that each has its flag).
+    pub(crate) fn settings(&self) -> SsiSettings {
+        let mut s = SsiSettings::default();
+        s.block_rows = self.block_rows;
+        s.lag_seconds = self.lag_seconds;
+        s.lag_periods = match self.lag_periods.as_deref() {
+            Some(&[count, hz]) => Some((count, hz)),
+            _ => None,
+        };
+        s.decimate = self.decimate;
+        s.max_order = self.max_order;
+        s.order_step = self.order_step;
+        s.references = self.references.clone();
+        s.df = self.df;
+        s.dzeta = self.dzeta;
+        s.dmac = self.dmac;
+        s.dreal = self.dreal;
+        s.refine = !self.no_refine;
+        s.joint = !self.no_joint;
+        s
     }
-}
 
-/// SSI's options from the flags.
-fn ssi_options(a: &SsiFlags) -> hyst::covssi::SsiOptions {
-    use hyst::covssi::{BlockRows, SsiOptions, StabilityCriteria};
-    let block_rows = match (a.lag_seconds, a.lag_periods.as_deref()) {
-        (Some(t), _) => BlockRows::Seconds(t),
-        (None, Some(&[count, frequency_hz])) => BlockRows::Periods {
-            count,
-            frequency_hz,
-        },
-        _ => a.block_rows.map_or(BlockRows::Auto, BlockRows::Count),
-    };
-    SsiOptions {
-        block_rows,
-        max_order: a.max_order,
-        order_step: a.order_step,
-        criteria: StabilityCriteria {
-            frequency: a.df,
-            damping: a.dzeta,
-            mac: a.dmac,
-            real: a.dreal,
-        },
-        references: a.references.clone(),
-        ..SsiOptions::default()
+    /// The analysis these flags ask for, a setting out of range named by its flag.
+    pub(crate) fn analysis(&self) -> Result<hyst::covssi::AnalysisOptions, Error> {
+        self.settings().analysis().map_err(|e| match e {
+            SettingsError::TooSmall { name, least, value } => fail(format!(
+                "--{} must be at least {least}, got {value}",
+                name.replace('_', "-")
+            )),
+            e => fail(e.to_string()),
+        })
     }
 }
 
@@ -158,9 +154,6 @@ struct Channels {
 
 /// The channels to analyse, after `--skip`, with their names.
 fn channels(a: &SsiArgs) -> Result<Channels, Error> {
-    if a.decimate == Some(0) {
-        return Err(fail("--decimate must be at least 1, got 0"));
-    }
     if let Some(fs) = a.fs {
         check_fs(fs)?;
     }
@@ -210,7 +203,7 @@ fn channels(a: &SsiArgs) -> Result<Channels, Error> {
 /// flag that set it, anything else with the file and columns it came from (and the
 /// decimation, which may be what made the record too short or constant).
 fn flag_error(a: &SsiArgs, e: hyst::covssi::SsiError, names: &[String], fs_used: f64) -> Error {
-    use hyst::covssi::{BlockRows, SsiError, SsiOption};
+    use hyst::covssi::{SsiError, SsiOption};
     if let SsiError::InvalidOption { option, value } = &e {
         let lag_too_short = |flag: &str| {
             fail(format!(
@@ -219,11 +212,15 @@ fn flag_error(a: &SsiArgs, e: hyst::covssi::SsiError, names: &[String], fs_used:
         };
         let flag = match option {
             // A lag given as a time is too short for the rate: say what it gave.
-            SsiOption::BlockRows => match ssi_options(&a.ssi).block_rows {
-                BlockRows::Seconds(_) => return lag_too_short("--lag-seconds"),
-                BlockRows::Periods { .. } => return lag_too_short("--lag-periods"),
-                _ => Some(("--block-rows", "at least 2")),
-            },
+            SsiOption::BlockRows => {
+                if a.ssi.lag_seconds.is_some() {
+                    return lag_too_short("--lag-seconds");
+                }
+                if a.ssi.lag_periods.is_some() {
+                    return lag_too_short("--lag-periods");
+                }
+                Some(("--block-rows", "at least 2"))
+            }
             SsiOption::BlockRowsSeconds => Some(("--lag-seconds", "positive and finite")),
             SsiOption::BlockRowsPeriodsCount => {
                 Some(("--lag-periods COUNT", "positive and finite"))
@@ -252,7 +249,7 @@ fn flag_error(a: &SsiArgs, e: hyst::covssi::SsiError, names: &[String], fs_used:
             return fail(format!("{flag} must be {needed}, got {value}"));
         }
     }
-    let decimated = match a.decimate {
+    let decimated = match a.ssi.decimate {
         Some(r) if r > 1 => format!(", decimated by {r} to {fs_used} Hz"),
         _ => String::new(),
     };
@@ -265,6 +262,8 @@ fn flag_error(a: &SsiArgs, e: hyst::covssi::SsiError, names: &[String], fs_used:
 
 pub(crate) fn run(a: &SsiArgs) -> Result<(), Error> {
     use hyst::covssi;
+    // Settings that are wrong whatever the record, before it is read.
+    let opts = a.ssi.analysis()?;
     let Channels {
         names,
         data,
@@ -272,14 +271,10 @@ pub(crate) fn run(a: &SsiArgs) -> Result<(), Error> {
         points,
     } = channels(a)?;
     let views: Vec<&[f64]> = data.iter().map(|c| c.as_slice()).collect();
-    let decimation = a
-        .decimate
-        .map_or(covssi::Decimation::Auto, covssi::Decimation::Factor);
-    let opts = a.ssi.analysis().with_decimation(decimation);
     let bar = steps_bar();
     let analysis = covssi::analyze_with_progress(&views, fs, &opts, &|p| show(&bar, p));
     bar.finish_and_clear();
-    let fs_used = fs / a.decimate.unwrap_or(1) as f64;
+    let fs_used = fs / a.ssi.decimate.unwrap_or(1) as f64;
     let mut analysis = analysis.map_err(|e| flag_error(a, e, &names, fs_used))?;
     analysis.channels = names;
     let report = hyst::report::FileReport::new(a.input.display().to_string(), analysis);

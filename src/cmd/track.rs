@@ -306,7 +306,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
     // the first record that loads, and kept for every record: each is analysed alike.
     // What makes each record's result: its source, the rate and channels asked for, and the
     // analysis options; a stored result made otherwise is identified again.
-    let analysis = resolved_analysis(&a.ssi.analysis(), &names, &load);
+    let analysis = resolved_analysis(&a.ssi.analysis()?, &names, &load);
     let settings = format!("{:?}|{:?}|{analysis:?}", a.fs, a.columns);
     let keys = sources.keys(a, &settings);
     let done: Vec<RecordModes> = names

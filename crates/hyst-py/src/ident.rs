@@ -91,6 +91,34 @@ fn validations(records: Vec<Validation>) -> Vec<ValidationRecord> {
         .collect()
 }
 
+/// A generated excitation at `fs` Hz, `design` a JSON object of
+/// `hyst_sim::excitation::ExcitationDesign`; see the Python wrapper `hyst.excite`.
+#[pyfunction]
+#[pyo3(signature = (fs, *, kind, design))]
+pub(crate) fn excite<'py>(
+    py: Python<'py>,
+    fs: f64,
+    kind: &str,
+    design: &str,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    use hyst::sim::excitation::{ExcitationDesign, ExcitationKind};
+    let mut d: ExcitationDesign =
+        serde_json::from_str(design).map_err(|e| value_error(format!("excite: {e}")))?;
+    d.kind = ExcitationKind::from_name(kind).ok_or_else(|| {
+        value_error(format!(
+            "excitation {kind:?} is not one of {:?}",
+            ExcitationKind::NAMES
+        ))
+    })?;
+    if !(fs.is_finite() && fs > 0.0) {
+        return Err(value_error(format!(
+            "fs must be a positive finite rate (Hz), got {fs}"
+        )));
+    }
+    let u = py.detach(|| d.generate(fs)).map_err(value_error)?;
+    Ok(u.into_pyarray(py))
+}
+
 /// The response of a model to the force `u`; see the Python wrapper `hyst.simulate`.
 #[pyfunction]
 #[pyo3(signature = (model_json, u, fs, *, input, oversample, integrator, decimation, noise, noise_seed))]

@@ -14,7 +14,8 @@ use std::borrow::Cow;
 mod ident;
 mod monitor;
 
-use covssi::{AnalysisOptions, BlockRows, ModalAnalysis, RefineOptions, SsiOptions};
+use covssi::ModalAnalysis;
+use hyst::settings::SsiSettings;
 use numpy::ndarray::{Array1, Array2, ShapeBuilder};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
@@ -285,30 +286,15 @@ fn columns<'a>(y: &'a numpy::ndarray::ArrayView2<'a, f64>) -> Vec<Cow<'a, [f64]>
 }
 
 /// SSI-COV and the maximum-likelihood refinement of the channels `y` (float64, samples ×
-/// channels) sampled at `fs` Hz; see the Python wrapper `hyst.ssi` for the options.
+/// channels) sampled at `fs` Hz, with `settings` a JSON object of [`SsiSettings`] (what
+/// the Python wrapper `hyst.ssi` makes of its keywords).
 #[pyfunction]
-#[pyo3(signature = (
-    y, fs, *, block_rows = None, lag_seconds = None, decimate = None, max_order = None, order_step = 1,
-    references = None, df = None, dzeta = None, dmac = None, dreal = None, refine = true,
-    joint = true, channels = None, record = "array"
-))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (y, fs, *, settings, channels = None, record = "array"))]
 fn ssi(
     py: Python<'_>,
     y: PyReadonlyArray2<'_, f64>,
     fs: f64,
-    block_rows: Option<usize>,
-    lag_seconds: Option<f64>,
-    decimate: Option<usize>,
-    max_order: Option<usize>,
-    order_step: usize,
-    references: Option<Vec<usize>>,
-    df: Option<f64>,
-    dzeta: Option<f64>,
-    dmac: Option<f64>,
-    dreal: Option<f64>,
-    refine: bool,
-    joint: bool,
+    settings: &str,
     channels: Option<Vec<String>>,
     record: &str,
 ) -> PyResult<SsiResult> {
@@ -322,37 +308,7 @@ fn ssi(
             names.len()
         )));
     }
-    let block_rows = match (lag_seconds, block_rows) {
-        (Some(_), Some(_)) => {
-            return Err(PyValueError::new_err(
-                "give block_rows or lag_seconds, not both",
-            ));
-        }
-        (Some(t), None) => BlockRows::Seconds(t),
-        (None, Some(n)) => BlockRows::Count(n),
-        (None, None) => SsiOptions::default().block_rows,
-    };
-    let defaults = covssi::StabilityCriteria::default();
-    let ssi = SsiOptions {
-        block_rows,
-        max_order,
-        order_step,
-        criteria: covssi::StabilityCriteria {
-            frequency: df.unwrap_or(defaults.frequency),
-            damping: dzeta.unwrap_or(defaults.damping),
-            mac: dmac.unwrap_or(defaults.mac),
-            real: dreal.unwrap_or(defaults.real),
-        },
-        references,
-        ..SsiOptions::default()
-    };
-    let opts = AnalysisOptions::default()
-        .with_decimation(decimate.map_or(covssi::Decimation::Auto, covssi::Decimation::Factor))
-        .with_ssi(ssi)
-        .with_refine(refine.then(|| RefineOptions {
-            joint,
-            ..RefineOptions::default()
-        }));
+    let opts = analysis_options(settings)?;
     let cols = columns(&view);
     let views: Vec<&[f64]> = cols.iter().map(|c| c.as_ref()).collect();
     let mut analysis = py
@@ -419,6 +375,7 @@ fn _hyst(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ssi, m)?)?;
     m.add_function(wrap_pyfunction!(read_record, m)?)?;
     m.add_function(wrap_pyfunction!(ident::simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(ident::excite, m)?)?;
     m.add_function(wrap_pyfunction!(ident::identify, m)?)?;
     m.add_function(wrap_pyfunction!(ident::refine, m)?)?;
     m.add_function(wrap_pyfunction!(ident::levels, m)?)?;
@@ -426,4 +383,11 @@ fn _hyst(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<ident::Report>()?;
     m.add_class::<SsiResult>()?;
     Ok(())
+}
+
+/// The analysis a JSON object of [`SsiSettings`] asks for; what is wrong as a `ValueError`.
+pub(crate) fn analysis_options(settings: &str) -> PyResult<covssi::AnalysisOptions> {
+    SsiSettings::from_json(settings)
+        .and_then(|s| s.analysis())
+        .map_err(|e| PyValueError::new_err(e.to_string()))
 }

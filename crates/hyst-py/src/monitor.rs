@@ -11,7 +11,7 @@ use crate::ident::{Report, value_error};
 /// Track the modes of `records` (each samples × channels); see the Python wrapper
 /// `hyst.track`.
 #[pyfunction]
-#[pyo3(signature = (records, fs, *, times, covariates, training, block_rows, lag_seconds, refine, whiten))]
+#[pyo3(signature = (records, fs, *, times, covariates, training, settings, whiten))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn track(
     py: Python<'_>,
@@ -20,9 +20,7 @@ pub(crate) fn track(
     times: Vec<f64>,
     covariates: Vec<Vec<f64>>,
     training: Option<usize>,
-    block_rows: Option<usize>,
-    lag_seconds: Option<f64>,
-    refine: bool,
+    settings: &str,
     whiten: bool,
 ) -> PyResult<Report> {
     let n = records.len();
@@ -48,18 +46,7 @@ pub(crate) fn track(
         })
         .collect();
     let names: Vec<String> = (0..n).map(|i| i.to_string()).collect();
-    let block_rows = match (block_rows, lag_seconds) {
-        (Some(_), Some(_)) => return Err(value_error("give block_rows or lag_seconds, not both")),
-        (Some(n), None) => covssi::BlockRows::Count(n),
-        (None, Some(t)) => covssi::BlockRows::Seconds(t),
-        (None, None) => covssi::SsiOptions::default().block_rows,
-    };
-    let analysis = covssi::AnalysisOptions::default()
-        .with_ssi(covssi::SsiOptions {
-            block_rows,
-            ..covssi::SsiOptions::default()
-        })
-        .with_refine(refine.then(covssi::RefineOptions::default));
+    let analysis = crate::analysis_options(settings)?;
     let load = |i: usize| -> Result<Loaded, String> {
         Ok(Loaded {
             channels: std::mem::take(&mut *data[i].lock().map_err(|e| e.to_string())?),

@@ -54,9 +54,9 @@ def white(hyst_bin, tmp_path_factory):
     "flags, kwargs",
     [
         ([], {}),
-        (["--input-interpolation", "linear"], {"input": "linear"}),
+        (["--input-interpolation", "linear"], {"input_interpolation": "linear"}),
         (["--periodic", "--integrator", "newmark", "--decimation", "fir"],
-         {"input": "periodic", "integrator": "newmark", "decimation": "fir"}),
+         {"periodic": True, "integrator": "newmark", "decimation": "fir"}),
         (["--noise", "1e-6", "--noise-seed", "9"], {"noise": 1e-6, "noise_seed": 9}),
     ],
 )
@@ -68,6 +68,28 @@ def test_simulate_gives_the_commands_samples(hyst_bin, white, flags, kwargs):
     run(hyst_bin, "simulate", "--input", d / "u4k.csv", "--fs", FS, "--out", out, *flags)
     # The command writes the shortest digits that read back to the same double.
     assert np.array_equal(hyst.simulate("benchmark", u, FS, **kwargs), columns(out)["y"])
+
+
+@pytest.mark.parametrize(
+    "flags, kwargs",
+    [
+        ([], {}),
+        (["--excitation", "white", "--rms", "3", "--samples", "1000", "--seed", "7"],
+         {"excitation": "white", "rms": 3, "samples": 1000, "seed": 7}),
+        (["--excitation", "sweep", "--f-min", "2", "--f-max", "40", "--fs", "200",
+          "--samples", "2000"],
+         {"excitation": "sweep", "f_min": 2, "f_max": 40, "fs": 200, "samples": 2000}),
+    ],
+)
+def test_excite_gives_the_commands_samples(hyst_bin, tmp_path, flags, kwargs):
+    out = tmp_path / "u.csv"
+    run(hyst_bin, "excite", "--out", out, *flags)
+    assert np.array_equal(hyst.excite(**kwargs), columns(out)["u"])
+
+
+def test_excite_refuses_an_unknown_kind():
+    with pytest.raises(ValueError, match='excitation "pink" is not one of'):
+        hyst.excite(excitation="pink")
 
 
 def test_a_model_dict_simulates_as_the_params_file(hyst_bin, white, tmp_path):
@@ -144,19 +166,25 @@ def test_bad_input_raises_value_error_with_the_librarys_message(call, says):
     assert says in str(e.value), str(e.value)
 
 
-def test_track_gives_the_commands_report(data_dir, hyst_bin, tmp_path):
+@pytest.mark.parametrize(
+    "settings", [{}, {"lag_periods": (8, 1.0), "decimate": 2, "joint": False, "dmac": 0.03}]
+)
+def test_track_gives_the_commands_report(data_dir, hyst_bin, tmp_path, settings):
     """`hyst.track` on ten 300 s windows of the 3-DOF record, as arrays, and `hyst track`
-    on the same windows of the file: the same report (the record's name aside)."""
-    from test_ssi import read_record
+    on the same windows of the file: the same report (the record's name aside), with the
+    defaults and with SSI settings given as keywords and as flags."""
+    from test_ssi import cli_flags, read_record
 
     y, _ = read_record(data_dir / "oma" / "data_3dof.csv")
     out = tmp_path / "track"
     run(hyst_bin, "track", "--input", data_dir / "oma" / "data_3dof.csv", "--fs", 20,
-        "--window", 300, "--columns", "y1,y2,y3", "--out", out)
+        "--window", 300, "--columns", "y1,y2,y3", "--out", out, *cli_flags(settings))
     windows = [y[i * 6000:(i + 1) * 6000] for i in range(10)]
-    report = hyst.track(windows, 20.0, times=[300.0 * i for i in range(10)])
+    report = hyst.track(windows, 20.0, times=[300.0 * i for i in range(10)], **settings)
     assert comparable(report.to_dict()) == document(out / "report.json")
     assert [round(m["frequency_hz"], 1) for m in report.to_dict()["reference"]] == [1.0, 2.8, 4.1]
+    if settings:
+        return
     # The same windows as files (.npy), read by hyst.track itself.
     paths = []
     for i, w in enumerate(windows):

@@ -20,11 +20,31 @@ def read_record(path):
     return y[:, cols], [names[i] for i in cols]
 
 
+def cli_flags(keywords):
+    """The command line's flags for Python keywords, by the rule the parity test checks:
+    `--` and the name in kebab case, a False switch as `--no-name`, a list comma-separated,
+    a pair as two values."""
+    args = []
+    for k, v in keywords.items():
+        flag = "--" + k.replace("_", "-")
+        if v is False:
+            args.append("--no-" + k.replace("_", "-"))
+        elif isinstance(v, tuple):
+            args += [flag] + [str(x) for x in v]
+        elif isinstance(v, list):
+            args += [flag, ",".join(str(x) for x in v)]
+        else:
+            args += [flag, str(v)]
+    return args
+
+
 @pytest.mark.parametrize(
     "name, fs, flags",
     [
         ("data_3dof.csv", 20.0, {}),
         ("data_3dof.csv", 20.0, {"block_rows": 60, "max_order": 40, "dmac": 0.03}),
+        ("data_3dof.csv", 20.0, {"lag_periods": (10, 1.0), "decimate": 2, "joint": False,
+                                 "references": [0, 2], "dzeta": 0.06, "order_step": 2}),
         ("data_sdof.csv", 20.0, {}),
     ],
 )
@@ -36,10 +56,7 @@ def test_the_same_document_as_the_command_line(data_dir, hyst_bin, tmp_path, nam
     if not path.is_file():
         pytest.fail(f"{path} is missing from the shared data")
     y, names = read_record(path)
-    cli = {"block_rows": "--block-rows", "max_order": "--max-order", "dmac": "--dmac"}
-    args = [str(hyst_bin), "ssi", "--input", str(path), "--fs", str(fs)]
-    for k, v in flags.items():
-        args += [cli[k], str(v)]
+    args = [str(hyst_bin), "ssi", "--input", str(path), "--fs", str(fs)] + cli_flags(flags)
     out = tmp_path / "cli.json"
     subprocess.run(args + ["--json", str(out)], check=True, capture_output=True)
     want = json.loads(out.read_text())
@@ -156,7 +173,7 @@ def test_the_type_stubs_name_what_the_package_has():
 
     stubs = (Path(hyst.__file__).parent / "__init__.pyi").read_text()
     stubbed = set(re.findall(r"def (\w+)\(", stubs))
-    functions = {"ssi", "read", "simulate", "identify", "refine", "levels", "track"}
+    functions = {"ssi", "read", "excite", "simulate", "identify", "refine", "levels", "track"}
     assert functions <= stubbed and all(hasattr(hyst, f) for f in functions)
     assert "class Record" in stubs and set(hyst.Record.__dataclass_fields__) == set(
         re.findall(r"^    (\w+): ", stubs.split("class Record")[1].split("def ")[0], re.M)

@@ -254,6 +254,91 @@ impl Sweep {
     }
 }
 
+/// The kinds of excitation [`ExcitationDesign::generate`] makes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
+#[non_exhaustive]
+pub enum ExcitationKind {
+    /// Random-phase multisine flat on [f_min, f_max], periodic with `samples` samples
+    /// ([`Multisine::band`]).
+    #[default]
+    Multisine,
+    /// Gaussian white noise ([`white_noise`]).
+    White,
+    /// Linear sine sweep from f_min to f_max over the record, amplitude √2·rms ([`Sweep`]).
+    Sweep,
+}
+
+impl ExcitationKind {
+    /// The names, as the command line and the Python package spell them.
+    pub const NAMES: [&'static str; 3] = ["multisine", "white", "sweep"];
+
+    /// The kind named `name` (one of [`ExcitationKind::NAMES`]).
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "multisine" => Some(ExcitationKind::Multisine),
+            "white" => Some(ExcitationKind::White),
+            "sweep" => Some(ExcitationKind::Sweep),
+            _ => None,
+        }
+    }
+}
+
+/// A generated excitation: its kind, level, length, seed and band. The defaults are the
+/// benchmark's: a 50 N RMS multisine of 8192 samples on 5–150 Hz, seed 1.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(default, deny_unknown_fields))]
+#[non_exhaustive]
+pub struct ExcitationDesign {
+    /// The kind.
+    pub kind: ExcitationKind,
+    /// RMS (N).
+    pub rms: f64,
+    /// Samples (a multisine: one period).
+    pub samples: usize,
+    /// Seed of the random generator.
+    pub seed: u64,
+    /// Lowest excited frequency (Hz; multisine and sweep).
+    pub f_min: f64,
+    /// Highest excited frequency (Hz; multisine and sweep).
+    pub f_max: f64,
+}
+
+impl Default for ExcitationDesign {
+    fn default() -> Self {
+        ExcitationDesign {
+            kind: ExcitationKind::Multisine,
+            rms: 50.0,
+            samples: 8192,
+            seed: 1,
+            f_min: 5.0,
+            f_max: 150.0,
+        }
+    }
+}
+
+impl ExcitationDesign {
+    /// The signal at `fs` Hz.
+    pub fn generate(&self, fs: f64) -> Result<Vec<f64>, SimError> {
+        match self.kind {
+            ExcitationKind::Multisine => {
+                Multisine::band(self.samples, fs, self.f_min, self.f_max, self.rms)?
+                    .generate(self.seed)
+            }
+            ExcitationKind::White => white_noise(self.samples, self.rms, self.seed),
+            ExcitationKind::Sweep => Sweep {
+                amplitude: self.rms * std::f64::consts::SQRT_2,
+                f0: self.f_min,
+                f1: self.f_max,
+                duration: self.samples as f64 / fs,
+            }
+            .sample(self.samples, fs),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -25,8 +25,8 @@ from . import _hyst
 from ._hyst import Report, SsiResult
 
 __all__ = [
-    "identify", "levels", "read", "Record", "refine", "Report", "simulate", "ssi", "SsiResult",
-    "track",
+    "excite", "identify", "levels", "read", "Record", "refine", "Report", "simulate", "ssi",
+    "SsiResult", "track",
 ]
 
 
@@ -100,6 +100,7 @@ def ssi(
     *,
     block_rows=None,
     lag_seconds=None,
+    lag_periods=None,
     decimate=None,
     max_order=None,
     order_step=1,
@@ -130,6 +131,10 @@ def ssi(
     lag_seconds : float, optional
         The same as a time: enough block rows that the largest lag covers this many
         seconds, ceil((lag_seconds * fs + 1) / 2). Not with ``block_rows``.
+    lag_periods : (float, float), optional
+        The same as (count, Hz): the largest lag covers ``count`` periods of a mode at
+        ``Hz``, e.g. ``(10, 1.5)`` (the paper's choice: ten periods of the dominant mode).
+        Not with ``block_rows`` or ``lag_seconds``.
     decimate : int, optional
         Decimate by this factor first (an ideal low-pass below the new Nyquist, then every
         ``decimate``-th sample). Default: read from the record's spectrum (the report says
@@ -179,24 +184,60 @@ def ssi(
         a = a.reshape(-1, 1)
     if a.ndim != 2:
         raise ValueError(f"y must be (samples, channels) or (samples,), got shape {a.shape}")
+    settings = _settings(
+        block_rows=block_rows, lag_seconds=lag_seconds, lag_periods=lag_periods,
+        decimate=decimate, max_order=max_order, order_step=order_step, references=references,
+        df=df, dzeta=dzeta, dmac=dmac, dreal=dreal, refine=refine, joint=joint,
+    )
     return _hyst.ssi(
         a,
         float(fs),
-        block_rows=_count(block_rows, "block_rows", 2),
-        lag_seconds=lag_seconds,
-        decimate=_count(decimate, "decimate", 1),
-        max_order=_count(max_order, "max_order", 1),
-        order_step=_count(order_step, "order_step", 1),
-        references=None if references is None else [int(r) for r in references],
-        df=df,
-        dzeta=dzeta,
-        dmac=dmac,
-        dreal=dreal,
-        refine=bool(refine),
-        joint=bool(joint),
+        settings=settings,
         channels=None if channels is None else [str(c) for c in channels],
         record=str(record),
     )
+
+
+def _settings(*, block_rows, lag_seconds, lag_periods, decimate, max_order, order_step,
+              references, df, dzeta, dmac, dreal, refine, joint):
+    """The analysis settings :func:`ssi` and :func:`track` share, checked and written as
+    the JSON object the library reads (``hyst::settings::SsiSettings``, whose fields are the
+    command line's flags too); a keyword left None keeps the library's default."""
+    import json
+
+    def real(v, name):
+        if v is None:
+            return None
+        if isinstance(v, bool):
+            raise ValueError(f"{name} must be a number, got {v!r}")
+        return float(v)
+
+    if lag_periods is not None:
+        lp = list(lag_periods)
+        if len(lp) != 2:
+            raise ValueError(f"lag_periods must be (count, Hz), got {lag_periods!r}")
+        lag_periods = [real(lp[0], "lag_periods count"), real(lp[1], "lag_periods Hz")]
+    values = {
+        "block_rows": _count(block_rows, "block_rows", 2),
+        "lag_seconds": real(lag_seconds, "lag_seconds"),
+        "lag_periods": lag_periods,
+        "decimate": _count(decimate, "decimate", 1),
+        "max_order": _count(max_order, "max_order", 1),
+        "order_step": _count(order_step, "order_step", 1),
+        "references": None if references is None
+        else [_count(r, "references", 0) for r in references],
+        "df": real(df, "df"),
+        "dzeta": real(dzeta, "dzeta"),
+        "dmac": real(dmac, "dmac"),
+        "dreal": real(dreal, "dreal"),
+        "refine": bool(refine),
+        "joint": bool(joint),
+    }
+    # NaN and infinities are not JSON: the library's own checks name them.
+    for k, v in values.items():
+        if isinstance(v, float) and not _np.isfinite(v):
+            raise ValueError(f"{k} must be finite, got {v!r}")
+    return json.dumps({k: v for k, v in values.items() if v is not None})
 
 
 def _count(v, name, least):
@@ -255,8 +296,42 @@ def _validations(validate):
     return out
 
 
-def simulate(model, u, fs, *, input="band-limited", oversample=20, integrator="rk4",
-             decimation="sample", noise=0.0, noise_seed=2):
+def excite(fs=750.0, *, excitation="multisine", rms=50.0, samples=8192, seed=1, f_min=5.0,
+           f_max=150.0):
+    """A generated force record, as ``hyst excite`` writes it (same samples for the same
+    arguments: the generator is seeded and portable).
+
+    Parameters
+    ----------
+    fs : float
+        Sampling rate (Hz).
+    excitation : {"multisine", "white", "sweep"}
+        A random-phase multisine flat on [f_min, f_max] and periodic with ``samples``
+        samples, Gaussian white noise, or a linear sine sweep from f_min to f_max over the
+        record (amplitude sqrt(2) * rms).
+    rms : float
+        RMS of the force (N).
+    samples : int
+        Samples (a multisine: one period).
+    seed : int
+        Seed of the random generator.
+    f_min, f_max : float
+        The excited band (Hz; multisine and sweep).
+
+    Returns
+    -------
+    numpy.ndarray, shape (samples,)
+        The force (N).
+    """
+    import json
+
+    design = {"rms": float(rms), "samples": _count(samples, "samples", 1),
+              "seed": _count(seed, "seed", 0), "f_min": float(f_min), "f_max": float(f_max)}
+    return _hyst.excite(float(fs), kind=str(excitation), design=json.dumps(design))
+
+
+def simulate(model, u, fs, *, periodic=False, input_interpolation="band-limited",
+             oversample=20, integrator="rk4", decimation="sample", noise=0.0, noise_seed=2):
     """The response of an oscillator to a force record, as ``hyst simulate`` writes it.
 
     Parameters
@@ -269,10 +344,12 @@ def simulate(model, u, fs, *, input="band-limited", oversample=20, integrator="r
         The force (N) at ``fs`` Hz.
     fs : float
         Sampling rate (Hz).
-    input : {"band-limited", "linear", "periodic"}
-        How the force is known between samples: a measured force (windowed-sinc, the
-        default), straight lines, or one period of a periodic signal (the result is then one
-        steady-state period).
+    periodic : bool
+        ``u`` is one period of a periodic signal: simulated to steady state, the result one
+        steady-state period (the force interpolated exactly between samples).
+    input_interpolation : {"band-limited", "linear"}
+        How a non-periodic force is known between samples: a measured force (windowed-sinc,
+        the default) or straight lines.
     oversample : int
         Integration sub-steps per sample (default 20).
     integrator : {"rk4", "newmark"}
@@ -287,8 +364,13 @@ def simulate(model, u, fs, *, input="band-limited", oversample=20, integrator="r
     numpy.ndarray, shape (samples,)
         The displacement (m).
     """
+    if input_interpolation not in ("band-limited", "linear"):
+        raise ValueError(
+            f'input_interpolation {input_interpolation!r} is not one of "band-limited", "linear"'
+        )
     return _hyst.simulate(
-        _model_json(model), _vector(u, "u"), float(fs), input=str(input),
+        _model_json(model), _vector(u, "u"), float(fs),
+        input="periodic" if periodic else str(input_interpolation),
         oversample=int(oversample), integrator=str(integrator), decimation=str(decimation),
         noise=float(noise), noise_seed=int(noise_seed),
     )
@@ -416,8 +498,10 @@ def levels(records, fs, mass, *, by_simulation=False, data_periodic=False, fit_e
     )
 
 
-def track(records, fs, *, times=None, covariates=None, training=None, block_rows=None,
-          lag_seconds=None, refine=True, whiten=True):
+def track(records, fs, *, times=None, covariates=None, training=None, whiten=True,
+          block_rows=None, lag_seconds=None, lag_periods=None, decimate=None, max_order=None,
+          order_step=1, references=None, df=None, dzeta=None, dmac=None, dreal=None,
+          refine=True, joint=True):
     """Track the modes of many records of one structure (``hyst track``).
 
     Each record is identified as :func:`ssi` does (in parallel), its modes matched to a
@@ -439,8 +523,11 @@ def track(records, fs, *, times=None, covariates=None, training=None, block_rows
         but not charted).
     training : int, optional
         The first this many records train the baselines (default 336, at most half).
-    block_rows, lag_seconds : int or float, optional
-        SSI's lag, as for :func:`ssi` (default 20 block rows).
+    block_rows, lag_seconds, lag_periods, decimate, max_order, order_step, references,
+    df, dzeta, dmac, dreal, joint
+        The analysis of each record, as for :func:`ssi` (and ``hyst track``'s flags of the
+        same names); what is left to the record (the lag, the decimation) is read from the
+        first record and kept for every record, as ``hyst track`` does.
     refine : bool
         The maximum-likelihood refinement (default True; without it there are no standard
         errors and no chart).
@@ -492,7 +579,11 @@ def track(records, fs, *, times=None, covariates=None, training=None, block_rows
     return _hyst.track(
         arrays, float(fs), times=t, covariates=x,
         training=None if training is None else int(training),
-        block_rows=None if block_rows is None else int(block_rows),
-        lag_seconds=None if lag_seconds is None else float(lag_seconds), refine=bool(refine),
+        settings=_settings(
+            block_rows=block_rows, lag_seconds=lag_seconds, lag_periods=lag_periods,
+            decimate=decimate, max_order=max_order, order_step=order_step,
+            references=references, df=df, dzeta=dzeta, dmac=dmac, dreal=dreal, refine=refine,
+            joint=joint,
+        ),
         whiten=bool(whiten),
     )

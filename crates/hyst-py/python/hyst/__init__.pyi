@@ -51,12 +51,23 @@ class Report:
 Model = Union[dict[str, Any], Literal["benchmark"]]
 Validation = Union[dict[str, Any], tuple[npt.ArrayLike, npt.ArrayLike]]
 
+def excite(
+    fs: float = ...,
+    *,
+    excitation: Literal["multisine", "white", "sweep"] = ...,
+    rms: float = ...,
+    samples: int = ...,
+    seed: int = ...,
+    f_min: float = ...,
+    f_max: float = ...,
+) -> npt.NDArray[np.float64]: ...
 def simulate(
     model: Model,
     u: npt.ArrayLike,
     fs: float,
     *,
-    input: Literal["band-limited", "linear", "periodic"] = ...,
+    periodic: bool = ...,
+    input_interpolation: Literal["band-limited", "linear"] = ...,
     oversample: int = ...,
     integrator: Literal["rk4", "newmark"] = ...,
     decimation: Literal["sample", "fir"] = ...,
@@ -106,10 +117,20 @@ def track(
     times: Optional[Sequence[float]] = ...,
     covariates: Optional[npt.ArrayLike] = ...,
     training: Optional[int] = ...,
+    whiten: bool = ...,
     block_rows: Optional[int] = ...,
     lag_seconds: Optional[float] = ...,
+    lag_periods: Optional[tuple[float, float]] = ...,
+    decimate: Optional[int] = ...,
+    max_order: Optional[int] = ...,
+    order_step: int = ...,
+    references: Optional[Sequence[int]] = ...,
+    df: Optional[float] = ...,
+    dzeta: Optional[float] = ...,
+    dmac: Optional[float] = ...,
+    dreal: Optional[float] = ...,
     refine: bool = ...,
-    whiten: bool = ...,
+    joint: bool = ...,
 ) -> Report: ...
 
 @dataclass(frozen=True)
@@ -134,6 +155,7 @@ def ssi(
     *,
     block_rows: Optional[int] = ...,
     lag_seconds: Optional[float] = ...,
+    lag_periods: Optional[tuple[float, float]] = ...,
     decimate: Optional[int] = ...,
     max_order: Optional[int] = ...,
     order_step: int = ...,

@@ -1,0 +1,227 @@
+//! The settings of a modal analysis as a user gives them, one flat set shared by `hyst ssi`,
+//! `hyst track` and their Python twins `hyst.ssi` and `hyst.track`: each field is a flag of
+//! the command line (`block_rows` is `--block-rows`; `refine` and `joint` are `--no-refine`
+//! and `--no-joint`) and a keyword of the Python function, and a test of the command line
+//! fails when one side lacks a field. [`SsiSettings::analysis`] turns them into covssi's
+//! [`AnalysisOptions`], the one place that does.
+
+use covssi::{
+    AnalysisOptions, BlockRows, Decimation, RefineOptions, SsiOptions, StabilityCriteria,
+};
+use serde::{Deserialize, Serialize};
+
+/// What is wrong with a set of [`SsiSettings`].
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum SettingsError {
+    /// Two settings that say the same thing two ways (e.g. `block_rows` and `lag_seconds`).
+    #[error("give {first} or {second}, not both")]
+    Conflict {
+        /// The first setting's name.
+        first: &'static str,
+        /// The second's.
+        second: &'static str,
+    },
+    /// A count that must be at least `least`.
+    #[error("{name} must be at least {least}, got {value}")]
+    TooSmall {
+        /// The setting's name.
+        name: &'static str,
+        /// The least value.
+        least: usize,
+        /// The value given.
+        value: usize,
+    },
+    /// Settings that did not parse (an unknown name, a value of the wrong type).
+    #[error("settings: {0}")]
+    Unreadable(String),
+}
+
+/// The settings of one modal analysis (SSI, then its refinement). `None` leaves a choice
+/// to the record (the lag, the decimation, the largest order); the thresholds default to
+/// [`StabilityCriteria::default`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+#[non_exhaustive]
+pub struct SsiSettings {
+    /// Block rows of the Toeplitz matrix (lags up to 2·N−1); default: read from the record.
+    pub block_rows: Option<usize>,
+    /// Instead of `block_rows`: the largest lag in seconds (after any decimation).
+    pub lag_seconds: Option<f64>,
+    /// Instead of `block_rows`: the largest lag as (count, Hz), count periods of Hz.
+    pub lag_periods: Option<(f64, f64)>,
+    /// Decimate by this factor first; default: read from the record's spectrum.
+    pub decimate: Option<usize>,
+    /// Largest model order; default: 40, or four per spectral peak when the record shows
+    /// more than ten, at most the Toeplitz rank.
+    pub max_order: Option<usize>,
+    /// Model order step.
+    pub order_step: usize,
+    /// Reference channels (0-based); default: all.
+    pub references: Option<Vec<usize>>,
+    /// Stabilization threshold on the relative frequency change.
+    pub df: f64,
+    /// Stabilization threshold on the relative damping change.
+    pub dzeta: f64,
+    /// Stabilization threshold on 1 − MAC.
+    pub dmac: f64,
+    /// Stabilization threshold of eq. (31) for real poles.
+    pub dreal: f64,
+    /// Refine the modes and real poles by maximum likelihood.
+    pub refine: bool,
+    /// Refine on the channels' joint likelihood (their cross-spectra), not each alone.
+    pub joint: bool,
+}
+
+impl Default for SsiSettings {
+    fn default() -> Self {
+        let c = StabilityCriteria::default();
+        SsiSettings {
+            block_rows: None,
+            lag_seconds: None,
+            lag_periods: None,
+            decimate: None,
+            max_order: None,
+            order_step: SsiOptions::default().order_step,
+            references: None,
+            df: c.frequency,
+            dzeta: c.damping,
+            dmac: c.mac,
+            dreal: c.real,
+            refine: true,
+            joint: true,
+        }
+    }
+}
+
+impl SsiSettings {
+    /// The settings read from a JSON object of them (what the Python package passes): an
+    /// unknown name or a value of the wrong type is an error; a name left out keeps its
+    /// default.
+    pub fn from_json(text: &str) -> Result<Self, SettingsError> {
+        serde_json::from_str(text).map_err(|e| SettingsError::Unreadable(e.to_string()))
+    }
+
+    /// The analysis these settings ask for. Values out of range that covssi checks
+    /// (thresholds, references, the lag's size) are its errors, named by
+    /// [`covssi::SsiOption`]; here only what covssi cannot see: two ways of giving the lag,
+    /// and a decimation factor of 0.
+    pub fn analysis(&self) -> Result<AnalysisOptions, SettingsError> {
+        let block_rows = match (self.block_rows, self.lag_seconds, self.lag_periods) {
+            (Some(_), Some(_), _) => return Err(conflict("block_rows", "lag_seconds")),
+            (Some(_), _, Some(_)) => return Err(conflict("block_rows", "lag_periods")),
+            (_, Some(_), Some(_)) => return Err(conflict("lag_seconds", "lag_periods")),
+            (Some(n), None, None) => BlockRows::Count(n),
+            (None, Some(t), None) => BlockRows::Seconds(t),
+            (None, None, Some((count, frequency_hz))) => BlockRows::Periods {
+                count,
+                frequency_hz,
+            },
+            (None, None, None) => BlockRows::Auto,
+        };
+        let decimation = match self.decimate {
+            Some(0) => {
+                return Err(SettingsError::TooSmall {
+                    name: "decimate",
+                    least: 1,
+                    value: 0,
+                });
+            }
+            Some(f) => Decimation::Factor(f),
+            None => Decimation::Auto,
+        };
+        let ssi = SsiOptions {
+            block_rows,
+            max_order: self.max_order,
+            order_step: self.order_step,
+            criteria: StabilityCriteria {
+                frequency: self.df,
+                damping: self.dzeta,
+                mac: self.dmac,
+                real: self.dreal,
+            },
+            references: self.references.clone(),
+            ..SsiOptions::default()
+        };
+        let refine = self.refine.then(|| RefineOptions {
+            joint: self.joint,
+            ..RefineOptions::default()
+        });
+        Ok(AnalysisOptions::default()
+            .with_decimation(decimation)
+            .with_ssi(ssi)
+            .with_refine(refine))
+    }
+
+    /// The settings' names, in order: the flags and keywords both sides must have.
+    pub fn names() -> Vec<String> {
+        match serde_json::to_value(SsiSettings::default()) {
+            Ok(serde_json::Value::Object(map)) => map.keys().cloned().collect(),
+            _ => Vec::new(),
+        }
+    }
+}
+
+fn conflict(first: &'static str, second: &'static str) -> SettingsError {
+    SettingsError::Conflict { first, second }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_covssis() {
+        let a = SsiSettings::default().analysis().unwrap();
+        assert_eq!(a, AnalysisOptions::default());
+    }
+
+    #[test]
+    fn every_setting_reaches_the_analysis() {
+        let s = SsiSettings::from_json(
+            r#"{"lag_periods": [10, 1.5], "decimate": 4, "max_order": 30, "order_step": 2,
+                "references": [0, 2], "df": 0.02, "dzeta": 0.1, "dmac": 0.05, "dreal": 2,
+                "refine": true, "joint": false}"#,
+        )
+        .unwrap();
+        let a = s.analysis().unwrap();
+        assert_eq!(a.decimation, Decimation::Factor(4));
+        assert_eq!(
+            a.ssi.block_rows,
+            BlockRows::Periods {
+                count: 10.0,
+                frequency_hz: 1.5
+            }
+        );
+        assert_eq!(a.ssi.max_order, Some(30));
+        assert_eq!(a.ssi.order_step, 2);
+        assert_eq!(a.ssi.references, Some(vec![0, 2]));
+        let c = a.ssi.criteria;
+        assert_eq!(
+            (c.frequency, c.damping, c.mac, c.real),
+            (0.02, 0.1, 0.05, 2.0)
+        );
+        assert!(!a.refine.unwrap().joint);
+        let none = SsiSettings {
+            refine: false,
+            ..SsiSettings::default()
+        };
+        assert!(none.analysis().unwrap().refine.is_none());
+    }
+
+    #[test]
+    fn two_ways_of_one_lag_and_unknown_names_are_refused() {
+        let s = SsiSettings::from_json(r#"{"block_rows": 20, "lag_seconds": 2}"#).unwrap();
+        assert_eq!(
+            s.analysis().unwrap_err().to_string(),
+            "give block_rows or lag_seconds, not both"
+        );
+        let e = SsiSettings::from_json(r#"{"block_row": 20}"#).unwrap_err();
+        assert!(e.to_string().contains("unknown field `block_row`"), "{e}");
+        let e = SsiSettings::from_json(r#"{"decimate": 0}"#)
+            .unwrap()
+            .analysis()
+            .unwrap_err();
+        assert_eq!(e.to_string(), "decimate must be at least 1, got 0");
+    }
+}
