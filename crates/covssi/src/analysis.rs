@@ -602,11 +602,18 @@ impl ModalAnalysis {
             }
         }
         for d in &r.dropped {
-            writeln!(
-                f,
-                "dropped the SSI mode at {:.4} Hz: evidence {:.1}",
-                d.frequency_hz, d.evidence
-            )?;
+            match d.fitted {
+                Some(p) => writeln!(
+                    f,
+                    "dropped the mode the fit had moved to {:.4} Hz, damping ratio {:.4} (nearest SSI mode {:.4} Hz): evidence {:.1}",
+                    p.frequency_hz, p.damping_ratio, d.frequency_hz, d.evidence
+                )?,
+                None => writeln!(
+                    f,
+                    "dropped the SSI mode at {:.4} Hz: evidence {:.1}",
+                    d.frequency_hz, d.evidence
+                )?,
+            }
         }
         for (i, p) in r.real_poles.iter().enumerate() {
             if !self.is_reported(i, true) {

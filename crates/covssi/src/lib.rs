@@ -81,8 +81,8 @@ pub use options::{BlockRows, SsiOptions, StabilityCriteria};
 pub use plausibility::{NotPhysical, NotReported};
 pub use progress::Progress;
 pub use refine::{
-    DroppedMode, DroppedRealPole, MISFIT_LIMIT, RefineOptions, RefinedMode, RefinedRealPole,
-    Refinement, refine, refine_with_real_poles,
+    DroppedMode, DroppedRealPole, FittedPole, MISFIT_LIMIT, RefineOptions, RefinedMode,
+    RefinedRealPole, Refinement, refine, refine_with_real_poles,
 };
 pub use stabilize::{Mode, Pole, PoleStatus, RealPoleCluster, Rejection, Stability, mac, mpc};
 pub use survey::{AutoLag, LagLimit, RecordSurvey, survey};

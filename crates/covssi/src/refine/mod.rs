@@ -108,8 +108,8 @@ use parametrization::*;
 use real_poles::*;
 use results::MisfitCounts;
 pub use results::{
-    DroppedMode, DroppedRealPole, MISFIT_LIMIT, RefinedMode, RefinedRealPole, Refinement,
-    exponential_misfit,
+    DroppedMode, DroppedRealPole, FittedPole, MISFIT_LIMIT, RefinedMode, RefinedRealPole,
+    Refinement, exponential_misfit,
 };
 use scoring::*;
 use spectra::*;
@@ -485,6 +485,7 @@ fn add_weak_modes(
                 source: cand,
                 frequency_hz: modes[cand].frequency_hz,
                 evidence,
+                fitted: None,
             });
         }
     }
@@ -522,6 +523,7 @@ fn mode_evidence(
                     source: src,
                     frequency_hz: modes[src].frequency_hz,
                     evidence: ev,
+                    fitted: Some(FittedPole::of(fit.lambdas[k])),
                 });
                 let (_, next) = without.into_iter().nth(k).expect("k < modes");
                 fit = cur.fit_from(

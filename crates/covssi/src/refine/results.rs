@@ -136,6 +136,32 @@ pub struct DroppedMode {
     /// or its rise when it was removed from the model and everything refitted (backward
     /// step).
     pub evidence: f64,
+    /// Where the fit had moved the pole before it was removed (backward step; `None` for a
+    /// mode never kept): its frequency (Hz) and damping ratio. Fitted poles may wander from
+    /// their SSI modes, so two dropped poles can share their nearest SSI mode.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub fitted: Option<FittedPole>,
+}
+
+/// A fitted pole as frequency and damping ratio.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct FittedPole {
+    /// Natural frequency |λ|/2π (Hz).
+    pub frequency_hz: f64,
+    /// Damping ratio −Re λ/|λ|.
+    pub damping_ratio: f64,
+}
+
+impl FittedPole {
+    /// The pole λ (rad/s) as frequency and damping ratio.
+    pub fn of(lambda: crate::Complex64) -> Self {
+        let w = lambda.norm();
+        FittedPole {
+            frequency_hz: w / (2.0 * std::f64::consts::PI),
+            damping_ratio: if w > 0.0 { -lambda.re / w } else { 0.0 },
+        }
+    }
 }
 
 /// A real pole (a non-oscillating, exponentially decaying component) after refinement.
@@ -231,5 +257,20 @@ impl Refinement {
             (true, None) => "channels jointly".to_string(),
             (false, _) => "each channel's spectrum".to_string(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// λ = ω(−ζ + i√(1−ζ²)) reads back as ω/2π and ζ, to rounding.
+    #[test]
+    fn a_fitted_pole_reads_as_frequency_and_damping() {
+        let (f, z) = (37.3, 0.02);
+        let w = 2.0 * std::f64::consts::PI * f;
+        let p = FittedPole::of(crate::Complex64::new(-z * w, w * (1.0 - z * z).sqrt()));
+        approx::assert_relative_eq!(p.frequency_hz, f, max_relative = 1e-12);
+        approx::assert_relative_eq!(p.damping_ratio, z, max_relative = 1e-12);
     }
 }
