@@ -3,8 +3,8 @@
 use crate::model::Oscillator;
 
 /// Every figure of `hyst ident --svg-dir`: the stabilization diagram, figures like the
-/// paper's 3(a) and 5, the Zener spectral fit, and the implied input of each Bouc-Wen
-/// candidate when the excitation's band is known.
+/// paper's 3(a) and 5, each model's hysteresis loop along the record, the Zener spectral
+/// fit, and the implied input of each Bouc-Wen candidate when the excitation's band is known.
 pub fn ident_figures(
     dir: &std::path::Path,
     r: &crate::ident::IdentReport,
@@ -22,6 +22,18 @@ pub fn ident_figures(
     );
     std::fs::write(&p, svg).map_err(|e| format!("{}: {e}", p.display()))?;
     paper_figures(dir, id, r.bouc_wen.as_ref(), validations)?;
+    let p = &id.prepared;
+    let mut models = vec![("linear", &r.linear)];
+    models.extend(r.zener.as_ref().map(|z| ("Zener", z)));
+    models.extend(r.bouc_wen.as_ref().map(|b| ("Bouc-Wen (kept)", b)));
+    super::loops::loops_figure(
+        &dir.join("hysteresis_loops.svg"),
+        &models,
+        &p.y,
+        p.fs,
+        p.dominant_hz,
+        3.0,
+    )?;
     if let Some(f) = &id.zener_spectrum {
         zener_spectrum_figure(&dir.join("zener_spectrum.svg"), y, fs, f)?;
     }

@@ -3,6 +3,7 @@
 
 mod ident;
 mod levels;
+mod loops;
 mod residual;
 mod track;
 
