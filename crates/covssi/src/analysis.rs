@@ -189,7 +189,7 @@ pub fn analyze_with_progress(
     y: &[&[f64]],
     fs: f64,
     opts: &AnalysisOptions,
-    progress: &dyn Fn(Progress),
+    progress: &(dyn Fn(Progress) + Sync),
 ) -> Result<ModalAnalysis, SsiError> {
     crate::identify::check_fs(fs)?;
     let checked = crate::identify::check_channels(y)?;
@@ -206,12 +206,16 @@ pub fn analyze_with_progress(
     // Undecimated, the survey that found no reason to decimate is the one SSI's lag is read
     // from: not made twice.
     let known = survey.clone().filter(|_| factor == 1);
-    progress(Progress {
-        done: 0,
-        total: 1,
-        what: "SSI",
-    });
-    let ssi = crate::identify::identify_surveyed(y, fs, &opts.ssi, known)?;
+    let ssi = crate::identify::identify_surveyed(y, fs, &opts.ssi, known, progress)?;
+    // The refinement's steps follow SSI's on one count.
+    let before = crate::identify::SSI_STEPS_BEFORE_ORDERS + ssi.diagram.orders.len();
+    let after_ssi = |p: Progress| {
+        progress(Progress {
+            done: before + p.done,
+            total: before + p.total,
+            what: p.what,
+        })
+    };
     let mac = ssi
         .modes
         .iter()
@@ -225,7 +229,7 @@ pub fn analyze_with_progress(
                 &ssi.modes,
                 &ssi.real_poles,
                 r,
-                progress,
+                &after_ssi,
             ) {
                 Ok(refined) => (Some(refined), None),
                 // An option of the refinement out of range is the caller's to hear.
@@ -662,10 +666,9 @@ mod tests {
     use super::*;
     use crate::refine_with_real_poles;
 
-    /// The analysis is SSI then the refinement, nothing more: the same modes as the two
-    /// calls made by hand, and without refinement none.
-    #[test]
-    fn analysis_is_identify_then_refine() {
+    /// A decaying 3 Hz oscillation at 50 Hz with a little deterministic noise, and options
+    /// of at most 10 model orders.
+    fn decay_record() -> (f64, Vec<f64>, AnalysisOptions) {
         let fs = 50.0;
         let y: Vec<f64> = (0..6000)
             .map(|n| {
@@ -678,6 +681,14 @@ mod tests {
             max_order: Some(10),
             ..SsiOptions::default()
         });
+        (fs, y, opts)
+    }
+
+    /// The analysis is SSI then the refinement, nothing more: the same modes as the two
+    /// calls made by hand, and without refinement none.
+    #[test]
+    fn analysis_is_identify_then_refine() {
+        let (fs, y, opts) = decay_record();
         let a = analyze(&[&y], fs, &opts).unwrap();
         let ssi = crate::identify(&[&y], fs, &opts.ssi).unwrap();
         assert_eq!(a.ssi, ssi);
@@ -713,6 +724,48 @@ mod tests {
         );
         let none = analyze(&[&y], fs, &opts.clone().with_refine(None)).unwrap();
         assert!(none.refined.is_none() && none.not_refined.is_none());
+    }
+
+    /// Progress moves on every step: the correlations, the SVD, each of the 10 model orders,
+    /// then the refinement's steps on the same count; never backwards, never past the total,
+    /// and each order told once.
+    #[test]
+    fn progress_counts_every_order_and_the_refinement_after_them() {
+        let (fs, y, opts) = decay_record();
+        let seen = std::sync::Mutex::new(Vec::new());
+        analyze_with_progress(&[&y], fs, &opts, &|p| {
+            seen.lock()
+                .unwrap()
+                .push((p.done, p.total, p.what.to_string()))
+        })
+        .unwrap();
+        let seen = seen.into_inner().unwrap();
+        // "poles of 0 of 10" as the orders start, then one line as each is done.
+        let orders = seen
+            .iter()
+            .filter(|s| s.2.starts_with("SSI: poles of"))
+            .count();
+        assert_eq!(orders, 1 + 10, "{seen:?}");
+        assert!(
+            seen.iter().all(|(done, total, _)| done <= total),
+            "{seen:?}"
+        );
+        // Orders finish in any order on rayon's threads: SSI's counts are 0 … 12, each once.
+        let mut ssi: Vec<usize> = seen
+            .iter()
+            .filter(|s| s.2.starts_with("SSI"))
+            .map(|s| s.0)
+            .collect();
+        ssi.sort_unstable();
+        assert_eq!(ssi, (0..=12).collect::<Vec<_>>(), "{seen:?}");
+        let refining: Vec<usize> = seen
+            .iter()
+            .filter(|s| s.2.starts_with("refining"))
+            .map(|s| s.0)
+            .collect();
+        assert!(!refining.is_empty(), "{seen:?}");
+        assert!(refining[0] >= 12, "{seen:?}");
+        assert!(refining.windows(2).all(|w| w[0] <= w[1]), "{seen:?}");
     }
 
     /// The options resolved on a record give that record the very analysis the automatic

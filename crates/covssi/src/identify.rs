@@ -2,6 +2,7 @@
 //! SVD, the poles of every order, labelled and clustered into modes.
 
 use crate::linalg::{self, C64, Dense};
+use crate::progress::Progress;
 use crate::{
     AutoLag, Correlations, Mode, Pole, RealPoleCluster, RecordSurvey, SsiError, SsiOption,
     SsiOptions, Stability, corr, stabilize,
@@ -215,7 +216,7 @@ pub const MIN_CORRELATION: f64 = 1e-290;
 ///
 /// The channels' means are removed first.
 pub fn identify(y: &[&[f64]], fs: f64, opts: &SsiOptions) -> Result<SsiResult, SsiError> {
-    identify_surveyed(y, fs, opts, None)
+    identify_surveyed(y, fs, opts, None, &|_| {})
 }
 
 /// The block rows and reference channels SSI uses on a record, and, when read from the
@@ -259,12 +260,15 @@ pub(crate) fn block_rows_for(
     })
 }
 
-/// [`identify`], with the record's survey when the caller has made it (not made again).
+/// [`identify`], with the record's survey when the caller has made it (not made again),
+/// telling `progress` of each step: the correlations, the SVD, then each model order as it
+/// is done (from rayon's threads); [`SSI_STEPS_BEFORE_ORDERS`] steps before the orders.
 pub(crate) fn identify_surveyed(
     y: &[&[f64]],
     fs: f64,
     opts: &SsiOptions,
     known: Option<RecordSurvey>,
+    progress: &(dyn Fn(Progress) + Sync),
 ) -> Result<SsiResult, SsiError> {
     check_fs(fs)?;
     let (n, means) = check_channels(y)?;
@@ -284,11 +288,22 @@ pub(crate) fn identify_surveyed(
             needed: lags.saturating_add(1),
         });
     }
+    let what = format!(
+        "SSI: correlations of {} channel(s) up to lag {}",
+        y.len(),
+        lags - 1
+    );
+    progress(Progress {
+        done: 0,
+        total: SSI_STEPS_BEFORE_ORDERS,
+        what: &what,
+    });
     let corr = corr::estimate_centred(y, &refs, lags, &means);
     match auto {
-        None => identify_from_correlations(&corr, fs, i, opts),
+        None => identify_with_order_cap(&corr, fs, i, opts, DEFAULT_ORDER_CAP, progress),
         Some((survey, lag)) => {
-            let mut res = identify_with_order_cap(&corr, fs, i, opts, survey.max_order())?;
+            let cap = survey.max_order();
+            let mut res = identify_with_order_cap(&corr, fs, i, opts, cap, progress)?;
             res.auto_lag = Some(lag);
             res.survey = Some(survey);
             Ok(res)
@@ -303,23 +318,36 @@ pub fn identify_from_correlations(
     block_rows: usize,
     opts: &SsiOptions,
 ) -> Result<SsiResult, SsiError> {
-    identify_with_order_cap(corr, fs, block_rows, opts, 40)
+    identify_with_order_cap(corr, fs, block_rows, opts, DEFAULT_ORDER_CAP, &|_| {})
 }
 
+/// The largest model order when neither the options nor the record's survey set it.
+const DEFAULT_ORDER_CAP: usize = 40;
+
+/// Steps of SSI before its model orders: the correlations and the SVD.
+pub(crate) const SSI_STEPS_BEFORE_ORDERS: usize = 2;
+
 /// [`identify_from_correlations`], the largest order at most `order_cap` when the options
-/// leave it open.
+/// leave it open, telling `progress` of the SVD and of each order done.
 fn identify_with_order_cap(
     corr: &Correlations,
     fs: f64,
     block_rows: usize,
     opts: &SsiOptions,
     order_cap: usize,
+    progress: &(dyn Fn(Progress) + Sync),
 ) -> Result<SsiResult, SsiError> {
     check_fs(fs)?;
     let i = block_rows;
     let (l, r) = check_correlations(corr, i)?;
     check_options(opts)?;
     let (rows, cols) = (l * i, r * i);
+    let what = format!("SSI: SVD of the {rows}×{cols} block Toeplitz matrix");
+    progress(Progress {
+        done: 1,
+        total: SSI_STEPS_BEFORE_ORDERS,
+        what: &what,
+    });
     let (u, s) = toeplitz_svd(corr, i)?;
     let s0 = s.first().copied().unwrap_or(0.0);
     let rank = s.iter().filter(|&&v| v > s0 * 1e-12).count();
@@ -357,9 +385,27 @@ fn identify_with_order_cap(
     let order_list: Vec<usize> = (1..=max_order / opts.order_step)
         .map(|k| k * opts.order_step)
         .collect();
+    let total = SSI_STEPS_BEFORE_ORDERS + order_list.len();
+    let what = format!("SSI: poles of 0 of {} model orders", order_list.len());
+    progress(Progress {
+        done: SSI_STEPS_BEFORE_ORDERS,
+        total,
+        what: &what,
+    });
+    let finished = std::sync::atomic::AtomicUsize::new(0);
     let orders = order_list
         .par_iter()
-        .map(|&order| order_poles(order, &m, &rr, &u, l, fs))
+        .map(|&order| {
+            let poles = order_poles(order, &m, &rr, &u, l, fs);
+            let done = 1 + finished.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            let what = format!("SSI: poles of {done} of {} model orders", order_list.len());
+            progress(Progress {
+                done: SSI_STEPS_BEFORE_ORDERS + done,
+                total,
+                what: &what,
+            });
+            poles
+        })
         .collect::<Result<Vec<OrderPoles>, SsiError>>()?;
     let spectrum = spectrum_from_correlations(corr, fs);
     let mut diagram = StabilizationDiagram {
