@@ -312,7 +312,11 @@ fn ssi(
     let cols = columns(&view);
     let views: Vec<&[f64]> = cols.iter().map(|c| c.as_ref()).collect();
     let mut analysis = py
-        .detach(|| covssi::analyze(&views, fs, &opts))
+        .detach(|| {
+            let a = covssi::analyze_with_progress(&views, fs, &opts, &terminal_progress);
+            clear_terminal_progress();
+            a
+        })
         .map_err(|e| PyValueError::new_err(e.to_string()))?;
     if let Some(names) = channels {
         analysis.channels = names;
@@ -390,4 +394,27 @@ pub(crate) fn analysis_options(settings: &str) -> PyResult<covssi::AnalysisOptio
     SsiSettings::from_json(settings)
         .and_then(|s| s.analysis())
         .map_err(|e| PyValueError::new_err(e.to_string()))
+}
+
+/// A long run's steps on one line of stderr when it is a terminal (as `hyst ssi`'s bar;
+/// nothing in a notebook or a log); [`clear_terminal_progress`] wipes it at the end.
+fn terminal_progress(p: covssi::Progress<'_>) {
+    use std::io::{IsTerminal, Write};
+    let mut err = std::io::stderr();
+    if err.is_terminal() {
+        // A line wider than the terminal would wrap: the message is cut to 70 characters.
+        let what: String = p.what.chars().take(70).collect();
+        let _ = write!(err, "\r\x1b[2K{}/{} {what}", p.done, p.total);
+        let _ = err.flush();
+    }
+}
+
+/// Wipe the line [`terminal_progress`] wrote.
+fn clear_terminal_progress() {
+    use std::io::{IsTerminal, Write};
+    let mut err = std::io::stderr();
+    if err.is_terminal() {
+        let _ = write!(err, "\r\x1b[2K");
+        let _ = err.flush();
+    }
 }

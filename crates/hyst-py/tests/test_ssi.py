@@ -181,3 +181,36 @@ def test_the_type_stubs_name_what_the_package_has():
     public = {n for n in dir(hyst.SsiResult) if not n.startswith("_")}
     assert public == stubbed - functions, (public ^ (stubbed - functions))
     assert {n for n in dir(hyst.Report) if not n.startswith("_")} <= stubbed
+
+
+def test_a_long_ssi_shows_its_steps_on_a_terminal_only():
+    """On a terminal, hyst.ssi tells its steps on one stderr line (each model order, then the
+    refinement's steps) and wipes it; in a pipe (a notebook, a log) it writes nothing."""
+    import os
+    import pty
+    import sys
+
+    code = (
+        "import hyst; "
+        "u = hyst.excite(750.0, excitation='white', rms=30.0, samples=2**14, seed=5); "
+        "hyst.ssi(hyst.simulate('benchmark', u, 750.0, input_interpolation='linear'), 750.0)"
+    )
+    leader, follower = pty.openpty()
+    subprocess.run([sys.executable, "-c", code], stderr=follower, stdout=subprocess.DEVNULL,
+                   check=True)
+    os.close(follower)
+    shown = b""
+    while True:
+        try:
+            chunk = os.read(leader, 1 << 16)
+        except OSError:  # Linux: the terminal's other side closed, all read
+            break
+        if not chunk:
+            break
+        shown += chunk
+    os.close(leader)
+    text = shown.decode()
+    assert "SSI: poles of 1 of" in text and "refining: " in text, text
+    assert text.endswith("\r\x1b[2K"), repr(text[-40:])
+    piped = subprocess.run([sys.executable, "-c", code], capture_output=True, check=True)
+    assert piped.stderr == b""
