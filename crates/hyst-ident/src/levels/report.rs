@@ -321,7 +321,7 @@ impl fmt::Display for LevelsReport {
         for l in &self.levels {
             writeln!(
                 f,
-                "  {}: k∞ {:.0} ± {:.0} (model {}), Ω {:.2} ± {:.2} (model {})",
+                "  {}: k∞ {:.0} ± {:.0} N/m (model {}), Ω {:.2} ± {:.2} rad/s (model {})",
                 l.record,
                 l.fit.k_inf,
                 l.fit.se[2],

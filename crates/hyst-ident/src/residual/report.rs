@@ -101,7 +101,7 @@ impl RefineReport {
             for ((rows, b), af) in self.test_rows.iter().zip(&s.before).zip(&s.after) {
                 writeln!(
                     f,
-                    "    test {}:{}  eps {} -> {}  rms {:.4e} -> {:.4e}",
+                    "    test rows {}:{}  ε {} -> {}  RMS error {:.4e} -> {:.4e} (output units, m)",
                     rows.0,
                     rows.1,
                     pct(b.epsilon),
@@ -135,7 +135,7 @@ impl RefineReport {
                 let eps: Vec<String> = r.noise_epsilon.iter().map(|e| pct(*e)).collect();
                 writeln!(
                     f,
-                    "noise level: {:.4e} (eps {} on the test rows), {how}",
+                    "noise level: std {:.4e} (output units, m; ε {} on the test rows), {how}",
                     nl.std,
                     eps.join(", ")
                 )?;
