@@ -1,0 +1,181 @@
+//! The composite Whittle likelihood L at θ, and what [`What`] asks for besides: the score,
+//! the Fisher information or the score's covariance, the ratios I/S, the misfit; and each
+//! channel's fitted noise floor.
+
+use super::*;
+
+impl Model {
+    /// The lowest value over frequency of each channel's fitted spectrum S_c (θ of a
+    /// per-channel fit with `m` modes): a bound on its white measurement noise's spectral
+    /// level, and near it where the modes' tails are below the noise.
+    pub(in crate::refine) fn noise_floor(&self, th: &[f64], m: usize) -> Option<Vec<f64>> {
+        let q = self.poles(m);
+        let den = Denominator::with_reals(th, m, self.reals, self.fs)?;
+        let floor = (0..self.l())
+            .map(|c| {
+                let off = q + c * (q + 1);
+                let mut b = vec![1.0];
+                b.extend_from_slice(&th[off + 1..=off + q]);
+                self.sp
+                    .z
+                    .iter()
+                    .map(|&z| {
+                        let b2 = poly_at(&b, z.conj()).norm_sqr();
+                        (th[off] + b2.ln() - den.at(z, false, &mut [])).exp()
+                    })
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .collect::<Vec<f64>>();
+        floor
+            .iter()
+            .all(|v| *v > 0.0 && v.is_finite())
+            .then_some(floor)
+    }
+
+    /// L at θ and what `what` asks for besides. `None` when θ is outside the model (a pole at
+    /// Nyquist, a numerator zero on the unit circle, overflow).
+    pub(in crate::refine) fn eval(&self, th: &[f64], m: usize, what: What) -> Option<Eval> {
+        let derivs = matches!(what, What::Fisher | What::Sandwich | What::FisherNumerators);
+        // Pole parameters, and each numerator's degree: 2m, plus one per real pole.
+        let p = self.poles(m);
+        // ∂ log S_c by the poles' parameters is −∂ ln|A|², the same for every channel: its
+        // columns D_p are stored once (none when the poles are held), and each channel's
+        // D_c holds those by ln σ_c² and by B_c's coefficients.
+        let shape = Shape {
+            p,
+            q: p,
+            l: self.l(),
+            derivs,
+            pole_derivs: derivs && what != What::FisherNumerators,
+            sandwich: what == What::Sandwich,
+            #[cfg(test)]
+            ratios: what == What::Ratios,
+            #[cfg(not(test))]
+            ratios: false,
+            misfit: what == What::Misfit,
+        };
+        let np = p + shape.l * (shape.q + 1);
+        let den = Denominator::with_reals(th, m, self.reals, self.fs)?;
+        let zero = || Eval::zero(if derivs { np } else { 0 });
+        // The ratios are per frequency: the misfit needs them so. Everything else sums over
+        // the bins. Chunks are summed in order, so the result does not depend on the threads.
+        let parts: Vec<Eval> = if shape.ratios || shape.misfit {
+            let k = self.k();
+            (0..k.div_ceil(FREQUENCY_CHUNK))
+                .into_par_iter()
+                .map(|ci| {
+                    let lo = ci * FREQUENCY_CHUNK;
+                    let f = self.sp.frequencies(lo..(lo + FREQUENCY_CHUNK).min(k));
+                    let mut acc = zero();
+                    acc.misfit = shape.misfit.then(MisfitCounts::new);
+                    self.chunk(&f, th, &den, &shape, 0..f.bins(), acc).0
+                })
+                .collect()
+        } else {
+            let bins = self.sp.bins();
+            (0..bins.div_ceil(CHUNK))
+                .into_par_iter()
+                .map(|ci| {
+                    let lo = ci * CHUNK;
+                    let hi = (lo + CHUNK).min(bins);
+                    let (mut acc, dp, d) = self.chunk(&self.sp, th, &den, &shape, lo..hi, zero());
+                    if shape.derivs && !shape.sandwich {
+                        fisher_blocks(&mut acc, &dp, &d, &shape);
+                    }
+                    if shape.sandwich {
+                        self.sandwich_blocks(&mut acc, &dp, &d, &shape, lo..hi);
+                    }
+                    acc
+                })
+                .collect()
+        };
+        let total = parts.into_iter().reduce(Eval::merge).unwrap_or_else(zero);
+        total.l.is_finite().then_some(total)
+    }
+
+    /// `L` over the bins `rows` of `sp`, and with derivatives the score and the rows of
+    /// D_p (the poles' columns) and of each channel's D_c, each row times √n_b (so that
+    /// their Gram matrices sum n_b ∂ln S ∂ln Sᵀ).
+    pub(super) fn chunk(
+        &self,
+        sp: &Spectra,
+        th: &[f64],
+        den: &Denominator,
+        shape: &Shape,
+        rows: Range<usize>,
+        mut acc: Eval,
+    ) -> (Eval, Dense, Vec<Dense>) {
+        let Shape {
+            p,
+            q,
+            l,
+            derivs,
+            pole_derivs,
+            ratios,
+            ..
+        } = *shape;
+        let (lo, hi) = (rows.start, rows.end);
+        let mut d = if derivs {
+            vec![Dense::zeros(hi - lo, q + 1); l]
+        } else {
+            Vec::new()
+        };
+        let mut dp = Dense::zeros(if pole_derivs { hi - lo } else { 0 }, p);
+        let mut da = vec![0.0; p];
+        let mut pw = vec![C64::new(0.0, 0.0); q + 1];
+        for (row, kk) in (lo..hi).enumerate() {
+            let z = sp.z[kk];
+            let (w, sw) = (sp.w[kk], sp.w[kk].sqrt());
+            let log_a2 = den.at(z, pole_derivs, &mut da);
+            let zc = z.conj();
+            pw[0] = C64::new(1.0, 0.0);
+            for k in 1..=q {
+                pw[k] = pw[k - 1] * zc;
+            }
+            // Σ_c n_b r_c, by which the poles' score grows.
+            let mut r_sum = 0.0;
+            for c in 0..l {
+                let off = p + c * (q + 1);
+                let b = pw[0]
+                    + pw[1..]
+                        .iter()
+                        .zip(&th[off + 1..=off + q])
+                        .map(|(p, bk)| p * bk)
+                        .sum::<C64>();
+                let b2 = b.norm_sqr();
+                let log_s = th[off] + b2.ln() - log_a2;
+                let s = log_s.exp();
+                let ic = sp.at(kk, c, c).re;
+                acc.l += w * (log_s + ic / s);
+                if ratios {
+                    acc.ratios.push(ic / s);
+                }
+                if let Some(counts) = &mut acc.misfit {
+                    counts.add(ic / s);
+                }
+                // With derivatives: the row of D_c (∂ log S_c, times √n_b), and U += its
+                // entries times n_b r. The score is summed as the row is written: reading
+                // the row back would stride across D_c's columns.
+                if let Some(dc) = d.get_mut(c) {
+                    let r = w * (ic / s - 1.0);
+                    r_sum += r;
+                    dc.set(row, 0, sw);
+                    acc.u[off] += r;
+                    let bc = b.conj();
+                    for (k, pk) in pw.iter().enumerate().skip(1) {
+                        let v = 2.0 * (pk * bc).re / b2;
+                        dc.set(row, k, v * sw);
+                        acc.u[off + k] += v * r;
+                    }
+                }
+            }
+            if pole_derivs {
+                for (t, dat) in da.iter().enumerate() {
+                    dp.set(row, t, -dat * sw);
+                    acc.u[t] -= dat * r_sum;
+                }
+            }
+        }
+        (acc, dp, d)
+    }
+}
