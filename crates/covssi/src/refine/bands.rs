@@ -1,6 +1,13 @@
 //! Many modes: groups at the widest frequency gaps, each fitted jointly over its own band.
 
-use super::*;
+use crate::linalg::{self, C64, Dense};
+use crate::refine::estimates::{Estimates, channel_block, pole_se, shape_se};
+use crate::refine::joint;
+use crate::refine::model::{Fit, Model};
+use crate::refine::options::RefineOptions;
+use crate::refine::results::MisfitCounts;
+use crate::refine::spectra::Spectra;
+use std::ops::Range;
 
 /// The modes of a per-channel fit split into groups of at most `p`, by increasing frequency:
 /// as few groups as that allows, ⌈m/p⌉, cut where the narrowest cut gap (ratio of

@@ -1,6 +1,10 @@
 //! Standard errors of the poles and shapes from the inverse Fisher information.
 
-use super::*;
+use crate::linalg::{self, C64, Dense};
+use crate::refine::model::{Fit, Model, What};
+use crate::refine::pairing::pair_with_ssi_modes;
+use crate::refine::results::{RefinedMode, RefinedRealPole};
+use crate::stabilize::Mode;
 
 /// The modes' estimates and standard errors (frequency Hz, damping ratio), in the order of
 /// the per-channel fit, with what [`Refinement`] reports of the fit that gave them.

@@ -73,18 +73,12 @@
 //! weakest goes while that is below the penalty. The joint likelihood has no real poles: with
 //! one kept, the estimates are the per-channel fit's.
 
-use crate::linalg::{self, C64, Dense};
-
-use crate::stabilize::pole_distance;
+use crate::linalg::C64;
 
 use crate::progress::{Progress, Steps};
 use crate::{Mode, RealPoleCluster, SsiError, SsiOption};
 
 use rayon::prelude::*;
-
-use realfft::RealFftPlanner;
-
-use std::ops::Range;
 
 mod bands;
 mod estimates;
@@ -104,16 +98,12 @@ use model::*;
 pub use options::RefineOptions;
 pub use pairing::SAME_MODE_DISTANCE;
 use pairing::*;
-use parametrization::*;
 use real_poles::*;
-use results::MisfitCounts;
 pub use results::{
     DroppedMode, DroppedRealPole, FittedPole, MISFIT_LIMIT, RefinedMode, RefinedRealPole,
     Refinement, exponential_misfit,
 };
-use scoring::*;
 use spectra::*;
-use std::sync::Arc;
 
 /// Most channels fitted by the joint likelihood; its cost grows as l⁴ (4lm parameters, l²
 /// observations per frequency). More channels are fitted through this many combinations of

@@ -1,7 +1,7 @@
 //! The parameters: poles by ln ω and logit ζ (ln ρ for a real pole), and the spectrum's
 //! denominator built from them.
 
-use super::*;
+use crate::linalg::C64;
 
 /// A pole's parameters: ln ω and logit ζ (ζ clamped to [1e-6, 0.99] so that both are finite);
 /// [`unpack`] is the inverse.

@@ -1,6 +1,12 @@
 //! The SSI real-pole clusters tested against the record, as the modes are.
 
-use super::*;
+use crate::error::SsiError;
+use crate::refine::model::{Fit, Model, better};
+use crate::refine::options::RefineOptions;
+use crate::refine::results::DroppedRealPole;
+use crate::refine::scoring::Evidence;
+use crate::stabilize::RealPoleCluster;
+use rayon::iter::{IntoParallelIterator, ParallelIterator};
 
 /// What [`add_real_poles`] leaves.
 pub(super) struct RealPoles {
@@ -120,16 +126,6 @@ pub(super) fn real_pole_evidence(
         evidence,
         dropped,
     })
-}
-
-/// The better (lower L) of two fits of one model from different starts, `a` on a tie; if one
-/// failed, the other; if both, `a`'s error.
-pub(super) fn better(a: Result<Fit, SsiError>, b: Result<Fit, SsiError>) -> Result<Fit, SsiError> {
-    match (a, b) {
-        (Ok(a), Ok(b)) => Ok(if a.l <= b.l { a } else { b }),
-        (Ok(a), Err(_)) | (Err(_), Ok(a)) => Ok(a),
-        (Err(e), Err(_)) => Err(e),
-    }
 }
 
 /// Which pole's removal (`without`, from [`Model::without`]) raises `full`'s L least once

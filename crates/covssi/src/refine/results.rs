@@ -1,7 +1,7 @@
 //! What the refinement returns: the refined modes and real poles with their standard
 //! errors, those dropped with their evidence, and whether the record follows the model.
 
-use super::*;
+use crate::linalg::C64;
 
 /// Above this [`Refinement::misfit`] the record does not follow the model.
 pub const MISFIT_LIMIT: f64 = 0.05;
@@ -83,7 +83,7 @@ impl MisfitCounts {
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct RefinedMode {
     /// Index of the SSI mode this one is: SSI modes and refined modes are paired nearest
-    /// first, one to one, within [`SAME_MODE_DISTANCE`] (poles may trade places while
+    /// first, one to one, within [`SAME_MODE_DISTANCE`](crate::refine::SAME_MODE_DISTANCE) (poles may trade places while
     /// fitting). `None` when the fit moved this mode away from every SSI mode not paired
     /// with a nearer one: the likelihood put it where SSI saw none. (`ssi_mode` in JSON.)
     #[cfg_attr(feature = "serde", serde(rename = "ssi_mode"))]
@@ -101,7 +101,7 @@ pub struct RefinedMode {
     pub lambda: C64,
     /// The mode's shape in every channel, in the channels' own units, scaled so that its
     /// largest entry is 1: from the joint likelihood of the channels (its $c_r$), or, above
-    /// [`JOINT_MAX_CHANNELS`] channels, each channel regressed on the joint fit of the
+    /// [`JOINT_MAX_CHANNELS`](crate::refine::JOINT_MAX_CHANNELS) channels, each channel regressed on the joint fit of the
     /// combinations (see [`Refinement::combinations`]). `None` when the channels were
     /// fitted each alone (one channel, `joint` off, a real pole kept, or a record the joint
     /// fit did not take).
@@ -195,7 +195,7 @@ pub struct DroppedRealPole {
     pub evidence: f64,
 }
 
-/// What [`refine`] finds.
+/// What [`refine`](crate::refine()) finds.
 #[derive(Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Refinement {
@@ -205,7 +205,7 @@ pub struct Refinement {
     pub dropped: Vec<DroppedMode>,
     /// BIC penalty of one mode, ½(2 + 2l) ln K.
     pub penalty: f64,
-    /// Kept real poles ([`refine_with_real_poles`]), slowest first; empty from [`refine`].
+    /// Kept real poles ([`refine_with_real_poles`](crate::refine_with_real_poles)), slowest first; empty from [`refine`](crate::refine()).
     pub real_poles: Vec<RefinedRealPole>,
     /// Real poles the likelihood does not support, in the order they were dropped.
     pub dropped_real_poles: Vec<DroppedRealPole>,
@@ -226,10 +226,10 @@ pub struct Refinement {
     /// Scoring iterations of the final fit.
     pub iterations: usize,
     /// Whether the estimates, standard errors, `neg_log_likelihood` and `misfit` are the
-    /// joint likelihood's (see [`RefineOptions::joint`]); the evidence is always the
+    /// joint likelihood's (see [`RefineOptions::joint`](crate::RefineOptions::joint)); the evidence is always the
     /// per-channel likelihood's, by which the modes were chosen.
     pub joint: bool,
-    /// For a joint fit of more than [`JOINT_MAX_CHANNELS`] channels: the number of
+    /// For a joint fit of more than [`JOINT_MAX_CHANNELS`](crate::refine::JOINT_MAX_CHANNELS) channels: the number of
     /// combinations of the channels it was fitted to (`neg_log_likelihood` and `misfit` are
     /// then theirs; each channel's shape is then regressed on that fit, its cross-spectra
     /// with the combinations' innovations being linear in the shape once the poles, gains

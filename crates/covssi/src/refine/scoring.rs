@@ -1,6 +1,10 @@
 //! Fisher scoring with a Levenberg–Marquardt safeguard, and the evidence of each mode.
 
-use super::*;
+use crate::error::SsiError;
+use crate::linalg::{self, Dense};
+use crate::refine::model::{Eval, Fit};
+use crate::refine::options::RefineOptions;
+use crate::refine::parametrization::unpack;
 
 /// What an evidence fit (a mode removed) needs of L, so that it can stop before converging.
 #[derive(Debug, Clone, Copy)]

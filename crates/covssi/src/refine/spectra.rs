@@ -25,7 +25,12 @@
 //! The per-frequency transforms are kept too, for what needs single frequencies: the misfit's
 //! ratios, which a bin average would hide.
 
-use super::*;
+use crate::linalg::C64;
+use rayon::iter::{
+    IndexedParallelIterator, IntoParallelIterator, IntoParallelRefIterator, ParallelIterator,
+};
+use realfft::RealFftPlanner;
+use std::ops::Range;
 use std::sync::Arc;
 
 /// Samples of the record's start kept in the time domain, for the regressions that start the
@@ -381,6 +386,12 @@ fn width(omega: f64, n: usize, scales: &[Scale]) -> f64 {
             ratio * h.max((omega - s.centre).abs())
         })
         .fold(WIDEST, f64::min)
+}
+
+/// Index of the unordered channel pair (a, b), a ≠ b, among l channels.
+pub(in crate::refine) fn pair(a: usize, b: usize, l: usize) -> usize {
+    let (a, b) = if a < b { (a, b) } else { (b, a) };
+    a * l + b
 }
 
 #[cfg(test)]

@@ -26,7 +26,7 @@ use super::options::RefineOptions;
 use super::parametrization::{discrete_poles, unpack};
 use super::results::MisfitCounts;
 use super::scoring::scoring;
-use crate::SsiError;
+use crate::error::SsiError;
 use crate::linalg::C64;
 use std::ops::Range;
 

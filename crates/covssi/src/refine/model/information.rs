@@ -1,7 +1,10 @@
 //! The Fisher information's and the score covariance's blocks, summed frequency by frequency
 //! without forming the full Jacobian.
 
-use super::*;
+use crate::linalg::{self, Dense};
+use crate::refine::model::{Eval, Model, global};
+use crate::refine::spectra::pair;
+use std::ops::Range;
 
 impl Model {
     /// The sandwich's middle over the frequencies `rows`: J = Σ_{c,c'} D_cᵀ diag(γ²_cc') D_c'

@@ -2,7 +2,14 @@
 //! the Fisher information or the score's covariance, the ratios I/S, the misfit; and each
 //! channel's fitted noise floor.
 
-use super::*;
+use crate::linalg::{C64, Dense};
+use crate::refine::model::information::{Shape, fisher_blocks};
+use crate::refine::model::{CHUNK, Eval, Model, What};
+use crate::refine::parametrization::{Denominator, poly_at};
+use crate::refine::results::MisfitCounts;
+use crate::refine::spectra::{FREQUENCY_CHUNK, Spectra};
+use rayon::iter::{IntoParallelIterator, ParallelIterator};
+use std::ops::Range;
 
 impl Model {
     /// The lowest value over frequency of each channel's fitted spectrum S_c (θ of a

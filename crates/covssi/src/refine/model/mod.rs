@@ -3,14 +3,16 @@
 //! jobs, one file each: the likelihood ([`likelihood`]), the information's blocks
 //! ([`information`]), starting values ([`starts`]) and fitting ([`fitting`]).
 
-use super::*;
+use crate::error::SsiError;
+use crate::linalg::{C64, Dense};
+use crate::refine::results::MisfitCounts;
+use crate::refine::spectra::Spectra;
+use std::sync::Arc;
 
 mod fitting;
 mod information;
 mod likelihood;
 mod starts;
-
-use information::{Shape, fisher_blocks};
 
 /// The record's spectra and the model's shape: how many real poles it has.
 pub(super) struct Model {
@@ -139,14 +141,21 @@ impl Model {
     }
 }
 
-/// Index of the unordered channel pair (a, b), a ≠ b, among l channels.
-pub(super) fn pair(a: usize, b: usize, l: usize) -> usize {
-    let (a, b) = if a < b { (a, b) } else { (b, a) };
-    a * l + b
-}
-
 /// Global index of local parameter `t` of a channel block starting at `off`: the first `p`
 /// are the shared pole parameters.
-pub(super) fn global(t: usize, p: usize, off: usize) -> usize {
+pub(in crate::refine) fn global(t: usize, p: usize, off: usize) -> usize {
     if t < p { t } else { off + t - p }
+}
+
+/// The better (lower L) of two fits of one model from different starts, `a` on a tie; if one
+/// failed, the other; if both, `a`'s error.
+pub(in crate::refine) fn better(
+    a: Result<Fit, SsiError>,
+    b: Result<Fit, SsiError>,
+) -> Result<Fit, SsiError> {
+    match (a, b) {
+        (Ok(a), Ok(b)) => Ok(if a.l <= b.l { a } else { b }),
+        (Ok(a), Err(_)) | (Err(_), Ok(a)) => Ok(a),
+        (Err(e), Err(_)) => Err(e),
+    }
 }

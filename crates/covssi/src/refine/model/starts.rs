@@ -2,7 +2,10 @@
 //! poles' own, a model nested in a fitted one, and the channel combinations that carry the
 //! modes.
 
-use super::*;
+use crate::error::SsiError;
+use crate::linalg::{self, C64, Dense};
+use crate::refine::model::{Fit, Model};
+use crate::refine::parametrization::{discrete_poles, pole_params, poly, poly_at};
 
 impl Model {
     /// `p` combinations of the channels that carry the modes `lambdas` (rows of l weights),
