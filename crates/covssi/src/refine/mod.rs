@@ -89,7 +89,6 @@ mod pairing;
 mod parametrization;
 mod real_poles;
 mod results;
-mod scoring;
 mod spectra;
 
 use bands::*;

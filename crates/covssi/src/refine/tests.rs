@@ -1,5 +1,5 @@
+use super::model::scoring::Evidence;
 use super::results::MisfitCounts;
-use super::scoring::Evidence;
 use super::*;
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};

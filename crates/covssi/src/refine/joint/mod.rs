@@ -21,11 +21,11 @@
 //! is Hermitian: stacking each $X_t$'s $l^2$ real coordinates makes both a least-squares
 //! product.
 
+use super::model::scoring::scoring;
 use super::model::{Fit, Model};
 use super::options::RefineOptions;
 use super::parametrization::{discrete_poles, unpack};
 use super::results::MisfitCounts;
-use super::scoring::scoring;
 use crate::error::SsiError;
 use crate::linalg::C64;
 use std::ops::Range;

@@ -4,9 +4,9 @@
 use crate::error::SsiError;
 use crate::linalg::C64;
 use crate::refine::model::better;
+use crate::refine::model::scoring::{Evidence, scoring};
 use crate::refine::model::{Fit, Model, What};
 use crate::refine::options::RefineOptions;
-use crate::refine::scoring::{Evidence, scoring};
 
 impl Model {
     /// Fit a model with the given starting poles (numerators from [`Self::start_numerator`]);

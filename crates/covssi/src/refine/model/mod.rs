@@ -1,7 +1,8 @@
 //! The model the refinement fits: the record's spectra and θ's layout (each mode's pole,
 //! each real pole, each channel's numerator), and what a fit and an evaluation give. Its
 //! jobs, one file each: the likelihood ([`likelihood`]), the information's blocks
-//! ([`information`]), starting values ([`starts`]) and fitting ([`fitting`]).
+//! ([`information`]), starting values ([`starts`]), the scoring iteration and a mode's
+//! evidence ([`scoring`]), and fitting from starts ([`fitting`]).
 
 use crate::error::SsiError;
 use crate::linalg::{C64, Dense};
@@ -12,6 +13,7 @@ use std::sync::Arc;
 mod fitting;
 mod information;
 mod likelihood;
+pub(super) mod scoring;
 mod starts;
 
 /// The record's spectra and the model's shape: how many real poles it has.

@@ -8,16 +8,16 @@ use crate::refine::parametrization::unpack;
 
 /// What an evidence fit (a mode removed) needs of L, so that it can stop before converging.
 #[derive(Debug, Clone, Copy)]
-pub(super) struct Evidence {
+pub(in crate::refine) struct Evidence {
     /// L of the model with every mode: the fit stops once it gains less than 10⁻⁵ of the
     /// rise above it.
-    pub(super) full: f64,
+    pub(in crate::refine) full: f64,
     /// Below this L the decision is made (a removed mode goes, an added one stays): stop
     /// once it is out of reach, and, with `stop_below`, once L is below it.
-    pub(super) drop_below: f64,
+    pub(in crate::refine) drop_below: f64,
     /// Stop once L is below `drop_below`. Not for a pole being added: a kept fit must
     /// converge.
-    pub(super) stop_below: bool,
+    pub(in crate::refine) stop_below: bool,
 }
 
 impl Evidence {
@@ -25,7 +25,7 @@ impl Evidence {
     /// falls below `current − penalty`, so the fit stops once that is out of reach (nothing
     /// else: a fit that reaches it runs to convergence, as without this). `None` without a
     /// penalty (no selection).
-    pub(super) fn adding(current: f64, penalty: Option<f64>) -> Option<Self> {
+    pub(in crate::refine) fn adding(current: f64, penalty: Option<f64>) -> Option<Self> {
         penalty.map(|p| Evidence {
             full: f64::INFINITY,
             drop_below: current - p,
@@ -42,7 +42,7 @@ impl Evidence {
 /// when L is below `drop_below` (if `stop_below`), or when `drop_below` is out of reach:
 /// further from L than ten times the larger of the two gains over each iteration left (the
 /// iteration cap would decide the same unless the gains grew tenfold).
-pub(super) fn scoring(
+pub(in crate::refine) fn scoring(
     eval: impl Fn(&[f64], bool) -> Option<Eval>,
     mut th: Vec<f64>,
     (m, reals): (usize, usize),
@@ -125,7 +125,7 @@ pub(super) fn scoring(
 
 /// `f` with its diagonal F_tt raised to F_tt·(1 + ν) (Levenberg–Marquardt damping) plus
 /// 1e-12·(1 + F_tt), so that a semi-definite F still factors.
-pub(super) fn damped(f: &Dense, nu: f64) -> Dense {
+pub(in crate::refine) fn damped(f: &Dense, nu: f64) -> Dense {
     let mut a = f.clone();
     for t in 0..a.rows {
         let dg = f.at(t, t);
@@ -135,7 +135,7 @@ pub(super) fn damped(f: &Dense, nu: f64) -> Dense {
 }
 
 /// The score with its first `held` entries (held parameters) zeroed.
-pub(super) fn masked(u: &[f64], held: usize) -> Vec<f64> {
+pub(in crate::refine) fn masked(u: &[f64], held: usize) -> Vec<f64> {
     let mut v = u.to_vec();
     v.iter_mut().take(held).for_each(|x| *x = 0.0);
     v
