@@ -20,9 +20,9 @@ pub(crate) enum DampingArg {
 
 #[derive(Clone, Copy, ValueEnum, PartialEq, Eq, Debug)]
 pub(crate) enum LinearizationArg {
-    /// Eqs. (37)-(38) as printed.
+    /// Eqs. (37)-(38) of the paper (Bajrić & Høgsberg 2018) as printed.
     Paper,
-    /// Alpha from eq. (37), then exact inversion of the describing function.
+    /// Alpha from the paper's eq. (37), then exact inversion of the describing function.
     Harmonic,
 }
 

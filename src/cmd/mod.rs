@@ -37,7 +37,8 @@ pub(crate) fn set_read_options(cli: &Cli) {
     name = "hyst",
     version,
     about = "Identify stiffness and hysteretic damping of vibrating structures from their response",
-    long_about = None
+    long_about = None,
+    after_help = "Equation numbers refer to A. Bajrić and J. Høgsberg, \"Estimation of hysteretic damping of structures by stochastic subspace identification\", Mechanical Systems and Signal Processing 105 (2018) 36-50. Start with `hyst ident` (built-in defaults, no data needed)."
 )]
 pub(crate) struct Cli {
     #[command(subcommand)]

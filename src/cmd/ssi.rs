@@ -88,7 +88,8 @@ pub(crate) struct SsiFlags {
     /// Stabilization threshold on 1 − MAC (several channels).
     #[arg(long, default_value_t = 0.02)]
     pub(crate) dmac: f64,
-    /// Stabilization threshold of eq. (31) for real poles.
+    /// Stabilization threshold for real poles: eq. (31) of Bajrić & Høgsberg (2018), the paper
+    /// hyst implements (see the README).
     #[arg(long, default_value_t = 1.5)]
     pub(crate) dreal: f64,
     /// Reference channels (0-based indices among --columns), comma-separated; default: all.
