@@ -252,16 +252,18 @@ fn every_flag_has_its_keyword_and_every_keyword_its_flag() {
     let mut problems = Vec::new();
     for p in PAIRS {
         let keywords = python_parameters(&src, p.function);
+        let command_flags = flags(p.command);
         let listed = |list: &[(&str, &str)], name: &str| list.iter().any(|(n, _)| *n == name);
-        for flag in flags(p.command) {
-            if listed(EVERY_COMMAND, &flag) || listed(p.cli_only, &flag) {
+        for flag in &command_flags {
+            let flag = flag.as_str();
+            if listed(EVERY_COMMAND, flag) || listed(p.cli_only, flag) {
                 continue;
             }
             let keyword = p
                 .renamed
                 .iter()
                 .find(|(f, _)| *f == flag)
-                .map_or_else(|| keyword_of(&flag), |(_, k)| k.to_string());
+                .map_or_else(|| keyword_of(flag), |(_, k)| k.to_string());
             if !keywords.contains(&keyword) {
                 problems.push(format!(
                     "hyst {} --{flag} has no keyword `{keyword}` in hyst.{}",
@@ -269,7 +271,7 @@ fn every_flag_has_its_keyword_and_every_keyword_its_flag() {
                 ));
             }
         }
-        let cli: Vec<String> = flags(p.command)
+        let cli: Vec<String> = command_flags
             .iter()
             .map(|f| {
                 p.renamed

@@ -77,20 +77,20 @@ pub(crate) struct SsiFlags {
     #[arg(long)]
     pub(crate) max_order: Option<usize>,
     /// Model order step.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = SsiSettings::default().order_step)]
     pub(crate) order_step: usize,
     /// Stabilization threshold on the relative frequency change.
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(long, default_value_t = SsiSettings::default().df)]
     pub(crate) df: f64,
     /// Stabilization threshold on the relative damping change.
-    #[arg(long, default_value_t = 0.05)]
+    #[arg(long, default_value_t = SsiSettings::default().dzeta)]
     pub(crate) dzeta: f64,
     /// Stabilization threshold on 1 − MAC (several channels).
-    #[arg(long, default_value_t = 0.02)]
+    #[arg(long, default_value_t = SsiSettings::default().dmac)]
     pub(crate) dmac: f64,
     /// Stabilization threshold for real poles: eq. (31) of Bajrić & Høgsberg (2018), the paper
     /// hyst implements (see the README).
-    #[arg(long, default_value_t = 1.5)]
+    #[arg(long, default_value_t = SsiSettings::default().dreal)]
     pub(crate) dreal: f64,
     /// Reference channels (0-based indices among --columns), comma-separated; default: all.
     #[arg(long, value_delimiter = ',')]
@@ -109,7 +109,7 @@ pub(crate) struct SsiFlags {
 
 impl SsiFlags {
     /// The settings these flags give, field by field ([`SsiSettings`]: the same set as
-    /// `hyst.ssi`'s keywords; a test below checks that each has its flag).
+    /// `hyst.ssi`'s keywords; `cmd/parity.rs` checks that each has its flag).
     pub(crate) fn settings(&self) -> SsiSettings {
         let mut s = SsiSettings::default();
         s.block_rows = self.block_rows;

@@ -399,22 +399,22 @@ pub(crate) fn analysis_options(settings: &str) -> PyResult<covssi::AnalysisOptio
 /// A long run's steps on one line of stderr when it is a terminal (as `hyst ssi`'s bar;
 /// nothing in a notebook or a log); [`clear_terminal_progress`] wipes it at the end.
 fn terminal_progress(p: covssi::Progress<'_>) {
-    use std::io::{IsTerminal, Write};
-    let mut err = std::io::stderr();
-    if err.is_terminal() {
-        // A line wider than the terminal would wrap: the message is cut to 70 characters.
-        let what: String = p.what.chars().take(70).collect();
-        let _ = write!(err, "\r\x1b[2K{}/{} {what}", p.done, p.total);
-        let _ = err.flush();
-    }
+    // A line wider than the terminal would wrap: the message is cut to 70 characters.
+    let what: String = p.what.chars().take(70).collect();
+    to_terminal(&format!("{}/{} {what}", p.done, p.total));
 }
 
 /// Wipe the line [`terminal_progress`] wrote.
 fn clear_terminal_progress() {
+    to_terminal("");
+}
+
+/// `text` in place of stderr's current line, when stderr is a terminal.
+fn to_terminal(text: &str) {
     use std::io::{IsTerminal, Write};
     let mut err = std::io::stderr();
     if err.is_terminal() {
-        let _ = write!(err, "\r\x1b[2K");
+        let _ = write!(err, "\r\x1b[2K{text}");
         let _ = err.flush();
     }
 }
