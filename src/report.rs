@@ -54,3 +54,17 @@ impl<T: fmt::Display> fmt::Display for FileReport<T> {
         self.report.fmt(f)
     }
 }
+
+/// The modes a `hyst ssi --json` document (or `hyst.ssi(..).to_json()`) reports, as
+/// tracking takes a reference: the refined ones when its refinement holds, else SSI's.
+/// What is wrong with `text` is said (not JSON; not such a document, with serde's reason).
+pub fn reference_modes(text: &str) -> Result<Vec<crate::monitor::ModeEstimate>, String> {
+    let mut doc: serde_json::Value =
+        serde_json::from_str(text).map_err(|e| format!("not JSON: {e}"))?;
+    if let Some(map) = doc.as_object_mut() {
+        map.remove("record");
+    }
+    let analysis: covssi::ModalAnalysis = serde_json::from_value(doc)
+        .map_err(|e| format!("not a `hyst ssi --json` document: {e}"))?;
+    Ok(crate::monitor::reported_modes(&analysis))
+}

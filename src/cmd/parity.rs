@@ -79,10 +79,6 @@ const PAIRS: &[Pair] = &[
             ),
             ("columns", "Python selects the arrays' columns"),
             (
-                "reference",
-                "a `hyst ssi --json` file; hyst.track takes the reference from its records",
-            ),
-            (
                 "out",
                 "the command's store and tables; Python returns the report",
             ),

@@ -152,7 +152,22 @@ pub(crate) fn excite(a: &ExcitationArgs) -> Result<(), Error> {
     let fs = check_fs(a.fs)?;
     let u = generate(a.excitation, &a.signal, fs)?;
     write_csv(&a.out, &["u"], &[&u])?;
+    println!(
+        "wrote {}: {}; u: force (N), RMS {:.4} N",
+        a.out.display(),
+        span(u.len(), fs),
+        rms(&u)
+    );
     Ok(())
+}
+
+/// `n samples at fs Hz (T s)`.
+fn span(n: usize, fs: f64) -> String {
+    format!("{n} samples at {fs} Hz ({:.4} s)", n as f64 / fs)
+}
+
+fn rms(x: &[f64]) -> f64 {
+    (x.iter().map(|v| v * v).sum::<f64>() / x.len().max(1) as f64).sqrt()
 }
 
 pub(crate) fn run(a: &SimulateArgs) -> Result<(), Error> {
@@ -203,5 +218,24 @@ pub(crate) fn run(a: &SimulateArgs) -> Result<(), Error> {
         sim::excitation::add_noise(&mut y, a.noise, a.noise_seed)?;
     }
     write_csv(&a.out, &["u", "y"], &[&u, &y])?;
+    let peak = y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    println!(
+        "wrote {}: {}{}; u: force (N), RMS {:.4} N; y: displacement (m), RMS {:.4e} m, peak {:.4e} m{}",
+        a.out.display(),
+        span(u.len(), fs),
+        if periodic {
+            ", the periodic steady state"
+        } else {
+            ", from rest"
+        },
+        rms(&u),
+        rms(&y),
+        peak,
+        if a.noise != 0.0 {
+            format!(" (with noise of RMS {:e} m)", a.noise)
+        } else {
+            String::new()
+        }
+    );
     Ok(())
 }

@@ -116,18 +116,8 @@ fn sources(a: &TrackArgs) -> Result<Sources, Error> {
 fn reference_modes(path: &Path) -> Result<Vec<hyst::monitor::ModeEstimate>, Error> {
     let text =
         std::fs::read_to_string(path).map_err(|e| fail(format!("{}: {e}", path.display())))?;
-    let mut doc: serde_json::Value = serde_json::from_str(&text)
-        .map_err(|e| fail(format!("--reference {}: not JSON: {e}", path.display())))?;
-    if let Some(map) = doc.as_object_mut() {
-        map.remove("record");
-    }
-    let analysis: hyst::covssi::ModalAnalysis = serde_json::from_value(doc).map_err(|e| {
-        fail(format!(
-            "--reference {}: not a `hyst ssi --json` document: {e}",
-            path.display()
-        ))
-    })?;
-    Ok(hyst::monitor::reported_modes(&analysis))
+    hyst::report::reference_modes(&text)
+        .map_err(|e| fail(format!("--reference {}: {e}", path.display())))
 }
 
 /// Put `files` in time order: the covariates' times when they give one for every record,
@@ -345,14 +335,15 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
     opts.training = a.training.unwrap_or(opts.training.min(names.len() / 2));
     opts.whiten = !a.no_whiten;
     let reference = a.reference.as_deref().map(reference_modes).transpose()?;
-    let report = hyst::monitor::track(&records, reference.as_deref(), &opts)
+    let mut report = hyst::monitor::track(&records, reference.as_deref(), &opts)
         .map_err(|e| fail(e.to_string()))?;
+    report.covariate_names = cov_names;
     print!("{report}");
-    write_table(&a.out.join("table.csv"), &report, &cov_names)?;
+    write_table(&a.out.join("table.csv"), &report, &report.covariate_names)?;
     write_rows(&a.out.join("table.jsonl"), &report)?;
     hyst::report::write_json(&report, &a.out.join("report.json"))?;
     if let Some(dir) = &a.svg_dir {
-        hyst::figures::track_figures(dir, &report, &cov_names).map_err(fail)?;
+        hyst::figures::track_figures(dir, &report, &report.covariate_names).map_err(fail)?;
     }
     Ok(())
 }

@@ -19,25 +19,30 @@ impl fmt::Display for TrackReport {
         for (j, m) in self.reference.iter().enumerate() {
             write!(
                 f,
-                "mode {j}: {:.4} Hz, damping {:.4}, tracked in {:.1} % of the records",
+                "mode {j}: {:.4} Hz, damping ratio {:.4} ({:.2} %), tracked in {:.1} % of the records",
                 m.frequency_hz,
                 m.damping_ratio,
+                100.0 * m.damping_ratio,
                 100.0 * self.tracked.get(j).copied().unwrap_or(0.0)
             )?;
             match (self.baselines.get(j), self.baseline_errors.get(j)) {
                 (Some(Some(b)), _) => {
                     let slopes: Vec<String> = b.coefficients[1..]
                         .iter()
-                        .map(|c| format!("{c:.3e}"))
+                        .enumerate()
+                        .map(|(c, v)| match self.covariate_names.get(c) {
+                            Some(name) => format!("{v:+.3e} Hz per unit of {name}"),
+                            None => format!("{v:+.3e} Hz per unit of covariate {c}"),
+                        })
                         .collect();
                     writeln!(
                         f,
-                        "; baseline {:.4} Hz{}, unexplained {:.2e} Hz ({} training records)",
+                        "; baseline {:.4} Hz at zero covariates{}; SD {:.2e} Hz unexplained beyond the estimation noise ({} training records)",
                         b.coefficients[0],
                         if slopes.is_empty() {
                             String::new()
                         } else {
-                            format!(" + [{}]·covariates", slopes.join(", "))
+                            format!(", {}", slopes.join(", "))
                         },
                         b.unexplained_sd_hz,
                         b.records
@@ -45,7 +50,7 @@ impl fmt::Display for TrackReport {
                     if let Some(Some(m)) = self.residual_models.get(j) {
                         writeln!(
                             f,
-                            "  a slow effect the covariates do not explain: {:.2e} Hz, correlation {:.3} from record to record; its filter's innovations charted, which keep {:.0} % of a lasting change once settled (a covariate that explains the effect keeps it all)",
+                            "  a slow effect the covariates do not explain: SD {:.2e} Hz, correlation {:.3} from record to record; its filter's innovations charted, which keep {:.0} % of a lasting change once settled (a covariate that explains the effect keeps it all)",
                             m.latent_var.sqrt(),
                             m.persistence,
                             100.0 * m.lasting_change_share

@@ -243,6 +243,10 @@ pub struct TrackReport {
     pub alarms: Vec<ModeAlarm>,
     /// The chart's in-control average run length (records per false alarm, per mode).
     pub in_control_run_length: f64,
+    /// The covariates' names, in the order of each row's `covariates` (the caller's to
+    /// set: [`track`] leaves it empty, and the text then numbers them).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub covariate_names: Vec<String>,
 }
 
 /// Track `records` (in time order) against `reference`, or against the reference the first
@@ -343,6 +347,7 @@ pub fn track(
         tracked,
         alarms,
         in_control_run_length: opts.chart.in_control_run_length(),
+        covariate_names: Vec::new(),
     })
 }
 

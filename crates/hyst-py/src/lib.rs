@@ -410,7 +410,7 @@ fn clear_terminal_progress() {
 }
 
 /// `text` in place of stderr's current line, when stderr is a terminal.
-fn to_terminal(text: &str) {
+pub(crate) fn to_terminal(text: &str) {
     use std::io::{IsTerminal, Write};
     let mut err = std::io::stderr();
     if err.is_terminal() {

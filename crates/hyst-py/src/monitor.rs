@@ -11,7 +11,7 @@ use crate::ident::{Report, value_error};
 /// Track the modes of `records` (each samples × channels); see the Python wrapper
 /// `hyst.track`.
 #[pyfunction]
-#[pyo3(signature = (records, fs, *, times, covariates, training, settings, whiten))]
+#[pyo3(signature = (records, fs, *, times, covariates, covariate_names, training, settings, whiten, reference))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn track(
     py: Python<'_>,
@@ -19,9 +19,11 @@ pub(crate) fn track(
     fs: f64,
     times: Vec<f64>,
     covariates: Vec<Vec<f64>>,
+    covariate_names: Vec<String>,
     training: Option<usize>,
     settings: &str,
     whiten: bool,
+    reference: Option<&str>,
 ) -> PyResult<Report> {
     let n = records.len();
     if times.len() != n || covariates.len() != n {
@@ -63,15 +65,27 @@ pub(crate) fn track(
         analysis.resolved_for(&views, fs).ok()
     };
     let (analysis, _) = hyst::monitor::campaign_analysis(&analysis, n, &resolve);
+    let reference = reference
+        .map(hyst::report::reference_modes)
+        .transpose()
+        .map_err(|e| value_error(format!("reference: {e}")))?;
     let mut opts = TrackOptions::default();
     opts.training = training.unwrap_or(opts.training.min(n / 2));
     opts.whiten = whiten;
-    let report = py
+    // Each record identified moves the terminal's progress line (as `hyst track`'s bar).
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let finished = |_: &hyst::monitor::RecordModes| {
+        let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+        crate::to_terminal(&format!("{k}/{n} records identified"));
+    };
+    let mut report = py
         .detach(|| {
             let identified =
-                hyst::monitor::identify_records(&names, &load, &analysis, &[], &|_| {});
-            hyst::monitor::track(&identified, None, &opts)
+                hyst::monitor::identify_records(&names, &load, &analysis, &[], &finished);
+            crate::to_terminal("");
+            hyst::monitor::track(&identified, reference.as_deref(), &opts)
         })
         .map_err(value_error)?;
+    report.covariate_names = covariate_names;
     Report::of("records", report)
 }

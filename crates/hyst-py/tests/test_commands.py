@@ -87,6 +87,30 @@ def test_excite_gives_the_commands_samples(hyst_bin, tmp_path, flags, kwargs):
     assert np.array_equal(hyst.excite(**kwargs), columns(out)["u"])
 
 
+def test_the_printed_summary_is_the_files(hyst_bin, tmp_path):
+    """What `hyst excite` and `hyst simulate` print (samples, duration, RMS, peak, with units)
+    is what numpy computes from the files they wrote."""
+    import re
+
+    u = tmp_path / "u.csv"
+    p = run(hyst_bin, "excite", "--excitation", "white", "--rms", 3, "--samples", 3000,
+            "--fs", 300, "--out", u)
+    x = columns(u)["u"]
+    m = re.search(r"(\d+) samples at 300 Hz \(([\d.]+) s\); u: force \(N\), RMS ([\d.]+) N",
+                  p.stdout)
+    assert m, p.stdout
+    assert int(m[1]) == x.size == 3000 and float(m[2]) == 10.0
+    assert float(m[3]) == pytest.approx(np.sqrt(np.mean(x**2)), abs=1e-4)  # 4 decimals printed
+    y = tmp_path / "y.csv"
+    p = run(hyst_bin, "simulate", "--input", u, "--fs", 300, "--out", y)
+    r = columns(y)["y"]
+    m = re.search(r"y: displacement \(m\), RMS (\S+) m, peak (\S+) m", p.stdout)
+    assert m, p.stdout
+    # Five significant digits printed.
+    assert float(m[1]) == pytest.approx(np.sqrt(np.mean(r**2)), rel=1e-4)
+    assert float(m[2]) == pytest.approx(np.abs(r).max(), rel=1e-4)
+
+
 def test_excite_refuses_an_unknown_kind():
     with pytest.raises(ValueError, match='excitation "pink" is not one of'):
         hyst.excite(excitation="pink")
@@ -192,3 +216,36 @@ def test_track_gives_the_commands_report(data_dir, hyst_bin, tmp_path, settings)
         np.save(paths[-1], w)
     from_files = hyst.track(paths, 20.0, times=[300.0 * i for i in range(10)])
     assert comparable(from_files.to_dict()) == comparable(report.to_dict())
+
+
+def test_track_takes_the_commands_reference_and_named_covariates(data_dir, hyst_bin, tmp_path):
+    """`hyst track --reference ref.json --covariates cov.csv` and `hyst.track(reference=...,
+    covariates={name: values})` on the same windows: the same report, the reference given as
+    the file or as `hyst.ssi`'s result; the covariate named in both texts."""
+    from test_ssi import read_record
+
+    rec = data_dir / "oma" / "data_3dof.csv"
+    y, _ = read_record(rec)
+    windows = [y[i * 6000:(i + 1) * 6000] for i in range(10)]
+    np.savetxt(tmp_path / "first.csv", windows[0], delimiter=",", header="y1,y2,y3",
+               comments="", fmt="%.17g")
+    run(hyst_bin, "ssi", "--input", tmp_path / "first.csv", "--fs", 20,
+        "--json", tmp_path / "ref.json")
+    temperature = 10.0 + np.arange(10) % 3
+    rows = ["record,time,temperature"] + [f"{i},{300.0 * i},{t}" for i, t in enumerate(temperature)]
+    (tmp_path / "cov.csv").write_text("\n".join(rows) + "\n")
+    out = tmp_path / "track"
+    p = run(hyst_bin, "track", "--input", rec, "--fs", 20, "--window", 300, "--columns",
+            "y1,y2,y3", "--reference", tmp_path / "ref.json", "--covariates", tmp_path / "cov.csv",
+            "--training", 5, "--out", out)
+    times = [300.0 * i for i in range(10)]
+    kwargs = dict(times=times, covariates={"temperature": temperature}, training=5)
+    from_file = hyst.track(windows, 20.0, reference=tmp_path / "ref.json", **kwargs)
+    assert comparable(from_file.to_dict()) == document(out / "report.json")
+    from_ssi = hyst.track(windows, 20.0, reference=hyst.ssi(windows[0], 20.0), **kwargs)
+    assert comparable(from_ssi.to_dict()) == comparable(from_file.to_dict())
+    assert "Hz per unit of temperature" in p.stdout, p.stdout
+    assert str(from_file).splitlines()[1:] == p.stdout.splitlines()[-len(str(from_file).splitlines()) + 1:]
+    with pytest.raises(ValueError, match="reference: not JSON"):
+        (tmp_path / "bad.json").write_text("{")
+        hyst.track(windows[:2], 20.0, reference=tmp_path / "bad.json")

@@ -61,13 +61,14 @@ impl fmt::Display for FrfReport {
         for (m, d) in fit.modes.iter().zip(&self.band_spread) {
             writeln!(
                 f,
-                "mode {:9.4} ± {:.4} Hz (band {:.4})  damping {:.5} ± {:.5} (band {:.5})",
+                "mode {:9.4} ± {:.4} Hz (band {:.4} Hz)  damping ratio {:.5} ± {:.5} (band {:.5}) = {:.3} %",
                 m.frequency_hz,
                 m.frequency_se_hz,
                 d.frequency_hz,
                 m.damping_ratio,
                 m.damping_se,
-                d.damping
+                d.damping,
+                100.0 * m.damping_ratio
             )?;
         }
         if self.channels.len() > 1 {
@@ -98,7 +99,7 @@ impl fmt::Display for FrfReport {
         }
         writeln!(
             f,
-            "misfit {:.3} (1 when the fit is at the noise)",
+            "misfit {:.3}: the weighted residual's mean square per equation, 1 when the fit is at the noise",
             fit.misfit
         )?;
         if fit.misfit > 3.0 {

@@ -499,9 +499,9 @@ def levels(records, fs, mass, *, by_simulation=False, data_periodic=False, fit_e
 
 
 def track(records, fs, *, times=None, covariates=None, training=None, whiten=True,
-          block_rows=None, lag_seconds=None, lag_periods=None, decimate=None, max_order=None,
-          order_step=1, references=None, df=None, dzeta=None, dmac=None, dreal=None,
-          refine=True, joint=True):
+          reference=None, block_rows=None, lag_seconds=None, lag_periods=None, decimate=None,
+          max_order=None, order_step=1, references=None, df=None, dzeta=None, dmac=None,
+          dreal=None, refine=True, joint=True):
     """Track the modes of many records of one structure (``hyst track``).
 
     Each record is identified as :func:`ssi` does (in parallel), its modes matched to a
@@ -518,9 +518,9 @@ def track(records, fs, *, times=None, covariates=None, training=None, whiten=Tru
         Sampling rate (Hz); None when the files state it (Universal Files).
     times : list of float, optional
         Each record's time (s); default its index.
-    covariates : array_like, shape (records, covariates), optional
+    covariates : array_like, shape (records, covariates), or dict of name -> sequence, optional
         E.g. the temperature at each record; NaN where missing (the record is then tracked
-        but not charted).
+        but not charted). A dict (or a pandas DataFrame) names them in the report's text.
     training : int, optional
         The first this many records train the baselines (default 336, at most half).
     block_rows, lag_seconds, lag_periods, decimate, max_order, order_step, references,
@@ -535,6 +535,9 @@ def track(records, fs, *, times=None, covariates=None, training=None, whiten=Tru
         Where the training records show a slow effect the covariates leave unexplained,
         chart its model's filter's innovations (default True: the effect is then not taken
         for a change), or the residuals as they are always (``hyst track --no-whiten``).
+    reference : path, or the result of :func:`ssi`, optional
+        The reference modes (``hyst track --reference``): a ``hyst ssi --json`` document, or
+        an :func:`ssi` result; default the record with the most modes among the first 24.
 
     Returns
     -------
@@ -565,20 +568,36 @@ def track(records, fs, *, times=None, covariates=None, training=None, whiten=Tru
     if n == 0:
         raise ValueError("no records: give at least one array or file")
     t = [float(i) for i in range(n)] if times is None else [float(v) for v in times]
+    names = []
     if covariates is None:
         x = [[] for _ in range(n)]
     else:
+        if hasattr(covariates, "keys"):
+            # A dict or a DataFrame: one named column per covariate.
+            names = [str(k) for k in covariates.keys()]
+            covariates = _np.column_stack([_np.asarray(covariates[k], dtype=_np.float64)
+                                           for k in covariates.keys()])
         c = _np.asarray(covariates, dtype=_np.float64)
         if c.ndim == 1:
             c = c.reshape(-1, 1)
         x = c.tolist()
+    if reference is None:
+        ref = None
+    elif isinstance(reference, (str, os.PathLike)):
+        with open(reference, encoding="utf-8") as f:
+            ref = f.read()
+    elif hasattr(reference, "to_json"):
+        ref = reference.to_json()
+    else:
+        raise ValueError("reference must be a path to a `hyst ssi --json` document or an "
+                         f"ssi() result, got {type(reference).__name__}")
     if fs is None:
         raise ValueError("fs is needed: the records do not state their sampling rate")
     if not (float(fs) > 0.0 and _np.isfinite(float(fs))):
         raise ValueError(f"fs must be a positive finite rate (Hz), got {fs}")
     return _hyst.track(
-        arrays, float(fs), times=t, covariates=x,
-        training=None if training is None else int(training),
+        arrays, float(fs), times=t, covariates=x, covariate_names=names,
+        training=None if training is None else int(training), reference=ref,
         settings=_settings(
             block_rows=block_rows, lag_seconds=lag_seconds, lag_periods=lag_periods,
             decimate=decimate, max_order=max_order, order_step=order_step,

@@ -1,6 +1,6 @@
 import os
 from dataclasses import dataclass
-from typing import Any, Literal, Optional, Sequence, Union
+from typing import Any, Literal, Mapping, Optional, Sequence, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -115,9 +115,10 @@ def track(
     fs: Optional[float],
     *,
     times: Optional[Sequence[float]] = ...,
-    covariates: Optional[npt.ArrayLike] = ...,
+    covariates: Optional[Union[npt.ArrayLike, Mapping[str, npt.ArrayLike]]] = ...,
     training: Optional[int] = ...,
     whiten: bool = ...,
+    reference: Optional[Union[str, os.PathLike[str], SsiResult]] = ...,
     block_rows: Optional[int] = ...,
     lag_seconds: Optional[float] = ...,
     lag_periods: Optional[tuple[float, float]] = ...,
