@@ -20,6 +20,7 @@ fn main() -> ExitCode {
         Command::Ident(a) => cmd::ident::run(a),
         Command::Refine(a) => cmd::refine::run(a),
         Command::Levels(a) => cmd::levels::run(a),
+        Command::Amplitude(a) => cmd::amplitude::run(a),
         Command::Frf(a) => cmd::frf::run(a),
         Command::Track(a) => cmd::track::run(a),
     });

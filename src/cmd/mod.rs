@@ -3,6 +3,7 @@
 
 use clap::{Parser, Subcommand, ValueEnum};
 
+pub(crate) mod amplitude;
 pub(crate) mod args;
 pub(crate) mod frf;
 pub(crate) mod ident;
@@ -135,6 +136,14 @@ pub(crate) enum Command {
     ///   hyst levels --data bw10.csv bw50.csv bw90.csv --fs 750 --mass 2 --data-periodic --validate bw50v.csv --periodic --json levels.json
     #[command(verbatim_doc_comment, allow_negative_numbers = true)]
     Levels(LevelsArgs),
+    /// Output only: each mode's natural frequency and damping ratio against its vibration
+    /// amplitude (random decrement in amplitude bands of each mode's filtered response), each
+    /// point with a standard error, and whether the mode is linear.
+    ///
+    /// Example (the F-16's wing torsion mode at the highest level, amplitudes as displacement):
+    ///   hyst amplitude --input msine_level7.csv --fs 400 --columns acc1,acc2,acc3 --skip 8192 --period 8192 --modes 7.3 --measured acceleration --amplitude-of displacement --svg torsion7.svg
+    #[command(verbatim_doc_comment)]
+    Amplitude(amplitude::AmplitudeArgs),
     /// With the input: the modes of a periodic record's frequency response over a band (an
     /// input-output second opinion on `hyst ssi`), with several outputs each mode's shape,
     /// and optionally the outputs under a force of flat spectrum.
@@ -300,6 +309,7 @@ pub(crate) fn output_files(c: &Command) -> Vec<(&'static str, &std::path::Path)>
         Command::Ident(a) => vec![("--json", a.json.as_deref())],
         Command::Refine(a) => vec![("--json", a.json.as_deref())],
         Command::Levels(a) => vec![("--json", a.json.as_deref())],
+        Command::Amplitude(a) => vec![("--json", a.json.as_deref()), ("--svg", a.svg.as_deref())],
         Command::Frf(a) => a.output_files(),
         Command::Track(_) => vec![],
     };
@@ -327,7 +337,8 @@ pub(crate) fn input_files(c: &Command) -> Vec<(&'static str, &std::path::Path)> 
             v.extend(one("--params", a.params.as_ref()));
         }
         Command::Excite(_) => {}
-        Command::Ssi(a) => v.push(("--input", &a.input)),
+        Command::Ssi(a) => v.push(("--input", &a.record.input)),
+        Command::Amplitude(a) => v.push(("--input", &a.record.input)),
         Command::Ident(a) => {
             v.extend(one("--data", a.data.as_ref()));
             v.extend(many("--validate", &a.validate));

@@ -36,6 +36,28 @@ const FILES: &str = "Python returns the result: report.to_dict(), str(report)";
 
 const PAIRS: &[Pair] = &[
     Pair {
+        command: "amplitude",
+        function: "amplitude",
+        renamed: &[],
+        cli_only: &[
+            ("input", "Python takes the array y"),
+            (
+                "columns",
+                "Python selects the array's columns: y[:, [0, 2]]",
+            ),
+            ("skip", "Python slices the array: y[skip:]"),
+            ("json", FILES),
+            ("svg", FILES),
+        ],
+        python_only: &[
+            ("y", "the array; the command reads --input"),
+            (
+                "record",
+                "a name for the report; the command's is the file's path",
+            ),
+        ],
+    },
+    Pair {
         command: "ssi",
         function: "ssi",
         renamed: &[("input", "y")],

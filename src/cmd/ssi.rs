@@ -7,8 +7,9 @@ use clap::Args;
 use super::*;
 use hyst::settings::{SettingsError, SsiSettings};
 
+/// The record and its channels: shared by `hyst ssi` and `hyst amplitude`.
 #[derive(Args, Debug)]
-pub(crate) struct SsiArgs {
+pub(crate) struct ChannelArgs {
     /// The record: CSV with a header line; a NumPy `.npy` array or `.npz` archive, or a
     /// MATLAB `.mat` variable (samples × channels, columns named 0, 1, …); a Universal File
     /// of dataset 58 functions (columns named by their point, `12+Z`).
@@ -24,6 +25,12 @@ pub(crate) struct SsiArgs {
     /// Skip this many leading rows (e.g. a start-up transient).
     #[arg(long, default_value_t = 0)]
     pub(crate) skip: usize,
+}
+
+#[derive(Args, Debug)]
+pub(crate) struct SsiArgs {
+    #[command(flatten)]
+    pub(crate) record: ChannelArgs,
     #[command(flatten)]
     pub(crate) ssi: SsiFlags,
     /// Write the modes, real poles and per-order poles as JSON here (optional: the report is
@@ -144,17 +151,17 @@ impl SsiFlags {
 }
 
 /// The channels to analyse, after `--skip`.
-struct Channels {
-    names: Vec<String>,
-    data: Vec<Vec<f64>>,
+pub(crate) struct Channels {
+    pub(crate) names: Vec<String>,
+    pub(crate) data: Vec<Vec<f64>>,
     /// The sampling rate, `--fs` or the file's.
-    fs: f64,
+    pub(crate) fs: f64,
     /// Where each channel was measured, if the file says.
-    points: Option<Vec<hyst::io::MeasurementPoint>>,
+    pub(crate) points: Option<Vec<hyst::io::MeasurementPoint>>,
 }
 
 /// The channels to analyse, after `--skip`, with their names.
-fn channels(a: &SsiArgs) -> Result<Channels, Error> {
+pub(crate) fn channels(a: &ChannelArgs) -> Result<Channels, Error> {
     if let Some(fs) = a.fs {
         check_fs(fs)?;
     }
@@ -203,7 +210,13 @@ fn channels(a: &SsiArgs) -> Result<Channels, Error> {
 /// covssi's error in the words of the command line: an option out of range named by the
 /// flag that set it, anything else with the file and columns it came from (and the
 /// decimation, which may be what made the record too short or constant).
-fn flag_error(a: &SsiArgs, e: hyst::covssi::SsiError, names: &[String], fs_used: f64) -> Error {
+pub(crate) fn flag_error(
+    a: &ChannelArgs,
+    ssi: &SsiFlags,
+    e: hyst::covssi::SsiError,
+    names: &[String],
+    fs_used: f64,
+) -> Error {
     use hyst::covssi::{SsiError, SsiOption};
     if let SsiError::InvalidOption { option, value } = &e {
         let lag_too_short = |flag: &str| {
@@ -214,10 +227,10 @@ fn flag_error(a: &SsiArgs, e: hyst::covssi::SsiError, names: &[String], fs_used:
         let flag = match option {
             // A lag given as a time is too short for the rate: say what it gave.
             SsiOption::BlockRows => {
-                if a.ssi.lag_seconds.is_some() {
+                if ssi.lag_seconds.is_some() {
                     return lag_too_short("--lag-seconds");
                 }
-                if a.ssi.lag_periods.is_some() {
+                if ssi.lag_periods.is_some() {
                     return lag_too_short("--lag-periods");
                 }
                 Some(("--block-rows", "at least 2"))
@@ -250,7 +263,7 @@ fn flag_error(a: &SsiArgs, e: hyst::covssi::SsiError, names: &[String], fs_used:
             return fail(format!("{flag} must be {needed}, got {value}"));
         }
     }
-    let decimated = match a.ssi.decimate {
+    let decimated = match ssi.decimate {
         Some(r) if r > 1 => format!(", decimated by {r} to {fs_used} Hz"),
         _ => String::new(),
     };
@@ -270,21 +283,21 @@ pub(crate) fn run(a: &SsiArgs) -> Result<(), Error> {
         data,
         fs,
         points,
-    } = channels(a)?;
+    } = channels(&a.record)?;
     let views: Vec<&[f64]> = data.iter().map(|c| c.as_slice()).collect();
     let bar = steps_bar();
     let analysis = covssi::analyze_with_progress(&views, fs, &opts, &|p| show(&bar, p));
     bar.finish_and_clear();
     let fs_used = fs / a.ssi.decimate.unwrap_or(1) as f64;
-    let mut analysis = analysis.map_err(|e| flag_error(a, e, &names, fs_used))?;
+    let mut analysis = analysis.map_err(|e| flag_error(&a.record, &a.ssi, e, &names, fs_used))?;
     analysis.channels = names;
-    let report = hyst::report::FileReport::new(a.input.display().to_string(), analysis);
+    let report = hyst::report::FileReport::new(a.record.input.display().to_string(), analysis);
     print!("{}", report.report);
     if let Some(json) = &a.json {
         report.write_json(json)?;
     }
     if let Some(svg) = &a.svg {
-        let title = format!("Stabilization diagram: {}", a.input.display());
+        let title = format!("Stabilization diagram: {}", a.record.input.display());
         std::fs::write(
             svg,
             covssi::svg::stabilization_svg(&report.report.ssi.diagram, None, &title),
@@ -292,7 +305,7 @@ pub(crate) fn run(a: &SsiArgs) -> Result<(), Error> {
         .map_err(|e| fail(format!("{}: {e}", svg.display())))?;
     }
     if let Some(path) = &a.shapes_uff {
-        write_shapes(path, &report.report, points.as_deref(), &a.input)?;
+        write_shapes(path, &report.report, points.as_deref(), &a.record.input)?;
     }
     Ok(())
 }

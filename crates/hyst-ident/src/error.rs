@@ -12,6 +12,9 @@ pub enum IdentError {
     /// A linearization step failed.
     #[error("linearization: {0}")]
     Linearize(#[from] LinearizeError),
+    /// The amplitude analysis's input or options.
+    #[error("amplitude analysis: {0}")]
+    Amplitude(#[from] crate::amplitude::AmplitudeError),
     /// A simulation failed.
     #[error("simulation: {0}")]
     Sim(#[from] SimError),

@@ -58,6 +58,8 @@ mod prepare;
 mod report;
 mod validation;
 
+pub mod amplitude;
+
 pub mod flatness;
 
 pub mod floor;

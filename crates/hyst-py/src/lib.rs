@@ -11,6 +11,7 @@
 
 use std::borrow::Cow;
 
+mod amplitude;
 mod ident;
 mod monitor;
 
@@ -275,7 +276,7 @@ impl SsiResult {
 
 /// The columns of `y` (samples × channels) as slices: in place when each is contiguous
 /// (a Fortran-ordered array), else copied.
-fn columns<'a>(y: &'a numpy::ndarray::ArrayView2<'a, f64>) -> Vec<Cow<'a, [f64]>> {
+pub(crate) fn columns<'a>(y: &'a numpy::ndarray::ArrayView2<'a, f64>) -> Vec<Cow<'a, [f64]>> {
     y.columns()
         .into_iter()
         .map(|c| match c.to_slice() {
@@ -384,6 +385,7 @@ fn _hyst(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ident::refine, m)?)?;
     m.add_function(wrap_pyfunction!(ident::levels, m)?)?;
     m.add_function(wrap_pyfunction!(monitor::track, m)?)?;
+    m.add_function(wrap_pyfunction!(amplitude::amplitude, m)?)?;
     m.add_class::<ident::Report>()?;
     m.add_class::<SsiResult>()?;
     Ok(())

@@ -25,8 +25,8 @@ from . import _hyst
 from ._hyst import Report, SsiResult
 
 __all__ = [
-    "excite", "identify", "levels", "read", "Record", "refine", "Report", "simulate", "ssi",
-    "SsiResult", "track",
+    "amplitude", "excite", "identify", "levels", "read", "Record", "refine", "Report",
+    "simulate", "ssi", "SsiResult", "track",
 ]
 
 
@@ -195,6 +195,92 @@ def ssi(
         settings=settings,
         channels=None if channels is None else [str(c) for c in channels],
         record=str(record),
+    )
+
+
+def amplitude(y, fs, *, modes=None, measured="displacement", amplitude_of=None, levels=8,
+              cycles=3.0, groups=20, min_triggers=50, band=None, method="envelope",
+              period=None, block_rows=None, lag_seconds=None, lag_periods=None, decimate=None,
+              max_order=None, order_step=1, references=None, df=None, dzeta=None, dmac=None,
+              dreal=None, refine=True, joint=True, record="array"):
+    """Each mode's natural frequency and damping ratio against its amplitude (``hyst
+    amplitude``): the modes as :func:`ssi` finds them, each mode's response filtered out
+    (a modal filter, then a band-pass), random decrement conditioned on its envelope in
+    ``levels`` amplitude bands, each band's decay fitted, standard errors by the jackknife
+    over ``groups`` stretches of the record, and a test of whether the mode is linear (see
+    docs/amplitude.md).
+
+    Parameters
+    ----------
+    y : array_like, shape (samples, channels) or (samples,)
+        The measured response.
+    fs : float
+        Sampling rate (Hz).
+    modes : list of float, optional
+        Frequencies (Hz) of the modes to follow: the identified mode nearest each (within
+        5 %); default every mode :func:`ssi` reports.
+    measured : {"displacement", "velocity", "acceleration"}
+        What the channels measure.
+    amplitude_of : {"displacement", "velocity", "acceleration"}, optional
+        The quantity amplitudes are reported in (converted at each point's frequency);
+        default as measured.
+    levels, cycles, groups, min_triggers : optional
+        Amplitude bands; cycles of each band's decay fitted; stretches of the jackknife;
+        fewest triggers a point needs.
+    band : float, optional
+        Band-pass half-width as a share of each mode's frequency (default 0.3, or half the
+        relative distance to the nearest other mode).
+    method : {"envelope", "extrema"}
+        Random decrement conditioned on the analytic signal's envelope (default), or the
+        classical one at the response's extrema.
+    period : int, optional
+        Samples per period of a periodic excitation: the periods are averaged into one,
+        read as circular.
+    block_rows, lag_seconds, lag_periods, decimate, max_order, order_step, references,
+    df, dzeta, dmac, dreal, refine, joint
+        The modal analysis, as for :func:`ssi`.
+    record : str
+        What the data is, for the report.
+
+    Returns
+    -------
+    Report
+        ``str(report)`` as ``hyst amplitude`` prints it; ``report.to_dict()`` its JSON:
+        ``curves.modes[j].points`` (``amplitude``, ``frequency_hz``, ``frequency_se_hz``,
+        ``damping_ratio``, ``damping_se``, ``triggers``), ``linearity``, ``notes``.
+    """
+    import json
+
+    a = _real(y, "y")
+    if a.ndim == 1:
+        a = a.reshape(-1, 1)
+    if a.ndim != 2:
+        raise ValueError(f"y must be (samples, channels) or (samples,), got shape {a.shape}")
+    quantities = ("displacement", "velocity", "acceleration")
+    for name, v in (("measured", measured), ("amplitude_of", amplitude_of)):
+        if v is not None and v not in quantities:
+            raise ValueError(f'{name} "{v}" is not one of {", ".join(quantities)}')
+    if method not in ("envelope", "extrema"):
+        raise ValueError(f'method "{method}" is not one of envelope, extrema')
+    options = {
+        "levels": _count(levels, "levels", 1),
+        "cycles": float(cycles),
+        "groups": _count(groups, "groups", 2),
+        "min_triggers": _count(min_triggers, "min_triggers", 1),
+        "band": None if band is None else float(band),
+        "measured": measured,
+        "report_as": amplitude_of,
+        "method": method,
+        "period": _count(period, "period", 1),
+    }
+    settings = _settings(
+        block_rows=block_rows, lag_seconds=lag_seconds, lag_periods=lag_periods,
+        decimate=decimate, max_order=max_order, order_step=order_step, references=references,
+        df=df, dzeta=dzeta, dmac=dmac, dreal=dreal, refine=refine, joint=joint,
+    )
+    return _hyst.amplitude(
+        a, float(fs), settings=settings, options=json.dumps(options),
+        modes=[] if modes is None else [float(f) for f in modes], record=str(record),
     )
 
 

@@ -1,0 +1,724 @@
+//! Each mode's natural frequency and damping ratio against its vibration amplitude, output
+//! only: the amplitude-dependent equivalent mode that a hysteretic element gives (the
+//! paper's eqs. 13, 19 and 20 are its Bouc-Wen case, through the describing function).
+//!
+//! For each mode $j$ (frequency $f_j$, shape $\phi_j$, from [`covssi`]):
+//!
+//! 1. **Modal response** ([`filter`]): $q_j(t) = w_j^\top y(t)$, with $w_j$ the $j$-th row of
+//!    the pseudo-inverse of the real shapes when the channels are at least as many as the
+//!    modes and tell them apart (a modal filter), else $\phi_j/\lVert\phi_j\rVert$ (a
+//!    projection); then band-passed with zero phase to $f_j \pm h_j$,
+//!    $h_j = \min(0.3 f_j, \tfrac12 \min_{k\ne j}|f_j - f_k|)$, which removes the other modes
+//!    and the element's higher harmonics.
+//! 2. **Random decrement at several levels** ([`randec`]): the extrema of $q_j$ (a minimum
+//!    with its sign turned) split by their value into bands of equal count between the 5th
+//!    and 99.5th percentiles; in each band the mean of the segments that start at its
+//!    extrema, $D_k(\tau) = \overline{\pm q_j(t_i + \tau)}$, is the decay from the band's
+//!    amplitude (for a linear mode, the correlation function scaled to it).
+//! 3. **Decay fit** ([`decay`]): $e^{-\sigma\tau}(a\cos\omega_d\tau + b\sin\omega_d\tau)$ over the
+//!    first [`AmplitudeOptions::cycles`] cycles of $D_k$; the point is
+//!    $(A_k, f_k = |\lambda|/2\pi, \zeta_k = \sigma/|\lambda|)$, $A_k$ the fitted envelope
+//!    at the window's middle, converted to the quantity asked for by $\omega^{\pm1,2}$.
+//! 4. **Standard errors** by the grouped jackknife: the triggers fall in
+//!    [`AmplitudeOptions::groups`] stretches of the record; every estimate is made again with
+//!    each stretch left out, $\mathrm{se}^2 = \tfrac{G-1}{G}\sum_g(\theta_{-g} - \bar\theta)^2$.
+//! 5. **Linearity test**: the weighted least-squares slope of $f$ and of $\zeta$ on $A$
+//!    (weights $1/\mathrm{se}^2$), its standard error by the same jackknife, and Student's
+//!    $t$ with $G-1$ degrees of freedom; the mode is called linear when neither slope is
+//!    significant at [`LINEARITY_LEVEL`] (Bonferroni over the two).
+
+mod decay;
+mod envelope;
+mod filter;
+mod randec;
+mod report;
+
+pub use report::*;
+
+use statrs::distribution::{ContinuousCDF, StudentsT};
+
+/// Overall significance of the linearity test (both slopes together).
+pub const LINEARITY_LEVEL: f64 = 0.01;
+
+/// The quantity a record measures, or an amplitude is reported in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(rename_all = "snake_case")
+)]
+pub enum Quantity {
+    /// Displacement.
+    #[default]
+    Displacement,
+    /// Velocity.
+    Velocity,
+    /// Acceleration.
+    Acceleration,
+}
+
+impl Quantity {
+    /// Time derivatives of displacement it is.
+    pub(crate) fn order(self) -> i32 {
+        match self {
+            Quantity::Displacement => 0,
+            Quantity::Velocity => 1,
+            Quantity::Acceleration => 2,
+        }
+    }
+
+    /// Its name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Quantity::Displacement => "displacement",
+            Quantity::Velocity => "velocity",
+            Quantity::Acceleration => "acceleration",
+        }
+    }
+
+    /// The amplitude of the same harmonic motion at ω rad/s in `to`, from its amplitude `a`
+    /// in `self`.
+    pub fn convert(self, a: f64, omega: f64, to: Quantity) -> f64 {
+        a * omega.powi(to.order() - self.order())
+    }
+}
+
+/// How each amplitude band's decay is found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(rename_all = "snake_case")
+)]
+#[non_exhaustive]
+pub enum AmplitudeMethod {
+    /// Random decrement conditioned on the analytic signal's envelope, every sample a
+    /// trigger, the segments turned to zero phase ([`envelope`]); straight-line fits of
+    /// log-amplitude and phase.
+    #[default]
+    Envelope,
+    /// Classical random decrement at the response's extrema in each band, a damped cosine
+    /// fitted by least squares ([`randec`], [`decay`]).
+    Extrema,
+}
+
+/// How the curves are made. In JSON (what `hyst.amplitude` passes), a field left out keeps
+/// its default and an unknown one is an error.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(default, deny_unknown_fields)
+)]
+#[non_exhaustive]
+pub struct AmplitudeOptions {
+    /// Amplitude bands (points per curve; default 8).
+    pub levels: usize,
+    /// Cycles of each signature fitted (default 3): fewer follow the amplitude more closely,
+    /// more lower the scatter.
+    pub cycles: f64,
+    /// Stretches of the record for the jackknife (default 20).
+    pub groups: usize,
+    /// Fewest triggers a point needs (default 50); a band with fewer is left out, and said.
+    pub min_triggers: usize,
+    /// Band-pass half-width relative to the mode's frequency; default
+    /// $\min(0.3, \tfrac12$ the relative distance to the nearest other mode$)$.
+    pub band: Option<f64>,
+    /// What the record measures (default displacement).
+    pub measured: Quantity,
+    /// What the amplitudes are reported in (default: as measured).
+    pub report_as: Option<Quantity>,
+    /// How each band's decay is found.
+    pub method: AmplitudeMethod,
+    /// Samples per period when the excitation is periodic (a multisine): the record's whole
+    /// periods are averaged into one, which is then read as circular. Without it, a
+    /// periodic record's stretches repeat one another and the standard errors are too small.
+    pub period: Option<usize>,
+}
+
+impl Default for AmplitudeOptions {
+    fn default() -> Self {
+        AmplitudeOptions {
+            levels: 8,
+            cycles: 3.0,
+            groups: 20,
+            min_triggers: 50,
+            band: None,
+            measured: Quantity::Displacement,
+            report_as: None,
+            method: AmplitudeMethod::Envelope,
+            period: None,
+        }
+    }
+}
+
+/// An option of [`AmplitudeOptions`], named in errors.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum AmplitudeOption {
+    /// [`AmplitudeOptions::levels`].
+    Levels,
+    /// [`AmplitudeOptions::cycles`].
+    Cycles,
+    /// [`AmplitudeOptions::groups`].
+    Groups,
+    /// [`AmplitudeOptions::band`].
+    Band,
+    /// [`AmplitudeOptions::period`].
+    Period,
+}
+
+/// What is wrong with the amplitude analysis's input.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum AmplitudeError {
+    /// An option out of range.
+    #[error("{option:?} = {value} is out of range: {needs}")]
+    BadOption {
+        /// Which.
+        option: AmplitudeOption,
+        /// Its value.
+        value: f64,
+        /// What it must be.
+        needs: &'static str,
+    },
+    /// The record is shorter than one period.
+    #[error("the record has {samples} samples, fewer than one period of {period}")]
+    ShorterThanPeriod {
+        /// Samples.
+        samples: usize,
+        /// The period.
+        period: usize,
+    },
+    /// A mode's shape has another length than the channels.
+    #[error("mode at {frequency_hz} Hz: its shape has {shape} entries for {channels} channels")]
+    ShapeLength {
+        /// The mode.
+        frequency_hz: f64,
+        /// Entries.
+        shape: usize,
+        /// Channels.
+        channels: usize,
+    },
+    /// No channel, or channels of different lengths.
+    #[error("channel {channel} has {samples} samples, channel 0 {first}")]
+    ChannelLengths {
+        /// The channel.
+        channel: usize,
+        /// Its samples.
+        samples: usize,
+        /// Channel 0's.
+        first: usize,
+    },
+    /// No channel given.
+    #[error("no channel: give at least one")]
+    NoChannel,
+    /// A sample is NaN or infinite.
+    #[error("channel {channel}, sample {index}: value {value} is not finite")]
+    NonFinite {
+        /// The channel.
+        channel: usize,
+        /// 0-based sample.
+        index: usize,
+        /// The value.
+        value: f64,
+    },
+    /// A mode's frequency is not inside (0, Nyquist).
+    #[error("mode at {frequency_hz} Hz is not inside (0, {nyquist_hz}) Hz")]
+    BadModeFrequency {
+        /// The mode.
+        frequency_hz: f64,
+        /// fs/2.
+        nyquist_hz: f64,
+    },
+}
+
+/// A mode to follow: where it is, and its shape when known.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct ModeToFollow {
+    /// Natural frequency (Hz), e.g. SSI's.
+    pub frequency_hz: f64,
+    /// Damping ratio, e.g. SSI's.
+    pub damping_ratio: f64,
+    /// Shape, one entry per channel.
+    pub shape: Option<Vec<covssi::Complex64>>,
+}
+
+/// One point of a mode's curves.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct AmplitudePoint {
+    /// The mode's amplitude (in [`AmplitudeReport::amplitude_of`]; of the modal
+    /// coordinate, in the record's unit).
+    pub amplitude: f64,
+    /// Triggers averaged.
+    pub triggers: usize,
+    /// Natural frequency (Hz).
+    pub frequency_hz: f64,
+    /// Its standard error (Hz).
+    pub frequency_se_hz: f64,
+    /// Damping ratio.
+    pub damping_ratio: f64,
+    /// Its standard error.
+    pub damping_se: f64,
+}
+
+/// A slope's test.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct SlopeTest {
+    /// The change over the amplitudes reached: the slope times the range (Hz, or damping
+    /// ratio).
+    pub change: f64,
+    /// Its standard error.
+    pub change_se: f64,
+    /// Two-sided p-value of no change (Student's t, groups − 1 degrees of freedom).
+    pub p_value: f64,
+}
+
+/// Whether a mode's frequency and damping change with its amplitude.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Linearity {
+    /// The frequency's change.
+    pub frequency: SlopeTest,
+    /// The damping ratio's change.
+    pub damping: SlopeTest,
+    /// Neither is significant at [`LINEARITY_LEVEL`] (each at half of it).
+    pub linear: bool,
+}
+
+/// One mode's curves.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct ModeCurve {
+    /// The mode followed.
+    pub mode: ModeToFollow,
+    /// The band its response was filtered to (Hz).
+    pub band_hz: (f64, f64),
+    /// The points, by increasing amplitude.
+    pub points: Vec<AmplitudePoint>,
+    /// The test (`None` with fewer than three points).
+    pub linearity: Option<Linearity>,
+    /// What was left out, and why.
+    pub notes: Vec<String>,
+}
+
+/// What [`amplitude_curves`] finds.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct AmplitudeReport {
+    /// Sampling rate (Hz).
+    pub fs_hz: f64,
+    /// What the record measures.
+    pub measured: Quantity,
+    /// What the amplitudes are in.
+    pub amplitude_of: Quantity,
+    /// The modes' curves.
+    pub modes: Vec<ModeCurve>,
+}
+
+fn check(opts: &AmplitudeOptions) -> Result<(), AmplitudeError> {
+    let bad = |option, value: f64, needs| {
+        Err(AmplitudeError::BadOption {
+            option,
+            value,
+            needs,
+        })
+    };
+    if opts.levels == 0 {
+        return bad(AmplitudeOption::Levels, 0.0, "at least 1");
+    }
+    if !(opts.cycles >= 0.5 && opts.cycles <= 50.0) {
+        return bad(AmplitudeOption::Cycles, opts.cycles, "between 0.5 and 50");
+    }
+    if opts.groups < 2 {
+        return bad(AmplitudeOption::Groups, opts.groups as f64, "at least 2");
+    }
+    if opts.period == Some(0) {
+        return bad(AmplitudeOption::Period, 0.0, "at least 1 sample");
+    }
+    if let Some(b) = opts.band
+        && !(b > 0.0 && b < 1.0)
+    {
+        return bad(
+            AmplitudeOption::Band,
+            b,
+            "between 0 and 1 (a share of the frequency)",
+        );
+    }
+    Ok(())
+}
+
+fn check_channels(y: &[&[f64]]) -> Result<(), AmplitudeError> {
+    let first = y.first().ok_or(AmplitudeError::NoChannel)?.len();
+    for (channel, c) in y.iter().enumerate() {
+        if c.len() != first {
+            return Err(AmplitudeError::ChannelLengths {
+                channel,
+                samples: c.len(),
+                first,
+            });
+        }
+        if let Some((index, &value)) = c.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(AmplitudeError::NonFinite {
+                channel,
+                index,
+                value,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Each mode's frequency and damping against its amplitude, from `y` (channels, each
+/// `samples` long, at `fs` Hz) and the modes to follow.
+///
+/// `others`: the record's other modes (not followed): their frequencies bound each band,
+/// and their shapes join the modal filter.
+pub fn amplitude_curves(
+    y: &[&[f64]],
+    fs: f64,
+    modes: &[ModeToFollow],
+    others: &[ModeToFollow],
+    opts: &AmplitudeOptions,
+) -> Result<AmplitudeReport, crate::IdentError> {
+    check(opts)?;
+    if !(fs > 0.0 && fs.is_finite()) {
+        return Err(crate::IdentError::BadRate { fs });
+    }
+    check_channels(y)?;
+    if let Some(period) = opts.period
+        && y[0].len() < period
+    {
+        return Err(AmplitudeError::ShorterThanPeriod {
+            samples: y[0].len(),
+            period,
+        }
+        .into());
+    }
+    let channels = y.len();
+    for m in modes.iter().chain(others) {
+        if !(m.frequency_hz > 0.0 && m.frequency_hz < 0.5 * fs) {
+            return Err(AmplitudeError::BadModeFrequency {
+                frequency_hz: m.frequency_hz,
+                nyquist_hz: 0.5 * fs,
+            }
+            .into());
+        }
+        if let Some(s) = &m.shape
+            && s.len() != channels
+        {
+            return Err(AmplitudeError::ShapeLength {
+                frequency_hz: m.frequency_hz,
+                shape: s.len(),
+                channels,
+            }
+            .into());
+        }
+    }
+    let all: Vec<ModeToFollow> = modes.iter().chain(others).cloned().collect();
+    let weights = filter::modal_weights(&all, channels);
+    let report_as = opts.report_as.unwrap_or(opts.measured);
+    let curves = modes
+        .iter()
+        .enumerate()
+        .map(|(j, m)| {
+            let nearest = all
+                .iter()
+                .enumerate()
+                .filter(|(k, _)| *k != j)
+                .map(|(_, o)| (o.frequency_hz - m.frequency_hz).abs() / m.frequency_hz)
+                .fold(f64::INFINITY, f64::min);
+            let h = opts.band.unwrap_or((0.5 * nearest).min(0.3));
+            let band = (
+                m.frequency_hz * (1.0 - h),
+                (m.frequency_hz * (1.0 + h)).min(0.5 * fs),
+            );
+            let q = filter::combine(y, &weights[j]);
+            let q = match opts.period {
+                Some(p) => period_mean(&q, p),
+                None => q,
+            };
+            mode_curve(&q, fs, m, band, opts, report_as)
+        })
+        .collect();
+    Ok(AmplitudeReport {
+        fs_hz: fs,
+        measured: opts.measured,
+        amplitude_of: report_as,
+        modes: curves,
+    })
+}
+
+/// The mean of `q`'s last whole periods of `p` samples.
+fn period_mean(q: &[f64], p: usize) -> Vec<f64> {
+    let periods = q.len() / p;
+    let start = q.len() - periods * p;
+    let mut m = vec![0.0; p];
+    for k in 0..periods {
+        m.iter_mut()
+            .zip(&q[start + k * p..start + (k + 1) * p])
+            .for_each(|(a, b)| *a += b / periods as f64);
+    }
+    m
+}
+
+/// A mode's amplitude bands, however triggered: their edges (in the record's unit), the
+/// triggers in each, and every band's decay with one group left out (`None`: none).
+struct Bands {
+    edges: Vec<f64>,
+    totals: Vec<usize>,
+    estimate: Box<dyn Fn(Option<usize>) -> Vec<Option<decay::Decay>> + Sync>,
+}
+
+/// The linear mode's signature through `band`, for the fits.
+fn filtered_mode(
+    fs: f64,
+    window: usize,
+    band: (f64, f64),
+    m: &ModeToFollow,
+    opts: &AmplitudeOptions,
+) -> decay::FilteredMode {
+    decay::FilteredMode::new(
+        fs,
+        window,
+        band,
+        &|f| filter::band_weight(f, band.0, band.1),
+        opts.measured.order(),
+        m.frequency_hz,
+        (0.5 * m.damping_ratio).clamp(5e-4, 0.05),
+    )
+}
+
+/// The extrema of the band-passed response as triggers.
+fn extrema_bands(
+    q: Vec<f64>,
+    fs: f64,
+    band: (f64, f64),
+    window: usize,
+    m: &ModeToFollow,
+    opts: &AmplitudeOptions,
+) -> Option<Bands> {
+    let triggers = randec::extrema(&q, window, opts.period.is_some());
+    if triggers.len() < opts.min_triggers {
+        return None;
+    }
+    let values: Vec<f64> = triggers.iter().map(|t| t.1).collect();
+    let edges = randec::level_edges(&values, opts.levels, 0.05, 0.995);
+    let levels = randec::level_sums(&q, &triggers, &edges, window, opts.groups);
+    let (f0, z0) = (m.frequency_hz, m.damping_ratio.clamp(1e-4, 0.3));
+    let model = filtered_mode(fs, window, band, m, opts);
+    Some(Bands {
+        edges,
+        totals: levels.iter().map(|l| l.total()).collect(),
+        estimate: Box::new(move |skip| {
+            levels
+                .iter()
+                .map(|l| {
+                    let (s, _) = l.signature(skip)?;
+                    let s: Vec<crate::fft::C> =
+                        s.iter().map(|v| crate::fft::C::new(*v, 0.0)).collect();
+                    model.fit(&s, true, f0, z0)
+                })
+                .collect()
+        }),
+    })
+}
+
+/// Every `stride`-th sample as a trigger, by the envelope.
+fn envelope_bands(
+    q: &[f64],
+    fs: f64,
+    band: (f64, f64),
+    window: usize,
+    m: &ModeToFollow,
+    opts: &AmplitudeOptions,
+) -> Option<Bands> {
+    let (re, im) = envelope::analytic(q, fs, band.0, band.1);
+    // Eight triggers a cycle: neighbours closer than that add little.
+    let stride = ((fs / m.frequency_hz) / 8.0).floor().max(1.0) as usize;
+    let circular = opts.period.is_some();
+    let usable = if circular {
+        re.len()
+    } else {
+        re.len().saturating_sub(window)
+    };
+    let env: Vec<f64> = (0..usable)
+        .step_by(stride)
+        .map(|t| re[t].hypot(im[t]))
+        .collect();
+    if env.len() < opts.min_triggers {
+        return None;
+    }
+    let edges = randec::level_edges(&env, opts.levels, 0.05, 0.995);
+    let sums = envelope::band_sums(&re, &im, &edges, window, stride, opts.groups, circular);
+    let (f0, z0) = (m.frequency_hz, m.damping_ratio.clamp(1e-4, 0.3));
+    let model = filtered_mode(fs, window, band, m, opts);
+    Some(Bands {
+        edges,
+        totals: sums.iter().map(|b| b.total()).collect(),
+        estimate: Box::new(move |skip| {
+            sums.iter()
+                .map(|b| model.fit(&b.signature(skip)?, false, f0, z0))
+                .collect()
+        }),
+    })
+}
+
+fn mode_curve(
+    q: &[f64],
+    fs: f64,
+    m: &ModeToFollow,
+    band: (f64, f64),
+    opts: &AmplitudeOptions,
+    report_as: Quantity,
+) -> ModeCurve {
+    let mut notes = Vec::new();
+    let window = (opts.cycles * fs / m.frequency_hz).round().max(8.0) as usize;
+    let mut curve = ModeCurve {
+        mode: m.clone(),
+        band_hz: band,
+        points: Vec::new(),
+        linearity: None,
+        notes: Vec::new(),
+    };
+    let bands = match opts.method {
+        AmplitudeMethod::Envelope => envelope_bands(q, fs, band, window, m, opts),
+        AmplitudeMethod::Extrema => extrema_bands(
+            filter::band_pass(q, fs, band.0, band.1),
+            fs,
+            band,
+            window,
+            m,
+            opts,
+        ),
+    };
+    let Some(bands) = bands else {
+        curve.notes.push(format!(
+            "the record holds fewer than the {} triggers one point needs: no curve",
+            opts.min_triggers
+        ));
+        return curve;
+    };
+    let full = (bands.estimate)(None);
+    let replicates: Vec<Vec<Option<decay::Decay>>> = (0..opts.groups)
+        .map(|g| (bands.estimate)(Some(g)))
+        .collect();
+    let jack = |values: &[f64]| -> f64 {
+        let g = values.len() as f64;
+        let mean = values.iter().sum::<f64>() / g;
+        ((g - 1.0) / g * values.iter().map(|v| (v - mean).powi(2)).sum::<f64>()).sqrt()
+    };
+    // A point needs its triggers, and a fit with every group and with each left out.
+    let mut rows: Vec<Row> = Vec::new();
+    for (k, d) in full.iter().enumerate() {
+        let n = bands.totals[k];
+        let (lo, hi) = (bands.edges[k], bands.edges[k + 1]);
+        if n < opts.min_triggers {
+            notes.push(format!(
+                "amplitudes {lo:.4e}–{hi:.4e} (record's unit): {n} triggers, fewer than {}: left out",
+                opts.min_triggers
+            ));
+            continue;
+        }
+        let reps: Option<Vec<decay::Decay>> = replicates.iter().map(|r| r[k]).collect();
+        match (d, reps) {
+            (Some(d), Some(reps)) => rows.push((*d, reps, n)),
+            _ => notes.push(format!(
+                "amplitudes {lo:.4e}–{hi:.4e} (record's unit): no decaying oscillation over {} cycles to fit: left out",
+                opts.cycles
+            )),
+        }
+    }
+    let omega = |d: &decay::Decay| 2.0 * std::f64::consts::PI * d.frequency_hz;
+    let amp = |d: &decay::Decay| opts.measured.convert(d.amplitude, omega(d), report_as);
+    for (d, reps, n) in &rows {
+        let f: Vec<f64> = reps.iter().map(|r| r.frequency_hz).collect();
+        let z: Vec<f64> = reps.iter().map(|r| r.damping_ratio).collect();
+        curve.points.push(AmplitudePoint {
+            amplitude: amp(d),
+            triggers: *n,
+            frequency_hz: d.frequency_hz,
+            frequency_se_hz: jack(&f),
+            damping_ratio: d.damping_ratio,
+            damping_se: jack(&z),
+        });
+    }
+    if rows.len() >= 3 {
+        curve.linearity = Some(linearity(&rows, opts.groups, &amp, &jack));
+    }
+    curve.notes = notes;
+    curve
+}
+
+/// The weighted least-squares slope of `v` on `a` (weights `w`), times the range of `a`.
+fn change(a: &[f64], v: &[f64], w: &[f64]) -> f64 {
+    let sw: f64 = w.iter().sum();
+    let ma = a.iter().zip(w).map(|(a, w)| a * w).sum::<f64>() / sw;
+    let mv = v.iter().zip(w).map(|(v, w)| v * w).sum::<f64>() / sw;
+    let sxy: f64 = a
+        .iter()
+        .zip(v)
+        .zip(w)
+        .map(|((a, v), w)| w * (a - ma) * (v - mv))
+        .sum();
+    let sxx: f64 = a.iter().zip(w).map(|(a, w)| w * (a - ma).powi(2)).sum();
+    let range = a.iter().fold(f64::NEG_INFINITY, |m, &x| m.max(x))
+        - a.iter().fold(f64::INFINITY, |m, &x| m.min(x));
+    sxy / sxx * range
+}
+
+type Row = (decay::Decay, Vec<decay::Decay>, usize);
+
+fn linearity(
+    rows: &[Row],
+    groups: usize,
+    amp: &dyn Fn(&decay::Decay) -> f64,
+    jack: &dyn Fn(&[f64]) -> f64,
+) -> Linearity {
+    let test = |get: &dyn Fn(&decay::Decay) -> f64| -> SlopeTest {
+        let reps: Vec<Vec<f64>> = (0..groups)
+            .map(|g| rows.iter().map(|r| get(&r.1[g])).collect())
+            .collect();
+        let se: Vec<f64> = (0..rows.len())
+            .map(|k| jack(&reps.iter().map(|r| r[k]).collect::<Vec<_>>()))
+            .collect();
+        let w: Vec<f64> = se
+            .iter()
+            .map(|s| 1.0 / (s * s).max(f64::MIN_POSITIVE))
+            .collect();
+        let a: Vec<f64> = rows.iter().map(|r| amp(&r.0)).collect();
+        let full = change(&a, &rows.iter().map(|r| get(&r.0)).collect::<Vec<_>>(), &w);
+        let replicate: Vec<f64> = (0..groups)
+            .map(|g| {
+                let a: Vec<f64> = rows.iter().map(|r| amp(&r.1[g])).collect();
+                change(&a, &reps[g], &w)
+            })
+            .collect();
+        let change_se = jack(&replicate);
+        let t = full / change_se;
+        let p_value = StudentsT::new(0.0, 1.0, (groups - 1) as f64)
+            .map(|d| 2.0 * (1.0 - d.cdf(t.abs())))
+            .unwrap_or(f64::NAN);
+        SlopeTest {
+            change: full,
+            change_se,
+            p_value,
+        }
+    };
+    let frequency = test(&|d| d.frequency_hz);
+    let damping = test(&|d| d.damping_ratio);
+    let half = 0.5 * LINEARITY_LEVEL;
+    let significant = |p: f64| p < half;
+    Linearity {
+        frequency,
+        damping,
+        // A p-value that could not be computed (NaN) is no evidence of a change.
+        linear: !significant(frequency.p_value) && !significant(damping.p_value),
+    }
+}
+
+#[cfg(test)]
+mod tests;

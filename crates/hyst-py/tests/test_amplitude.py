@@ -1,0 +1,63 @@
+"""hyst.amplitude against the command line on records made outside the project, and the
+curves against those records' published truth."""
+
+import json
+import subprocess
+
+import numpy as np
+import pytest
+
+import hyst
+from test_ssi import cli_flags, read_record
+
+
+def comparable(doc):
+    """A report's document without the record's name (the rest is computed alike)."""
+    return {k: v for k, v in doc.items() if k != "record"}
+
+
+@pytest.mark.parametrize(
+    "keywords", [{}, {"levels": 5, "cycles": 6.0, "method": "extrema", "amplitude_of": "velocity"}]
+)
+def test_amplitude_gives_the_commands_report(data_dir, hyst_bin, tmp_path, keywords):
+    """The same curves from the command and from Python, with the defaults and with options
+    given as flags and as keywords."""
+    path = data_dir / "oma" / "data_3dof.csv"
+    out = tmp_path / "a.json"
+    p = subprocess.run(
+        [str(hyst_bin), "amplitude", "--input", str(path), "--fs", "20", "--json", str(out),
+         *cli_flags(keywords)],
+        capture_output=True, text=True,
+    )
+    assert p.returncode == 0, p.stderr
+    y, _ = read_record(path)
+    report = hyst.amplitude(y, 20.0, **keywords)
+    assert comparable(report.to_dict()) == comparable(json.loads(out.read_text()))
+    assert str(report).splitlines()[1:] == p.stdout.splitlines()[1:]
+
+
+def test_the_3dof_chains_modes_are_linear_at_their_truth(data_dir):
+    """The shared 3-DOF chain (linear, modal damping 1, 2 and 5 %, made outside the project):
+    every mode called linear, and ≥ 90 % of the points within 2 standard errors of the
+    published frequency and damping ratio."""
+    truth = json.loads((data_dir / "oma" / "truth_3dof.json").read_text())
+    y, _ = read_record(data_dir / "oma" / "data_3dof.csv")
+    doc = hyst.amplitude(y, truth["fs"]).to_dict()
+    modes = doc["curves"]["modes"]
+    assert len(modes) == 3
+    z = []
+    for m, f, zeta in zip(modes, truth["fn_hz"], truth["zeta"]):
+        assert m["linearity"]["linear"], m["linearity"]
+        for p in m["points"]:
+            z.append((p["frequency_hz"] - f) / p["frequency_se_hz"])
+            z.append((p["damping_ratio"] - zeta) / p["damping_se"])
+    z = np.array(z)
+    assert np.mean(np.abs(z) < 2.0) >= 0.9, z
+
+
+def test_bad_options_are_refused():
+    y = np.random.default_rng(1).standard_normal((2000, 1))
+    with pytest.raises(ValueError, match='measured "strain" is not one of'):
+        hyst.amplitude(y, 100.0, measured="strain")
+    with pytest.raises(ValueError, match="levels must be at least 1"):
+        hyst.amplitude(y, 100.0, levels=0)
