@@ -39,8 +39,20 @@ pub(crate) enum MethodArg {
 
 #[derive(Args, Debug)]
 pub(crate) struct AmplitudeArgs {
-    #[command(flatten)]
-    pub(crate) record: ChannelArgs,
+    /// The record, or several of one structure (force levels, a campaign): each analysed
+    /// alike, the same modes followed in each, and each mode's change pooled over all their
+    /// points. Formats as `hyst ssi --input`.
+    #[arg(long, num_args = 1.., required = true)]
+    pub(crate) input: Vec<PathBuf>,
+    /// Sampling rate of the files (Hz); a Universal File states its own.
+    #[arg(long)]
+    pub(crate) fs: Option<f64>,
+    /// Channels to analyse, comma-separated; default: every column except `t` and `time`.
+    #[arg(long, value_delimiter = ',')]
+    pub(crate) columns: Option<Vec<String>>,
+    /// Skip this many leading rows of each record (e.g. a start-up transient).
+    #[arg(long, default_value_t = 0)]
+    pub(crate) skip: usize,
     /// Modes to follow, by frequency (Hz), comma-separated: the identified mode nearest each
     /// (within 5 %); default every mode `hyst ssi` reports.
     #[arg(
@@ -121,31 +133,83 @@ impl AmplitudeArgs {
     }
 }
 
+impl AmplitudeArgs {
+    /// The record flags for the file `input`, as `hyst ssi` takes them.
+    fn record(&self, input: &std::path::Path) -> ChannelArgs {
+        ChannelArgs {
+            input: input.to_path_buf(),
+            fs: self.fs,
+            columns: self.columns.clone(),
+            skip: self.skip,
+        }
+    }
+}
+
+/// One record's analysis, following `modes` (every reported mode when empty).
+fn analyse(
+    a: &AmplitudeArgs,
+    input: &std::path::Path,
+    analysis: &hyst::covssi::AnalysisOptions,
+    opts: &AmplitudeOptions,
+    modes: &[f64],
+) -> Result<amplitude::AmplitudeAnalysis, Error> {
+    let record = a.record(input);
+    let ch = channels(&record)?;
+    let views: Vec<&[f64]> = ch.data.iter().map(|c| c.as_slice()).collect();
+    amplitude::amplitude_analysis(&views, ch.fs, analysis, opts, modes).map_err(|e| match e {
+        hyst::ident::IdentError::Ssi(e) => flag_error(&record, &a.ssi, e, &ch.names, ch.fs),
+        e => fail(format!("{}: {e}", input.display())),
+    })
+}
+
 pub(crate) fn run(a: &AmplitudeArgs) -> Result<(), Error> {
     let analysis = a.ssi.analysis()?;
     let opts = a.options();
-    let ch = channels(&a.record)?;
-    let views: Vec<&[f64]> = ch.data.iter().map(|c| c.as_slice()).collect();
-    let bar = spinner();
-    bar.set_message("identifying the modes, then their amplitude bands");
-    let result = amplitude::amplitude_analysis(&views, ch.fs, &analysis, &opts, &a.modes);
+    let name = |p: &PathBuf| p.display().to_string();
+    let bar = steps_bar();
+    bar.set_length(a.input.len() as u64);
+    let campaign = amplitude::amplitude_campaign(a.input.len(), &a.modes, |i, follow| {
+        let input = &a.input[i];
+        bar.set_position(i as u64);
+        bar.set_message(format!(
+            "{}: its modes, then their amplitude bands",
+            input.display()
+        ));
+        Ok::<_, Error>((name(input), analyse(a, input, &analysis, &opts, follow)?))
+    });
     bar.finish_and_clear();
-    let result = result.map_err(|e| match e {
-        hyst::ident::IdentError::Ssi(e) => flag_error(&a.record, &a.ssi, e, &ch.names, ch.fs),
-        e => fail(format!("{}: {e}", a.record.input.display())),
-    })?;
-    let report = hyst::report::FileReport::new(a.record.input.display().to_string(), result);
-    print!("{report}");
-    if let Some(json) = &a.json {
-        report.write_json(json)?;
+    let mut campaign = campaign?;
+    if campaign.records.len() == 1 {
+        let (record, analysis) = campaign.records.remove(0);
+        let report = hyst::report::FileReport::new(record.clone(), analysis);
+        print!("{report}");
+        if let Some(json) = &a.json {
+            report.write_json(json)?;
+        }
+        return draw(a, &[(record, &report.report.curves)]);
     }
+    print!("{campaign}");
+    if let Some(json) = &a.json {
+        hyst::report::write_json(&campaign, json)?;
+    }
+    let curves: Vec<(String, &amplitude::AmplitudeReport)> = campaign
+        .records
+        .iter()
+        .map(|(n, r)| (n.clone(), &r.curves))
+        .collect();
+    draw(a, &curves)
+}
+
+/// The figure, when asked for.
+fn draw(a: &AmplitudeArgs, curves: &[(String, &amplitude::AmplitudeReport)]) -> Result<(), Error> {
     if let Some(svg) = &a.svg {
-        let title = format!("Amplitude dependence: {}", a.record.input.display());
-        std::fs::write(
-            svg,
-            hyst::figures::amplitude_svg(&report.report.curves, &title),
-        )
-        .map_err(|e| fail(format!("{}: {e}", svg.display())))?;
+        let title = if curves.len() == 1 {
+            format!("Amplitude dependence: {}", curves[0].0)
+        } else {
+            format!("Amplitude dependence: {} records", curves.len())
+        };
+        std::fs::write(svg, hyst::figures::amplitude_svg(curves, &title))
+            .map_err(|e| fail(format!("{}: {e}", svg.display())))?;
     }
     Ok(())
 }

@@ -3,18 +3,19 @@
 
 use plotters::prelude::*;
 
-use crate::ident::amplitude::{AmplitudeReport, ModeCurve};
+use crate::ident::amplitude::{AmplitudePoint, AmplitudeReport, ModeCurve};
 use crate::plot::colors;
 
 /// One row per mode: its natural frequency (left) and damping ratio (right) against its
-/// amplitude, each point with a bar of ± one standard error; the SVG as a string.
-pub fn amplitude_svg(r: &AmplitudeReport, title: &str) -> String {
-    let rows = r.modes.len().max(1);
+/// amplitude, each point with a bar of ± one standard error, one colour per record (the
+/// records following the same modes in the same order); the SVG as a string.
+pub fn amplitude_svg(records: &[(String, &AmplitudeReport)], title: &str) -> String {
+    let rows = records.first().map_or(1, |r| r.1.modes.len().max(1));
     let mut svg = String::new();
     {
         let root =
             SVGBackend::with_string(&mut svg, (900, 60 + 300 * rows as u32)).into_drawing_area();
-        if draw(&root, r, title).is_err() {
+        if draw(&root, records, title).is_err() {
             // A failed drawing leaves what was drawn; there is nothing to recover here.
         }
         let _ = root.present();
@@ -24,31 +25,55 @@ pub fn amplitude_svg(r: &AmplitudeReport, title: &str) -> String {
 
 type Area<'a> = DrawingArea<SVGBackend<'a>, plotters::coord::Shift>;
 
-fn draw(root: &Area<'_>, r: &AmplitudeReport, title: &str) -> Result<(), String> {
+const PALETTE: [RGBColor; 6] = [
+    colors::BLUE,
+    colors::RED,
+    colors::GREEN,
+    colors::ORANGE,
+    colors::BLACK,
+    colors::GREY,
+];
+
+type Value = dyn Fn(&AmplitudePoint) -> (f64, f64);
+
+/// A point with its bar: (amplitude, value, standard error).
+type Bar = (f64, f64, f64);
+
+fn draw(
+    root: &Area<'_>,
+    records: &[(String, &AmplitudeReport)],
+    title: &str,
+) -> Result<(), String> {
     root.fill(&WHITE).map_err(|e| e.to_string())?;
     let root = root
         .titled(title, ("sans-serif", 20))
         .map_err(|e| e.to_string())?;
-    let rows = root.split_evenly((r.modes.len().max(1), 2));
-    let unit = format!("amplitude ({})", r.amplitude_of.name());
-    for (j, c) in r.modes.iter().enumerate() {
-        let f = |p: &crate::ident::amplitude::AmplitudePoint| (p.frequency_hz, p.frequency_se_hz);
-        let z = |p: &crate::ident::amplitude::AmplitudePoint| {
-            (100.0 * p.damping_ratio, 100.0 * p.damping_se)
-        };
+    let Some(first) = records.first() else {
+        return Ok(());
+    };
+    let rows = root.split_evenly((first.1.modes.len().max(1), 2));
+    let unit = format!("amplitude ({})", first.1.amplitude_of.name());
+    let f: &Value = &|p| (p.frequency_hz, p.frequency_se_hz);
+    let z: &Value = &|p| (100.0 * p.damping_ratio, 100.0 * p.damping_se);
+    for (j, c) in first.1.modes.iter().enumerate() {
+        let curves: Vec<(&str, Option<&ModeCurve>)> = records
+            .iter()
+            .map(|(n, r)| (n.as_str(), r.modes.get(j)))
+            .collect();
+        let hz = c.mode.frequency_hz;
         panel(
             &rows[2 * j],
-            c,
+            &curves,
             &unit,
-            &format!("{:.3} Hz: frequency (Hz)", c.mode.frequency_hz),
-            &f,
+            &format!("{hz:.3} Hz: frequency (Hz)"),
+            f,
         )?;
         panel(
             &rows[2 * j + 1],
-            c,
+            &curves,
             &unit,
-            &format!("{:.3} Hz: damping ratio (%)", c.mode.frequency_hz),
-            &z,
+            &format!("{hz:.3} Hz: damping ratio (%)"),
+            z,
         )?;
     }
     Ok(())
@@ -56,27 +81,37 @@ fn draw(root: &Area<'_>, r: &AmplitudeReport, title: &str) -> Result<(), String>
 
 fn panel(
     area: &Area<'_>,
-    c: &ModeCurve,
+    curves: &[(&str, Option<&ModeCurve>)],
     xl: &str,
     yl: &str,
-    value: &dyn Fn(&crate::ident::amplitude::AmplitudePoint) -> (f64, f64),
+    value: &Value,
 ) -> Result<(), String> {
-    let pts: Vec<(f64, f64, f64)> = c
-        .points
+    let series: Vec<(&str, Vec<Bar>)> = curves
         .iter()
-        .map(|p| {
-            let (v, se) = value(p);
-            (p.amplitude, v, se)
+        .map(|(name, c)| {
+            let pts = c
+                .map(|c| {
+                    c.points
+                        .iter()
+                        .map(|p| {
+                            let (v, se) = value(p);
+                            (p.amplitude, v, se)
+                        })
+                        .filter(|p| p.0.is_finite() && p.1.is_finite() && p.2.is_finite())
+                        .collect()
+                })
+                .unwrap_or_default();
+            (*name, pts)
         })
-        .filter(|p| p.0.is_finite() && p.1.is_finite() && p.2.is_finite())
         .collect();
-    if pts.is_empty() {
+    let all: Vec<&Bar> = series.iter().flat_map(|s| s.1.iter()).collect();
+    if all.is_empty() {
         return Ok(());
     }
-    let (x0, x1) = pts.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |a, p| {
+    let (x0, x1) = all.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |a, p| {
         (a.0.min(p.0), a.1.max(p.0))
     });
-    let (y0, y1) = pts.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |a, p| {
+    let (y0, y1) = all.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |a, p| {
         (a.0.min(p.1 - p.2), a.1.max(p.1 + p.2))
     });
     let (dx, dy) = (
@@ -96,16 +131,36 @@ fn panel(
         .x_label_formatter(&|v| format!("{v:.2e}"))
         .draw()
         .map_err(|e| e.to_string())?;
-    chart
-        .draw_series(pts.iter().map(|&(x, y, se)| {
-            ErrorBar::new_vertical(x, y - se, y, y + se, colors::BLUE.filled(), 8)
-        }))
-        .map_err(|e| e.to_string())?;
-    chart
-        .draw_series(
-            pts.iter()
-                .map(|&(x, y, _)| Circle::new((x, y), 3, colors::BLUE.filled())),
-        )
-        .map_err(|e| e.to_string())?;
+    for (k, (name, pts)) in series.iter().enumerate() {
+        let color = PALETTE[k % PALETTE.len()];
+        chart
+            .draw_series(
+                pts.iter().map(|&(x, y, se)| {
+                    ErrorBar::new_vertical(x, y - se, y, y + se, color.filled(), 8)
+                }),
+            )
+            .map_err(|e| e.to_string())?;
+        let drawn = chart
+            .draw_series(
+                pts.iter()
+                    .map(|&(x, y, _)| Circle::new((x, y), 3, color.filled())),
+            )
+            .map_err(|e| e.to_string())?;
+        if series.len() > 1 {
+            let label: String = name.rsplit('/').next().unwrap_or(name).to_string();
+            drawn
+                .label(label)
+                .legend(move |(x, y)| Circle::new((x + 7, y), 3, color.filled()));
+        }
+    }
+    if series.len() > 1 {
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()
+            .map_err(|e| e.to_string())?;
+    }
     Ok(())
 }

@@ -627,6 +627,39 @@ fn bench_ident() {
     println!("ident_zener_spectrum_ms_2e17 {:.1} ms", t * 1e3);
 }
 
+/// `hyst amplitude`'s analysis on a ten-channel, ten-minute record at 100 Hz (the five-mode
+/// record of `bench command`, 60 000 samples): SSI and its refinement, then every reported
+/// mode's amplitude curves (the target: under 10 s on this machine), and the curves alone.
+fn bench_amplitude() {
+    use hyst_ident::amplitude::{
+        AmplitudeOptions, ModeToFollow, amplitude_analysis, amplitude_curves,
+    };
+    let y = bench_command::record(60_000, 77);
+    let views: Vec<&[f64]> = y.iter().map(|c| c.as_slice()).collect();
+    let analysis = covssi::AnalysisOptions::default();
+    let opts = AmplitudeOptions::default();
+    let mut modes = 0;
+    let t = best_of(2, || {
+        let r =
+            amplitude_analysis(&views, bench_command::FS, &analysis, &opts, &[]).expect("curves");
+        modes = r.curves.modes.len();
+        r
+    });
+    println!("amplitude_10ch_10min_100hz_s {t:.2} s ({modes} modes)");
+    let follow: Vec<ModeToFollow> = bench_command::MODES
+        .iter()
+        .map(|&(f, z)| ModeToFollow {
+            frequency_hz: f,
+            damping_ratio: z,
+            shape: None,
+        })
+        .collect();
+    let t = best_of(2, || {
+        amplitude_curves(&views, bench_command::FS, &follow, &[], &opts).expect("curves")
+    });
+    println!("amplitude_curves_only_10ch_10min_5modes_s {t:.2} s");
+}
+
 /// `cargo xtask bench growth` (`growth.rs`).
 fn bench_growth() {
     or_exit(growth::run());
@@ -666,6 +699,8 @@ enum BenchGroup {
     Growth,
     /// Monitoring's throughput: 1-hour 10-channel records at 100 Hz identified per minute.
     Monitor,
+    /// `hyst amplitude` on a 10-channel 10-minute record at 100 Hz.
+    Amplitude,
 }
 
 #[derive(clap::Subcommand)]
@@ -709,7 +744,7 @@ fn main() {
     use clap::Parser;
     match Cli::parse().task {
         Task::Bench { groups } => {
-            let all: [(BenchGroup, fn()); 7] = [
+            let all: [(BenchGroup, fn()); 8] = [
                 (BenchGroup::Rk4, bench),
                 (BenchGroup::Covssi, bench_covssi),
                 (BenchGroup::Ident, bench_ident),
@@ -717,6 +752,7 @@ fn main() {
                 (BenchGroup::Command, bench_command),
                 (BenchGroup::Growth, bench_growth),
                 (BenchGroup::Monitor, monitor::bench),
+                (BenchGroup::Amplitude, bench_amplitude),
             ];
             for (group, run) in all {
                 if groups.is_empty() || groups.contains(&group) {

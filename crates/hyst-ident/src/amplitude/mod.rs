@@ -32,10 +32,11 @@ mod envelope;
 mod filter;
 mod randec;
 mod report;
+mod slope;
 
 pub use report::*;
-
-use statrs::distribution::{ContinuousCDF, StudentsT};
+pub use slope::*;
+use slope::{Row, linearity};
 
 /// Overall significance of the linearity test (both slopes together).
 pub const LINEARITY_LEVEL: f64 = 0.01;
@@ -651,73 +652,6 @@ fn mode_curve(
     }
     curve.notes = notes;
     curve
-}
-
-/// The weighted least-squares slope of `v` on `a` (weights `w`), times the range of `a`.
-fn change(a: &[f64], v: &[f64], w: &[f64]) -> f64 {
-    let sw: f64 = w.iter().sum();
-    let ma = a.iter().zip(w).map(|(a, w)| a * w).sum::<f64>() / sw;
-    let mv = v.iter().zip(w).map(|(v, w)| v * w).sum::<f64>() / sw;
-    let sxy: f64 = a
-        .iter()
-        .zip(v)
-        .zip(w)
-        .map(|((a, v), w)| w * (a - ma) * (v - mv))
-        .sum();
-    let sxx: f64 = a.iter().zip(w).map(|(a, w)| w * (a - ma).powi(2)).sum();
-    let range = a.iter().fold(f64::NEG_INFINITY, |m, &x| m.max(x))
-        - a.iter().fold(f64::INFINITY, |m, &x| m.min(x));
-    sxy / sxx * range
-}
-
-type Row = (decay::Decay, Vec<decay::Decay>, usize);
-
-fn linearity(
-    rows: &[Row],
-    groups: usize,
-    amp: &dyn Fn(&decay::Decay) -> f64,
-    jack: &dyn Fn(&[f64]) -> f64,
-) -> Linearity {
-    let test = |get: &dyn Fn(&decay::Decay) -> f64| -> SlopeTest {
-        let reps: Vec<Vec<f64>> = (0..groups)
-            .map(|g| rows.iter().map(|r| get(&r.1[g])).collect())
-            .collect();
-        let se: Vec<f64> = (0..rows.len())
-            .map(|k| jack(&reps.iter().map(|r| r[k]).collect::<Vec<_>>()))
-            .collect();
-        let w: Vec<f64> = se
-            .iter()
-            .map(|s| 1.0 / (s * s).max(f64::MIN_POSITIVE))
-            .collect();
-        let a: Vec<f64> = rows.iter().map(|r| amp(&r.0)).collect();
-        let full = change(&a, &rows.iter().map(|r| get(&r.0)).collect::<Vec<_>>(), &w);
-        let replicate: Vec<f64> = (0..groups)
-            .map(|g| {
-                let a: Vec<f64> = rows.iter().map(|r| amp(&r.1[g])).collect();
-                change(&a, &reps[g], &w)
-            })
-            .collect();
-        let change_se = jack(&replicate);
-        let t = full / change_se;
-        let p_value = StudentsT::new(0.0, 1.0, (groups - 1) as f64)
-            .map(|d| 2.0 * (1.0 - d.cdf(t.abs())))
-            .unwrap_or(f64::NAN);
-        SlopeTest {
-            change: full,
-            change_se,
-            p_value,
-        }
-    };
-    let frequency = test(&|d| d.frequency_hz);
-    let damping = test(&|d| d.damping_ratio);
-    let half = 0.5 * LINEARITY_LEVEL;
-    let significant = |p: f64| p < half;
-    Linearity {
-        frequency,
-        damping,
-        // A p-value that could not be computed (NaN) is no evidence of a change.
-        linear: !significant(frequency.p_value) && !significant(damping.p_value),
-    }
 }
 
 #[cfg(test)]

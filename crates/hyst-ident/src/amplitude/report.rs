@@ -187,3 +187,124 @@ impl fmt::Display for ModeCurve {
         Ok(())
     }
 }
+
+/// Several records of one structure (force levels, or a campaign), each analysed alike with
+/// the same modes followed, and each mode's change pooled over all their points.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct AmplitudeCampaign {
+    /// Each record's name and analysis.
+    pub records: Vec<(String, AmplitudeAnalysis)>,
+    /// Per followed mode (the first record's order): the test over every record's points.
+    pub pooled: Vec<PooledMode>,
+}
+
+/// One mode's change over every record's points.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct PooledMode {
+    /// The mode as the first record has it (Hz).
+    pub frequency_hz: f64,
+    /// Points pooled.
+    pub points: usize,
+    /// [`super::pooled_linearity`] of them (`None` with fewer than three).
+    pub linearity: Option<super::Linearity>,
+}
+
+/// A campaign of `count` records: `analyse(i, follow)` gives record i's name and analysis
+/// following the modes at `follow` (Hz; every reported mode when empty). The first record
+/// follows `asked`; the others the modes it followed, in its order (so that mode j is the
+/// same mode in every record); then each mode's change is pooled ([`pool_records`]).
+pub fn amplitude_campaign<E>(
+    count: usize,
+    asked: &[f64],
+    mut analyse: impl FnMut(usize, &[f64]) -> Result<(String, AmplitudeAnalysis), E>,
+) -> Result<AmplitudeCampaign, E> {
+    let mut records = Vec::with_capacity(count);
+    let mut follow = asked.to_vec();
+    for i in 0..count {
+        let r = analyse(i, &follow)?;
+        if i == 0 {
+            follow = campaign_modes(asked, &r.1);
+        }
+        records.push(r);
+    }
+    Ok(pool_records(records))
+}
+
+/// The frequencies every record of a campaign follows: `asked`, else the modes the first
+/// record's analysis followed.
+fn campaign_modes(asked: &[f64], first: &AmplitudeAnalysis) -> Vec<f64> {
+    if asked.is_empty() {
+        first
+            .curves
+            .modes
+            .iter()
+            .map(|m| m.mode.frequency_hz)
+            .collect()
+    } else {
+        asked.to_vec()
+    }
+}
+
+/// The campaign of `records` (each analysed with the same modes followed, in the same
+/// order): the pooled test of each mode ([`super::pooled_linearity`]).
+fn pool_records(records: Vec<(String, AmplitudeAnalysis)>) -> AmplitudeCampaign {
+    let modes = records.first().map_or(0, |r| r.1.curves.modes.len());
+    let pooled = (0..modes)
+        .map(|j| {
+            let points: Vec<super::AmplitudePoint> = records
+                .iter()
+                .filter_map(|r| r.1.curves.modes.get(j))
+                .flat_map(|c| c.points.iter().cloned())
+                .collect();
+            PooledMode {
+                frequency_hz: records[0].1.curves.modes[j].mode.frequency_hz,
+                points: points.len(),
+                linearity: super::pooled_linearity(&points),
+            }
+        })
+        .collect();
+    AmplitudeCampaign { records, pooled }
+}
+
+impl fmt::Display for AmplitudeCampaign {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for (name, a) in &self.records {
+            writeln!(f, "record: {name}")?;
+            a.fmt(f)?;
+        }
+        writeln!(
+            f,
+            "pooled over the {} records (each point with its standard error):",
+            self.records.len()
+        )?;
+        for m in &self.pooled {
+            match &m.linearity {
+                Some(l) => writeln!(
+                    f,
+                    "mode {:.4} Hz, {} points: frequency {:+.4} ± {:.4} Hz (p = {:.2e}), damping ratio {:+.3} ± {:.3} % (p = {:.2e}) over the amplitudes reached: {}",
+                    m.frequency_hz,
+                    m.points,
+                    l.frequency.change,
+                    l.frequency.change_se,
+                    l.frequency.p_value,
+                    100.0 * l.damping.change,
+                    100.0 * l.damping.change_se,
+                    l.damping.p_value,
+                    if l.linear {
+                        "no significant change"
+                    } else {
+                        "amplitude-dependent"
+                    }
+                )?,
+                None => writeln!(
+                    f,
+                    "mode {:.4} Hz: {} points, too few to test",
+                    m.frequency_hz, m.points
+                )?,
+            }
+        }
+        Ok(())
+    }
+}

@@ -212,8 +212,10 @@ def amplitude(y, fs, *, modes=None, measured="displacement", amplitude_of=None, 
 
     Parameters
     ----------
-    y : array_like, shape (samples, channels) or (samples,)
-        The measured response.
+    y : array_like, shape (samples, channels) or (samples,); or a list of them
+        The measured response; or several records of one structure (force levels, a
+        campaign), each analysed alike with the same modes followed, and each mode's change
+        pooled over all their points (``hyst amplitude --input A B ...``).
     fs : float
         Sampling rate (Hz).
     modes : list of float, optional
@@ -240,22 +242,29 @@ def amplitude(y, fs, *, modes=None, measured="displacement", amplitude_of=None, 
     df, dzeta, dmac, dreal, refine, joint
         The modal analysis, as for :func:`ssi`.
     record : str
-        What the data is, for the report.
+        What the data is, for the report (several records are named ``record[i]``).
 
     Returns
     -------
     Report
-        ``str(report)`` as ``hyst amplitude`` prints it; ``report.to_dict()`` its JSON:
+        ``str(report)`` as ``hyst amplitude`` prints it; ``report.to_dict()`` its JSON (with
+        several records: ``records``, a list of [name, analysis], and ``pooled``):
         ``curves.modes[j].points`` (``amplitude``, ``frequency_hz``, ``frequency_se_hz``,
         ``damping_ratio``, ``damping_se``, ``triggers``), ``linearity``, ``notes``.
     """
     import json
 
-    a = _real(y, "y")
-    if a.ndim == 1:
-        a = a.reshape(-1, 1)
-    if a.ndim != 2:
-        raise ValueError(f"y must be (samples, channels) or (samples,), got shape {a.shape}")
+    many = isinstance(y, (list, tuple))
+    arrays = []
+    for i, r in enumerate(y if many else [y]):
+        a = _real(r, f"y[{i}]" if many else "y")
+        if a.ndim == 1:
+            a = a.reshape(-1, 1)
+        if a.ndim != 2:
+            raise ValueError(f"y must be (samples, channels) or (samples,), got shape {a.shape}")
+        arrays.append(a)
+    if not arrays:
+        raise ValueError("no records: give an array, or a list of them")
     quantities = ("displacement", "velocity", "acceleration")
     for name, v in (("measured", measured), ("amplitude_of", amplitude_of)):
         if v is not None and v not in quantities:
@@ -278,9 +287,10 @@ def amplitude(y, fs, *, modes=None, measured="displacement", amplitude_of=None, 
         decimate=decimate, max_order=max_order, order_step=order_step, references=references,
         df=df, dzeta=dzeta, dmac=dmac, dreal=dreal, refine=refine, joint=joint,
     )
+    names = [f"{record}[{i}]" for i in range(len(arrays))] if many else [str(record)]
     return _hyst.amplitude(
-        a, float(fs), settings=settings, options=json.dumps(options),
-        modes=[] if modes is None else [float(f) for f in modes], record=str(record),
+        arrays, float(fs), settings=settings, options=json.dumps(options),
+        modes=[] if modes is None else [float(f) for f in modes], records=names,
     )
 
 

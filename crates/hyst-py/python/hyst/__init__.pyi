@@ -172,7 +172,7 @@ def ssi(
 ) -> SsiResult: ...
 
 def amplitude(
-    y: npt.ArrayLike,
+    y: Union[npt.ArrayLike, Sequence[npt.ArrayLike]],
     fs: float,
     *,
     modes: Optional[Sequence[float]] = ...,
