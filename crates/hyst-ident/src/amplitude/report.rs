@@ -15,8 +15,49 @@ pub struct AmplitudeAnalysis {
     /// Frequencies asked for that no identified mode lies within 5 % of (followed there,
     /// with every channel weighted alike).
     pub unidentified: Vec<f64>,
+    /// Channels that look clipped (saturated): many samples at exactly their largest or
+    /// smallest value. A clipped channel's large amplitudes are cut, and its curves there
+    /// are not the structure's.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub clipped: Vec<ClippedChannel>,
     /// The curves.
     pub curves: AmplitudeReport,
+}
+
+/// A channel that looks clipped.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct ClippedChannel {
+    /// The channel (0-based).
+    pub channel: usize,
+    /// Samples at exactly its extreme value.
+    pub samples: usize,
+    /// That value.
+    pub value: f64,
+}
+
+/// Channels of `y` with more than `max(8, n/2000)` samples at exactly their largest or
+/// smallest value (a continuous signal reaches its extreme once; a saturated sensor or
+/// converter holds it).
+pub fn clipped_channels(y: &[&[f64]]) -> Vec<ClippedChannel> {
+    y.iter()
+        .enumerate()
+        .filter_map(|(channel, c)| {
+            let hi = c.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            let lo = c.iter().copied().fold(f64::INFINITY, f64::min);
+            let limit = 8.max(c.len() / 2000);
+            [hi, lo]
+                .into_iter()
+                .map(|v| (v, c.iter().filter(|&&x| x == v).count()))
+                .filter(|&(_, n)| n > limit)
+                .max_by_key(|&(_, n)| n)
+                .map(|(value, samples)| ClippedChannel {
+                    channel,
+                    samples,
+                    value,
+                })
+        })
+        .collect()
 }
 
 /// Identify `y`'s modes (`analysis`), then follow those nearest `follow` (Hz; every
@@ -82,6 +123,7 @@ pub fn amplitude_analysis(
     Ok(AmplitudeAnalysis {
         modes_from: modes_from.into(),
         unidentified,
+        clipped: clipped_channels(y),
         curves,
     })
 }
@@ -97,6 +139,13 @@ impl fmt::Display for AmplitudeAnalysis {
                 "SSI"
             }
         )?;
+        for c in &self.clipped {
+            writeln!(
+                f,
+                "warning: channel {} looks clipped: {} samples at exactly {:e}; its largest amplitudes are cut, and the curves there are not the structure's",
+                c.channel, c.samples, c.value
+            )?;
+        }
         for u in &self.unidentified {
             writeln!(
                 f,

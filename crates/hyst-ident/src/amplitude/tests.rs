@@ -214,6 +214,20 @@ fn bad_input_is_named() {
     );
 }
 
+/// A saturated channel is named; a clean one, or a constant-free sine, is not.
+#[test]
+fn clipped_channels_are_named() {
+    let sine: Vec<f64> = (0..20_000).map(|i| (i as f64 * 0.0123).sin()).collect();
+    let clipped: Vec<f64> = sine.iter().map(|v| v.clamp(-0.9, 0.9)).collect();
+    let found = clipped_channels(&[&sine, &clipped]);
+    assert_eq!(found.len(), 1, "{found:?}");
+    assert_eq!(found[0].channel, 1);
+    assert!(
+        found[0].value.abs() == 0.9 && found[0].samples > 1000,
+        "{found:?}"
+    );
+}
+
 /// The tables of docs/amplitude.md: the two methods on the linear oscillator over 30 fresh
 /// seeds per setting, and the Bouc-Wen oscillators against their describing function and
 /// a free decay. `cargo test --release -p hyst-ident --lib amplitude::tests::study --
