@@ -476,28 +476,39 @@ struct Bands {
 
 /// The linear mode's signature through `band`, for the fits.
 fn filtered_mode(
+    q: &[f64],
     fs: f64,
     window: usize,
     band: (f64, f64),
     m: &ModeToFollow,
     opts: &AmplitudeOptions,
 ) -> decay::FilteredMode {
-    decay::FilteredMode::new(
+    let weight = |f: f64| filter::band_weight(f, band.0, band.1);
+    let model = decay::FilteredMode::new(
         fs,
         window,
         band,
-        &|f| filter::band_weight(f, band.0, band.1),
+        &weight,
         opts.measured.order(),
         m.frequency_hz,
         (0.5 * m.damping_ratio).clamp(5e-4, 0.05),
-    )
+    );
+    let share = decay::noise_share(
+        q,
+        fs,
+        band,
+        &weight,
+        &model,
+        m.frequency_hz,
+        m.damping_ratio.clamp(1e-4, 0.3),
+    );
+    model.with_noise_share(share)
 }
 
 /// The extrema of the band-passed response as triggers.
 fn extrema_bands(
     q: Vec<f64>,
-    fs: f64,
-    band: (f64, f64),
+    model: decay::FilteredMode,
     window: usize,
     m: &ModeToFollow,
     opts: &AmplitudeOptions,
@@ -510,7 +521,6 @@ fn extrema_bands(
     let edges = randec::level_edges(&values, opts.levels, 0.05, 0.995);
     let levels = randec::level_sums(&q, &triggers, &edges, window, opts.groups);
     let (f0, z0) = (m.frequency_hz, m.damping_ratio.clamp(1e-4, 0.3));
-    let model = filtered_mode(fs, window, band, m, opts);
     Some(Bands {
         edges,
         totals: levels.iter().map(|l| l.total()).collect(),
@@ -532,7 +542,7 @@ fn extrema_bands(
 fn envelope_bands(
     q: &[f64],
     fs: f64,
-    band: (f64, f64),
+    (band, model): ((f64, f64), decay::FilteredMode),
     window: usize,
     m: &ModeToFollow,
     opts: &AmplitudeOptions,
@@ -556,7 +566,6 @@ fn envelope_bands(
     let edges = randec::level_edges(&env, opts.levels, 0.05, 0.995);
     let sums = envelope::band_sums(&re, &im, &edges, window, stride, opts.groups, circular);
     let (f0, z0) = (m.frequency_hz, m.damping_ratio.clamp(1e-4, 0.3));
-    let model = filtered_mode(fs, window, band, m, opts);
     Some(Bands {
         edges,
         totals: sums.iter().map(|b| b.total()).collect(),
@@ -585,12 +594,14 @@ fn mode_curve(
         linearity: None,
         notes: Vec::new(),
     };
+    // The model each band's decay is fitted by, with the white noise's share read from the
+    // unfiltered response's spectrum.
+    let model = filtered_mode(q, fs, window, band, m, opts);
     let bands = match opts.method {
-        AmplitudeMethod::Envelope => envelope_bands(q, fs, band, window, m, opts),
+        AmplitudeMethod::Envelope => envelope_bands(q, fs, (band, model), window, m, opts),
         AmplitudeMethod::Extrema => extrema_bands(
             filter::band_pass(q, fs, band.0, band.1),
-            fs,
-            band,
+            model,
             window,
             m,
             opts,
