@@ -93,6 +93,11 @@ impl FilteredMode {
         }
     }
 
+    /// The share of the band's variance that is white noise.
+    pub(super) fn noise_share(&self) -> f64 {
+        self.noise_share
+    }
+
     /// The model with `share` of the band's variance white noise (0 ≤ share < 1).
     pub(super) fn with_noise_share(mut self, share: f64) -> Self {
         self.noise_share = share.clamp(0.0, 0.95);

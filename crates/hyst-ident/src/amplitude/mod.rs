@@ -38,6 +38,10 @@ pub use report::*;
 pub use slope::*;
 use slope::{Row, linearity};
 
+/// A mode whose band holds more white noise than this share of its variance is said to be
+/// weak.
+pub const WEAK_MODE_SHARE: f64 = 0.5;
+
 /// Overall significance of the linearity test (both slopes together).
 pub const LINEARITY_LEVEL: f64 = 0.01;
 
@@ -597,6 +601,12 @@ fn mode_curve(
     // The model each band's decay is fitted by, with the white noise's share read from the
     // unfiltered response's spectrum.
     let model = filtered_mode(q, fs, window, band, m, opts);
+    if model.noise_share() > WEAK_MODE_SHARE {
+        notes.push(format!(
+            "{:.0} % of the band's variance is white noise (sensor noise, or a force's direct share): the mode is weak against it here, and its points' errors are large",
+            100.0 * model.noise_share()
+        ));
+    }
     let bands = match opts.method {
         AmplitudeMethod::Envelope => envelope_bands(q, fs, (band, model), window, m, opts),
         AmplitudeMethod::Extrema => extrema_bands(
@@ -608,10 +618,11 @@ fn mode_curve(
         ),
     };
     let Some(bands) = bands else {
-        curve.notes.push(format!(
+        notes.push(format!(
             "the record holds fewer than the {} triggers one point needs: no curve",
             opts.min_triggers
         ));
+        curve.notes = notes;
         return curve;
     };
     let full = (bands.estimate)(None);

@@ -208,10 +208,44 @@ fn bad_input_is_named() {
         .expect("a report");
     assert!(r.modes[0].points.is_empty());
     assert!(
-        r.modes[0].notes[0].contains("fewer than the 50 triggers"),
+        r.modes[0]
+            .notes
+            .iter()
+            .any(|n| n.contains("fewer than the 50 triggers")),
         "{:?}",
         r.modes[0].notes
     );
+}
+
+/// A mode buried in white noise is said to be weak: a 2 % mode at 10 Hz whose band holds
+/// white noise of about three times its variance; the same mode alone is not.
+#[test]
+fn a_weak_mode_is_said_to_be_weak() {
+    let fs = 100.0;
+    let lin = Oscillator::linear(1.0, 2.0 * 0.02 * 62.83, 62.83f64.powi(2));
+    let clean = record(&lin, 1.0, 1 << 15, fs, 4400);
+    let sd = (clean.iter().map(|v| v * v).sum::<f64>() / clean.len() as f64).sqrt();
+    let mut noisy = clean.clone();
+    // White noise of 4·sd over 0–50 Hz puts about 16·sd²·(6/50) ≈ 2·sd² in the ± 3 Hz band.
+    hyst_sim::excitation::add_noise(&mut noisy, 4.0 * sd, 4401).expect("noise");
+    let m = ModeToFollow {
+        frequency_hz: 10.0,
+        damping_ratio: 0.02,
+        shape: None,
+    };
+    let weak = |y: &[f64]| {
+        let r = amplitude_curves(
+            &[y],
+            fs,
+            std::slice::from_ref(&m),
+            &[],
+            &AmplitudeOptions::default(),
+        )
+        .expect("a report");
+        r.modes[0].notes.iter().any(|n| n.contains("weak"))
+    };
+    assert!(weak(&noisy));
+    assert!(!weak(&clean));
 }
 
 /// A saturated channel is named; a clean one, or a constant-free sine, is not.
