@@ -285,7 +285,18 @@ pub(crate) fn refine(
         interpolation,
     };
     let report = py
-        .detach(|| residual::refine_report(&rec, mass, start, estimate, &tests, &|_| {}))
+        .detach(|| {
+            let r = residual::refine_report(
+                &rec,
+                mass,
+                start,
+                estimate,
+                &tests,
+                &crate::terminal_progress,
+            );
+            crate::clear_terminal_progress();
+            r
+        })
         .map_err(value_error)?;
     Report::of(record, report)
 }
@@ -315,7 +326,11 @@ pub(crate) fn levels(
     let views: Vec<(String, &[f64])> = records.iter().map(|(n, y)| (n.clone(), &y[..])).collect();
     let checks = validations(validate);
     let report = py
-        .detach(|| levels::levels_report(&views, fs, &opts, &checks, &|_| {}))
+        .detach(|| {
+            let r = levels::levels_report(&views, fs, &opts, &checks, &crate::terminal_progress);
+            crate::clear_terminal_progress();
+            r
+        })
         .map_err(value_error)?;
     let record = records
         .iter()

@@ -400,14 +400,14 @@ pub(crate) fn analysis_options(settings: &str) -> PyResult<covssi::AnalysisOptio
 
 /// A long run's steps on one line of stderr when it is a terminal (as `hyst ssi`'s bar;
 /// nothing in a notebook or a log); [`clear_terminal_progress`] wipes it at the end.
-fn terminal_progress(p: covssi::Progress<'_>) {
+pub(crate) fn terminal_progress(p: covssi::Progress<'_>) {
     // A line wider than the terminal would wrap: the message is cut to 70 characters.
     let what: String = p.what.chars().take(70).collect();
     to_terminal(&format!("{}/{} {what}", p.done, p.total));
 }
 
 /// Wipe the line [`terminal_progress`] wrote.
-fn clear_terminal_progress() {
+pub(crate) fn clear_terminal_progress() {
     to_terminal("");
 }
 

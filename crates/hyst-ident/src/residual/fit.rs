@@ -47,6 +47,8 @@ pub const WARM_UP: usize = 2048;
 pub(super) struct Prepared<'a> {
     rec: Record<'a>,
     fine: Vec<f64>,
+    /// Told of every iteration of every fit on the record (a progress line that moves).
+    beat: Option<&'a (dyn Fn() + Sync)>,
 }
 
 /// RK4 sub-steps per sample of the loop's simulations.
@@ -60,7 +62,24 @@ impl<'a> Prepared<'a> {
             }
             InputInterpolation::Linear => Vec::new(),
         };
-        Prepared { rec: *rec, fine }
+        Prepared {
+            rec: *rec,
+            fine,
+            beat: None,
+        }
+    }
+
+    /// The record with `beat` told of each fit iteration on it.
+    pub(super) fn with_heartbeat(mut self, beat: &'a (dyn Fn() + Sync)) -> Self {
+        self.beat = Some(beat);
+        self
+    }
+
+    /// One fit iteration done.
+    fn beat(&self) {
+        if let Some(b) = self.beat {
+            b();
+        }
     }
 }
 
@@ -258,6 +277,7 @@ pub(super) fn fit_window(
     let mut c = sse(&r);
     let mut lambda = 1e-3;
     for _ in 0..iterations {
+        rec.beat();
         // Finite-difference Jacobian, one simulation per parameter, in parallel.
         let cols: Vec<Option<Vec<f64>>> = (0..np)
             .into_par_iter()

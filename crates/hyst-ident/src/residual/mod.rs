@@ -196,6 +196,47 @@ pub type ProgressFn<'a> = &'a (dyn Fn(Progress<'_>) + Sync);
 
 fn no_progress(_: Progress<'_>) {}
 
+/// The loop's progress, remembered so that each fit iteration can tell it again with the
+/// iterations done so far.
+struct Heartbeat<'p> {
+    progress: ProgressFn<'p>,
+    last: std::sync::Mutex<(usize, usize, String)>,
+    iterations: std::sync::atomic::AtomicUsize,
+}
+
+impl<'p> Heartbeat<'p> {
+    fn new(progress: ProgressFn<'p>) -> Self {
+        Heartbeat {
+            progress,
+            last: std::sync::Mutex::new((0, LOOP_STEPS, String::new())),
+            iterations: std::sync::atomic::AtomicUsize::new(0),
+        }
+    }
+
+    /// Tell `p` and remember it.
+    fn tell(&self, p: Progress<'_>) {
+        if let Ok(mut l) = self.last.lock() {
+            *l = (p.done, p.total, p.what.to_string());
+        }
+        (self.progress)(p);
+    }
+
+    /// One more fit iteration: the last step told again, with the count.
+    fn beat(&self) {
+        let n = self
+            .iterations
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+            + 1;
+        let Ok(l) = self.last.lock() else { return };
+        let what = format!("{} ({n} least-squares iterations so far)", l.2);
+        (self.progress)(Progress {
+            done: l.0,
+            total: l.1,
+            what: &what,
+        });
+    }
+}
+
 /// Steps of one run of the loop: the start's fit, at most [`MAX_STEPS`] steps, the report.
 const LOOP_STEPS: usize = MAX_STEPS + 2;
 
@@ -245,7 +286,12 @@ pub fn refine_with(
         check_rows(range, rec.y.len())?;
     }
     check_test_rows(tests, estimate)?;
-    let prep = Prepared::new(rec);
+    // Every fit iteration re-tells the step that runs, with the iterations so far: a step
+    // that fits for a minute still moves the progress line.
+    let heart = Heartbeat::new(progress);
+    let progress: ProgressFn<'_> = &|p| heart.tell(p);
+    let beat = || heart.beat();
+    let prep = Prepared::new(rec).with_heartbeat(&beat);
     let rec = &prep;
     let errs = |m: &Oscillator| held_out_errors(m, rec, tests);
     tell(progress, 0, "fitting the start by output error");
@@ -846,6 +892,57 @@ mod tests {
         assert!(
             quad.delta_bic > SIGNIFICANT_BIC || quad.rejected.is_some(),
             "{quad:?}"
+        );
+    }
+
+    /// Progress moves within a step: every fit iteration tells the step again with the
+    /// iterations so far, in order, between the loop's own step messages.
+    #[test]
+    fn every_fit_iteration_moves_the_progress() {
+        let fs = 100.0;
+        let n = 3000;
+        let u = hyst_sim::excitation::white_noise(n, 1.0, 3).expect("force");
+        let truth = Oscillator::linear(1.0, 0.5, 400.0);
+        let y = hyst_sim::simulate(
+            &truth,
+            hyst_sim::Input::Sampled(&u),
+            fs,
+            n,
+            &Default::default(),
+        )
+        .expect("simulation");
+        let rec = Record {
+            u: &u,
+            y: &y,
+            fs,
+            interpolation: InputInterpolation::Linear,
+        };
+        let heard = std::sync::Mutex::new(Vec::<String>::new());
+        let r = refine_with(
+            &Oscillator::linear(1.0, 0.8, 350.0),
+            &rec,
+            (0, 2000),
+            &[(2000, n)],
+            false,
+            &|p| heard.lock().expect("lock").push(p.what.to_string()),
+        );
+        assert!(r.is_ok(), "{r:?}");
+        let heard = heard.into_inner().expect("lock");
+        let counts: Vec<usize> = heard
+            .iter()
+            .filter_map(|w| {
+                let (_, tail) = w.rsplit_once(" (")?;
+                tail.strip_suffix(" least-squares iterations so far)")?
+                    .parse()
+                    .ok()
+            })
+            .collect();
+        assert!(counts.len() > 3, "{heard:?}");
+        assert!(counts.windows(2).all(|c| c[1] > c[0]), "{counts:?}");
+        assert!(heard[0].starts_with("fitting the start"), "{heard:?}");
+        assert!(
+            heard[1].starts_with("fitting the start by output error (1 least-squares"),
+            "{heard:?}"
         );
     }
 
