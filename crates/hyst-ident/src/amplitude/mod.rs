@@ -4,18 +4,18 @@
 //!
 //! For each mode $j$ (frequency $f_j$, shape $\phi_j$, from [`covssi`]):
 //!
-//! 1. **Modal response** ([`filter`]): $q_j(t) = w_j^\top y(t)$, with $w_j$ the $j$-th row of
+//! 1. **Modal response** (`filter`): $q_j(t) = w_j^\top y(t)$, with $w_j$ the $j$-th row of
 //!    the pseudo-inverse of the real shapes when the channels are at least as many as the
 //!    modes and tell them apart (a modal filter), else $\phi_j/\lVert\phi_j\rVert$ (a
 //!    projection); then band-passed with zero phase to $f_j \pm h_j$,
 //!    $h_j = \min(0.3 f_j, \tfrac12 \min_{k\ne j}|f_j - f_k|)$, which removes the other modes
 //!    and the element's higher harmonics.
-//! 2. **Random decrement at several levels** ([`randec`]): the extrema of $q_j$ (a minimum
+//! 2. **Random decrement at several levels** (`randec`): the extrema of $q_j$ (a minimum
 //!    with its sign turned) split by their value into bands of equal count between the 5th
 //!    and 99.5th percentiles; in each band the mean of the segments that start at its
 //!    extrema, $D_k(\tau) = \overline{\pm q_j(t_i + \tau)}$, is the decay from the band's
 //!    amplitude (for a linear mode, the correlation function scaled to it).
-//! 3. **Decay fit** ([`decay`]): $e^{-\sigma\tau}(a\cos\omega_d\tau + b\sin\omega_d\tau)$ over the
+//! 3. **Decay fit** (`decay`): $e^{-\sigma\tau}(a\cos\omega_d\tau + b\sin\omega_d\tau)$ over the
 //!    first [`AmplitudeOptions::cycles`] cycles of $D_k$; the point is
 //!    $(A_k, f_k = |\lambda|/2\pi, \zeta_k = \sigma/|\lambda|)$, $A_k$ the fitted envelope
 //!    at the window's middle, converted to the quantity asked for by $\omega^{\pm1,2}$.
@@ -98,12 +98,11 @@ impl Quantity {
 #[non_exhaustive]
 pub enum AmplitudeMethod {
     /// Random decrement conditioned on the analytic signal's envelope, every sample a
-    /// trigger, the segments turned to zero phase ([`envelope`]); straight-line fits of
-    /// log-amplitude and phase.
+    /// trigger, the segments turned to zero phase.
     #[default]
     Envelope,
-    /// Classical random decrement at the response's extrema in each band, a damped cosine
-    /// fitted by least squares ([`randec`], [`decay`]).
+    /// Classical random decrement at the response's extrema in each band (its frequency is
+    /// biased at short windows: docs/amplitude.md).
     Extrema,
 }
 

@@ -263,7 +263,7 @@ pub struct PooledMode {
 /// A campaign of `count` records: `analyse(i, follow)` gives record i's name and analysis
 /// following the modes at `follow` (Hz; every reported mode when empty). The first record
 /// follows `asked`; the others the modes it followed, in its order (so that mode j is the
-/// same mode in every record); then each mode's change is pooled ([`pool_records`]).
+/// same mode in every record); then each mode's change is pooled ([`super::pooled_linearity`]).
 pub fn amplitude_campaign<E>(
     count: usize,
     asked: &[f64],
