@@ -42,7 +42,7 @@ pub(crate) fn amplitude(
                 .collect()
         })
         .collect();
-    let campaign = py
+    let mut campaign = py
         .detach(|| {
             hyst::ident::amplitude::amplitude_campaign(data.len(), &modes, |i, follow| {
                 let views: Vec<&[f64]> = data[i].iter().map(|c| c.as_slice()).collect();
@@ -54,7 +54,6 @@ pub(crate) fn amplitude(
             })
         })
         .map_err(value_error)?;
-    let mut campaign = campaign;
     if campaign.records.len() == 1 {
         let (record, analysis) = campaign.records.remove(0);
         return Report::of(&record, analysis);

@@ -76,7 +76,9 @@ pub(super) fn band_sums(
     for t in (0..end).step_by(stride.max(1)) {
         let z0 = C::new(re[t], im[t]);
         let a = z0.norm();
-        let Some(k) = band_of(edges, a) else { continue };
+        let Some(k) = super::randec::band_of(edges, a) else {
+            continue;
+        };
         let turn = z0.conj() / a;
         let g = (t * groups / n.max(1)).min(groups - 1);
         let b = &mut out[k];
@@ -87,13 +89,6 @@ pub(super) fn band_sums(
         b.counts[g] += 1;
     }
     out
-}
-
-/// The band of `edges` holding `a` (the top edge belongs to the top band).
-pub(super) fn band_of(edges: &[f64], a: f64) -> Option<usize> {
-    let bands = edges.len().checked_sub(1)?;
-    (0..bands)
-        .find(|&k| a >= edges[k] && (a < edges[k + 1] || (k + 1 == bands && a <= edges[k + 1])))
 }
 
 #[cfg(test)]

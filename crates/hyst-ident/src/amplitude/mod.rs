@@ -36,7 +36,7 @@ mod slope;
 
 pub use report::*;
 pub use slope::*;
-use slope::{Row, linearity};
+use slope::{jackknife_se, linearity};
 
 /// A mode whose band holds more white noise than this share of its variance is said to be
 /// weak.
@@ -628,13 +628,8 @@ fn mode_curve(
     let replicates: Vec<Vec<Option<decay::Decay>>> = (0..opts.groups)
         .map(|g| (bands.estimate)(Some(g)))
         .collect();
-    let jack = |values: &[f64]| -> f64 {
-        let g = values.len() as f64;
-        let mean = values.iter().sum::<f64>() / g;
-        ((g - 1.0) / g * values.iter().map(|v| (v - mean).powi(2)).sum::<f64>()).sqrt()
-    };
     // A point needs its triggers, and a fit with every group and with each left out.
-    let mut rows: Vec<Row> = Vec::new();
+    let mut rows: Vec<(decay::Decay, Vec<decay::Decay>, usize)> = Vec::new();
     for (k, d) in full.iter().enumerate() {
         let n = bands.totals[k];
         let (lo, hi) = (bands.edges[k], bands.edges[k + 1]);
@@ -663,13 +658,14 @@ fn mode_curve(
             amplitude: amp(d),
             triggers: *n,
             frequency_hz: d.frequency_hz,
-            frequency_se_hz: jack(&f),
+            frequency_se_hz: jackknife_se(&f),
             damping_ratio: d.damping_ratio,
-            damping_se: jack(&z),
+            damping_se: jackknife_se(&z),
         });
     }
     if rows.len() >= 3 {
-        curve.linearity = Some(linearity(&rows, opts.groups, &amp, &jack));
+        let replicates: Vec<Vec<decay::Decay>> = rows.into_iter().map(|r| r.1).collect();
+        curve.linearity = Some(linearity(&curve.points, &replicates, opts.groups, &amp));
     }
     curve.notes = notes;
     curve

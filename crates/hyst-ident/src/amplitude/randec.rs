@@ -82,6 +82,13 @@ pub(super) fn level_edges(values: &[f64], levels: usize, lo: f64, hi: f64) -> Ve
         .collect()
 }
 
+/// The band of `edges` holding `a` (the top edge belongs to the top band).
+pub(super) fn band_of(edges: &[f64], a: f64) -> Option<usize> {
+    let bands = edges.len().checked_sub(1)?;
+    (0..bands)
+        .find(|&k| a >= edges[k] && (a < edges[k + 1] || (k + 1 == bands && a <= edges[k + 1])))
+}
+
 /// Each band's segment sums, by group: the segment of `len` samples from each extremum
 /// whose |value| lies in the band, signed so that it starts positive; extrema assigned to
 /// `groups` equal stretches of the record by their time.
@@ -105,9 +112,7 @@ pub(super) fn level_sums(
     for &(i, v) in triggers {
         // (A circular record's segments wrap; others' never reach its end.)
         // The band holding v (the last edge belongs to the top band).
-        let Some(k) = (0..levels)
-            .find(|&k| v >= edges[k] && (v < edges[k + 1] || k + 1 == levels && v <= edges[k + 1]))
-        else {
+        let Some(k) = band_of(edges, v) else {
             continue;
         };
         let g = (i * groups / n).min(groups - 1);

@@ -178,6 +178,22 @@ impl fmt::Display for AmplitudeReport {
     }
 }
 
+impl fmt::Display for super::Linearity {
+    /// The two changes with their errors and p-values, as the reports print them.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "frequency {:+.4} ± {:.4} Hz (p = {:.2e}), damping ratio {:+.3} ± {:.3} % (p = {:.2e})",
+            self.frequency.change,
+            self.frequency.change_se,
+            self.frequency.p_value,
+            100.0 * self.damping.change,
+            100.0 * self.damping.change_se,
+            self.damping.p_value
+        )
+    }
+}
+
 impl fmt::Display for ModeCurve {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(
@@ -216,13 +232,7 @@ impl fmt::Display for ModeCurve {
                 });
             writeln!(
                 f,
-                "  from {a0:.3e} to {a1:.3e}: frequency {:+.4} ± {:.4} Hz (p = {:.2e}), damping ratio {:+.3} ± {:.3} % (p = {:.2e}): {}",
-                l.frequency.change,
-                l.frequency.change_se,
-                l.frequency.p_value,
-                100.0 * l.damping.change,
-                100.0 * l.damping.change_se,
-                l.damping.p_value,
+                "  from {a0:.3e} to {a1:.3e}: {l}: {}",
                 if l.linear {
                     "no significant change: linear over these amplitudes"
                 } else {
@@ -332,15 +342,9 @@ impl fmt::Display for AmplitudeCampaign {
             match &m.linearity {
                 Some(l) => writeln!(
                     f,
-                    "mode {:.4} Hz, {} points: frequency {:+.4} ± {:.4} Hz (p = {:.2e}), damping ratio {:+.3} ± {:.3} % (p = {:.2e}) over the amplitudes reached: {}",
+                    "mode {:.4} Hz, {} points: {l} over the amplitudes reached: {}",
                     m.frequency_hz,
                     m.points,
-                    l.frequency.change,
-                    l.frequency.change_se,
-                    l.frequency.p_value,
-                    100.0 * l.damping.change,
-                    100.0 * l.damping.change_se,
-                    l.damping.p_value,
                     if l.linear {
                         "no significant change"
                     } else {

@@ -47,6 +47,22 @@ fn benchmark_mode(f: f64) -> ModeToFollow {
     }
 }
 
+/// The linearity test of `model`'s mode (near 36 Hz) on a record of 2^`bits` samples at
+/// 750 Hz under a 50 N white force.
+fn bouc_wen_linearity(model: &Oscillator, bits: u32, seed: u64) -> Linearity {
+    let fs = 750.0;
+    let y = record(model, 50.0, 1 << bits, fs, seed);
+    let r = amplitude_curves(
+        &[&y],
+        fs,
+        &[benchmark_mode(36.0)],
+        &[],
+        &AmplitudeOptions::default(),
+    )
+    .expect("curves");
+    r.modes[0].linearity.expect("a test")
+}
+
 /// z-scores of a linear oscillator's points against its exact frequency and damping, over
 /// `seeds`, and the records called linear.
 fn linear_study(
@@ -116,33 +132,20 @@ fn a_linear_mode_is_linear_with_calibrated_errors() {
 /// function's: docs/amplitude.md).
 #[test]
 fn a_bouc_wen_mode_is_amplitude_dependent() {
-    let fs = 750.0;
     let bw = BoucWen::benchmark();
     let model = Oscillator::bouc_wen(2.0, 10.0, 5e4, bw);
     let (f_lo, z_lo) = bouc_wen_truth(&model, &bw, 2e-4);
     let (f_hi, z_hi) = bouc_wen_truth(&model, &bw, 6e-4);
     assert!(f_hi > f_lo && z_hi > z_lo);
-    let test = |bits: u32, seed: u64| {
-        let y = record(&model, 50.0, 1 << bits, fs, seed);
-        let r = amplitude_curves(
-            &[&y],
-            fs,
-            &[benchmark_mode(36.0)],
-            &[],
-            &AmplitudeOptions::default(),
-        )
-        .expect("curves");
-        r.modes[0].linearity.expect("a test")
-    };
     for seed in 4300..4303 {
-        let l = test(17, seed);
+        let l = bouc_wen_linearity(&model, 17, seed);
         assert!(!l.linear, "seed {seed}: {l:?}");
         assert!(
             l.frequency.change > 2.0 * l.frequency.change_se,
             "seed {seed}: {l:?}"
         );
     }
-    let l = test(18, 4310);
+    let l = bouc_wen_linearity(&model, 18, 4310);
     assert!(l.damping.change > 0.0, "{l:?}");
 }
 
@@ -419,16 +422,7 @@ fn study_power() {
     for (bits, seeds) in [(16, 5000..5020u64), (17, 5100..5120), (18, 5200..5220)] {
         let (mut nonlinear, mut f_up, mut z_up) = (0, 0, 0);
         for seed in seeds {
-            let y = record(&model, 50.0, 1 << bits, fs, seed);
-            let r = amplitude_curves(
-                &[&y],
-                fs,
-                &[benchmark_mode(36.0)],
-                &[],
-                &AmplitudeOptions::default(),
-            )
-            .expect("curves");
-            let l = r.modes[0].linearity.expect("a test");
+            let l = bouc_wen_linearity(&model, bits, seed);
             nonlinear += usize::from(!l.linear);
             f_up += usize::from(l.frequency.change > 0.0);
             z_up += usize::from(l.damping.change > 0.0);
