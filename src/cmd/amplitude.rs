@@ -44,15 +44,8 @@ pub(crate) struct AmplitudeArgs {
     /// points. Formats as `hyst ssi --input`.
     #[arg(long, num_args = 1.., required = true)]
     pub(crate) input: Vec<PathBuf>,
-    /// Sampling rate of the files (Hz); a Universal File states its own.
-    #[arg(long)]
-    pub(crate) fs: Option<f64>,
-    /// Channels to analyse, comma-separated; default: every column except `t` and `time`.
-    #[arg(long, value_delimiter = ',')]
-    pub(crate) columns: Option<Vec<String>>,
-    /// Skip this many leading rows of each record (e.g. a start-up transient).
-    #[arg(long, default_value_t = 0)]
-    pub(crate) skip: usize,
+    #[command(flatten)]
+    pub(crate) record: ChannelArgs,
     /// Modes to follow, by frequency (Hz), comma-separated: the identified mode nearest each
     /// (within 5 %); default every mode `hyst ssi` reports.
     #[arg(
@@ -133,18 +126,6 @@ impl AmplitudeArgs {
     }
 }
 
-impl AmplitudeArgs {
-    /// The record flags for the file `input`, as `hyst ssi` takes them.
-    fn record(&self, input: &std::path::Path) -> ChannelArgs {
-        ChannelArgs {
-            input: input.to_path_buf(),
-            fs: self.fs,
-            columns: self.columns.clone(),
-            skip: self.skip,
-        }
-    }
-}
-
 /// One record's analysis, following `modes` (every reported mode when empty).
 fn analyse(
     a: &AmplitudeArgs,
@@ -153,11 +134,10 @@ fn analyse(
     opts: &AmplitudeOptions,
     modes: &[f64],
 ) -> Result<amplitude::AmplitudeAnalysis, Error> {
-    let record = a.record(input);
-    let ch = channels(&record)?;
+    let ch = channels(input, &a.record)?;
     let views: Vec<&[f64]> = ch.data.iter().map(|c| c.as_slice()).collect();
     amplitude::amplitude_analysis(&views, ch.fs, analysis, opts, modes).map_err(|e| match e {
-        hyst::ident::IdentError::Ssi(e) => flag_error(&record, &a.ssi, e, &ch.names, ch.fs),
+        hyst::ident::IdentError::Ssi(e) => flag_error(input, &a.ssi, e, &ch.names, ch.fs),
         e => fail(format!("{}: {e}", input.display())),
     })
 }

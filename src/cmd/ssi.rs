@@ -1,20 +1,16 @@
 //! `hyst ssi`: output-only modal analysis by covariance-driven SSI and its refinement.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use clap::Args;
 
 use super::*;
 use hyst::settings::{SettingsError, SsiSettings};
 
-/// The record and its channels: shared by `hyst ssi` and `hyst amplitude`.
+/// How a record's channels are taken: shared by `hyst ssi` and `hyst amplitude` (each names
+/// its own `--input`: one record, or several).
 #[derive(Args, Debug)]
 pub(crate) struct ChannelArgs {
-    /// The record: CSV with a header line; a NumPy `.npy` array or `.npz` archive, or a
-    /// MATLAB `.mat` variable (samples × channels, columns named 0, 1, …); a Universal File
-    /// of dataset 58 functions (columns named by their point, `12+Z`).
-    #[arg(long)]
-    pub(crate) input: PathBuf,
     /// Sampling rate of the file (Hz); a Universal File states its own.
     #[arg(long)]
     pub(crate) fs: Option<f64>,
@@ -29,6 +25,11 @@ pub(crate) struct ChannelArgs {
 
 #[derive(Args, Debug)]
 pub(crate) struct SsiArgs {
+    /// The record: CSV with a header line; a NumPy `.npy` array or `.npz` archive, or a
+    /// MATLAB `.mat` variable (samples × channels, columns named 0, 1, …); a Universal File
+    /// of dataset 58 functions (columns named by their point, `12+Z`).
+    #[arg(long)]
+    pub(crate) input: PathBuf,
     #[command(flatten)]
     pub(crate) record: ChannelArgs,
     #[command(flatten)]
@@ -161,11 +162,11 @@ pub(crate) struct Channels {
 }
 
 /// The channels to analyse, after `--skip`, with their names.
-pub(crate) fn channels(a: &ChannelArgs) -> Result<Channels, Error> {
+pub(crate) fn channels(input: &Path, a: &ChannelArgs) -> Result<Channels, Error> {
     if let Some(fs) = a.fs {
         check_fs(fs)?;
     }
-    let mut t = read_record(&a.input)?;
+    let mut t = read_record(input)?;
     let fs = check_fs(t.rate(a.fs)?)?;
     let names = channel_names(&t, a.columns.as_deref(), &[]);
     if a.columns.is_none() {
@@ -182,7 +183,7 @@ pub(crate) fn channels(a: &ChannelArgs) -> Result<Channels, Error> {
             "--skip {} leaves no rows of the {} in {}",
             a.skip,
             rows,
-            a.input.display()
+            input.display()
         )));
     }
     // The columns are taken from the table, not copied: a long record is held once.
@@ -211,7 +212,7 @@ pub(crate) fn channels(a: &ChannelArgs) -> Result<Channels, Error> {
 /// flag that set it, anything else with the file and columns it came from (and the
 /// decimation, which may be what made the record too short or constant).
 pub(crate) fn flag_error(
-    a: &ChannelArgs,
+    input: &Path,
     ssi: &SsiFlags,
     e: hyst::covssi::SsiError,
     names: &[String],
@@ -269,7 +270,7 @@ pub(crate) fn flag_error(
     };
     fail(format!(
         "{}: columns {}{decimated}: {e}",
-        a.input.display(),
+        input.display(),
         names.join(",")
     ))
 }
@@ -283,21 +284,21 @@ pub(crate) fn run(a: &SsiArgs) -> Result<(), Error> {
         data,
         fs,
         points,
-    } = channels(&a.record)?;
+    } = channels(&a.input, &a.record)?;
     let views: Vec<&[f64]> = data.iter().map(|c| c.as_slice()).collect();
     let bar = steps_bar();
     let analysis = covssi::analyze_with_progress(&views, fs, &opts, &|p| show(&bar, p));
     bar.finish_and_clear();
     let fs_used = fs / a.ssi.decimate.unwrap_or(1) as f64;
-    let mut analysis = analysis.map_err(|e| flag_error(&a.record, &a.ssi, e, &names, fs_used))?;
+    let mut analysis = analysis.map_err(|e| flag_error(&a.input, &a.ssi, e, &names, fs_used))?;
     analysis.channels = names;
-    let report = hyst::report::FileReport::new(a.record.input.display().to_string(), analysis);
+    let report = hyst::report::FileReport::new(a.input.display().to_string(), analysis);
     print!("{}", report.report);
     if let Some(json) = &a.json {
         report.write_json(json)?;
     }
     if let Some(svg) = &a.svg {
-        let title = format!("Stabilization diagram: {}", a.record.input.display());
+        let title = format!("Stabilization diagram: {}", a.input.display());
         std::fs::write(
             svg,
             covssi::svg::stabilization_svg(&report.report.ssi.diagram, None, &title),
@@ -305,7 +306,7 @@ pub(crate) fn run(a: &SsiArgs) -> Result<(), Error> {
         .map_err(|e| fail(format!("{}: {e}", svg.display())))?;
     }
     if let Some(path) = &a.shapes_uff {
-        write_shapes(path, &report.report, points.as_deref(), &a.record.input)?;
+        write_shapes(path, &report.report, points.as_deref(), &a.input)?;
     }
     Ok(())
 }

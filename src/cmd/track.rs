@@ -339,11 +339,11 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
         .map_err(|e| fail(e.to_string()))?;
     report.covariate_names = cov_names;
     print!("{report}");
-    write_table(&a.out.join("table.csv"), &report, &report.covariate_names)?;
+    write_table(&a.out.join("table.csv"), &report)?;
     write_rows(&a.out.join("table.jsonl"), &report)?;
     hyst::report::write_json(&report, &a.out.join("report.json"))?;
     if let Some(dir) = &a.svg_dir {
-        hyst::figures::track_figures(dir, &report, &report.covariate_names).map_err(fail)?;
+        hyst::figures::track_figures(dir, &report).map_err(fail)?;
     }
     Ok(())
 }
@@ -390,7 +390,7 @@ fn write_rows(path: &Path, report: &TrackReport) -> Result<(), Error> {
 }
 
 /// The tidy table: one row per record × mode.
-fn write_table(path: &Path, report: &TrackReport, cov_names: &[String]) -> Result<(), Error> {
+fn write_table(path: &Path, report: &TrackReport) -> Result<(), Error> {
     let mut w =
         csv::Writer::from_path(path).map_err(|e| fail(format!("{}: {e}", path.display())))?;
     let mut header: Vec<String> = [
@@ -410,7 +410,7 @@ fn write_table(path: &Path, report: &TrackReport, cov_names: &[String]) -> Resul
     .iter()
     .map(|s| s.to_string())
     .collect();
-    header.extend(cov_names.iter().cloned());
+    header.extend(report.covariate_names.iter().cloned());
     let err = |e: csv::Error| fail(format!("{}: {e}", path.display()));
     w.write_record(&header).map_err(err)?;
     let opt = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:e}"));

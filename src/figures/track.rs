@@ -3,12 +3,9 @@
 use crate::monitor::TrackReport;
 
 /// For each reference mode: its frequency and its damping against time (days) with ± one
-/// standard error and the alarms marked, and its frequency against the first covariate.
-pub fn track_figures(
-    dir: &std::path::Path,
-    r: &TrackReport,
-    covariate_names: &[String],
-) -> Result<(), String> {
+/// standard error and the alarms marked, and its frequency against the first covariate
+/// (named by the report's `covariate_names`).
+pub fn track_figures(dir: &std::path::Path, r: &TrackReport) -> Result<(), String> {
     use crate::plot::{colors, scatter};
     std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     let day = |t: f64| t / 86400.0;
@@ -59,7 +56,7 @@ pub fn track_figures(
             "damping ratio",
             &series(&|w| w.damping_ratio, &|w| se(w.damping_se)),
         )?;
-        if let Some(name) = covariate_names.first() {
+        if let Some(name) = r.covariate_names.first() {
             scatter(
                 &dir.join(format!("mode{j}_vs_{name}.svg")),
                 &format!("Mode {j}: frequency against {name}"),

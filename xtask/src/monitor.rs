@@ -60,7 +60,9 @@ pub fn run(a: &DemoArgs) -> Result<(), String> {
     let identify_s = t0.elapsed().as_secs_f64();
     let mut opts = TrackOptions::default();
     opts.training = (campaign.per_day * 14).min(n / 2);
-    let report = track(&records, None, &opts).map_err(|e| e.to_string())?;
+    let mut report = track(&records, None, &opts).map_err(|e| e.to_string())?;
+    // The campaign's one covariate.
+    report.covariate_names = vec!["temperature".to_string()];
     let total_s = t0.elapsed().as_secs_f64();
     println!(
         "monitor_records {n} ({} days × {}/day, {} s at {} Hz, {} channels; unexplained {:e} correlated over {} h)",
@@ -150,7 +152,7 @@ pub fn run(a: &DemoArgs) -> Result<(), String> {
         peak_mb()
     );
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/monitor");
-    hyst::figures::track_figures(&dir, &report, &["temperature".to_string()])?;
+    hyst::figures::track_figures(&dir, &report)?;
     println!("figures in {}", dir.display());
     Ok(())
 }
