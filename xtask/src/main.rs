@@ -660,6 +660,46 @@ fn bench_amplitude() {
     println!("amplitude_curves_only_10ch_10min_5modes_s {t:.2} s");
 }
 
+/// How often `hyst ssi`'s progress moves: the longest time between two progress reports of
+/// `covssi::analyze_with_progress` (defaults), on the ten-channel 10⁶-sample record of `bench
+/// command` and on the steel frame's first setup (five channels at 256 Hz) when the shared
+/// data is there.
+fn bench_progress() {
+    let longest_gap = |views: &[&[f64]], fs: f64| -> (f64, f64) {
+        let t0 = Instant::now();
+        let last = std::sync::Mutex::new((0.0f64, 0.0f64));
+        covssi::analyze_with_progress(views, fs, &covssi::AnalysisOptions::default(), &|_| {
+            let now = t0.elapsed().as_secs_f64();
+            if let Ok(mut l) = last.lock() {
+                *l = (now, l.1.max(now - l.0));
+            }
+        })
+        .expect("analysed");
+        let end = t0.elapsed().as_secs_f64();
+        let (at, gap) = last.into_inner().expect("lock");
+        (gap.max(end - at), end)
+    };
+    let y = bench_command::record(bench_command::SAMPLES, 5);
+    let views: Vec<&[f64]> = y.iter().map(|c| c.as_slice()).collect();
+    let (gap, total) = longest_gap(&views, bench_command::FS);
+    println!("ssi_progress_longest_gap_s_10ch_1e6 {gap:.2} s (of {total:.2} s)");
+    let Some(dir) = hyst::io::data_dir() else {
+        println!("ssi_progress_longest_gap_s_steelframe skipped: no shared data");
+        return;
+    };
+    let path = dir.join("steelframe/measurement_1/measurement_1.npy");
+    match hyst::io::read_npy(&path) {
+        Ok(t) => {
+            let cols: Vec<&[f64]> = (0..5)
+                .filter_map(|c| t.column(&c.to_string()).ok())
+                .collect();
+            let (gap, total) = longest_gap(&cols, 256.0);
+            println!("ssi_progress_longest_gap_s_steelframe_1 {gap:.2} s (of {total:.2} s)");
+        }
+        Err(e) => println!("ssi_progress_longest_gap_s_steelframe skipped: {e}"),
+    }
+}
+
 /// `cargo xtask bench growth` (`growth.rs`).
 fn bench_growth() {
     or_exit(growth::run());
@@ -701,6 +741,8 @@ enum BenchGroup {
     Monitor,
     /// `hyst amplitude` on a 10-channel 10-minute record at 100 Hz.
     Amplitude,
+    /// The longest time between two of SSI's progress reports.
+    Progress,
 }
 
 #[derive(clap::Subcommand)]
@@ -744,7 +786,7 @@ fn main() {
     use clap::Parser;
     match Cli::parse().task {
         Task::Bench { groups } => {
-            let all: [(BenchGroup, fn()); 8] = [
+            let all: [(BenchGroup, fn()); 9] = [
                 (BenchGroup::Rk4, bench),
                 (BenchGroup::Covssi, bench_covssi),
                 (BenchGroup::Ident, bench_ident),
@@ -753,6 +795,7 @@ fn main() {
                 (BenchGroup::Growth, bench_growth),
                 (BenchGroup::Monitor, monitor::bench),
                 (BenchGroup::Amplitude, bench_amplitude),
+                (BenchGroup::Progress, bench_progress),
             ];
             for (group, run) in all {
                 if groups.is_empty() || groups.contains(&group) {
