@@ -107,6 +107,29 @@ pub(crate) struct AmplitudeArgs {
     pub(crate) svg: Option<PathBuf>,
 }
 
+/// An option out of range in the words of the command line: named by its flag.
+fn flag_of(e: amplitude::AmplitudeError) -> Error {
+    use amplitude::{AmplitudeError, AmplitudeOption};
+    match e {
+        AmplitudeError::BadOption {
+            option,
+            value,
+            needs,
+        } => {
+            let flag = match option {
+                AmplitudeOption::Levels => "--levels",
+                AmplitudeOption::Cycles => "--cycles",
+                AmplitudeOption::Groups => "--groups",
+                AmplitudeOption::Band => "--band",
+                AmplitudeOption::Period => "--period",
+                _ => "an option",
+            };
+            fail(format!("{flag} {value} is out of range: {needs}"))
+        }
+        e => fail(e.to_string()),
+    }
+}
+
 impl AmplitudeArgs {
     fn options(&self) -> AmplitudeOptions {
         let mut o = AmplitudeOptions::default();
@@ -143,8 +166,10 @@ fn analyse(
 }
 
 pub(crate) fn run(a: &AmplitudeArgs) -> Result<(), Error> {
+    // Settings that are wrong whatever the record, before any is read.
     let analysis = a.ssi.analysis()?;
     let opts = a.options();
+    opts.check().map_err(flag_of)?;
     let name = |p: &PathBuf| p.display().to_string();
     let bar = steps_bar();
     bar.set_length(a.input.len() as u64);

@@ -156,6 +156,43 @@ impl Default for AmplitudeOptions {
     }
 }
 
+impl AmplitudeOptions {
+    /// Every option in range, or the first that is not, named: what is wrong whatever the
+    /// record, to be said before any record is read or analysed.
+    pub fn check(&self) -> Result<(), AmplitudeError> {
+        let opts = self;
+        let bad = |option, value: f64, needs| {
+            Err(AmplitudeError::BadOption {
+                option,
+                value,
+                needs,
+            })
+        };
+        if opts.levels == 0 {
+            return bad(AmplitudeOption::Levels, 0.0, "at least 1");
+        }
+        if !(opts.cycles >= 0.5 && opts.cycles <= 50.0) {
+            return bad(AmplitudeOption::Cycles, opts.cycles, "between 0.5 and 50");
+        }
+        if opts.groups < 2 {
+            return bad(AmplitudeOption::Groups, opts.groups as f64, "at least 2");
+        }
+        if opts.period == Some(0) {
+            return bad(AmplitudeOption::Period, 0.0, "at least 1 sample");
+        }
+        if let Some(b) = opts.band
+            && !(b > 0.0 && b < 1.0)
+        {
+            return bad(
+                AmplitudeOption::Band,
+                b,
+                "between 0 and 1 (a share of the frequency)",
+            );
+        }
+        Ok(())
+    }
+}
+
 /// An option of [`AmplitudeOptions`], named in errors.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[non_exhaustive]
@@ -323,38 +360,6 @@ pub struct AmplitudeReport {
     pub modes: Vec<ModeCurve>,
 }
 
-fn check(opts: &AmplitudeOptions) -> Result<(), AmplitudeError> {
-    let bad = |option, value: f64, needs| {
-        Err(AmplitudeError::BadOption {
-            option,
-            value,
-            needs,
-        })
-    };
-    if opts.levels == 0 {
-        return bad(AmplitudeOption::Levels, 0.0, "at least 1");
-    }
-    if !(opts.cycles >= 0.5 && opts.cycles <= 50.0) {
-        return bad(AmplitudeOption::Cycles, opts.cycles, "between 0.5 and 50");
-    }
-    if opts.groups < 2 {
-        return bad(AmplitudeOption::Groups, opts.groups as f64, "at least 2");
-    }
-    if opts.period == Some(0) {
-        return bad(AmplitudeOption::Period, 0.0, "at least 1 sample");
-    }
-    if let Some(b) = opts.band
-        && !(b > 0.0 && b < 1.0)
-    {
-        return bad(
-            AmplitudeOption::Band,
-            b,
-            "between 0 and 1 (a share of the frequency)",
-        );
-    }
-    Ok(())
-}
-
 fn check_channels(y: &[&[f64]]) -> Result<(), AmplitudeError> {
     let first = y.first().ok_or(AmplitudeError::NoChannel)?.len();
     for (channel, c) in y.iter().enumerate() {
@@ -388,7 +393,7 @@ pub fn amplitude_curves(
     others: &[ModeToFollow],
     opts: &AmplitudeOptions,
 ) -> Result<AmplitudeReport, crate::IdentError> {
-    check(opts)?;
+    opts.check()?;
     if !(fs > 0.0 && fs.is_finite()) {
         return Err(crate::IdentError::BadRate { fs });
     }

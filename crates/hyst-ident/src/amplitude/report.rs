@@ -69,6 +69,7 @@ pub fn amplitude_analysis(
     opts: &AmplitudeOptions,
     follow: &[f64],
 ) -> Result<AmplitudeAnalysis, crate::IdentError> {
+    opts.check()?;
     super::check_channels(y)?;
     let modal = covssi::analyze(y, fs, analysis)?;
     let reported = modal.reported_modes();
