@@ -80,6 +80,12 @@ pub(crate) struct IdentArgs {
     /// periods of the steady state (use --skip to drop a start-up transient).
     #[arg(long)]
     pub(crate) period: Option<usize>,
+    /// Also show what one record leaves free: at each ratio βδ/βγ, the Bouc-Wen model that
+    /// best reproduces the record's statistics (its Zener fit, amplitude curve and kurtosis;
+    /// fitted by simulation), with its χ² and its validation errors: models the record cannot
+    /// tell apart that predict other force levels differently (about a minute).
+    #[arg(long)]
+    pub(crate) profile: bool,
     /// Write the results as JSON here.
     #[arg(help_heading = "Output files", long)]
     pub(crate) json: Option<PathBuf>,
@@ -212,6 +218,7 @@ fn options(a: &IdentArgs) -> Result<hyst::ident::IdentOptions, Error> {
         mass: a.mass.unwrap_or(2.0),
         excitation: excitation_band(a)?,
         damping_guess,
+        profile: a.profile,
         ..IdentOptions::default()
     })
 }

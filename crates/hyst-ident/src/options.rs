@@ -58,6 +58,10 @@ pub struct IdentOptions {
     /// The excitation's design, when known: then the Bouc-Wen model is fitted by flatness of
     /// its implied input ([`flatness`]), starting from the mapped one (default: unknown).
     pub excitation: Option<flatness::ExcitationBand>,
+    /// [`identify_and_validate`] also profiles what one record leaves free: the Bouc-Wen
+    /// models that reproduce the record's statistics along the ratio βδ/βγ
+    /// ([`levels::beta_delta_profile`]; about a minute). Default false.
+    pub profile: bool,
 }
 
 impl Default for IdentOptions {
@@ -77,6 +81,7 @@ impl Default for IdentOptions {
             linearization: Linearization::default(),
             amplitude: Amplitude::SigmaX,
             excitation: None,
+            profile: false,
         }
     }
 }

@@ -112,6 +112,7 @@ pub struct IdentReport {
     pub zener: Option<Oscillator>,
     /// The Bouc-Wen candidate kept: the best on the first validation record, or without
     /// records the first (the flatness fit when the band is known, else the first mapping).
+    /// None when even the best validates worse than the Zener model there (a note says so).
     pub bouc_wen: Option<Oscillator>,
     /// Where the kept candidate came from.
     pub bouc_wen_route: Option<BoucWenRoute>,
@@ -127,6 +128,20 @@ pub struct IdentReport {
     pub notes: Vec<String>,
     /// Wall time of the identification (s), validation apart.
     pub seconds: f64,
+    /// With [`IdentOptions::profile`]: what the record leaves free, each point's model
+    /// validated on the records.
+    pub profile: Vec<ProfileRow>,
+}
+
+/// A point of the one-record profile ([`crate::levels::beta_delta_profile`]) and its
+/// model's score on each validation record.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct ProfileRow {
+    /// The point.
+    pub point: crate::levels::ProfilePoint,
+    /// Its model's scores, in the records' order (empty without a model).
+    pub validation: Vec<Score>,
 }
 
 /// The mappings to Bouc-Wen tried: `chosen` alone when given, else the describing
@@ -195,7 +210,7 @@ pub fn identify_and_validate(
             validation: v.into_iter().map(Score::of).collect(),
         })
         .collect();
-    let kept = best.and_then(|i| candidates.get(i));
+    let mut kept = best.and_then(|i| candidates.get(i));
     let scores_of = |m: &Oscillator| -> Vec<Score> {
         validate_all(m, records, fs)
             .into_iter()
@@ -204,6 +219,10 @@ pub fn identify_and_validate(
     };
     let linear = scores_of(&id.models.linear);
     let zener = id.models.zener.as_ref().map(scores_of);
+    let dropped = worse_than_zener(kept, zener.as_deref(), records);
+    if dropped.is_some() {
+        kept = None;
+    }
     let validation = records
         .iter()
         .enumerate()
@@ -223,10 +242,27 @@ pub fn identify_and_validate(
         .chain(&id.ssi.notes)
         .cloned()
         .collect();
+    notes.extend(dropped);
+    let profile = if opts.profile {
+        match &id.zener_spectrum {
+            Some(fit) => one_record_profile(fit, y, fs, records),
+            None => {
+                notes.push(
+                    "no profile: it starts from the Zener spectral fit, which did not hold".into(),
+                );
+                Vec::new()
+            }
+        }
+    } else {
+        Vec::new()
+    };
     if id.zener_spectrum.is_some() && opts.excitation.is_none() {
         notes.push(
-            "one record maps to Bouc-Wen through one amplitude; records of the same \
-             structure at several force levels map to one Bouc-Wen model together: hyst levels"
+            "one record under a random force fixes the Zener element at its amplitude (k, k∞, \
+             Ω), not all of the Bouc-Wen element: its statistics bound the ratio βδ/βγ only \
+             loosely, and models they cannot tell apart predict other force levels differently \
+             (--profile shows them; docs/amplitude.md); records of the same structure at \
+             several force levels fix it: hyst levels"
                 .into(),
         );
     }
@@ -241,7 +277,67 @@ pub fn identify_and_validate(
         identification: id,
         notes,
         seconds,
+        profile,
     })
+}
+
+/// [`crate::levels::beta_delta_profile`] of the record `y` at its default ratios, each
+/// point's model validated on `records`.
+fn one_record_profile(
+    fit: &zener_spectrum::ZenerSpectralFit,
+    y: &[f64],
+    fs: f64,
+    records: &[ValidationRecord],
+) -> Vec<ProfileRow> {
+    let curve_opts = crate::amplitude::AmplitudeOptions::default();
+    let record = crate::levels::OneRecord {
+        fit,
+        y,
+        curve_opts: &curve_opts,
+    };
+    crate::levels::beta_delta_profile(
+        &record,
+        &crate::levels::PROFILE_RATIOS,
+        &crate::levels::SimulationOptions::default(),
+        &|_, _| {},
+    )
+    .into_iter()
+    .map(|point| {
+        let validation = match &point.fit {
+            Ok(f) => validate_all(&f.oscillator, records, fs)
+                .into_iter()
+                .map(Score::of)
+                .collect(),
+            Err(_) => Vec::new(),
+        };
+        ProfileRow { point, validation }
+    })
+    .collect()
+}
+
+/// Why the kept Bouc-Wen candidate is dropped, when it validates worse than the Zener model
+/// (`zener`: its scores) on the first record: from one record the element is not fixed
+/// (docs/amplitude.md, "One record, one oscillator").
+fn worse_than_zener(
+    kept: Option<&BoucWenCandidate>,
+    zener: Option<&[Score]>,
+    records: &[ValidationRecord],
+) -> Option<String> {
+    let first_eps = |v: &[Score]| v.first().and_then(Score::epsilon);
+    let (c, ez) = (kept?, zener.and_then(first_eps)?);
+    let eb = first_eps(&c.validation).filter(|&eb| eb > ez)?;
+    Some(format!(
+        "no Bouc-Wen model is kept: the best ({}) validates worse than the Zener model on {} \
+         (ε {:.3} % against {:.3} %); one record fixes the equivalent Zener element at its \
+         amplitude, not the Bouc-Wen element that would extrapolate to another: records at \
+         several force levels do (hyst levels)",
+        c.route.name(),
+        records
+            .first()
+            .map_or("the first record", |r| r.name.as_str()),
+        100.0 * eb,
+        100.0 * ez
+    ))
 }
 
 fn eps_text(s: Option<&Score>) -> String {
@@ -347,6 +443,44 @@ impl IdentReport {
     }
 }
 
+impl IdentReport {
+    fn fmt_profile(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.profile.is_empty() {
+            return Ok(());
+        }
+        writeln!(
+            f,
+            "what one record leaves free: the Bouc-Wen models that best reproduce its statistics \
+             (Zener fit, amplitude curve, kurtosis) at each ratio βδ/βγ held; χ² over the \
+             statistics (a difference of a few is within the record's noise)"
+        )?;
+        let names: Vec<&str> = self.validation.iter().map(|r| r.record.as_str()).collect();
+        for row in &self.profile {
+            match &row.point.fit {
+                Ok(p) => {
+                    let eps: Vec<String> = names
+                        .iter()
+                        .zip(&row.validation)
+                        .map(|(n, s)| format!("ε on {n} {}", eps_text(Some(s))))
+                        .collect();
+                    writeln!(
+                        f,
+                        "  βδ/βγ {:5.2}: χ² {:7.1} of {}  {}{}{}",
+                        row.point.ratio,
+                        p.chi2,
+                        p.residuals,
+                        p.oscillator,
+                        if eps.is_empty() { "" } else { "  " },
+                        eps.join(", ")
+                    )?;
+                }
+                Err(e) => writeln!(f, "  βδ/βγ {:5.2}: no model ({e})", row.point.ratio)?,
+            }
+        }
+        Ok(())
+    }
+}
+
 impl fmt::Display for IdentReport {
     /// What `hyst ident` prints: the prepared record, the poles, each model, the spectral
     /// and flatness fits, every Bouc-Wen candidate with its validation, the validation
@@ -381,6 +515,7 @@ impl fmt::Display for IdentReport {
         }
         self.fmt_fits(f)?;
         self.fmt_validation(f)?;
+        self.fmt_profile(f)?;
         for n in &self.notes {
             writeln!(f, "note: {n}")?;
         }

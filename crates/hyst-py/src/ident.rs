@@ -183,7 +183,7 @@ pub(crate) fn simulate<'py>(
 
 /// The paper's output-only pipeline on the output `y`; see the Python wrapper `hyst.identify`.
 #[pyfunction]
-#[pyo3(signature = (y, fs, mass, *, damping, c, excitation_band, period, linearization, validate, record))]
+#[pyo3(signature = (y, fs, mass, *, damping, c, excitation_band, period, linearization, validate, profile, record))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn identify(
     py: Python<'_>,
@@ -196,6 +196,7 @@ pub(crate) fn identify(
     period: Option<usize>,
     linearization: Option<&str>,
     validate: Vec<Validation>,
+    profile: bool,
     record: &str,
 ) -> PyResult<Report> {
     let damping_guess = match (c, damping) {
@@ -231,6 +232,7 @@ pub(crate) fn identify(
         mass,
         excitation,
         damping_guess,
+        profile,
         ..IdentOptions::default()
     };
     let records = validations(validate);

@@ -32,7 +32,7 @@ mod envelope;
 mod filter;
 mod randec;
 mod report;
-mod slope;
+pub(crate) mod slope;
 
 pub use report::*;
 pub use slope::*;

@@ -8,7 +8,7 @@ use super::{AmplitudePoint, LINEARITY_LEVEL, Linearity, SlopeTest, decay};
 
 /// The grouped jackknife's standard error from the estimates with each group left out:
 /// $\sqrt{\tfrac{G-1}{G}\sum_g(\theta_{-g} - \bar\theta)^2}$.
-pub(super) fn jackknife_se(values: &[f64]) -> f64 {
+pub(crate) fn jackknife_se(values: &[f64]) -> f64 {
     let g = values.len() as f64;
     let mean = values.iter().sum::<f64>() / g;
     ((g - 1.0) / g * values.iter().map(|v| (v - mean).powi(2)).sum::<f64>()).sqrt()

@@ -21,7 +21,12 @@ use nalgebra::{DMatrix, Matrix4, Vector4};
 use crate::IdentError;
 use crate::zener_spectrum::ZenerSpectralFit;
 
+mod one_record;
 mod report;
+pub use one_record::{
+    BoucWenParameter, OneRecord, OneRecordBoucWen, PROFILE_RATIOS, ProfilePoint,
+    beta_delta_profile, bouc_wen_from_one_record,
+};
 pub use report::{
     Level, LevelsModels, LevelsOptions, LevelsReport, LevelsValidation, fit_levels, levels_report,
 };
@@ -231,7 +236,10 @@ pub fn bouc_wen_by_simulation(
         p.push(bw.nu);
     }
     let aux = |p: &[f64]| simulated_fits(&osc(p), fits, lengths, opts);
-    let fit = indirect_lm(&mut p, &aux, &resid, opts, progress)?;
+    let mut nonnegative = vec![false; p.len()];
+    nonnegative[0] = true;
+    let resid = |a: &Vec<[f64; 4]>| resid(a);
+    let fit = indirect_lm(&mut p, &nonnegative, &aux, &resid, opts, progress)?;
     let se_of = |k: usize| {
         fit.covariance
             .as_ref()
@@ -249,8 +257,8 @@ pub fn bouc_wen_by_simulation(
 }
 
 /// The auxiliary statistics of `model`: at each level one simulated record of the level's
-/// length (white force of its density, its noise added, common random numbers by the
-/// options' seed) fitted as the measured one was, (c, k, k∞, Ω). In parallel over levels.
+/// length ([`simulated_record`]) fitted as the measured one was, (c, k, k∞, Ω). In parallel
+/// over levels.
 fn simulated_fits(
     model: &Oscillator,
     fits: &[&ZenerSpectralFit],
@@ -263,28 +271,40 @@ fn simulated_fits(
         .zip(lengths)
         .enumerate()
         .map(|(i, (f, &n))| {
-            let seed = opts.seed.wrapping_add(2 * i as u64);
-            let rms = (f.force_density * f.fs).sqrt();
-            let sim = hyst_sim::SimOptions::default();
-            let mut y = if opts.periodic {
-                let u = hyst_sim::excitation::white_noise(n, rms, seed)?;
-                hyst_sim::steady_state_period(model, &u, f.fs, &sim, 1e-10, 200)?.y
-            } else {
-                let warm = warm_up_samples(f, n);
-                let u = hyst_sim::excitation::white_noise(warm + n, rms, seed)?;
-                let mut y =
-                    hyst_sim::simulate(model, hyst_sim::Input::Sampled(&u), f.fs, warm + n, &sim)?;
-                y.drain(..warm);
-                y
-            };
-            hyst_sim::excitation::add_noise(&mut y, f.noise_std, seed + 1)?;
-            let mean = y.iter().sum::<f64>() / n as f64;
-            y.iter_mut().for_each(|v| *v -= mean);
+            let y = simulated_record(model, f, n, opts, i)?;
             let g =
                 crate::zener_spectrum::fit(&y, f.fs, f.mass, f.pair, f.real, f.max_frequency_hz)?;
             Ok([g.c, g.k, g.k_inf, g.omega])
         })
         .collect()
+}
+
+/// `model`'s record of `n` samples at the level of fit `f` (the `i`th): a white force of the
+/// fit's density, its noise added, common random numbers by the options' seed; mean removed.
+fn simulated_record(
+    model: &Oscillator,
+    f: &ZenerSpectralFit,
+    n: usize,
+    opts: &SimulationOptions,
+    i: usize,
+) -> Result<Vec<f64>, IdentError> {
+    let seed = opts.seed.wrapping_add(2 * i as u64);
+    let rms = (f.force_density * f.fs).sqrt();
+    let sim = hyst_sim::SimOptions::default();
+    let mut y = if opts.periodic {
+        let u = hyst_sim::excitation::white_noise(n, rms, seed)?;
+        hyst_sim::steady_state_period(model, &u, f.fs, &sim, 1e-10, 200)?.y
+    } else {
+        let warm = warm_up_samples(f, n);
+        let u = hyst_sim::excitation::white_noise(warm + n, rms, seed)?;
+        let mut y = hyst_sim::simulate(model, hyst_sim::Input::Sampled(&u), f.fs, warm + n, &sim)?;
+        y.drain(..warm);
+        y
+    };
+    hyst_sim::excitation::add_noise(&mut y, f.noise_std, seed + 1)?;
+    let mean = y.iter().sum::<f64>() / n as f64;
+    y.iter_mut().for_each(|v| *v -= mean);
+    Ok(y)
 }
 
 /// Weights of each level's residual: the inverse Cholesky factor of its measured fit's
@@ -318,12 +338,12 @@ fn fit_weights(fits: &[&ZenerSpectralFit]) -> Result<Vec<Matrix4<f64>>, IdentErr
 
 /// The auxiliary statistics of a parameter vector: each level's (c, k, k∞, Ω) fitted to the
 /// model's simulated record.
-type AuxiliaryStatistics<'a> = dyn Fn(&[f64]) -> Result<Vec<[f64; 4]>, IdentError> + Sync + 'a;
+type AuxiliaryStatistics<'a, S> = dyn Fn(&[f64]) -> Result<S, IdentError> + Sync + 'a;
 
 /// Where the indirect-inference fit ended.
-struct IndirectFit {
+struct IndirectFit<S> {
     /// The auxiliary statistics at the optimum.
-    simulated: Vec<[f64; 4]>,
+    simulated: S,
     /// Weighted sum of squares there.
     cost: f64,
     /// Residuals in the sum.
@@ -337,13 +357,15 @@ struct IndirectFit {
 /// 1 % of each parameter (c at least 0.1 N s/m: large enough that the fits' own
 /// convergence tolerance does not show), λ from 1e-2, ÷3 on success (at least 1e-7), ×10 on
 /// failure up to 1e6; stops when an iteration gains less than the options' tolerance.
-fn indirect_lm(
+/// `nonnegative` says which parameters may not go below 0 (c).
+fn indirect_lm<S>(
     p: &mut Vec<f64>,
-    aux: &AuxiliaryStatistics<'_>,
-    resid: &dyn Fn(&[[f64; 4]]) -> Vec<f64>,
+    nonnegative: &[bool],
+    aux: &AuxiliaryStatistics<'_, S>,
+    resid: &dyn Fn(&S) -> Vec<f64>,
     opts: &SimulationOptions,
     progress: &(dyn Fn(usize, f64) + Sync),
-) -> Result<IndirectFit, IdentError> {
+) -> Result<IndirectFit<S>, IdentError> {
     const SCHEDULE: crate::LmSchedule = crate::LmSchedule {
         shrink: 1.0 / 3.0,
         grow: 10.0,
@@ -362,7 +384,7 @@ fn indirect_lm(
         let steps: Vec<f64> = p
             .iter()
             .enumerate()
-            .map(|(k, v)| (0.01 * v.abs()).max(if k == 0 { 0.1 } else { 1e-3 }))
+            .map(|(k, v)| (0.01 * v.abs()).max(if nonnegative[k] { 0.1 } else { 1e-3 }))
             .collect();
         let columns: Vec<Vec<f64>> = (0..p.len())
             .map(|k| {
@@ -377,7 +399,9 @@ fn indirect_lm(
         let before = cost;
         crate::lm_step_with(&SCHEDULE, &jtj, &jtr, &mut lambda, |step| {
             let mut q: Vec<f64> = p.iter().zip(step).map(|(a, b)| a - b).collect();
-            q[0] = q[0].max(0.0);
+            for (v, _) in q.iter_mut().zip(nonnegative).filter(|(_, n)| **n) {
+                *v = v.max(0.0);
+            }
             let s = aux(&q).ok()?;
             let rq = resid(&s);
             let c = sum_sq(&rq);

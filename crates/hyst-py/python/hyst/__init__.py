@@ -473,7 +473,7 @@ def simulate(model, u, fs, *, periodic=False, input_interpolation="band-limited"
 
 
 def identify(y, fs, mass, *, damping="spectrum", c=None, excitation_band=None, period=None,
-             linearization=None, validate=None, record="array"):
+             linearization=None, validate=None, profile=False, record="array"):
     """The paper's output-only identification (``hyst ident``) of a record's output.
 
     Linear, Zener and Bouc-Wen models from the response alone: SSI-COV's poles, the real
@@ -501,6 +501,10 @@ def identify(y, fs, mass, *, damping="spectrum", c=None, excitation_band=None, p
     validate : list, optional
         Records to validate each model on: dicts ``{"u", "y", "name"?, "periodic"?}`` or
         ``(u, y)`` pairs.
+    profile : bool
+        Also show what one record leaves free (``hyst ident --profile``): at each ratio
+        βδ/βγ the Bouc-Wen model that best reproduces the record's statistics, its χ² and
+        its validation errors (about a minute).
     record : str
         What the data is, for the report.
 
@@ -516,7 +520,8 @@ def identify(y, fs, mass, *, damping="spectrum", c=None, excitation_band=None, p
         c=None if c is None else float(c),
         excitation_band=None if excitation_band is None else tuple(map(float, excitation_band)),
         period=None if period is None else int(period),
-        linearization=linearization, validate=_validations(validate), record=str(record),
+        linearization=linearization, validate=_validations(validate), profile=bool(profile),
+        record=str(record),
     )
 
 

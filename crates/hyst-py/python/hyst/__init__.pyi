@@ -85,6 +85,7 @@ def identify(
     period: Optional[int] = ...,
     linearization: Optional[Literal["paper", "harmonic"]] = ...,
     validate: Optional[Sequence[Validation]] = ...,
+    profile: bool = ...,
     record: str = ...,
 ) -> Report: ...
 def refine(
