@@ -109,23 +109,16 @@ pub(crate) struct AmplitudeArgs {
 
 /// An option out of range in the words of the command line: named by its flag.
 fn flag_of(e: amplitude::AmplitudeError) -> Error {
-    use amplitude::{AmplitudeError, AmplitudeOption};
+    use amplitude::AmplitudeError;
     match e {
         AmplitudeError::BadOption {
             option,
             value,
             needs,
-        } => {
-            let flag = match option {
-                AmplitudeOption::Levels => "--levels",
-                AmplitudeOption::Cycles => "--cycles",
-                AmplitudeOption::Groups => "--groups",
-                AmplitudeOption::Band => "--band",
-                AmplitudeOption::Period => "--period",
-                _ => "an option",
-            };
-            fail(format!("{flag} {value} is out of range: {needs}"))
-        }
+        } => fail(format!(
+            "--{} {value} is out of range: {needs}",
+            option.name()
+        )),
         e => fail(e.to_string()),
     }
 }

@@ -61,6 +61,9 @@ def test_bad_options_are_refused():
         hyst.amplitude(y, 100.0, measured="strain")
     with pytest.raises(ValueError, match="levels must be at least 1"):
         hyst.amplitude(y, 100.0, levels=0)
+    # A range the library checks is named by the keyword, as the command names its flag.
+    with pytest.raises(ValueError, match=r"cycles = 0\.1 is out of range"):
+        hyst.amplitude(y, 100.0, cycles=0.1)
 
 
 def test_several_records_give_the_commands_campaign(data_dir, hyst_bin, tmp_path):

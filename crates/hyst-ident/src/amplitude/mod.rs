@@ -209,12 +209,25 @@ pub enum AmplitudeOption {
     Period,
 }
 
+impl AmplitudeOption {
+    /// The field's name: the Python keyword, and the flag without its dashes.
+    pub fn name(self) -> &'static str {
+        match self {
+            AmplitudeOption::Levels => "levels",
+            AmplitudeOption::Cycles => "cycles",
+            AmplitudeOption::Groups => "groups",
+            AmplitudeOption::Band => "band",
+            AmplitudeOption::Period => "period",
+        }
+    }
+}
+
 /// What is wrong with the amplitude analysis's input.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum AmplitudeError {
     /// An option out of range.
-    #[error("{option:?} = {value} is out of range: {needs}")]
+    #[error("{} = {value} is out of range: {needs}", option.name())]
     BadOption {
         /// Which.
         option: AmplitudeOption,

@@ -164,14 +164,14 @@ fn bad_input_is_named() {
             levels: 0,
             ..Default::default()
         })
-        .contains("Levels = 0")
+        .contains("levels = 0")
     );
     assert!(
         err(AmplitudeOptions {
             cycles: 0.1,
             ..Default::default()
         })
-        .contains("Cycles = 0.1")
+        .contains("cycles = 0.1")
     );
     assert!(
         err(AmplitudeOptions {
