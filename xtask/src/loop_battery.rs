@@ -44,6 +44,18 @@ pub enum Force {
     Random,
 }
 
+/// How the records are made.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum Generator {
+    /// RK4 at 20× the rate, FIR decimation 2·2·5 (the battery's own).
+    #[default]
+    Project,
+    /// Another integrator, step and decimation than the loop's forward model and the
+    /// project's generator: the implicit trapezoidal rule at 40× the rate, FIR decimation
+    /// 2·4·5 (a drifting record keeps the project's generator).
+    Independent,
+}
+
 /// What the loop should find.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Expect {
@@ -256,11 +268,26 @@ fn force(kind: Force, seed: u64) -> Vec<f64> {
 
 /// The noise-free output of `o` under `u` (of `kind`), the stiffness drifting by `drift`
 /// over the record ([`hyst_sim::simulate_drifting`]).
-fn respond(o: &Oscillator, u: &[f64], kind: Force, drift: f64) -> Option<Vec<f64>> {
+fn respond(
+    o: &Oscillator,
+    u: &[f64],
+    kind: Force,
+    drift: f64,
+    generator: Generator,
+) -> Option<Vec<f64>> {
     let input = match kind {
         Force::Periodic => Input::Periodic(&u[..PERIOD]),
         Force::Random => Input::BandLimited(u),
     };
+    if generator == Generator::Independent && drift == 0.0 {
+        let opts = hyst_sim::SimOptions {
+            oversample: 40,
+            integrator: hyst_sim::Integrator::Trapezoidal,
+            decimation: hyst_sim::Decimation::Fir(vec![2, 4, 5]),
+            ..hyst_sim::SimOptions::default()
+        };
+        return hyst_sim::simulate(o, input, FS, N, &opts).ok();
+    }
     let pieces = if drift == 0.0 { 1 } else { DRIFT_PIECES };
     hyst_sim::simulate_drifting(o, input, FS, N, &STAGES, drift, pieces).ok()
 }
@@ -298,15 +325,15 @@ pub struct Made {
 }
 
 /// Make the record of `case` under `kind` with `seed`.
-pub fn make(case: &Case, kind: Force, seed: u64) -> Option<Made> {
+pub fn make(case: &Case, kind: Force, seed: u64, generator: Generator) -> Option<Made> {
     let u = force(kind, seed);
     let base = Oscillator::benchmark();
-    let y0 = respond(&base, &u, kind, 0.0)?;
+    let y0 = respond(&base, &u, kind, 0.0, generator)?;
     let v0: Vec<f64> = y0.windows(2).map(|w| (w[1] - w[0]) * FS).collect();
     let (sx, sv) = (rms(&y0), rms(&v0));
     let mut truth = base;
     (case.effect)(&mut truth, sx, sv);
-    let clean = respond(&truth, &u, kind, case.drift)?;
+    let clean = respond(&truth, &u, kind, case.drift, generator)?;
     let noise = sensor_noise(case.coloured_noise, seed.wrapping_add(0x5eed));
     let y: Vec<f64> = clean.iter().zip(&noise).map(|(a, b)| a + b).collect();
     let test = 3 * N / 4..N;
@@ -475,6 +502,9 @@ pub struct BatteryArgs {
     /// Only write the records (with --records), without running the loop.
     #[arg(long, requires = "records")]
     pub records_only: bool,
+    /// How the records are made.
+    #[arg(long, value_enum, default_value = "project")]
+    pub generator: Generator,
 }
 
 /// A file name for the record of `case` under `kind` with `seed`: the case's name in lower
@@ -530,7 +560,7 @@ pub fn run(args: &BatteryArgs) -> Result<(), String> {
     for (case, kind, seed) in jobs {
         bar.set_message(format!("{} ({kind:?})", case.name));
         let t = Instant::now();
-        let made = make(case, kind, seed);
+        let made = make(case, kind, seed, args.generator);
         let truth = made.as_ref().map_or(Oscillator::benchmark(), |m| m.truth);
         let (outcome, noise_eps) = match made {
             None => (

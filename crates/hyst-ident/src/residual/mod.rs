@@ -41,6 +41,7 @@ mod fit;
 pub mod heldout;
 pub mod noise;
 mod params;
+mod plausible;
 mod report;
 pub mod surface;
 
@@ -388,6 +389,7 @@ fn add_effects(
         tests.iter().map(|&r| simulate(m, rec, r)).collect()
     };
     let ys: Vec<&[f64]> = tests.iter().map(|r| &rec.y[r.0..r.1]).collect();
+    let band = plausible::excited_band(&rec.u[estimate.0..estimate.1], rec.fs);
     let mut steps = Vec::new();
     for k in 0..MAX_STEPS {
         tell(
@@ -408,9 +410,13 @@ fn add_effects(
             c,
             &ys,
             &before_out,
-            |m| {
-                let (m, c1) = fit_on(m, rec, estimate, fit_mass, CONVERGED_ITERATIONS)?;
-                Some((m, c1, outputs(&m)))
+            |effect, m| {
+                let (m, c1) = fit_on(m, rec, estimate, fit_mass, CONVERGED_ITERATIONS)
+                    .ok_or(NotConverged::FitFailed)?;
+                if let Some(why) = plausible::implausible(effect, &m, band) {
+                    return Err(NotConverged::NotAFinding(why));
+                }
+                Ok((m, c1, outputs(&m)))
             },
             &|what| tell(progress, k + 1, &format!("step {}: {what}", k + 1)),
         );
@@ -540,6 +546,26 @@ fn baseline(
         let sx = (y.iter().map(|v| v * v).sum::<f64>() / y.len() as f64).sqrt();
         starts.extend(alpha_starts(start, &b, sx));
     }
+    // c moves on a log scale: from (near) zero it cannot come back, and a record whose
+    // output-only start held c at 0 ended with c = 7e-12 N s/m and a "second mass" of 0.39
+    // kg at 3 Hz standing in for it (issue 45). Such starts are also tried at 1 % of critical.
+    let initial = start.stiffness
+        + match start.restoring {
+            hyst_model::Restoring::BoucWen(b) => b.alpha,
+            hyst_model::Restoring::Zener(z) => z.k_inf,
+            _ => 0.0,
+        };
+    let critical = 2.0 * (start.mass * initial.max(0.0)).sqrt();
+    if start.damping < 1e-3 * critical {
+        let seeded: Vec<Oscillator> = starts
+            .iter()
+            .map(|s| Oscillator {
+                damping: 0.01 * critical,
+                ..*s
+            })
+            .collect();
+        starts.extend(seeded);
+    }
     fit::fit_best_of(&starts, rec, estimate, fit_mass, CONVERGED_ITERATIONS).ok_or(
         IdentError::StartDiverges {
             start: estimate.0,
@@ -556,6 +582,18 @@ struct Chosen {
     gain: Option<HeldOutGain>,
 }
 
+/// A candidate fitted to convergence: the model, its sum of squares and its outputs on the
+/// test rows.
+type Converged = (Oscillator, f64, Vec<Option<Vec<f64>>>);
+
+/// Why a candidate was not fitted to convergence.
+enum NotConverged {
+    /// The fit failed (its simulation diverged).
+    FitFailed,
+    /// It converged to a size that is not a finding ([`plausible`]): why.
+    NotAFinding(String),
+}
+
 /// A candidate fitted to convergence that passed the held-out test: its index, model, sum
 /// of squares and outputs on the test rows.
 type Tried = (usize, Oscillator, f64, Vec<Option<Vec<f64>>>);
@@ -570,7 +608,7 @@ fn choose(
     c0: f64,
     ys: &[&[f64]],
     before: &[Option<Vec<f64>>],
-    converge: impl Fn(&Oscillator) -> Option<(Oscillator, f64, Vec<Option<Vec<f64>>>)>,
+    converge: impl Fn(Effect, &Oscillator) -> Result<Converged, NotConverged>,
     progress: &dyn Fn(&str),
 ) -> Option<Chosen> {
     let mut order: Vec<usize> = (0..evidence.len())
@@ -578,24 +616,42 @@ fn choose(
         .collect();
     order.sort_by(|&a, &b| evidence[a].delta_bic.total_cmp(&evidence[b].delta_bic));
     if ys.is_empty() {
-        // No test rows: the strongest candidate by ΔBIC, fitted to convergence.
-        let &i = order.first()?;
-        let m = evidence[i].model?;
-        let (m, c1, _) =
-            converge(&m).unwrap_or((m, c0 * (1.0 - evidence[i].variance_explained), Vec::new()));
-        return Some(Chosen {
-            i,
-            model: m,
-            c: c1,
-            gain: None,
-        });
+        // No test rows: the strongest candidate by ΔBIC that is a finding, fitted to
+        // convergence (as fitted by the diagnosis when that fails).
+        for &i in &order {
+            let Some(m) = evidence[i].model else { continue };
+            let (model, c) = match converge(evidence[i].effect, &m) {
+                Ok((m, c1, _)) => (m, c1),
+                Err(NotConverged::NotAFinding(why)) => {
+                    evidence[i].model = None;
+                    evidence[i].rejected = Some(why);
+                    continue;
+                }
+                Err(NotConverged::FitFailed) => (m, c0 * (1.0 - evidence[i].variance_explained)),
+            };
+            return Some(Chosen {
+                i,
+                model,
+                c,
+                gain: None,
+            });
+        }
+        return None;
     }
     // Try one candidate on the test rows against the outputs `base`.
     let mut tried: Vec<Tried> = Vec::new();
     let mut try_one = |i: usize, ev: &mut [Evidence]| -> Option<usize> {
         let m = ev[i].model?;
         progress(&format!("trying {} on the test rows", ev[i].effect.name()));
-        let (m, c1, out) = converge(&m)?;
+        let (m, c1, out) = match converge(ev[i].effect, &m) {
+            Ok(v) => v,
+            Err(NotConverged::FitFailed) => return None,
+            Err(NotConverged::NotAFinding(why)) => {
+                ev[i].model = None;
+                ev[i].rejected = Some(why);
+                return None;
+            }
+        };
         let gain = paired_gain(ys, before, &out);
         ev[i].held_out = Some(gain);
         if gain.accepts() {
