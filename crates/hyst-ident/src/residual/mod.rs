@@ -616,27 +616,7 @@ fn choose(
         .collect();
     order.sort_by(|&a, &b| evidence[a].delta_bic.total_cmp(&evidence[b].delta_bic));
     if ys.is_empty() {
-        // No test rows: the strongest candidate by ΔBIC that is a finding, fitted to
-        // convergence (as fitted by the diagnosis when that fails).
-        for &i in &order {
-            let Some(m) = evidence[i].model else { continue };
-            let (model, c) = match converge(evidence[i].effect, &m) {
-                Ok((m, c1, _)) => (m, c1),
-                Err(NotConverged::NotAFinding(why)) => {
-                    evidence[i].model = None;
-                    evidence[i].rejected = Some(why);
-                    continue;
-                }
-                Err(NotConverged::FitFailed) => (m, c0 * (1.0 - evidence[i].variance_explained)),
-            };
-            return Some(Chosen {
-                i,
-                model,
-                c,
-                gain: None,
-            });
-        }
-        return None;
+        return strongest_finding(&order, evidence, c0, &converge);
     }
     // Try one candidate on the test rows against the outputs `base`.
     let mut tried: Vec<Tried> = Vec::new();
@@ -723,6 +703,35 @@ fn choose(
         c: c1,
         gain: evidence[i].held_out,
     })
+}
+
+/// Without test rows: the strongest candidate of `order` (by ΔBIC) that is a finding, fitted
+/// to convergence (as fitted by the diagnosis when that fails).
+fn strongest_finding(
+    order: &[usize],
+    evidence: &mut [Evidence],
+    c0: f64,
+    converge: &dyn Fn(Effect, &Oscillator) -> Result<Converged, NotConverged>,
+) -> Option<Chosen> {
+    for &i in order {
+        let Some(m) = evidence[i].model else { continue };
+        let (model, c) = match converge(evidence[i].effect, &m) {
+            Ok((m, c1, _)) => (m, c1),
+            Err(NotConverged::NotAFinding(why)) => {
+                evidence[i].model = None;
+                evidence[i].rejected = Some(why);
+                continue;
+            }
+            Err(NotConverged::FitFailed) => (m, c0 * (1.0 - evidence[i].variance_explained)),
+        };
+        return Some(Chosen {
+            i,
+            model,
+            c,
+            gain: None,
+        });
+    }
+    None
 }
 
 /// Why a candidate's held-out gain does not add it, in words.
