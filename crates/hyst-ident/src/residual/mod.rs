@@ -24,6 +24,11 @@
 //!   by a paired test of squared errors over blocks, valid for coloured residuals; the
 //!   first named effect with a significant gain of at least 1 % is added, unless the
 //!   surface itself (for a shape no named effect has) beats it there.
+//! * **Stop**: before each step, a model whose residual RMS on the estimation rows is within
+//!   [`NOISE_STOP_Z`] standard errors of the noise level's estimate ([`noise`]) gets nothing
+//!   more: what it lacks cannot be told from the noise, however significant a tiny term's
+//!   held-out gain; and an effect that converges to a size that is not a finding (a second
+//!   mass below 1 % of the first, or its mode outside the force's band) is not added.
 //! * **Report**: per step the trace, the evidence and the test; at the end the standard
 //!   errors (sandwich over blocks, [`standard_errors`]), the noise level ([`noise`]), the
 //!   model fitted on each half of the estimation rows ([`drift`]: a structure that changes
@@ -136,7 +141,17 @@ pub struct Refinement {
     pub nonstationary: bool,
     /// What is left, when the final residual is above [`UNEXPLAINED_RATIO`] × the noise.
     pub unexplained: Option<Unexplained>,
+    /// Why the loop stopped before tracing the residual again, when it did: the residual was
+    /// already within what the noise level's estimate allows ([`NOISE_STOP_Z`]).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub stopped: Option<String>,
 }
+
+/// The loop adds nothing to a model whose residual RMS on the estimation rows is within this
+/// many standard errors of the noise level's estimate above it ([`noise::NoiseLevel::std_se`]):
+/// whatever such a model lacks is smaller than what the noise's own uncertainty hides, however
+/// significant the held-out gain of a tiny term.
+pub const NOISE_STOP_Z: f64 = 2.0;
 
 /// Most iterations of the fits of the baseline and of each model the loop accepts: enough to
 /// converge (the fit stops earlier when an iteration gains less than 1e-9 of the sum of
@@ -298,7 +313,7 @@ pub fn refine_with(
     tell(progress, 0, "fitting the start by output error");
     let (model, c) = baseline(start, rec, estimate, fit_mass)?;
     let baseline = model;
-    let (model, steps) = add_effects(model, c, rec, estimate, tests, fit_mass, progress);
+    let (model, steps, stopped) = add_effects(model, c, rec, estimate, tests, fit_mass, progress);
     tell(
         progress,
         LOOP_STEPS - 1,
@@ -352,6 +367,7 @@ pub fn refine_with(
         halves,
         nonstationary,
         unexplained,
+        stopped,
     })
 }
 
@@ -374,7 +390,8 @@ fn held_out_errors(
 
 /// The loop's steps from `model` (its sum of squares `c`): each traces the residual, fits
 /// every candidate, and adds the one the held-out test accepts, until none is or
-/// [`MAX_STEPS`] are added. Returns the final model and the steps.
+/// [`MAX_STEPS`] are added, or the residual is within the noise ([`within_noise`]). Returns
+/// the final model, the steps and why the loop stopped early.
 fn add_effects(
     mut model: Oscillator,
     mut c: f64,
@@ -383,7 +400,7 @@ fn add_effects(
     tests: &[(usize, usize)],
     fit_mass: bool,
     progress: ProgressFn<'_>,
-) -> (Oscillator, Vec<Step>) {
+) -> (Oscillator, Vec<Step>, Option<String>) {
     let errs = |m: &Oscillator| held_out_errors(m, rec, tests);
     let outputs = |m: &Oscillator| -> Vec<Option<Vec<f64>>> {
         tests.iter().map(|&r| simulate(m, rec, r)).collect()
@@ -392,6 +409,9 @@ fn add_effects(
     let band = plausible::excited_band(&rec.u[estimate.0..estimate.1], rec.fs);
     let mut steps = Vec::new();
     for k in 0..MAX_STEPS {
+        if let Some(why) = within_noise(&model, rec, estimate) {
+            return (model, steps, Some(why));
+        }
         tell(
             progress,
             k + 1,
@@ -455,7 +475,26 @@ fn add_effects(
             }
         }
     }
-    (model, steps)
+    (model, steps, None)
+}
+
+/// Why `model` needs nothing more, when its residual RMS on the estimation rows is within
+/// [`NOISE_STOP_Z`] standard errors of the noise level above it.
+fn within_noise(
+    model: &Oscillator,
+    rec: &Prepared<'_>,
+    estimate: (usize, usize),
+) -> Option<String> {
+    let resid = residual(model, rec, estimate)?;
+    let nl = noise::noise_level(rec.u, rec.y, &resid, rec.fs).ok()?;
+    let rms = (sse(&resid) / resid.len().max(1) as f64).sqrt();
+    let bound = nl.std + NOISE_STOP_Z * nl.std_se;
+    (nl.std_se.is_finite() && rms <= bound).then(|| {
+        format!(
+            "the residual's RMS on the estimation rows ({rms:.4e}) is within {NOISE_STOP_Z} standard errors of the noise level ({:.4e} ± {:.2e}): nothing it lacks can be told from the noise",
+            nl.std, nl.std_se
+        )
+    })
 }
 
 /// Out of band, coloured noise reads low. A residual `resid` above that level which is no
@@ -477,12 +516,13 @@ fn coloured_noise(
     else {
         return noise;
     };
-    let level = (sse(resid) / resid.len().max(1) as f64).sqrt();
+    let (level, level_se) = noise::rms_with_se(resid);
     let (share, bias) = noise::coherent_share(resid, u);
     let structured = trace.is_none_or(|f| f.present().next().is_some());
     if level > UNEXPLAINED_RATIO * nl.std && !structured && share < 3.0 * bias && !nonstationary {
         Ok(noise::NoiseLevel {
             std: level,
+            std_se: level_se,
             method: noise::NoiseMethod::Residual {
                 out_of_band: nl.std,
             },

@@ -45,6 +45,11 @@ pub enum NoiseMethod {
 pub struct NoiseLevel {
     /// Its standard deviation, in the output's units.
     pub std: f64,
+    /// The standard error of `std` (output units): of the mean of squared differences
+    /// (period to period), of the median of the quiet band's Welch ordinates, or of the
+    /// residual's RMS over blocks (coloured residuals allowed).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub std_se: f64,
     /// How it was found.
     pub method: NoiseMethod,
 }
@@ -101,8 +106,13 @@ pub fn noise_level(u: &[f64], y: &[f64], residual: &[f64], fs: f64) -> Result<No
             .collect();
         let mean = d.iter().sum::<f64>() / d.len() as f64;
         let var = d.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / d.len() as f64;
+        // var/2 is a mean of n = d.len() squares, each of relative variance 2 for white
+        // noise, and each correlated 1/4 with the squares a period before and after it (they
+        // share a sample): relative variance 2·1.5/n, σ's standard error half its root.
+        let std = (var / 2.0).sqrt();
         return Ok(NoiseLevel {
-            std: (var / 2.0).sqrt(),
+            std,
+            std_se: std * (1.5 / (2.0 * d.len() as f64)).sqrt(),
             method: NoiseMethod::PeriodToPeriod {
                 period,
                 pairs: pairs - 2,
@@ -132,11 +142,37 @@ pub fn noise_level(u: &[f64], y: &[f64], residual: &[f64], fs: f64) -> Result<No
     }
     let mut q = quiet;
     q.sort_by(f64::total_cmp);
-    let median = q[q.len() / 2];
+    let m = q.len();
+    let median = q[m / 2];
+    // The median's standard error from the ordinates' own spread (their quartiles: for a
+    // density f at the median, 1/(2f√M) ≈ 0.93·IQR/√M for a near-normal spread), σ's half of
+    // its relative size. Hann-windowed neighbours are not independent: their powers correlate
+    // (2/3)² and (1/6)² one and two bins apart, which multiplies the variance by 1.94.
+    let iqr = q[(3 * m) / 4] - q[m / 4];
+    let median_se = 0.93 * iqr * (1.94 / m as f64).sqrt();
+    let std = (median * fs / 2.0).sqrt();
     Ok(NoiseLevel {
-        std: (median * fs / 2.0).sqrt(),
+        std,
+        std_se: std * median_se / (2.0 * median),
         method: NoiseMethod::OutOfBand { share },
     })
+}
+
+/// The RMS of `r` and its standard error from the mean squares of 16 consecutive blocks
+/// (so that a coloured `r` counts as the fewer independent values it is).
+pub fn rms_with_se(r: &[f64]) -> (f64, f64) {
+    const BLOCKS: usize = 16;
+    let n = r.len();
+    if n == 0 {
+        return (f64::NAN, f64::NAN);
+    }
+    let ms = |x: &[f64]| x.iter().map(|v| v * v).sum::<f64>() / x.len().max(1) as f64;
+    let all = ms(r);
+    let b = BLOCKS.min(n);
+    let blocks: Vec<f64> = (0..b).map(|i| ms(&r[i * n / b..(i + 1) * n / b])).collect();
+    let sd = (blocks.iter().map(|v| (v - all).powi(2)).sum::<f64>() / (b - 1).max(1) as f64).sqrt();
+    let rms = all.sqrt();
+    (rms, sd / (b as f64).sqrt() / (2.0 * rms))
 }
 
 /// The share of `r`'s variance that is linearly coherent with `u` (Welch, Hann segments of
@@ -217,5 +253,41 @@ mod tests {
         let white = hyst_sim::excitation::white_noise(8192, 1.0, 5).unwrap();
         let why = noise_level(&white, &white, &white, fs).unwrap_err();
         assert!(why.contains("no band free of the response"), "{why}");
+    }
+
+    /// The noise level's standard error against the spread of its estimate over 30 records
+    /// (random input, out of band; periodic input, period to period): within a factor 1.5
+    /// of it (30 draws give the spread to about ±13 %). Measured: 1.10e-4 against 1.34e-4
+    /// (periodic), 1.35e-4 against 1.22e-4 (random); without the neighbours' correlation the
+    /// errors were 0.67 and 0.79 of the spread.
+    #[test]
+    fn the_noise_levels_standard_error_is_its_spread() {
+        let fs = 750.0;
+        let sigma = 0.01;
+        let period = Multisine::band(1024, fs, 5.0, 150.0, 1.0)
+            .unwrap()
+            .generate(3)
+            .unwrap();
+        let periodic: Vec<f64> = period.iter().cycle().take(8192).copied().collect();
+        let random = band_limited_noise(8192, fs, 5.0, 150.0, 1.0, 4).unwrap();
+        for u in [&periodic, &random] {
+            let (mut levels, mut ses) = (Vec::new(), Vec::new());
+            for seed in 0..30 {
+                let mut y: Vec<f64> = u.iter().map(|v| 0.3 * v).collect();
+                add_noise(&mut y, sigma, 100 + seed).unwrap();
+                let resid: Vec<f64> = y.iter().zip(u.iter()).map(|(a, b)| a - 0.3 * b).collect();
+                let l = noise_level(u, &y, &resid, fs).unwrap();
+                levels.push(l.std);
+                ses.push(l.std_se);
+            }
+            let mean = levels.iter().sum::<f64>() / 30.0;
+            let sd = (levels.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / 29.0).sqrt();
+            let se = ses.iter().sum::<f64>() / 30.0;
+            eprintln!("standard error {se:.3e}, spread over 30 records {sd:.3e}");
+            assert!(
+                se / sd > 1.0 / 1.5 && se / sd < 1.5,
+                "standard error {se:.3e}, spread {sd:.3e}"
+            );
+        }
     }
 }

@@ -111,6 +111,9 @@ impl RefineReport {
                 )?;
             }
         }
+        if let Some(why) = &self.refinement.stopped {
+            writeln!(f, "step: none, not traced: {why}")?;
+        }
         Ok(())
     }
 
