@@ -80,7 +80,8 @@ pub(crate) struct IdentArgs {
     /// periods of the steady state (use --skip to drop a start-up transient).
     #[arg(long)]
     pub(crate) period: Option<usize>,
-    /// Also show what one record leaves free: at each ratio βδ/βγ, the Bouc-Wen model that
+    /// Also show what one record under a white force leaves free (it starts from the Zener
+    /// fit to the record's spectrum): at each ratio βδ/βγ, the Bouc-Wen model that
     /// best reproduces the record's statistics (its Zener fit, amplitude curve and kurtosis;
     /// fitted by simulation), with its χ² and its validation errors: models the record cannot
     /// tell apart that predict other force levels differently (about a minute).
