@@ -66,7 +66,7 @@ pub struct OneRecordBoucWen {
     /// The oscillator (β = 1, ν the start's).
     pub oscillator: Oscillator,
     /// Weighted sum of squares at the end: the Zener fit's four numbers in their covariance,
-    /// the curves' points in their standard errors.
+    /// the curve's points and the kurtosis in their standard errors.
     pub chi2: f64,
     /// Numbers in it.
     pub residuals: usize,
