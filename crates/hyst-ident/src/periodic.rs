@@ -21,9 +21,9 @@ pub fn input_period(u: &[f64]) -> Option<usize> {
 
 /// The first lag from `min_lag` samples to a third of the record at which `u`'s normalised
 /// correlation with itself is at least [`PERIODIC_CORRELATION`], moved on to where that
-/// correlation peaks: the period of a record that repeats. For a response, `min_lag` must exceed the time over which a lightly
-/// damped mode stays correlated with itself (a mode of damping ratio ζ keeps a correlation
-/// of e^(−2πζ) after one cycle: 0.994 at ζ = 0.1 %).
+/// correlation peaks: the period of a record that repeats. For a response, `min_lag` must
+/// exceed the time over which a lightly damped mode stays correlated with itself (a mode of
+/// damping ratio ζ keeps a correlation of e^(−2πζ) after one cycle: 0.994 at ζ = 0.1 %).
 pub fn repeat_period(u: &[f64], min_lag: usize) -> Option<usize> {
     let n = u.len();
     if n < 3 * min_lag.max(16) {

@@ -211,14 +211,8 @@ pub fn identify_and_validate(
         })
         .collect();
     let mut kept = best.and_then(|i| candidates.get(i));
-    let scores_of = |m: &Oscillator| -> Vec<Score> {
-        validate_all(m, records, fs)
-            .into_iter()
-            .map(Score::of)
-            .collect()
-    };
-    let linear = scores_of(&id.models.linear);
-    let zener = id.models.zener.as_ref().map(scores_of);
+    let linear = scores_of(&id.models.linear, records, fs);
+    let zener = id.models.zener.as_ref().map(|m| scores_of(m, records, fs));
     let dropped = worse_than_zener(kept, zener.as_deref(), records);
     if dropped.is_some() {
         kept = None;
@@ -304,15 +298,20 @@ fn one_record_profile(
     .into_iter()
     .map(|point| {
         let validation = match &point.fit {
-            Ok(f) => validate_all(&f.oscillator, records, fs)
-                .into_iter()
-                .map(Score::of)
-                .collect(),
+            Ok(f) => scores_of(&f.oscillator, records, fs),
             Err(_) => Vec::new(),
         };
         ProfileRow { point, validation }
     })
     .collect()
+}
+
+/// `m`'s score on each of `records`.
+fn scores_of(m: &Oscillator, records: &[ValidationRecord], fs: f64) -> Vec<Score> {
+    validate_all(m, records, fs)
+        .into_iter()
+        .map(Score::of)
+        .collect()
 }
 
 /// Why the kept Bouc-Wen candidate is dropped, when it validates worse than the Zener model
@@ -441,9 +440,7 @@ impl IdentReport {
         }
         Ok(())
     }
-}
 
-impl IdentReport {
     fn fmt_profile(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         if self.profile.is_empty() {
             return Ok(());

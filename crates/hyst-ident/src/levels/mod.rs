@@ -215,7 +215,7 @@ pub fn bouc_wen_by_simulation(
         )
     };
     let weights = fit_weights(fits)?;
-    let resid = |a: &[[f64; 4]]| -> Vec<f64> {
+    let resid = |a: &Vec<[f64; 4]>| -> Vec<f64> {
         a.iter()
             .zip(fits)
             .zip(&weights)
@@ -238,7 +238,6 @@ pub fn bouc_wen_by_simulation(
     let aux = |p: &[f64]| simulated_fits(&osc(p), fits, lengths, opts);
     let mut nonnegative = vec![false; p.len()];
     nonnegative[0] = true;
-    let resid = |a: &Vec<[f64; 4]>| resid(a);
     let fit = indirect_lm(&mut p, &nonnegative, &aux, &resid, opts, progress)?;
     let se_of = |k: usize| {
         fit.covariance

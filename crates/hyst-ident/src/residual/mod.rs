@@ -406,7 +406,7 @@ fn add_effects(
         tests.iter().map(|&r| simulate(m, rec, r)).collect()
     };
     let ys: Vec<&[f64]> = tests.iter().map(|r| &rec.y[r.0..r.1]).collect();
-    let band = plausible::excited_band(&rec.u[estimate.0..estimate.1], rec.fs);
+    let band = surface::input_band(&rec.u[estimate.0..estimate.1], rec.fs);
     let mut steps = Vec::new();
     for k in 0..MAX_STEPS {
         if let Some(why) = within_noise(&model, rec, estimate) {
@@ -589,13 +589,8 @@ fn baseline(
     // c moves on a log scale: from (near) zero it cannot come back, and a record whose
     // output-only start held c at 0 ended with c = 7e-12 N s/m and a "second mass" of 0.39
     // kg at 3 Hz standing in for it (issue 45). Such starts are also tried at 1 % of critical.
-    let initial = start.stiffness
-        + match start.restoring {
-            hyst_model::Restoring::BoucWen(b) => b.alpha,
-            hyst_model::Restoring::Zener(z) => z.k_inf,
-            _ => 0.0,
-        };
-    let critical = 2.0 * (start.mass * initial.max(0.0)).sqrt();
+    // 2mω at the small-amplitude resonance.
+    let critical = 4.0 * std::f64::consts::PI * start.mass * candidates::resonance_hz(start);
     if start.damping < 1e-3 * critical {
         let seeded: Vec<Oscillator> = starts
             .iter()

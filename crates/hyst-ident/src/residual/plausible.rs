@@ -13,35 +13,8 @@ use super::Effect;
 /// coloured noise's share were 0.1–0.3 % (issue 45).
 pub const MIN_SECOND_MASS_SHARE: f64 = 0.01;
 
-/// Share of the input's power below the excited band's lower edge, and above its upper one.
-const BAND_TAIL: f64 = 0.005;
-
-/// The band the input excites (Hz): where the middle 99 % of its power lies (Welch, 512-row
-/// segments).
-pub(super) fn excited_band(u: &[f64], fs: f64) -> (f64, f64) {
-    let (f, p) = crate::welch_psd(u, fs, 512);
-    let total: f64 = p.iter().sum();
-    if total <= 0.0 || !total.is_finite() {
-        return (0.0, fs / 2.0);
-    }
-    let mut cum = 0.0;
-    let (mut lo, mut hi) = (f[0], f[f.len() - 1]);
-    let mut found_lo = false;
-    for (fk, pk) in f.iter().zip(&p) {
-        cum += pk;
-        if !found_lo && cum >= BAND_TAIL * total {
-            lo = *fk;
-            found_lo = true;
-        }
-        if cum >= (1.0 - BAND_TAIL) * total {
-            hi = *fk;
-            break;
-        }
-    }
-    (lo, hi)
-}
-
-/// Why `effect`, as fitted in `model`, is not a finding (`band`: [`excited_band`], Hz), or
+/// Why `effect`, as fitted in `model`, is not a finding (`band`: the input's,
+/// [`super::surface::input_band`], Hz), or
 /// `None` when it is.
 pub(super) fn implausible(effect: Effect, model: &Oscillator, band: (f64, f64)) -> Option<String> {
     match effect {
@@ -77,7 +50,7 @@ mod tests {
     #[test]
     fn the_excited_band_is_the_inputs() {
         let u = hyst_sim::excitation::band_limited_noise(32768, 750.0, 5.0, 150.0, 1.0, 3).unwrap();
-        let (lo, hi) = excited_band(&u, 750.0);
+        let (lo, hi) = super::super::surface::input_band(&u, 750.0);
         // Welch bins of 750/512 = 1.46 Hz.
         assert!(
             (lo - 5.0).abs() < 3.0 && (hi - 150.0).abs() < 3.0,

@@ -53,16 +53,20 @@ pub struct Kinematics {
     pub cut_hz: f64,
 }
 
-/// The upper edge of the input's band: the highest frequency where its spectrum is above
-/// 1e-3 of its peak.
-fn input_band_edge(u: &[f64], fs: f64) -> f64 {
+/// The input's band (Hz): the lowest and highest frequencies where its spectrum (Welch,
+/// 512-row segments) is above 1e-3 of its peak; (0, fs/2) when it has none.
+pub(super) fn input_band(u: &[f64], fs: f64) -> (f64, f64) {
     let (f, s) = crate::welch_psd(u, fs, 512.min(u.len()).max(16));
     let peak = s.iter().cloned().fold(0.0, f64::max);
-    f.iter()
+    let above = |(_, p): &(&f64, &f64)| **p > 1e-3 * peak;
+    let lo = f.iter().zip(&s).find(above).map_or(0.0, |(f, _)| *f);
+    let hi = f
+        .iter()
         .zip(&s)
         .rev()
-        .find(|(_, p)| **p > 1e-3 * peak)
-        .map_or(fs / 2.0, |(f, _)| *f)
+        .find(above)
+        .map_or(fs / 2.0, |(f, _)| *f);
+    (lo, hi)
 }
 
 /// Derivatives of `y` (rows `range` of the record) in the frequency domain, cut at `cut_hz`.
@@ -575,7 +579,7 @@ pub struct Trace {
 /// subtracted, which leaves 0.04 N there and no group present on records with white or
 /// coloured sensor noise.
 pub fn trace(o: &Oscillator, rec: &Record<'_>, range: (usize, usize), fit_mass: bool) -> Trace {
-    let cut = (1.5 * input_band_edge(&rec.u[range.0..range.1], rec.fs)).min(0.9 * rec.fs / 2.0);
+    let cut = (1.5 * input_band(&rec.u[range.0..range.1], rec.fs).1).min(0.9 * rec.fs / 2.0);
     let kinematics = kinematics(rec.y, rec.fs, range, cut);
     let mut force = missing_force(o, rec, &kinematics);
     let simulated = super::response(o, rec, range);
