@@ -123,7 +123,8 @@ impl AnalysisOptions {
                 let views: Vec<&[f64]> = decimated.iter().map(|c| c.as_slice()).collect();
                 let (n, means) = crate::identify::check_channels(&views)?;
                 let fs = fs / factor as f64;
-                crate::identify::block_rows_for(&views, fs, (n, &means), &self.ssi, None)?
+                let known = survey.map(|s| s.decimated(factor));
+                crate::identify::block_rows_for(&views, fs, (n, &means), &self.ssi, known)?
             } else {
                 let (n, means) = &checked;
                 crate::identify::block_rows_for(y, fs, (*n, means), &self.ssi, survey)?
@@ -203,9 +204,9 @@ pub fn analyze_with_progress(
     let y = views.as_slice();
     let recorded_fs = fs;
     let fs = fs / factor as f64;
-    // Undecimated, the survey that found no reason to decimate is the one SSI's lag is read
-    // from: not made twice.
-    let known = survey.clone().filter(|_| factor == 1);
+    // The survey that chose the factor is the one SSI's lag is read from, restated at the
+    // new rate: not made twice, and not at a coarser resolution.
+    let known = survey.as_ref().map(|s| s.decimated(factor));
     let ssi = crate::identify::identify_surveyed(y, fs, &opts.ssi, known, progress)?;
     // The refinement's steps follow SSI's on one count.
     let before = crate::identify::SSI_STEPS_BEFORE_ORDERS + ssi.diagram.orders.len();

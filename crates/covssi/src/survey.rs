@@ -135,6 +135,29 @@ pub(crate) fn surveyed(y: &[&[f64]], fs: f64, means: &[f64], n: usize) -> Record
 }
 
 impl RecordSurvey {
+    /// This survey restated for the record decimated by `factor` ([`crate::decimate`]: an
+    /// ideal low-pass below the new Nyquist, so the spectrum below it is the record's own):
+    /// the rate divided, the band and the peaks below the new Nyquist kept at this survey's
+    /// finer resolution. A second survey of the decimated record would see the same spectrum
+    /// through segments as many samples long, so `factor` times coarser: on the F-16's
+    /// multisine records that hid the wing-bending peak (5.2 Hz) beside the torsion mode,
+    /// and the lag, sized by the torsion mode alone, was too short for SSI to find it.
+    pub fn decimated(&self, factor: usize) -> RecordSurvey {
+        let fs_hz = self.fs_hz / factor.max(1) as f64;
+        let nyquist = fs_hz / 2.0;
+        RecordSurvey {
+            fs_hz,
+            resolution_hz: self.resolution_hz,
+            band_hz: self.band_hz.min(nyquist),
+            peaks_hz: self
+                .peaks_hz
+                .iter()
+                .copied()
+                .filter(|&f| f < nyquist)
+                .collect(),
+        }
+    }
+
     /// The decimation factor the record asks for (1: none): see the [module](self).
     pub fn decimation(&self, samples: usize) -> usize {
         let nyquist_for = |hz: f64| self.fs_hz / (2.0 * hz);
@@ -283,6 +306,24 @@ fn peaks(p: &[f64]) -> Vec<usize> {
 mod tests {
     use super::*;
     use std::f64::consts::PI;
+
+    /// Restated after decimation, a survey keeps its resolution, band and the peaks below
+    /// the new Nyquist, at the new rate.
+    #[test]
+    fn a_decimated_survey_keeps_its_resolution_and_peaks() {
+        let s = RecordSurvey {
+            fs_hz: 400.0,
+            resolution_hz: 0.0244,
+            band_hz: 14.4,
+            peaks_hz: vec![3.5, 5.2, 7.3, 16.5, 45.0],
+        };
+        let d = s.decimated(5);
+        assert_eq!(d.fs_hz, 80.0);
+        assert_eq!(d.resolution_hz, s.resolution_hz);
+        assert_eq!(d.band_hz, 14.4);
+        assert_eq!(d.peaks_hz, vec![3.5, 5.2, 7.3, 16.5]);
+        assert_eq!(s.decimated(1), s);
+    }
 
     /// Two decaying resonances in white noise, made by a second-order recursion each: the
     /// survey finds their peaks, a band above the higher one, and from the lower one a lag of
