@@ -19,10 +19,12 @@
 
 use hyst_model::{ModelError, Oscillator, State};
 
+pub mod batch;
 mod drift;
 pub mod excitation;
 mod kernel;
 
+pub use batch::simulate_many;
 pub use drift::simulate_drifting;
 mod record;
 pub use record::{InputKind, STEADY_STATE_MAX_PERIODS, STEADY_STATE_TOLERANCE, response};
