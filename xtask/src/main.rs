@@ -505,9 +505,59 @@ fn bench_real_poles() {
     );
 }
 
+/// `hyst_sim::simulate_many` against the same models simulated one by one: a batch of Bouc-Wen
+/// models (ν = 1, the benchmark's element scaled to a 10 Hz oscillator, each a little off
+/// the others as a finite-difference Jacobian's are) on 32768 samples at 4 sub-steps, the
+/// loop's simulations; then with a cubic spring (the general kernel).
+fn bench_simulate_many() {
+    use hyst_model::{BoucWen, Restoring};
+    let n = 32768;
+    let w = 2.0 * std::f64::consts::PI * 10.0;
+    let u = white_noise(n, 10.0, 31).expect("valid rms");
+    let opts = SimOptions {
+        oversample: 4,
+        ..SimOptions::default()
+    };
+    let mut base = Oscillator::linear(1.0, 2.0 * 0.02 * w, w * w);
+    base.restoring = Restoring::BoucWen(BoucWen {
+        alpha: 0.3 * w * w,
+        beta: 1.0,
+        gamma: 20.0,
+        delta: -5.0,
+        nu: 1.0,
+    });
+    for (name, cubic) in [("bouc_wen", 0.0), ("bouc_wen_cubic", 1e5)] {
+        let models: Vec<Oscillator> = (0..hyst_sim::batch::LANES)
+            .map(|j| {
+                let mut m = base;
+                m.stiffness *= 1.0 + 1e-6 * j as f64;
+                m.extras.cubic_stiffness = cubic;
+                m
+            })
+            .collect();
+        let one = best_of(3, || {
+            models
+                .iter()
+                .map(|m| simulate(m, Input::Sampled(&u), 200.0, n, &opts).expect("stable"))
+                .collect::<Vec<_>>()
+        });
+        let many = best_of(3, || {
+            hyst_sim::simulate_many(&models, Input::Sampled(&u), 200.0, n, &opts)
+        });
+        println!(
+            "simulate_many_{name}_{}x32768 {:.1} ms (one by one {:.1} ms, ratio {:.2})",
+            models.len(),
+            1e3 * many,
+            1e3 * one,
+            many / one
+        );
+    }
+}
+
 /// `hyst refine`'s loop on a 32768-sample record: a 10 Hz oscillator with an undeclared cubic
 /// spring under white noise at 200 Hz, estimate on 75 %, test on 25 %.
 fn bench_refine() {
+    bench_simulate_many();
     use hyst_ident::residual::{self, Record, Start};
     let n = 32768;
     let w = 2.0 * std::f64::consts::PI * 10.0;

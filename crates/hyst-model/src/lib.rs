@@ -408,8 +408,20 @@ impl ForceSurface {
     /// The force at displacement `x` and velocity `v`.
     #[inline(always)]
     pub fn force(&self, x: f64, v: f64) -> f64 {
-        let b = Self::basis(x / self.x_scale, v / self.v_scale);
-        b.iter().zip(&self.coefficients).map(|(p, c)| p * c).sum()
+        let (xi, eta) = (x / self.x_scale, v / self.v_scale);
+        let (x2, e2) = (xi * xi, eta * eta);
+        let c = &self.coefficients;
+        let f = x2 * (c[0] + xi * (c[1] + xi * (c[2] + xi * c[3])))
+            + e2 * (c[4] + c[6] * eta)
+            + c[5] * eta * eta.abs()
+            + c[8] * x2 * eta
+            + c[9] * xi * e2;
+        // The jump's tanh costs more than the rest together: only when the term is in.
+        if c[7] != 0.0 {
+            f + c[7] * (eta / SURFACE_JUMP_WIDTH).tanh()
+        } else {
+            f
+        }
     }
 
     /// Partial derivatives of the force with respect to `x` and `v`.

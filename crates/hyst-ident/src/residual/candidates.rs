@@ -634,8 +634,9 @@ pub(super) fn diagnose_on(
         residual: &r0,
         scan: &scan,
     };
+    // The candidates are fitted in parallel, each fit's simulations in lockstep batches.
     let ev = Effect::ALL
-        .iter()
+        .par_iter()
         .map(|&e| {
             let starts = candidate_starts(e, &ctx);
             let starts = match starts {
