@@ -111,12 +111,7 @@ impl<'a> Source<'a> {
                 samples,
                 per_sample,
             } => {
-                if per_sample != 2 * r {
-                    return Err(SimError::UnsupportedInput {
-                        what: "an interpolated record whose points per sample are not twice the oversampling",
-                    });
-                }
-                crate::check_length(samples, (n - 1) * per_sample + 1)?;
+                crate::check_interpolated(samples, per_sample, r, n)?;
                 Source::Fine(samples.into())
             }
             Input::Periodic(_) | Input::Function(_) => return Ok(None),

@@ -253,6 +253,22 @@ fn check_length(u: &[f64], n_samples: usize) -> Result<(), SimError> {
     Ok(())
 }
 
+/// An interpolated input ([`Input::Interpolated`]) whose points match `r` sub-steps and
+/// cover `n_samples` samples.
+fn check_interpolated(
+    samples: &[f64],
+    per_sample: usize,
+    r: usize,
+    n_samples: usize,
+) -> Result<(), SimError> {
+    if per_sample != 2 * r {
+        return Err(SimError::UnsupportedInput {
+            what: "an interpolated record whose points per sample are not twice the oversampling",
+        });
+    }
+    check_length(samples, (n_samples - 1) * per_sample + 1)
+}
+
 fn check_record(u: &[f64]) -> Result<(), SimError> {
     if u.is_empty() {
         return Err(SimError::EmptyInput);
@@ -584,12 +600,7 @@ fn drive_input(
             samples,
             per_sample,
         } => {
-            if per_sample != 2 * r {
-                return Err(SimError::UnsupportedInput {
-                    what: "an interpolated record whose points per sample are not twice the oversampling",
-                });
-            }
-            check_length(samples, (n_samples - 1) * per_sample + 1)?;
+            check_interpolated(samples, per_sample, r, n_samples)?;
             drive(
                 model,
                 s0,
