@@ -555,7 +555,7 @@ fn bench_simulate_many() {
 }
 
 /// `hyst refine`'s loop on a 32768-sample record: a 10 Hz oscillator with an undeclared cubic
-/// spring under white noise at 200 Hz, estimate on 75 %, test on 25 %.
+/// spring under white noise at 200 Hz, estimate on 75 %, test on 25 %; then on the Silverbox.
 fn bench_refine() {
     bench_simulate_many();
     use hyst_ident::residual::{self, Record, Start};
@@ -614,6 +614,61 @@ fn bench_refine() {
         })
         .collect();
     println!("refine_s_32768 {t:.2} s (steps: {})", steps.join(", "));
+    bench_refine_silverbox();
+}
+
+/// The residual loop on the measured Silverbox, as `tests/refine_silverbox.rs` runs it
+/// (linear start, estimate on the first 75 % of the multisine part, test on the arrow head).
+fn bench_refine_silverbox() {
+    use hyst_ident::residual::{self, Record, Start};
+    let Some(dir) = hyst::io::data_dir() else {
+        println!("refine_silverbox_s skipped: no shared data");
+        return;
+    };
+    let t = match hyst::io::read_csv(&dir.join("silverbox/SNLS80mV.csv")) {
+        Ok(t) => t,
+        Err(e) => {
+            println!("refine_silverbox_s skipped: {e}");
+            return;
+        }
+    };
+    let (Ok(u), Ok(y)) = (t.column("u"), t.column("y")) else {
+        println!("refine_silverbox_s skipped: no u and y columns");
+        return;
+    };
+    let rec = Record {
+        u,
+        y,
+        fs: 1e7 / 16384.0,
+        interpolation: residual::InputInterpolation::BandLimited,
+    };
+    let estimate = (40650, 40650 + 3 * (127400 - 40650) / 4);
+    let mut r = None;
+    let secs = best_of(1, || {
+        r = Some(residual::refine_record(
+            &rec,
+            None,
+            Start::Linear,
+            estimate,
+            &[(100, 40575), (100, 32100)],
+        ));
+    });
+    match r {
+        Some(Ok(r)) => {
+            let steps: Vec<&str> = r
+                .steps
+                .iter()
+                .map(|s| s.effect.map_or("none", |e| e.name()))
+                .collect();
+            println!(
+                "refine_silverbox_s {secs:.1} s (target at most 60; steps: {}; arrow head {:.3} mV)",
+                steps.join(", "),
+                1e3 * r.tests[0].rms
+            );
+        }
+        Some(Err(e)) => println!("refine_silverbox_s failed: {e}"),
+        None => {}
+    }
 }
 
 /// `hyst ident`'s identification step on its built-in record (the benchmark at 50 N, four
