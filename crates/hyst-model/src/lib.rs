@@ -418,10 +418,16 @@ impl ForceSurface {
             + c[9] * xi * e2;
         // The jump's tanh costs more than the rest together: only when the term is in.
         if c[7] != 0.0 {
-            f + c[7] * (eta / SURFACE_JUMP_WIDTH).tanh()
+            f + c[7] * Self::jump(eta)
         } else {
             f
         }
+    }
+
+    /// The jump term at scaled velocity `eta`: $\tanh(\eta/0.05)$.
+    #[inline(always)]
+    pub fn jump(eta: f64) -> f64 {
+        (eta / SURFACE_JUMP_WIDTH).tanh()
     }
 
     /// Partial derivatives of the force with respect to `x` and `v`.

@@ -16,7 +16,7 @@
 //! lane has them. The outputs agree with [`simulate`](crate::simulate)'s to rounding (the
 //! same scheme with the terms summed in another order; this module's tests).
 
-use hyst_model::{Oscillator, Restoring};
+use hyst_model::{Oscillator, Restoring, SURFACE_TERMS};
 
 use crate::{Decimation, Input, Integrator, SimError, SimOptions};
 
@@ -156,8 +156,9 @@ struct LaneKernel<'a> {
     k2: V,
     c2: V,
     inv_m2: V,
-    /// Some lane has a clearance, friction or a force surface.
-    rare: bool,
+    /// The clearance, friction and force surface of the lanes that have them (boxed: the
+    /// kernel's other constants stay together).
+    rare: Option<Box<RareLanes>>,
     /// Some lane has a Bouc-Wen exponent other than 1.
     powered: bool,
 }
@@ -192,10 +193,7 @@ impl<'a> LaneKernel<'a> {
             k2: lanes(|l| sm(l).map_or(0.0, |s| s.stiffness)),
             c2: lanes(|l| sm(l).map_or(0.0, |s| s.damping)),
             inv_m2: lanes(|l| sm(l).map_or(0.0, |s| 1.0 / s.mass)),
-            rare: (0..LANES).any(|l| {
-                let e = e(l);
-                e.clearance.is_some() || e.coulomb.is_some() || e.surface.is_some()
-            }),
+            rare: RareLanes::of(models),
             powered: (0..LANES).any(|l| bw(l).is_some_and(|b| b.nu != 1.0)),
         }
     }
@@ -218,19 +216,8 @@ impl<'a> LaneKernel<'a> {
                     - self.qd[l] * v[l] * v[l].abs()
             });
         }
-        if self.rare {
-            for (l, f) in force.iter_mut().enumerate() {
-                let e = &self.models[l].extras;
-                if let Some(g) = &e.clearance {
-                    *f -= g.force(x[l]);
-                }
-                if let Some(cf) = &e.coulomb {
-                    *f -= cf.force * (v[l] / cf.smoothing_velocity).tanh();
-                }
-                if let Some(sf) = &e.surface {
-                    *f -= sf.force(x[l], v[l]);
-                }
-            }
+        if let Some(rare) = &self.rare {
+            rare.subtract(x, v, &mut force);
         }
         let dz = match T::ELEMENT {
             Element::None => [0.0; LANES],
@@ -350,6 +337,91 @@ impl LaneKernel<'_> {
     /// Whether some lane has a second mass.
     fn second(&self) -> bool {
         (0..LANES).any(|l| self.models[l].extras.second_mass.is_some())
+    }
+}
+
+/// The extra forces few models have, lane by lane: a clearance's spring, smoothed Coulomb
+/// friction and a force surface ([`hyst_model::ExtraForces`]), each zero in the lanes
+/// without it and `None` when no lane has it.
+struct RareLanes {
+    /// Gap and spring.
+    clearance: Option<(V, V)>,
+    /// Friction force and the inverse of its smoothing velocity.
+    coulomb: Option<(V, V)>,
+    /// Inverse displacement and velocity scales and the terms' coefficients.
+    surface: Option<(V, V, [V; SURFACE_TERMS])>,
+}
+
+impl RareLanes {
+    fn of(models: &[&Oscillator; LANES]) -> Option<Box<RareLanes>> {
+        let e = |l: usize| &models[l].extras;
+        let any = |f: &dyn Fn(usize) -> bool| (0..LANES).any(f);
+        let clearance = any(&|l| e(l).clearance.is_some()).then(|| {
+            let c = |l: usize| e(l).clearance;
+            (
+                lanes(|l| c(l).map_or(0.0, |c| c.gap)),
+                lanes(|l| c(l).map_or(0.0, |c| c.stiffness)),
+            )
+        });
+        let coulomb = any(&|l| e(l).coulomb.is_some()).then(|| {
+            let c = |l: usize| e(l).coulomb;
+            (
+                lanes(|l| c(l).map_or(0.0, |c| c.force)),
+                lanes(|l| c(l).map_or(0.0, |c| 1.0 / c.smoothing_velocity)),
+            )
+        });
+        let surface = any(&|l| e(l).surface.is_some()).then(|| {
+            let sf = |l: usize| e(l).surface;
+            (
+                lanes(|l| sf(l).map_or(0.0, |s| 1.0 / s.x_scale)),
+                lanes(|l| sf(l).map_or(0.0, |s| 1.0 / s.v_scale)),
+                std::array::from_fn(|i| lanes(|l| sf(l).map_or(0.0, |s| s.coefficients[i]))),
+            )
+        });
+        (clearance.is_some() || coulomb.is_some() || surface.is_some()).then(|| {
+            Box::new(RareLanes {
+                clearance,
+                coulomb,
+                surface,
+            })
+        })
+    }
+
+    /// `force` less these forces at displacements `x` and velocities `v`. Not inlined: in
+    /// the kernel, its code made the common models' loop (no such force) spill its
+    /// registers and run at half speed.
+    #[inline(never)]
+    fn subtract(&self, x: &V, v: &V, force: &mut V) {
+        if let Some((gap, k)) = &self.clearance {
+            *force = lanes(|l| {
+                let beyond = (x[l] - gap[l]).max(0.0) + (x[l] + gap[l]).min(0.0);
+                force[l] - k[l] * beyond
+            });
+        }
+        if let Some((fc, inv_v)) = &self.coulomb {
+            for l in 0..LANES {
+                if fc[l] != 0.0 {
+                    force[l] -= fc[l] * (v[l] * inv_v[l]).tanh();
+                }
+            }
+        }
+        if let Some((ixs, ivs, c)) = &self.surface {
+            let (xi, eta) = (lanes(|l| x[l] * ixs[l]), lanes(|l| v[l] * ivs[l]));
+            *force = lanes(|l| {
+                let (x2, e2) = (xi[l] * xi[l], eta[l] * eta[l]);
+                force[l]
+                    - x2 * (c[0][l] + xi[l] * (c[1][l] + xi[l] * (c[2][l] + xi[l] * c[3][l])))
+                    - e2 * (c[4][l] + c[6][l] * eta[l])
+                    - c[5][l] * eta[l] * eta[l].abs()
+                    - c[8][l] * x2 * eta[l]
+                    - c[9][l] * xi[l] * e2
+            });
+            for l in 0..LANES {
+                if c[7][l] != 0.0 {
+                    force[l] -= c[7][l] * hyst_model::ForceSurface::jump(eta[l]);
+                }
+            }
+        }
     }
 }
 
@@ -491,6 +563,13 @@ mod tests {
             smoothing_velocity: 1e-3,
         });
         v.push(rare);
+        let mut surf = bw(1.0);
+        surf.extras.surface = Some(hyst_model::ForceSurface {
+            x_scale: 3e-3,
+            v_scale: 0.2,
+            coefficients: [0.5, 0.3, 0.1, 0.05, 0.2, 0.4, 0.1, 0.3, 0.2, 0.2],
+        });
+        v.push(surf);
         let mut two = cubic;
         two.extras.second_mass = Some(SecondMass {
             mass: 0.2,
