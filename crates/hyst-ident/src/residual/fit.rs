@@ -317,37 +317,44 @@ pub(super) fn fit_window(
         }
         m
     };
+    // The model at x and its finite-difference Jacobian: the model and one perturbation per
+    // parameter simulated together in lockstep, so that each column's difference is taken
+    // between outputs of the same arithmetic. The output at x comes with its Jacobian;
+    // `None` for the Jacobian when a perturbed model does not simulate.
+    let at = |x: &[f64], m: &Oscillator| -> Option<(Vec<f64>, Option<Jacobian>)> {
+        let steps: Vec<f64> = (0..np).map(|j| scale[j].step(x[j])).collect();
+        let models: Vec<Oscillator> = std::iter::once(*m)
+            .chain((0..np).map(|j| {
+                let mut xj = x.to_vec();
+                xj[j] += steps[j];
+                model_at(&xj)
+            }))
+            .collect();
+        let mut outs = simulate_batch(&models, rec, range).into_iter();
+        let y0 = outs.next()??;
+        // r = y − ŷ, so ∂r/∂x_j = −∂ŷ/∂x_j.
+        let cols = outs
+            .zip(&steps)
+            .map(|(yj, h)| Some(yj?.iter().zip(&y0).map(|(a, b)| (b - a) / h).collect()))
+            .collect::<Option<Jacobian>>();
+        let r = rec.y[range.0..range.1]
+            .iter()
+            .zip(&y0)
+            .map(|(a, b)| a - b)
+            .collect();
+        Some((r, cols))
+    };
     let mut cur = model_at(&x);
-    let mut r = residual(&cur, rec, range)?;
+    let (mut r, mut jac) = at(&x, &cur)?;
     let mut c = sse(&r);
     let mut lambda = 1e-3;
     let rows = (range.1 - range.0) as f64;
     let mut small_steps = 0;
     for _ in 0..iterations {
         rec.beat();
-        // Finite-difference Jacobian: the model and one perturbation per parameter,
-        // simulated together in lockstep, so that each column's difference is taken
-        // between outputs of the same arithmetic.
-        let steps: Vec<f64> = (0..np).map(|j| scale[j].step(x[j])).collect();
-        let models: Vec<Oscillator> = std::iter::once(cur)
-            .chain((0..np).map(|j| {
-                let mut xj = x.clone();
-                xj[j] += steps[j];
-                model_at(&xj)
-            }))
-            .collect();
-        let Some(outs) = simulate_batch(&models, rec, range)
-            .into_iter()
-            .collect::<Option<Vec<Vec<f64>>>>()
-        else {
+        let Some(cols) = jac.take() else {
             break;
         };
-        // r = y − ŷ, so ∂r/∂x_j = −∂ŷ/∂x_j.
-        let cols: Vec<Vec<f64>> = outs[1..]
-            .iter()
-            .zip(&steps)
-            .map(|(yj, h)| yj.iter().zip(&outs[0]).map(|(a, b)| (b - a) / h).collect())
-            .collect();
         let (a, g) = crate::normal_equations(&cols, &r);
         let improved = crate::lm_step(&a, &g, &mut lambda, |step| {
             // A log coordinate moves by at most MAX_LOG_STEP a step (the whole step is
@@ -367,15 +374,19 @@ pub(super) fn fit_window(
             let xn: Vec<f64> = x.iter().zip(step).map(|(a, b)| a - shrink * b).collect();
             let mn = model_at(&xn);
             mn.validate().ok()?;
-            let rn = residual(&mn, rec, range)?;
+            // The trial is simulated with the Jacobian it will need if accepted: most
+            // trials are, and the next iteration then starts with its Jacobian made.
+            let (rn, jn) = at(&xn, &mn)?;
             let cn = sse(&rn);
             (cn < c).then(|| {
                 let significant = c - cn > CONVERGED_GAIN * c / rows;
-                (x, cur, r, c) = (xn, mn, rn, cn);
+                (x, cur, r, c, jac) = (xn, mn, rn, cn, jn);
                 significant
             })
         });
-        // λ past its largest: no step lowers the cost from here.
+        // λ past its largest: no step lowers the cost from here. Otherwise a step was
+        // accepted, with the Jacobian at its point (none if a perturbed model diverged,
+        // which ends the fit at the next iteration).
         if lambda >= crate::numerics::LmSchedule::default().max {
             break;
         }
@@ -386,6 +397,9 @@ pub(super) fn fit_window(
     }
     Some((cur, c))
 }
+
+/// A Jacobian's columns, one per free parameter: the residual's derivative on each row.
+type Jacobian = Vec<Vec<f64>>;
 
 /// A fitted parameter with its standard error.
 #[derive(Debug, Clone, PartialEq)]
