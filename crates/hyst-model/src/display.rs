@@ -120,6 +120,9 @@ impl fmt::Display for Oscillator {
                 s(m.damping)
             )?;
         }
+        if let Some(c) = e.chain {
+            write!(f, ", chain {{delay {} s, lag {} s}}", s(c.delay), s(c.lag))?;
+        }
         Ok(())
     }
 }

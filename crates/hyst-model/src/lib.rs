@@ -67,6 +67,14 @@ pub enum ModelError {
         /// The offending value.
         value: f64,
     },
+    /// A parameter that must not be negative is.
+    #[error("parameter `{name}` must be >= 0, got {value}")]
+    Negative {
+        /// Parameter name.
+        name: &'static str,
+        /// The offending value.
+        value: f64,
+    },
     /// A linear state-space form was asked of a model with nonlinear terms.
     #[error("the model is not linear: it has {what}")]
     NotLinear {
@@ -80,6 +88,15 @@ fn finite(name: &'static str, value: f64) -> Result<(), ModelError> {
         Ok(())
     } else {
         Err(ModelError::NonFinite { name, value })
+    }
+}
+
+fn not_negative(name: &'static str, value: f64) -> Result<(), ModelError> {
+    finite(name, value)?;
+    if value >= 0.0 {
+        Ok(())
+    } else {
+        Err(ModelError::Negative { name, value })
     }
 }
 
@@ -440,7 +457,40 @@ impl ForceSurface {
     }
 }
 
-/// Extra force terms that can be added to any oscillator. All off by default.
+/// What the acquisition does to the measured displacement between the structure and the
+/// record: a sensor's first-order lag τ and a delay d (the sensor's, the conditioning's, a skew
+/// between the input's and the output's sampling). The record holds
+/// $$y_m(t) = \int_0^\infty \tfrac{1}{\tau} e^{-s/\tau}\, x(t - d - s)\, ds,
+/// \qquad Y_m(s) = \frac{e^{-sd}}{1 + s\tau}\, X(s),$$
+/// $y_m(t) = x(t - d)$ when τ = 0. In the band it also stands for an anti-aliasing filter:
+/// to first order in frequency any causal chain is a delay and a lag. It is not structure:
+/// it moves no pole and no force, and the linearization ignores it. Since the structure is
+/// time-invariant, a delay of the output is the same as one of the input; an output that
+/// leads its input (a force channel that lags) is not modelled.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(deny_unknown_fields)
+)]
+pub struct MeasurementChain {
+    /// Delay d (s), ≥ 0.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub delay: f64,
+    /// The sensor's first-order time constant τ (s), ≥ 0.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub lag: f64,
+}
+
+impl MeasurementChain {
+    /// Whether the chain does nothing (d = τ = 0).
+    pub fn is_identity(&self) -> bool {
+        self.delay == 0.0 && self.lag == 0.0
+    }
+}
+
+/// Extra force terms that can be added to any oscillator, and the measurement chain between
+/// its displacement and the record ([`MeasurementChain`]). All off by default.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct ExtraForces {
     /// Cubic spring coefficient $k_3$ (N/m³): force $k_3x^3$.
@@ -461,10 +511,14 @@ pub struct ExtraForces {
     /// against the output. It shifts the equilibrium and leaves the dynamics (the poles) as
     /// they are.
     pub offset: f64,
+    /// The measurement chain: not a force, but what the acquisition does to the output
+    /// ([`MeasurementChain`]); `None` for a record of the displacement itself.
+    pub chain: Option<MeasurementChain>,
 }
 
 impl ExtraForces {
-    /// Whether every extra term is off.
+    /// Whether every extra force term is off (the measurement chain, not a force, is not
+    /// counted).
     pub fn is_empty(&self) -> bool {
         self.cubic_stiffness == 0.0
             && self.quadratic_stiffness == 0.0
@@ -645,6 +699,10 @@ impl Oscillator {
             positive("second_mass.mass", sm.mass)?;
             finite("second_mass.stiffness", sm.stiffness)?;
             finite("second_mass.damping", sm.damping)?;
+        }
+        if let Some(ch) = &e.chain {
+            not_negative("chain.delay", ch.delay)?;
+            not_negative("chain.lag", ch.lag)?;
         }
         Ok(())
     }
@@ -925,6 +983,7 @@ mod tests {
                 damping: 3.0,
             }),
             offset: 0.4,
+            chain: None,
         };
         let s = State::new(1e-3, 0.07, 20.0, -2e-4, 0.01);
         let j = o.jacobian(&s);

@@ -8,7 +8,8 @@
 //!  "clearance": {"stiffness": 3e4, "gap": 1e-3},
 //!  "coulomb": {"force": 1, "smoothing_velocity": 1e-3},
 //!  "surface": {"x_scale": 1e-3, "v_scale": 0.2, "terms": {"xi^3": 4.5, "xi^2 eta": -1}},
-//!  "second_mass": {"mass": 0.5, "stiffness": 2e4, "damping": 3}}
+//!  "second_mass": {"mass": 0.5, "stiffness": 2e4, "damping": 3},
+//!  "chain": {"delay": 1.3e-3, "lag": 2e-4}}
 //! ```
 //!
 //! Only `mass`, `damping` and `stiffness` are required. `bouc_wen` may give `beta`, `gamma`,
@@ -27,8 +28,8 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 
 use crate::{
-    BoucWen, Clearance, Coulomb, ExtraForces, ForceSurface, ModelError, Oscillator, Restoring,
-    SURFACE_TERMS, SecondMass, ZenerParams,
+    BoucWen, Clearance, Coulomb, ExtraForces, ForceSurface, MeasurementChain, ModelError,
+    Oscillator, Restoring, SURFACE_TERMS, SecondMass, ZenerParams,
 };
 
 /// Why a JSON oscillator is not a model (beyond what serde itself reports).
@@ -236,6 +237,8 @@ pub(crate) struct OscillatorFile {
     second_mass: Option<SecondMass>,
     #[serde(default, skip_serializing_if = "is_zero")]
     offset: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    chain: Option<MeasurementChain>,
 }
 
 impl From<Oscillator> for OscillatorFile {
@@ -261,6 +264,7 @@ impl From<Oscillator> for OscillatorFile {
             surface: e.surface.map(Into::into),
             second_mass: e.second_mass,
             offset: e.offset,
+            chain: e.chain,
             ..Default::default()
         }
     }
@@ -332,6 +336,7 @@ impl TryFrom<OscillatorFile> for Oscillator {
                 surface: f.surface.map(TryInto::try_into).transpose()?,
                 second_mass: f.second_mass,
                 offset: f.offset,
+                chain: f.chain,
             },
         };
         o.validate()?;
@@ -363,6 +368,10 @@ mod tests {
         o.extras.quadratic_stiffness = -2e6;
         o.extras.quadratic_damping = 4.0;
         o.extras.offset = 0.25;
+        o.extras.chain = Some(MeasurementChain {
+            delay: 1.3e-3,
+            lag: 2e-4,
+        });
         o.extras.clearance = Some(Clearance {
             stiffness: 3e4,
             gap: 1e-3,

@@ -77,7 +77,24 @@ pub fn simulate_many(
             _ => &chunk[first_ok],
         });
         let kernel = LaneKernel::new(&lane_models);
-        let ys = run(&kernel, &source, fs, n_samples, opts);
+        // A lane with a measurement chain needs the displacement at every sub-step.
+        let chains: [Option<hyst_model::MeasurementChain>; LANES] =
+            std::array::from_fn(|l| lane_models[l].extras.chain.filter(|c| !c.is_identity()));
+        let fine = chains.iter().any(Option::is_some);
+        let mut ys = run(&kernel, &source, fs, n_samples, opts, fine);
+        if fine {
+            let r = opts.oversample;
+            let h = 1.0 / (fs * r as f64);
+            for (y, c) in ys.iter_mut().zip(&chains) {
+                if let Ok(y) = y {
+                    let through = match c {
+                        Some(c) => crate::chain::apply(y, h, c),
+                        None => std::mem::take(y),
+                    };
+                    *y = through.into_iter().step_by(r).collect();
+                }
+            }
+        }
         for (v, y) in valid.into_iter().zip(ys) {
             out.push(v.and(y));
         }
@@ -464,36 +481,37 @@ fn axpy(a: &[V; 5], h: f64, b: &[V; 5]) -> [V; 5] {
     std::array::from_fn(|i| lanes(|l| a[i][l] + h * b[i][l]))
 }
 
-/// Integrate the kernel's lanes from rest; each lane's outputs or its divergence.
+/// Integrate the kernel's lanes from rest; each lane's outputs (at every sub-step when
+/// `fine`, else at the samples) or its divergence.
 fn run(
     kern: &LaneKernel<'_>,
     src: &Source<'_>,
     fs: f64,
     n: usize,
     opts: &SimOptions,
+    fine: bool,
 ) -> Vec<Result<Vec<f64>, SimError>> {
+    let run = (src, fs, n, opts, fine);
     match (kern.second(), kern.poly(), kern.element()) {
-        (false, false, Element::None) => run_with::<Plain>(kern, src, fs, n, opts),
-        (false, false, Element::Zener) => run_with::<PlainZener>(kern, src, fs, n, opts),
-        (false, false, Element::BoucWen1) => run_with::<PlainBoucWen>(kern, src, fs, n, opts),
-        (false, _, Element::None) => run_with::<Poly>(kern, src, fs, n, opts),
-        (false, _, Element::Zener) => run_with::<PolyZener>(kern, src, fs, n, opts),
-        (false, _, Element::BoucWen1) => run_with::<PolyBoucWen>(kern, src, fs, n, opts),
-        _ => run_with::<General>(kern, src, fs, n, opts),
+        (false, false, Element::None) => run_with::<Plain>(kern, run),
+        (false, false, Element::Zener) => run_with::<PlainZener>(kern, run),
+        (false, false, Element::BoucWen1) => run_with::<PlainBoucWen>(kern, run),
+        (false, _, Element::None) => run_with::<Poly>(kern, run),
+        (false, _, Element::Zener) => run_with::<PolyZener>(kern, run),
+        (false, _, Element::BoucWen1) => run_with::<PolyBoucWen>(kern, run),
+        _ => run_with::<General>(kern, run),
     }
 }
 
 /// [`run`] with the lanes' terms those of `T`.
 fn run_with<T: Terms>(
     kern: &LaneKernel<'_>,
-    src: &Source<'_>,
-    fs: f64,
-    n: usize,
-    opts: &SimOptions,
+    (src, fs, n, opts, fine): (&Source<'_>, f64, usize, &SimOptions, bool),
 ) -> Vec<Result<Vec<f64>, SimError>> {
     let r = opts.oversample;
     let h = 1.0 / (fs * r as f64);
-    let mut ys = vec![vec![0.0; n]; LANES];
+    let per = if fine { r } else { 1 };
+    let mut ys = vec![vec![0.0; (n - 1) * per + 1]; LANES];
     let mut failed: [Option<SimError>; LANES] = std::array::from_fn(|_| None);
     let mut s = [[0.0; LANES]; 5];
     const THIRD: f64 = 1.0 / 3.0;
@@ -509,9 +527,14 @@ fn run_with<T: Terms>(
                     THIRD * (y2[c][l] - s[c][l] + 2.0 * y3[c][l] + y4[c][l]) + (h / 6.0) * k4[c][l]
                 })
             });
+            if fine {
+                for l in 0..LANES {
+                    ys[l][k * r + i + 1] = s[0][l];
+                }
+            }
         }
         for l in 0..LANES {
-            ys[l][k + 1] = s[0][l];
+            ys[l][(k + 1) * per] = s[0][l];
             if failed[l].is_some() {
                 continue;
             }
@@ -603,6 +626,19 @@ mod tests {
             coefficients: [0.5, 0.3, 0.1, 0.05, 0.2, 0.4, 0.1, 0.3, 0.2, 0.2],
         });
         v.push(surf);
+        // Measurement chains, in a chunk beside lanes without one.
+        let mut lagged = bw(1.0);
+        lagged.extras.chain = Some(hyst_model::MeasurementChain {
+            delay: 3.3e-3,
+            lag: 1e-3,
+        });
+        v.push(lagged);
+        let mut delayed = zen;
+        delayed.extras.chain = Some(hyst_model::MeasurementChain {
+            delay: 7e-3,
+            lag: 0.0,
+        });
+        v.push(delayed);
         let mut two = cubic;
         two.extras.second_mass = Some(SecondMass {
             mass: 0.2,

@@ -20,6 +20,7 @@
 use hyst_model::{ModelError, Oscillator, State};
 
 pub mod batch;
+mod chain;
 mod drift;
 pub mod excitation;
 mod kernel;
@@ -481,7 +482,9 @@ pub fn simulate(
     simulate_from(model, State::zeros(), input, fs, n_samples, opts).map(|(y, _)| y)
 }
 
-/// As [`simulate`] but from the given initial state; also returns the final state.
+/// As [`simulate`] but from the given initial state; also returns the final state. A
+/// measurement chain ([`hyst_model::MeasurementChain`]) holds the initial displacement
+/// before t = 0 (exact from rest); its own state is not part of the returned one.
 pub fn simulate_from(
     model: &Oscillator,
     s0: State,
@@ -496,7 +499,8 @@ pub fn simulate_from(
     }
     let r = opts.oversample;
     let h = 1.0 / (fs * r as f64);
-    let fine = matches!(opts.decimation, Decimation::Fir(_));
+    let chain = model.extras.chain.filter(|c| !c.is_identity());
+    let fine = matches!(opts.decimation, Decimation::Fir(_)) || chain.is_some();
     let mut out = Vec::with_capacity(if fine {
         (n_samples - 1) * r + 1
     } else {
@@ -523,7 +527,11 @@ pub fn simulate_from(
         n_samples,
         &mut sink,
     )?;
+    if let Some(c) = &chain {
+        out = chain::apply(&out, h, c);
+    }
     let y = match &opts.decimation {
+        Decimation::Subsample if fine => out.into_iter().step_by(r).collect(),
         Decimation::Subsample => out,
         Decimation::Fir(stages) => resample::decimate_stages(&out, stages),
     };
@@ -686,13 +694,15 @@ pub fn steady_state_period(
     if change > tol {
         return Err(SimError::NoSteadyState { periods, change });
     }
+    // A measurement chain's memory reaches into the previous period: the last period of a
+    // run over all of them, as for the FIR decimation.
     match &opts.decimation {
-        Decimation::Subsample => Ok(SteadyState {
+        Decimation::Subsample if model.extras.chain.is_none() => Ok(SteadyState {
             y: prev.unwrap_or_default(),
             periods,
             change,
         }),
-        Decimation::Fir(_) => {
+        _ => {
             // Phase 2: the full-rate run over periods+1 periods, decimated as a whole.
             let total = (periods + 1) * n;
             let y = simulate(model, Input::Periodic(period), fs, total, opts)?;
