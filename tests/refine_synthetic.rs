@@ -155,6 +155,46 @@ fn finds_hysteresis_from_a_linear_start() {
     check("hysteresis", t, Effect::Hysteresis);
 }
 
+/// The output channel sampled one sample after the input's (a skew in the acquisition, made
+/// here by shifting the record, not by the simulator's measurement chain): the loop adds the
+/// chain's delay first, not a structural effect, finds d = 1/fs within three standard
+/// errors, and ends at the noise (ε within 1.3× the control's).
+#[test]
+fn takes_a_late_output_channel_for_the_acquisition() {
+    let (u, y) = record(&base());
+    let late: Vec<f64> = std::iter::once(0.0)
+        .chain(y[..N - 1].iter().copied())
+        .collect();
+    let rec = Record {
+        u: &u,
+        y: &late,
+        fs: FS,
+        interpolation: InputInterpolation::Linear,
+    };
+    let r = residual::refine_record(&rec, Some(1.0), Start::Linear, ESTIMATE, &[HELD_OUT]).unwrap();
+    report("late output", &r);
+    assert_eq!(r.steps[0].effect, Some(Effect::OutputDelay));
+    let d = r
+        .estimates
+        .iter()
+        .find(|e| e.name == "chain_delay")
+        .expect("the delay is estimated");
+    assert!(
+        (d.value - 1.0 / FS).abs() <= 3.0 * d.se,
+        "delay {} ± {} s, true {}",
+        d.value,
+        d.se,
+        1.0 / FS
+    );
+    let control = run(&base());
+    assert!(
+        r.tests[0].epsilon <= 1.3 * control.tests[0].epsilon,
+        "{} against the control's {}",
+        r.tests[0].epsilon,
+        control.tests[0].epsilon
+    );
+}
+
 #[test]
 fn control_with_no_effect_reports_none() {
     let r = run(&base());

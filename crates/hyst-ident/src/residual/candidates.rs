@@ -275,6 +275,12 @@ pub(super) fn already_has(o: &Oscillator, effect: Effect) -> Option<&'static str
         Effect::SecondMode if x.second_mass.is_some() => {
             Some("the model already has a second mass (one is supported)")
         }
+        Effect::OutputDelay if x.chain.is_some_and(|c| c.delay != 0.0) => {
+            Some("the model already has an output delay")
+        }
+        Effect::SensorLag if x.chain.is_some_and(|c| c.lag != 0.0) => {
+            Some("the model already has a sensor lag")
+        }
         _ => None,
     }
 }
@@ -302,7 +308,9 @@ pub(super) fn with_effect(o: &Oscillator, effect: Effect, sx: f64, sv: f64) -> O
         Effect::SecondMode
         | Effect::HysteresisExponent
         | Effect::Clearance
-        | Effect::RestoringSurface => return None,
+        | Effect::RestoringSurface
+        | Effect::OutputDelay
+        | Effect::SensorLag => return None,
         Effect::Hysteresis => {
             if o.restoring != Restoring::None {
                 return None;
@@ -316,6 +324,44 @@ pub(super) fn with_effect(o: &Oscillator, effect: Effect, sx: f64, sv: f64) -> O
         }
     }
     Some(m)
+}
+
+/// The start of a measurement chain's delay or lag (`e`) on `o`: to first order both make
+/// the output $\hat y(t) - d\,\dot{\hat y}(t)$, so the residual `r0` regressed on the model
+/// output's rate gives d (or τ) $= -\langle r, \dot{\hat y}\rangle / \langle\dot{\hat y},
+/// \dot{\hat y}\rangle$. A residual that leads the output (d ≤ 0) has no causal chain to
+/// start.
+pub(super) fn chain_start(
+    o: &Oscillator,
+    e: Effect,
+    r0: &[f64],
+    rec: &Prepared<'_>,
+    range: (usize, usize),
+) -> Result<Oscillator, &'static str> {
+    let y = &rec.y[range.0..range.1];
+    if r0.len() != y.len() || y.len() < 3 {
+        return Err("the model does not simulate on the record");
+    }
+    let yhat: Vec<f64> = y.iter().zip(r0).map(|(y, r)| y - r).collect();
+    let (mut num, mut den) = (0.0, 0.0);
+    for i in 1..yhat.len() - 1 {
+        let rate = 0.5 * (yhat[i + 1] - yhat[i - 1]) * rec.fs;
+        num -= r0[i] * rate;
+        den += rate * rate;
+    }
+    let d = num / den;
+    if !(d.is_finite() && d > 0.0) {
+        return Err("the residual does not lag the model's output (no causal chain to start)");
+    }
+    let mut m = *o;
+    let mut c = o.extras.chain.unwrap_or_default();
+    if e == Effect::OutputDelay {
+        c.delay = d;
+    } else {
+        c.lag = d;
+    }
+    m.extras.chain = Some(c);
+    Ok(m)
 }
 
 /// The Bouc-Wen element (ν = 1) to put in place of the Zener element `z` of `o`: for each
@@ -593,6 +639,7 @@ fn candidate_starts(e: Effect, ctx: &Candidates<'_>) -> Result<Vec<Oscillator>, 
                 .and_then(|t| surface_start(o, t))
                 .map(|m| vec![m])
                 .ok_or("the missing force's surface has no term present"),
+            None if e.is_measurement_chain() => chain_start(o, e, r0, rec, range).map(|m| vec![m]),
             None if e == Effect::SecondMode => Ok(second_mass_starts(o, scan)).and_then(|v| {
                 (!v.is_empty())
                     .then_some(v)
@@ -654,7 +701,7 @@ pub(super) fn diagnose_on(
             };
             // Linear-in-coefficient effects start from a regression and converge in a few
             // iterations; a second mode or a hysteretic element starts far and needs more.
-            let iterations = if linear_coefficient(e).is_some() {
+            let iterations = if linear_coefficient(e).is_some() || e.is_measurement_chain() {
                 25
             } else {
                 60

@@ -29,6 +29,13 @@ pub enum Effect {
     /// turns from stiff to slipping. Started from elements of several ν whose describing
     /// function at A = σₓ equals the current element's.
     HysteresisExponent,
+    /// The record's output delayed against its input by d
+    /// ([`hyst_model::MeasurementChain::delay`]): the acquisition (a sensor, its conditioning,
+    /// a skew between the channels, an anti-aliasing filter's group delay), not structure.
+    OutputDelay,
+    /// The output sensor's first-order lag τ ([`hyst_model::MeasurementChain::lag`]): the
+    /// acquisition, not structure.
+    SensorLag,
     /// The missing force's own fit on the surface basis ([`hyst_model::ForceSurface`]): its
     /// significant terms, kept when no named effect explains the residual as well.
     RestoringSurface,
@@ -47,12 +54,14 @@ impl Effect {
             Effect::SecondMode => "second_mode",
             Effect::Hysteresis => "hysteresis",
             Effect::HysteresisExponent => "hysteresis_exponent",
+            Effect::OutputDelay => "output_delay",
+            Effect::SensorLag => "sensor_lag",
             Effect::RestoringSurface => "restoring_surface",
         }
     }
 
     /// Every candidate.
-    pub const ALL: [Effect; 10] = [
+    pub const ALL: [Effect; 12] = [
         Effect::CubicStiffness,
         Effect::QuadraticStiffness,
         Effect::Clearance,
@@ -62,11 +71,18 @@ impl Effect {
         Effect::SecondMode,
         Effect::Hysteresis,
         Effect::HysteresisExponent,
+        Effect::OutputDelay,
+        Effect::SensorLag,
         Effect::RestoringSurface,
     ];
 
     /// Whether the effect is one of the named ones (every one but the surface).
     pub fn is_named(&self) -> bool {
         *self != Effect::RestoringSurface
+    }
+
+    /// Whether the effect is the measurement chain's, not the structure's.
+    pub fn is_measurement_chain(&self) -> bool {
+        matches!(self, Effect::OutputDelay | Effect::SensorLag)
     }
 }

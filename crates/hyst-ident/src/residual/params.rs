@@ -31,6 +31,8 @@ pub(super) enum P {
     M2,
     K2,
     C2,
+    Delay,
+    Lag,
 }
 
 pub(super) fn free(o: &Oscillator, fit_mass: bool) -> Vec<P> {
@@ -78,12 +80,21 @@ pub(super) fn free(o: &Oscillator, fit_mass: bool) -> Vec<P> {
     if e.second_mass.is_some() {
         v.extend([P::M2, P::K2, P::C2]);
     }
+    if let Some(c) = e.chain {
+        if c.delay != 0.0 {
+            v.push(P::Delay);
+        }
+        if c.lag != 0.0 {
+            v.push(P::Lag);
+        }
+    }
     v
 }
 
 /// Whether physics keeps the parameter positive: masses, viscous and quadratic damping,
 /// friction, the stiffness and damping of a second mode, a clearance's gap and spring, the
-/// Zener element's constants, and the Bouc-Wen element's βγ (its loss) and ν. The fits move
+/// Zener element's constants, the Bouc-Wen element's βγ (its loss) and ν, and the
+/// measurement chain's delay and lag (a chain that leads its input is not causal). The fits move
 /// these on a log scale, so that they cannot cross zero.
 pub(super) fn positive(p: P) -> bool {
     matches!(
@@ -101,6 +112,8 @@ pub(super) fn positive(p: P) -> bool {
             | P::M2
             | P::K2
             | P::C2
+            | P::Delay
+            | P::Lag
     )
 }
 
@@ -127,6 +140,8 @@ pub(super) fn get(o: &Oscillator, p: P) -> f64 {
         (P::M2, _) => e.second_mass.map_or(0.0, |s| s.mass),
         (P::K2, _) => e.second_mass.map_or(0.0, |s| s.stiffness),
         (P::C2, _) => e.second_mass.map_or(0.0, |s| s.damping),
+        (P::Delay, _) => e.chain.map_or(0.0, |c| c.delay),
+        (P::Lag, _) => e.chain.map_or(0.0, |c| c.lag),
         _ => 0.0,
     }
 }
@@ -191,6 +206,15 @@ pub(super) fn set(o: &mut Oscillator, p: P, v: f64) {
                 }
             }
         }
+        P::Delay | P::Lag => {
+            if let Some(c) = &mut e.chain {
+                if p == P::Delay {
+                    c.delay = v
+                } else {
+                    c.lag = v
+                }
+            }
+        }
     }
 }
 
@@ -231,6 +255,8 @@ impl P {
             P::M2 => "second_mass",
             P::K2 => "second_stiffness",
             P::C2 => "second_damping",
+            P::Delay => "chain_delay",
+            P::Lag => "chain_lag",
         }
     }
 }
@@ -259,6 +285,8 @@ impl P {
             P::M2,
             P::K2,
             P::C2,
+            P::Delay,
+            P::Lag,
         ]
         .into_iter()
         .chain((0..SURFACE_TERMS).map(P::Surface))
@@ -286,7 +314,7 @@ pub(super) fn deserialize_name<'de, D: serde::Deserializer<'de>>(
 #[cfg(test)]
 #[test]
 fn surface_parameter_names_follow_the_model() {
-    assert_eq!(P::all().count(), 19 + SURFACE_TERMS);
+    assert_eq!(P::all().count(), 21 + SURFACE_TERMS);
     for (n, t) in SURFACE_NAMES.iter().zip(ForceSurface::TERMS) {
         assert_eq!(n.strip_prefix("surface "), Some(t));
     }

@@ -204,6 +204,15 @@ impl fmt::Display for RefineReport {
         )?;
         self.fmt_steps(f)?;
         writeln!(f, "final model: {}", r.model)?;
+        if let Some(c) = r.model.extras.chain.filter(|c| !c.is_identity()) {
+            writeln!(
+                f,
+                "  measurement chain: the recorded output lags the structure's by a delay of {} s \
+                 and a sensor lag of {} s; this is the acquisition, not the structure",
+                six_digits(c.delay),
+                six_digits(c.lag)
+            )?;
+        }
         if !r.estimates.is_empty() {
             let list: Vec<String> = r
                 .estimates
