@@ -16,6 +16,7 @@
 
 use std::time::Instant;
 
+use crate::acquisition::{Chain, TAIL};
 use hyst_ident::residual::{self, Record, Refinement, Start};
 use hyst_model::{
     BoucWen, Clearance, Coulomb, ForceSurface, Oscillator, SURFACE_TERMS, SecondMass,
@@ -83,6 +84,9 @@ pub struct Case {
     pub expect: Expect,
     /// The model the loop starts from.
     pub start: Start,
+    /// The measurement chain between the structure and the record, applied by the battery
+    /// ([`crate::acquisition`]), not by the simulator.
+    pub chain: Option<Chain>,
 }
 
 /// The base system's linear spring k (N/m).
@@ -99,6 +103,7 @@ fn case(name: &'static str, effect: fn(&mut Oscillator, f64, f64), expect: Expec
         coloured_noise: false,
         expect,
         start: Start::BoucWen,
+        chain: None,
     }
 }
 
@@ -108,6 +113,7 @@ pub fn cases() -> Vec<Case> {
     let mut all = controls();
     all.extend(single_effects());
     all.extend(pairs_and_drifts());
+    all.extend(chains());
     all
 }
 
@@ -251,17 +257,55 @@ fn pairs_and_drifts() -> Vec<Case> {
     ]
 }
 
-/// The force of a record.
-fn force(kind: Force, seed: u64) -> Vec<f64> {
+/// The benchmark structure behind a measurement chain the loop's model lacks: what the
+/// acquisition does, which the loop should take for the acquisition (`output_delay` or
+/// `sensor_lag`; to first order in frequency the two are one), not for structure.
+fn chains() -> Vec<Case> {
+    let chained = |name, chain| Case {
+        chain: Some(chain),
+        ..case(
+            name,
+            nothing,
+            Expect::First(&["output_delay", "sensor_lag"]),
+        )
+    };
+    vec![
+        // A sensor with its corner at 800 Hz (above the 375 Hz Nyquist): 3 % of the
+        // response at the 25 Hz resonance.
+        chained(
+            "sensor lag 0.2 ms",
+            Chain::DelayLag {
+                delay: 0.0,
+                lag: 2e-4,
+            },
+        ),
+        // The output channel sampled 0.4 samples after the input's (a multiplexed converter).
+        chained(
+            "output delay 0.4 samples",
+            Chain::DelayLag {
+                delay: 0.4 / FS,
+                lag: 0.0,
+            },
+        ),
+        // A second-order Butterworth anti-aliasing filter at 300 Hz on the output only.
+        chained(
+            "anti-aliasing filter on the output",
+            Chain::Butterworth2 { corner: 300.0 },
+        ),
+    ]
+}
+
+/// The force of a record, `n` samples.
+fn force(kind: Force, seed: u64, n: usize) -> Vec<f64> {
     match kind {
         Force::Periodic => {
             let p = Multisine::band(PERIOD, FS, 5.0, 150.0, FORCE_RMS)
                 .and_then(|m| m.generate(seed))
                 .expect("a valid band");
-            p.iter().cycle().take(N).copied().collect()
+            p.iter().cycle().take(n).copied().collect()
         }
         Force::Random => {
-            band_limited_noise(N, FS, 5.0, 150.0, FORCE_RMS, seed).expect("a valid band")
+            band_limited_noise(n, FS, 5.0, 150.0, FORCE_RMS, seed).expect("a valid band")
         }
     }
 }
@@ -286,10 +330,10 @@ fn respond(
             decimation: hyst_sim::Decimation::Fir(vec![2, 4, 5]),
             ..hyst_sim::SimOptions::default()
         };
-        return hyst_sim::simulate(o, input, FS, N, &opts).ok();
+        return hyst_sim::simulate(o, input, FS, u.len(), &opts).ok();
     }
     let pieces = if drift == 0.0 { 1 } else { DRIFT_PIECES };
-    hyst_sim::simulate_drifting(o, input, FS, N, &STAGES, drift, pieces).ok()
+    hyst_sim::simulate_drifting(o, input, FS, u.len(), &STAGES, drift, pieces).ok()
 }
 
 /// Sensor noise of standard deviation [`NOISE_STD`]: white, or AR(1) with φ = 0.95 scaled to
@@ -326,14 +370,24 @@ pub struct Made {
 
 /// Make the record of `case` under `kind` with `seed`.
 pub fn make(case: &Case, kind: Force, seed: u64, generator: Generator) -> Option<Made> {
-    let u = force(kind, seed);
+    // A chain's record is made longer and cut after the chain ([`TAIL`]).
+    let long = case.chain.map_or(N, |_| N + TAIL);
+    let mut u = force(kind, seed, long);
     let base = Oscillator::benchmark();
     let y0 = respond(&base, &u, kind, 0.0, generator)?;
     let v0: Vec<f64> = y0.windows(2).map(|w| (w[1] - w[0]) * FS).collect();
     let (sx, sv) = (rms(&y0), rms(&v0));
     let mut truth = base;
     (case.effect)(&mut truth, sx, sv);
-    let clean = respond(&truth, &u, kind, case.drift, generator)?;
+    let mut clean = respond(&truth, &u, kind, case.drift, generator)?;
+    if let Some(c) = case.chain {
+        clean = c.apply(&clean, FS);
+        clean.truncate(N);
+        u.truncate(N);
+        if let Chain::DelayLag { delay, lag } = c {
+            truth.extras.chain = Some(hyst_model::MeasurementChain { delay, lag });
+        }
+    }
     let noise = sensor_noise(case.coloured_noise, seed.wrapping_add(0x5eed));
     let y: Vec<f64> = clean.iter().zip(&noise).map(|(a, b)| a + b).collect();
     let test = 3 * N / 4..N;
@@ -383,6 +437,8 @@ fn truth_value(name: &str, t: &Oscillator) -> Option<f64> {
         "second_mass" => e.second_mass.map(|m| m.mass),
         "second_stiffness" => e.second_mass.map(|m| m.stiffness),
         "second_damping" => e.second_mass.map(|m| m.damping),
+        "chain_delay" => e.chain.map(|c| c.delay).filter(|v| *v != 0.0),
+        "chain_lag" => e.chain.map(|c| c.lag).filter(|v| *v != 0.0),
         _ => None,
     }
 }
@@ -411,6 +467,7 @@ impl Row {
             && (r.model.extras.coulomb.is_some() == self.truth.extras.coulomb.is_some())
             && (r.model.extras.second_mass.is_some() == self.truth.extras.second_mass.is_some())
             && (r.model.extras.clearance.is_some() == self.truth.extras.clearance.is_some())
+            && (r.model.extras.chain.is_some() == self.truth.extras.chain.is_some())
             && ((r.model.extras.cubic_stiffness != 0.0)
                 == (self.truth.extras.cubic_stiffness != 0.0))
             && ((r.model.extras.quadratic_stiffness != 0.0)
@@ -650,10 +707,12 @@ fn line(r: &Row) -> String {
         })
         .collect();
     let (b, a) = r.eps().unwrap_or((f64::NAN, f64::NAN));
-    let start = if out.start.notes.is_empty() {
-        out.start.used.name().to_string()
-    } else {
+    let start = if out.start.used != out.start.requested {
         format!("{} (fell back)", out.start.used.name())
+    } else if !out.start.notes.is_empty() {
+        format!("{} (element afresh)", out.start.used.name())
+    } else {
+        out.start.used.name().to_string()
     };
     let est = out.noise_epsilon.first().copied().unwrap_or(f64::NAN);
     let left = match (&out.unexplained, out.nonstationary) {

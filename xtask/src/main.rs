@@ -15,6 +15,7 @@
 //! - `cargo xtask unused-deps` and `cargo xtask sizes` check the workspace's manifests and the
 //!   size of its files and functions (`deps.rs`, `sizes.rs`; tests run both in CI).
 
+mod acquisition;
 mod bench_command;
 mod bench_refine;
 mod compare;
