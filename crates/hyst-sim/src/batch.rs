@@ -491,26 +491,31 @@ fn run(
     opts: &SimOptions,
     fine: bool,
 ) -> Vec<Result<Vec<f64>, SimError>> {
-    let run = (src, fs, n, opts, fine);
+    let run = (src, fs, n, opts);
+    // Output at every sub-step (a measurement chain's lanes) takes the general terms: the
+    // specialised kernels keep their inner loop free of it.
+    if fine {
+        return run_with::<General, true>(kern, run);
+    }
     match (kern.second(), kern.poly(), kern.element()) {
-        (false, false, Element::None) => run_with::<Plain>(kern, run),
-        (false, false, Element::Zener) => run_with::<PlainZener>(kern, run),
-        (false, false, Element::BoucWen1) => run_with::<PlainBoucWen>(kern, run),
-        (false, _, Element::None) => run_with::<Poly>(kern, run),
-        (false, _, Element::Zener) => run_with::<PolyZener>(kern, run),
-        (false, _, Element::BoucWen1) => run_with::<PolyBoucWen>(kern, run),
-        _ => run_with::<General>(kern, run),
+        (false, false, Element::None) => run_with::<Plain, false>(kern, run),
+        (false, false, Element::Zener) => run_with::<PlainZener, false>(kern, run),
+        (false, false, Element::BoucWen1) => run_with::<PlainBoucWen, false>(kern, run),
+        (false, _, Element::None) => run_with::<Poly, false>(kern, run),
+        (false, _, Element::Zener) => run_with::<PolyZener, false>(kern, run),
+        (false, _, Element::BoucWen1) => run_with::<PolyBoucWen, false>(kern, run),
+        _ => run_with::<General, false>(kern, run),
     }
 }
 
-/// [`run`] with the lanes' terms those of `T`.
-fn run_with<T: Terms>(
+/// [`run`] with the lanes' terms those of `T`, the output at every sub-step when `FINE`.
+fn run_with<T: Terms, const FINE: bool>(
     kern: &LaneKernel<'_>,
-    (src, fs, n, opts, fine): (&Source<'_>, f64, usize, &SimOptions, bool),
+    (src, fs, n, opts): (&Source<'_>, f64, usize, &SimOptions),
 ) -> Vec<Result<Vec<f64>, SimError>> {
     let r = opts.oversample;
     let h = 1.0 / (fs * r as f64);
-    let per = if fine { r } else { 1 };
+    let per = if FINE { r } else { 1 };
     let mut ys = vec![vec![0.0; (n - 1) * per + 1]; LANES];
     let mut failed: [Option<SimError>; LANES] = std::array::from_fn(|_| None);
     let mut s = [[0.0; LANES]; 5];
@@ -527,7 +532,7 @@ fn run_with<T: Terms>(
                     THIRD * (y2[c][l] - s[c][l] + 2.0 * y3[c][l] + y4[c][l]) + (h / 6.0) * k4[c][l]
                 })
             });
-            if fine {
+            if FINE {
                 for l in 0..LANES {
                     ys[l][k * r + i + 1] = s[0][l];
                 }
