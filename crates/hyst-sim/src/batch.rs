@@ -447,6 +447,7 @@ impl RareLanes {
 /// absolute error of about 1e-16 (this module's tests).
 #[inline(always)]
 fn tanh_lanes(a: &V) -> V {
+    const SATURATED: f64 = 20.0;
     // ln 2 split so that n·LN2_HI is exact (fdlibm's pair).
     const LN2_HI: f64 = f64::from_bits(0x3FE6_2E42_FEE0_0000);
     const LN2_LO: f64 = f64::from_bits(0x3DEA_39EF_3579_3C76);
@@ -459,6 +460,12 @@ fn tanh_lanes(a: &V) -> V {
         }
         v
     };
+    // Past |a| = 20, 1 − tanh|a| = 2e^{−2|a|} < 1e-17 rounds away: ±1, which the series
+    // below also gives. Lanes of one structure move together (sliding friction, most of
+    // the time), so all four are often there at once.
+    if a.iter().all(|x| x.abs() >= SATURATED) {
+        return lanes(|l| 1.0f64.copysign(a[l]));
+    }
     lanes(|l| {
         // exp(t), t = −2|a| ≤ 0; below −700 it is under 1e-304 and tanh is ±1.
         let t = (-2.0 * a[l].abs()).max(-700.0);
@@ -706,6 +713,13 @@ mod tests {
         }
         assert!(worst <= 4e-16, "{worst}");
         assert_eq!(tanh_lanes(&[1e6, -1e6, 0.0, -0.0]), [1.0, -1.0, 0.0, -0.0]);
+        // Where all lanes are saturated the shortcut gives what the series and libm give.
+        for a in [20.0f64, 20.1, 25.0, 700.0] {
+            assert_eq!(a.tanh(), 1.0, "{a}");
+            let series = tanh_lanes(&[a, -a, 1.0, a]);
+            assert_eq!([series[0], series[1], series[3]], [1.0, -1.0, 1.0], "{a}");
+            assert_eq!(tanh_lanes(&[a, -a, a, -a]), [1.0, -1.0, 1.0, -1.0], "{a}");
+        }
     }
 
     /// A model that diverges and one that is invalid get their own errors; the others in
