@@ -2284,6 +2284,146 @@ fn track_windows_resumes_and_refuses_no_records() {
     assert!(!ok && err.contains("no records"), "{err}");
 }
 
+/// `hyst track --estimates` on the modes `hyst track` itself identified (its table pivoted to
+/// one row per record, a column per mode) charts the same standardized residuals and
+/// innovations, record by record and mode by mode: another system's estimates get the same
+/// normalization. Without standard errors the noise is read from the training rows and said;
+/// a 1 % step in one mode's later estimates is alarmed on that mode alone; a bad table is an
+/// error naming the column.
+#[test]
+fn track_estimates_charts_as_the_records_do() {
+    let Some(path) = common::data_file("oma/data_3dof.csv") else {
+        return;
+    };
+    let cov = write(
+        "track_est_cov.csv",
+        &(0..10).fold("record,time,temperature\n".to_string(), |t, i| {
+            t + &format!("{i},{},{}\n", 3600 * i, 10.0 + (i * 7 % 5) as f64)
+        }),
+    );
+    let out = tmp("track_est_records");
+    let _ = std::fs::remove_dir_all(&out);
+    let (ok, _, err) = hyst(&[
+        "track",
+        "--input",
+        s(&path),
+        "--fs",
+        "20",
+        "--window",
+        "300",
+        "--columns",
+        "y1,y2,y3",
+        "--covariates",
+        s(&cov),
+        "--training",
+        "6",
+        "--out",
+        s(&out),
+    ]);
+    assert!(ok, "{err}");
+    let table = std::fs::read_to_string(out.join("table.csv")).unwrap();
+    let rows: Vec<Vec<String>> = table
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect();
+    // Columns: record,time_s,mode,frequency_hz,frequency_se_hz,damping_ratio,damping_se,mac,
+    // misfit_flag,z,innovation,alarm,temperature.
+    let cell = |rec: usize, mode: usize, col: usize| -> String {
+        rows.iter()
+            .find(|r| r[0] == rec.to_string() && r[2] == mode.to_string())
+            .map_or(String::new(), |r| r[col].clone())
+    };
+    let pivot = |with_se: bool, step: f64| {
+        let mut text = String::from("record");
+        for m in 0..3 {
+            text += &format!(",m{m}_hz");
+            if with_se {
+                text += &format!(",m{m}_hz_se");
+            }
+            text += &format!(",m{m}_damping");
+        }
+        text.push('\n');
+        for rec in 0..10 {
+            text += &rec.to_string();
+            for m in 0..3 {
+                let f: f64 = cell(rec, m, 3).parse().unwrap();
+                let f = if m == 1 && rec >= 6 {
+                    f * (1.0 + step)
+                } else {
+                    f
+                };
+                text += &format!(",{f:e}");
+                if with_se {
+                    text += &format!(",{}", cell(rec, m, 4));
+                }
+                text += &format!(",{}", cell(rec, m, 5));
+            }
+            text.push('\n');
+        }
+        text
+    };
+    let run = |name: &str, text: &str| {
+        let est = write(&format!("{name}.csv"), text);
+        let o = tmp(name);
+        let _ = std::fs::remove_dir_all(&o);
+        let (ok, stdout, err) = hyst(&[
+            "track",
+            "--estimates",
+            s(&est),
+            "--covariates",
+            s(&cov),
+            "--training",
+            "6",
+            "--out",
+            s(&o),
+        ]);
+        (
+            ok,
+            stdout,
+            err,
+            std::fs::read_to_string(o.join("table.csv")).unwrap_or_default(),
+        )
+    };
+    let (ok, _, err, same) = run("track_est_same", &pivot(true, 0.0));
+    assert!(ok, "{err}");
+    let again: Vec<Vec<String>> = same
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect();
+    assert_eq!(again.len(), rows.len());
+    let mut charted = 0;
+    for (a, b) in rows.iter().zip(&again) {
+        // Record, time, mode, frequency, its error, z, innovation, alarm, temperature.
+        for c in [0, 1, 2, 3, 4, 9, 10, 11, 12] {
+            assert_eq!(a[c], b[c], "column {c} of {a:?} against {b:?}");
+        }
+        charted += usize::from(!a[9].is_empty());
+    }
+    assert_eq!(charted, 12, "records 6–9, three modes each, charted");
+    let (ok, stdout, err, _) = run("track_est_nose", &pivot(false, 0.0));
+    assert!(ok, "{err}");
+    assert!(
+        stdout.contains("mode m0: no standard errors given"),
+        "{stdout}"
+    );
+    let (ok, stdout, err, stepped) = run("track_est_step", &pivot(true, 0.01));
+    assert!(ok, "{err}");
+    let alarmed: Vec<&str> = stepped
+        .lines()
+        .skip(1)
+        .filter(|l| !l.split(',').nth(11).unwrap_or("").is_empty())
+        .map(|l| l.split(',').nth(2).unwrap_or(""))
+        .collect();
+    assert!(
+        !alarmed.is_empty() && alarmed.iter().all(|m| *m == "1"),
+        "alarms on modes {alarmed:?}\n{stdout}"
+    );
+    let (ok, _, err, _) = run("track_est_bad", "record,m0_hz,colour\n0,1.2,red\n");
+    assert!(!ok && err.contains("unknown column `colour`"), "{err}");
+}
+
 /// `hyst track` on files never serves a stale or wrong result: a run resumed with another
 /// `--fs` gives what a fresh run with it gives (it served the first run's 1.0 Hz where the
 /// fresh run gives 2.0); records are taken in natural order (rec_2 before rec_10); a record

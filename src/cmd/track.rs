@@ -19,6 +19,13 @@ pub(crate) struct TrackArgs {
     /// One long record cut into windows (with --window and --step).
     #[arg(long, requires = "window")]
     pub(crate) input: Option<PathBuf>,
+    /// Modal estimates made by another system, instead of records: a delimited table, one
+    /// row per record, with `record`, an optional `time` (s) and per tracked mode
+    /// `<mode>_hz`, optionally `<mode>_hz_se` (Hz) and `<mode>_damping`; an empty cell is a
+    /// mode the record did not have. Without standard errors the estimation noise is read
+    /// from the training rows, and the report says so.
+    #[arg(long, conflicts_with_all = ["inputs", "input"])]
+    pub(crate) estimates: Option<PathBuf>,
     /// Window length (s) of --input.
     #[arg(long, value_name = "SECONDS")]
     pub(crate) window: Option<f64>,
@@ -249,6 +256,9 @@ impl Sources {
 }
 
 pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
+    if let Some(path) = &a.estimates {
+        return run_estimates(a, path);
+    }
     let mut sources = sources(a)?;
     let (covs, cov_names) = match &a.covariates {
         Some(p) => hyst::io::read_covariates(p)?,
@@ -338,14 +348,68 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
     let mut report = hyst::monitor::track(&records, reference.as_deref(), &opts)
         .map_err(|e| fail(e.to_string()))?;
     report.covariate_names = cov_names;
-    print!("{report}");
-    write_table(&a.out.join("table.csv"), &report)?;
-    write_rows(&a.out.join("table.jsonl"), &report)?;
-    hyst::report::write_json(&report, &a.out.join("report.json"))?;
-    if let Some(dir) = &a.svg_dir {
-        hyst::figures::track_figures(dir, &report).map_err(fail)?;
+    write_outputs(a, &report)
+}
+
+/// `hyst track --estimates`: another system's estimates tracked as records' are, the
+/// covariates joined by record name (a record without them is tracked, not charted).
+fn run_estimates(a: &TrackArgs, path: &Path) -> Result<(), Error> {
+    let table = hyst::io::read_estimates(path)?;
+    let (covs, cov_names) = match &a.covariates {
+        Some(p) => hyst::io::read_covariates(p)?,
+        None => Default::default(),
+    };
+    let records: Vec<hyst::monitor::RecordEstimates> = table
+        .rows
+        .iter()
+        .enumerate()
+        .map(|(i, (name, time, modes))| {
+            let (cov_time, values) = match covs.get(name) {
+                Some((t, v)) => (*t, v.clone()),
+                None => (None, vec![f64::NAN; cov_names.len()]),
+            };
+            hyst::monitor::RecordEstimates {
+                name: name.clone(),
+                time: time.or(cov_time).unwrap_or(i as f64),
+                covariates: values,
+                modes: modes.clone(),
+            }
+        })
+        .collect();
+    let without: Vec<&str> = records
+        .iter()
+        .filter(|r| r.covariates.iter().any(|v| !v.is_finite()))
+        .map(|r| r.name.as_str())
+        .collect();
+    println!(
+        "{} records of estimates, {} modes ({}), from {}",
+        records.len(),
+        table.modes.len(),
+        table.modes.join(", "),
+        path.display()
+    );
+    if !without.is_empty() && !cov_names.is_empty() {
+        println!(
+            "{} record(s) without every covariate (tracked, not charted): {}",
+            without.len(),
+            without.join(", ")
+        );
     }
-    Ok(())
+    std::fs::create_dir_all(&a.out).map_err(|e| fail(format!("{}: {e}", a.out.display())))?;
+    let mut opts = TrackOptions::default();
+    opts.training = a.training.unwrap_or(opts.training.min(records.len() / 2));
+    opts.whiten = !a.no_whiten;
+    let (mut report, noise) = hyst::monitor::track_estimates(&records, &table.modes, &opts)
+        .map_err(|e| fail(e.to_string()))?;
+    report.covariate_names = cov_names;
+    for (name, n) in table.modes.iter().zip(&noise) {
+        if let hyst::monitor::NoiseSource::TrainingScatter(s) = n {
+            println!(
+                "mode {name}: no standard errors given; the estimation noise read from the training rows' consecutive differences: {s:.3e} Hz"
+            );
+        }
+    }
+    write_outputs(a, &report)
 }
 
 /// `analysis` with what it leaves to the record read from the campaign's first readable
@@ -376,6 +440,19 @@ fn resolved_analysis(
         );
     }
     fixed
+}
+
+/// The report printed, and written into `--out` (`table.csv`, `table.jsonl`, `report.json`)
+/// and `--svg-dir`.
+fn write_outputs(a: &TrackArgs, report: &TrackReport) -> Result<(), Error> {
+    print!("{report}");
+    write_table(&a.out.join("table.csv"), report)?;
+    write_rows(&a.out.join("table.jsonl"), report)?;
+    hyst::report::write_json(report, &a.out.join("report.json"))?;
+    if let Some(dir) = &a.svg_dir {
+        hyst::figures::track_figures(dir, report).map_err(fail)?;
+    }
+    Ok(())
 }
 
 /// The tidy table as JSON lines: one `TrackRow` per line.

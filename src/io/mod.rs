@@ -285,6 +285,7 @@ fn variable_message(asked: Option<&str>, available: &str) -> String {
 
 mod covariates;
 mod delimited;
+mod estimates;
 mod mat;
 mod npy;
 mod paths;
@@ -292,6 +293,7 @@ mod shapes_uff;
 mod uff;
 pub use covariates::{Covariates, list_records, read_covariates};
 pub use delimited::{Delimiter, read_csv, read_csv_with, write_csv};
+pub use estimates::{EstimatesTable, read_estimates};
 pub use mat::read_mat;
 pub use npy::{read_npy, read_npz};
 pub use paths::check_outputs;

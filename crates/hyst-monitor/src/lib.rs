@@ -31,6 +31,7 @@ pub mod baseline;
 #[cfg(feature = "synth")]
 pub mod campaign;
 pub mod chart;
+pub mod estimates;
 pub mod matching;
 mod report;
 pub mod track;
@@ -38,6 +39,7 @@ pub mod whiten;
 
 pub use baseline::{Baseline, fit_baseline};
 pub use chart::{Alarm, Cusum, Side};
+pub use estimates::{NoiseSource, RecordEstimates, track_estimates};
 pub use matching::{Assignment, MatchOptions, ModeEstimate, match_modes};
 pub use track::{
     Identified, Loaded, ModeAlarm, RecordModes, TrackOptions, TrackReport, TrackRow,

@@ -310,12 +310,33 @@ pub fn track(
         new_modes.extend(a.new.iter().map(|&j| (i, id.modes[j].frequency_hz)));
         split.extend(a.split.iter().map(|&mode| (i, mode)));
     }
+    let tracked = seen
+        .iter()
+        .map(|&s| s as f64 / identified.max(1) as f64)
+        .collect();
+    let mut report = chart_modes(reference, rows, records.len(), opts);
+    report.skipped = skipped;
+    report.new_modes = new_modes;
+    report.split = split;
+    report.tracked = tracked;
+    Ok(report)
+}
+
+/// Each reference mode's baseline fitted and its later rows charted ([`chart_mode`]): the
+/// report of a campaign of `records` records whose rows are `rows`, the skipped records,
+/// new and split modes and the tracked shares left empty for the caller.
+pub(crate) fn chart_modes(
+    reference: Vec<ModeEstimate>,
+    mut rows: Vec<TrackRow>,
+    records: usize,
+    opts: &TrackOptions,
+) -> TrackReport {
     let mut baselines = Vec::with_capacity(reference.len());
     let mut baseline_errors = Vec::with_capacity(reference.len());
     let mut residual_models = Vec::with_capacity(reference.len());
     let mut alarms = Vec::new();
     for mode in 0..reference.len() {
-        match chart_mode(&mut rows, mode, records.len(), opts) {
+        match chart_mode(&mut rows, mode, records, opts) {
             Ok((b, model, found)) => {
                 baselines.push(Some(b));
                 baseline_errors.push(None);
@@ -331,24 +352,20 @@ pub fn track(
     }
     alarms.sort_by(|a, b| a.record.cmp(&b.record).then(a.mode.cmp(&b.mode)));
     rows.sort_by(|a, b| a.record.cmp(&b.record).then(a.mode.cmp(&b.mode)));
-    let tracked = seen
-        .iter()
-        .map(|&s| s as f64 / identified.max(1) as f64)
-        .collect();
-    Ok(TrackReport {
+    TrackReport {
         reference,
         rows,
-        skipped,
-        new_modes,
-        split,
+        skipped: Vec::new(),
+        new_modes: Vec::new(),
+        split: Vec::new(),
         baselines,
         baseline_errors,
         residual_models,
-        tracked,
+        tracked: Vec::new(),
         alarms,
         in_control_run_length: opts.chart.in_control_run_length(),
         covariate_names: Vec::new(),
-    })
+    }
 }
 
 /// Fit `mode`'s baseline on its training rows, standardize its later rows (setting their
