@@ -2328,7 +2328,7 @@ fn track_estimates_charts_as_the_records_do() {
         .map(|l| l.split(',').map(str::to_string).collect())
         .collect();
     // Columns: record,time_s,mode,frequency_hz,frequency_se_hz,damping_ratio,damping_se,mac,
-    // misfit_flag,z,innovation,alarm,temperature.
+    // misfit_flag,z,innovation,alarm,extrapolated,temperature.
     let cell = |rec: usize, mode: usize, col: usize| -> String {
         rows.iter()
             .find(|r| r[0] == rec.to_string() && r[2] == mode.to_string())
@@ -2395,8 +2395,9 @@ fn track_estimates_charts_as_the_records_do() {
     assert_eq!(again.len(), rows.len());
     let mut charted = 0;
     for (a, b) in rows.iter().zip(&again) {
-        // Record, time, mode, frequency, its error, z, innovation, alarm, temperature.
-        for c in [0, 1, 2, 3, 4, 9, 10, 11, 12] {
+        // Record, time, mode, frequency, its error, z, innovation, alarm, extrapolated,
+        // temperature.
+        for c in [0, 1, 2, 3, 4, 9, 10, 11, 12, 13] {
             assert_eq!(a[c], b[c], "column {c} of {a:?} against {b:?}");
         }
         charted += usize::from(!a[9].is_empty());

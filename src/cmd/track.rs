@@ -57,6 +57,13 @@ pub(crate) struct TrackArgs {
     /// and its innovations charted, so that the effect is not taken for a change).
     #[arg(long)]
     pub(crate) no_whiten: bool,
+    /// Regress on the covariates as they are. By default each mode's environmental model is
+    /// chosen on the training records by BIC: each covariate through a first-order lag of
+    /// whole hours (up to 12) and its slope changing below a breakpoint (frost); the report
+    /// says what was chosen, and the table which records lie outside the training range
+    /// (column `extrapolated`).
+    #[arg(long)]
+    pub(crate) no_environment_model: bool,
     /// Folder for `records.jsonl` (each record's modes, appended as they come: a run
     /// interrupted continues where it stopped), `table.csv` and `table.jsonl` (record ×
     /// mode) and `report.json`.
@@ -344,6 +351,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
     let mut opts = TrackOptions::default();
     opts.training = a.training.unwrap_or(opts.training.min(names.len() / 2));
     opts.whiten = !a.no_whiten;
+    opts.environment = !a.no_environment_model;
     let reference = a.reference.as_deref().map(reference_modes).transpose()?;
     let mut report = hyst::monitor::track(&records, reference.as_deref(), &opts)
         .map_err(|e| fail(e.to_string()))?;
@@ -399,6 +407,7 @@ fn run_estimates(a: &TrackArgs, path: &Path) -> Result<(), Error> {
     let mut opts = TrackOptions::default();
     opts.training = a.training.unwrap_or(opts.training.min(records.len() / 2));
     opts.whiten = !a.no_whiten;
+    opts.environment = !a.no_environment_model;
     let (mut report, noise) = hyst::monitor::track_estimates(&records, &table.modes, &opts)
         .map_err(|e| fail(e.to_string()))?;
     report.covariate_names = cov_names;
@@ -483,6 +492,7 @@ fn write_table(path: &Path, report: &TrackReport) -> Result<(), Error> {
         "z",
         "innovation",
         "alarm",
+        "extrapolated",
     ]
     .iter()
     .map(|s| s.to_string())
@@ -506,6 +516,7 @@ fn write_table(path: &Path, report: &TrackReport) -> Result<(), Error> {
             opt(r.innovation),
             r.alarm
                 .map_or(String::new(), |s| format!("{s:?}").to_lowercase()),
+            r.extrapolated.to_string(),
         ];
         row.extend(r.covariates.iter().map(|v| format!("{v:e}")));
         w.write_record(&row).map_err(err)?;

@@ -100,6 +100,7 @@ pub fn track_estimates(
                 innovation: None,
                 alarm: None,
                 covariates: r.covariates.clone(),
+                extrapolated: false,
             });
         }
     }

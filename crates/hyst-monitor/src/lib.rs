@@ -31,6 +31,7 @@ pub mod baseline;
 #[cfg(feature = "synth")]
 pub mod campaign;
 pub mod chart;
+pub mod environment;
 pub mod estimates;
 pub mod matching;
 mod report;

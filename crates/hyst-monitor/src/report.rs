@@ -5,6 +5,111 @@ use std::fmt;
 use crate::chart::Side;
 use crate::track::TrackReport;
 
+impl TrackReport {
+    /// Mode `j`'s line: its reference, tracking share, baseline, environmental model,
+    /// extrapolated records and slow effect.
+    fn fmt_mode(
+        &self,
+        f: &mut fmt::Formatter<'_>,
+        j: usize,
+        m: &crate::ModeEstimate,
+    ) -> fmt::Result {
+        write!(
+            f,
+            "mode {j}: {:.4} Hz, damping ratio {:.4} ({:.2} %), tracked in {:.1} % of the records",
+            m.frequency_hz,
+            m.damping_ratio,
+            100.0 * m.damping_ratio,
+            100.0 * self.tracked.get(j).copied().unwrap_or(0.0)
+        )?;
+        match (self.baselines.get(j), self.baseline_errors.get(j)) {
+            (Some(Some(b)), _) => {
+                let names = self.regressor_names(j, b.coefficients.len() - 1);
+                let slopes: Vec<String> = b.coefficients[1..]
+                    .iter()
+                    .zip(&names)
+                    .map(|(v, name)| format!("{v:+.3e} Hz per unit of {name}"))
+                    .collect();
+                writeln!(
+                    f,
+                    "; baseline {:.4} Hz at zero covariates{}; SD {:.2e} Hz unexplained beyond the estimation noise ({} training records)",
+                    b.coefficients[0],
+                    if slopes.is_empty() {
+                        String::new()
+                    } else {
+                        format!(", {}", slopes.join(", "))
+                    },
+                    b.unexplained_sd_hz,
+                    b.records
+                )?;
+                if let Some(Some(e)) = self.environments.get(j)
+                    && e.bic_gain < 0.0
+                {
+                    writeln!(
+                        f,
+                        "  environmental model chosen on the training records (BIC {:+.1} against the covariates as they are, linear)",
+                        e.bic_gain
+                    )?;
+                }
+                let outside = self
+                    .rows
+                    .iter()
+                    .filter(|r| r.mode == j && r.extrapolated)
+                    .count();
+                if outside > 0 {
+                    writeln!(
+                        f,
+                        "  {outside} record(s) with covariates outside the training range: their predictions extrapolated (column `extrapolated`)"
+                    )?;
+                }
+                if let Some(Some(m)) = self.residual_models.get(j) {
+                    writeln!(
+                        f,
+                        "  a slow effect the covariates do not explain: SD {:.2e} Hz, correlation {:.3} from record to record; its filter's innovations charted, which keep {:.0} % of a lasting change once settled (a covariate that explains the effect keeps it all)",
+                        m.latent_var.sqrt(),
+                        m.persistence,
+                        100.0 * m.lasting_change_share
+                    )?;
+                }
+            }
+            (_, Some(Some(e))) => writeln!(f, "; no baseline: {e}")?,
+            _ => writeln!(f)?,
+        }
+        Ok(())
+    }
+
+    /// The names of mode `j`'s `count` regressors: each covariate, lagged, and its hinge.
+    fn regressor_names(&self, j: usize, count: usize) -> Vec<String> {
+        let name = |c: usize| {
+            self.covariate_names
+                .get(c)
+                .cloned()
+                .unwrap_or_else(|| format!("covariate {c}"))
+        };
+        let mut names = Vec::with_capacity(count);
+        match self.environments.get(j) {
+            Some(Some(e)) => {
+                for t in &e.terms {
+                    let lagged = if t.lag_s > 0.0 {
+                        format!("{} ({:.3} h earlier)", name(t.covariate), t.lag_s / 3600.0)
+                    } else {
+                        name(t.covariate)
+                    };
+                    if let Some(c) = t.breakpoint {
+                        names.push(lagged.clone());
+                        names.push(format!("{lagged} below {c:.4}"));
+                    } else {
+                        names.push(lagged);
+                    }
+                }
+            }
+            _ => names.extend((0..count).map(name)),
+        }
+        names.resize_with(count, || "?".into());
+        names
+    }
+}
+
 impl fmt::Display for TrackReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let records: std::collections::BTreeSet<usize> =
@@ -17,49 +122,7 @@ impl fmt::Display for TrackReport {
             self.skipped.len()
         )?;
         for (j, m) in self.reference.iter().enumerate() {
-            write!(
-                f,
-                "mode {j}: {:.4} Hz, damping ratio {:.4} ({:.2} %), tracked in {:.1} % of the records",
-                m.frequency_hz,
-                m.damping_ratio,
-                100.0 * m.damping_ratio,
-                100.0 * self.tracked.get(j).copied().unwrap_or(0.0)
-            )?;
-            match (self.baselines.get(j), self.baseline_errors.get(j)) {
-                (Some(Some(b)), _) => {
-                    let slopes: Vec<String> = b.coefficients[1..]
-                        .iter()
-                        .enumerate()
-                        .map(|(c, v)| match self.covariate_names.get(c) {
-                            Some(name) => format!("{v:+.3e} Hz per unit of {name}"),
-                            None => format!("{v:+.3e} Hz per unit of covariate {c}"),
-                        })
-                        .collect();
-                    writeln!(
-                        f,
-                        "; baseline {:.4} Hz at zero covariates{}; SD {:.2e} Hz unexplained beyond the estimation noise ({} training records)",
-                        b.coefficients[0],
-                        if slopes.is_empty() {
-                            String::new()
-                        } else {
-                            format!(", {}", slopes.join(", "))
-                        },
-                        b.unexplained_sd_hz,
-                        b.records
-                    )?;
-                    if let Some(Some(m)) = self.residual_models.get(j) {
-                        writeln!(
-                            f,
-                            "  a slow effect the covariates do not explain: SD {:.2e} Hz, correlation {:.3} from record to record; its filter's innovations charted, which keep {:.0} % of a lasting change once settled (a covariate that explains the effect keeps it all)",
-                            m.latent_var.sqrt(),
-                            m.persistence,
-                            100.0 * m.lasting_change_share
-                        )?;
-                    }
-                }
-                (_, Some(Some(e))) => writeln!(f, "; no baseline: {e}")?,
-                _ => writeln!(f)?,
-            }
+            self.fmt_mode(f, j, m)?;
         }
         for (name, why) in &self.skipped {
             writeln!(f, "skipped {name}: {why}")?;

@@ -4,6 +4,7 @@
 use crate::MonitorError;
 use crate::baseline::{Baseline, fit_baseline};
 use crate::chart::{Cusum, Side};
+use crate::environment::{Environment, Series};
 use crate::matching::{MatchOptions, ModeEstimate, match_modes};
 use crate::whiten::ResidualModel;
 
@@ -152,6 +153,10 @@ pub struct TrackOptions {
     /// hold one, and chart the filter's innovations (default), not the residuals themselves:
     /// see [`crate::whiten`].
     pub whiten: bool,
+    /// Choose each mode's environmental model on the training records (each covariate
+    /// through a first-order lag, a breakpoint; [`crate::environment`]; from 20 training
+    /// records; default), rather than regress on the covariates as they are.
+    pub environment: bool,
 }
 
 impl Default for TrackOptions {
@@ -162,6 +167,7 @@ impl Default for TrackOptions {
             reference_pool: 24,
             chart: Cusum::default(),
             whiten: true,
+            environment: true,
         }
     }
 }
@@ -199,6 +205,10 @@ pub struct TrackRow {
     pub alarm: Option<Side>,
     /// The covariates.
     pub covariates: Vec<f64>,
+    /// The environmental model's regressors lie outside their training range here: the
+    /// prediction is extrapolated.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub extrapolated: bool,
 }
 
 /// A change found: a mode's chart passed its limit.
@@ -234,6 +244,9 @@ pub struct TrackReport {
     pub baselines: Vec<Option<Baseline>>,
     /// Why a mode has no baseline.
     pub baseline_errors: Vec<Option<String>>,
+    /// Each mode's environmental model (`None` without a baseline).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub environments: Vec<Option<Environment>>,
     /// Each mode's slow unexplained effect, whose filter's innovations were charted (`None`:
     /// its residuals were independent, were charted as they are, or it has no baseline).
     pub residual_models: Vec<Option<ResidualModel>>,
@@ -305,6 +318,7 @@ pub fn track(
                 innovation: None,
                 alarm: None,
                 covariates: r.covariates.clone(),
+                extrapolated: false,
             });
         }
         new_modes.extend(a.new.iter().map(|&j| (i, id.modes[j].frequency_hz)));
@@ -334,18 +348,31 @@ pub(crate) fn chart_modes(
     let mut baselines = Vec::with_capacity(reference.len());
     let mut baseline_errors = Vec::with_capacity(reference.len());
     let mut residual_models = Vec::with_capacity(reference.len());
+    let mut environments = Vec::with_capacity(reference.len());
     let mut alarms = Vec::new();
+    // Each record's time and covariates once, for lagged values.
+    let mut seen = vec![false; records];
+    let mut at = Vec::new();
+    for r in &rows {
+        if r.record < records && !seen[r.record] {
+            seen[r.record] = true;
+            at.push((r.time, r.covariates.clone()));
+        }
+    }
+    let series = Series::new(&at);
     for mode in 0..reference.len() {
-        match chart_mode(&mut rows, mode, records, opts) {
-            Ok((b, model, found)) => {
+        match chart_mode(&mut rows, mode, records, &series, opts) {
+            Ok((b, env, model, found)) => {
                 baselines.push(Some(b));
                 baseline_errors.push(None);
+                environments.push(Some(env));
                 residual_models.push(model);
                 alarms.extend(found);
             }
             Err(e) => {
                 baselines.push(None);
                 baseline_errors.push(Some(e.to_string()));
+                environments.push(None);
                 residual_models.push(None);
             }
         }
@@ -360,6 +387,7 @@ pub(crate) fn chart_modes(
         split: Vec::new(),
         baselines,
         baseline_errors,
+        environments,
         residual_models,
         tracked: Vec::new(),
         alarms,
@@ -371,13 +399,16 @@ pub(crate) fn chart_modes(
 /// Fit `mode`'s baseline on its training rows, standardize its later rows (setting their
 /// `z`), whiten them by the slow unexplained effect's model when `opts.whiten` and the
 /// training residuals hold one (setting `innovation`) and chart them (setting `alarm`); the
-/// baseline, the slow effect's model and the alarms. `records` counts the campaign's records: one missing the mode is a gap.
+/// baseline, the environmental model, the slow effect's model and the alarms. `records`
+/// counts the campaign's records: one missing the mode is a gap. `series`: every record's
+/// covariates, for lagged values.
 fn chart_mode(
     rows: &mut [TrackRow],
     mode: usize,
     records: usize,
+    series: &Series,
     opts: &TrackOptions,
-) -> Result<(Baseline, Option<ResidualModel>, Vec<ModeAlarm>), MonitorError> {
+) -> Result<(Baseline, Environment, Option<ResidualModel>, Vec<ModeAlarm>), MonitorError> {
     // The mode's row of each record, if it has one with what the chart needs (a standard
     // error and every covariate).
     let mut row_of: Vec<Option<usize>> = vec![None; records];
@@ -397,7 +428,24 @@ fn chart_mode(
         .iter()
         .map(|&k| rows[k].frequency_se_hz.unwrap_or(0.0))
         .collect();
-    let x: Vec<Vec<f64>> = train.iter().map(|&k| rows[k].covariates.clone()).collect();
+    let q = train.first().map_or(0, |&k| rows[k].covariates.len());
+    let env = if opts.environment && train.len() >= 20 {
+        let data: Vec<(f64, Vec<f64>, f64)> = train
+            .iter()
+            .map(|&k| {
+                (
+                    rows[k].time,
+                    rows[k].covariates.clone(),
+                    rows[k].frequency_hz,
+                )
+            })
+            .collect();
+        Environment::choose(series, &data)
+    } else {
+        Environment::linear(q)
+    };
+    let features = |row: &TrackRow| env.features(series, row.time, &row.covariates);
+    let x: Vec<Vec<f64>> = train.iter().map(|&k| features(&rows[k])).collect();
     let b = fit_baseline(&f, &se, &x)?;
     // Each record's residual (Hz) and the variance the baseline knows of (Hz²), for the
     // slow effect's model, and its standardized residual z; NaN where it has none (not
@@ -409,7 +457,9 @@ fn chart_mode(
         if let Some(k) = k {
             let row = &rows[*k];
             let se = row.frequency_se_hz.unwrap_or(0.0);
-            (r[t], n[t], z[t]) = b.residual(row.frequency_hz, se, &row.covariates);
+            let x = features(row);
+            (r[t], n[t], z[t]) = b.residual(row.frequency_hz, se, &x);
+            rows[*k].extrapolated = env.extrapolated(&x);
         }
     }
     let later = &z[training..];
@@ -445,7 +495,7 @@ fn chart_mode(
             side: a.side,
         });
     }
-    Ok((b, model, alarms))
+    Ok((b, env, model, alarms))
 }
 
 #[cfg(test)]

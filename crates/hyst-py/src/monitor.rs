@@ -11,7 +11,7 @@ use crate::ident::{Report, value_error};
 /// Track the modes of `records` (each samples × channels); see the Python wrapper
 /// `hyst.track`.
 #[pyfunction]
-#[pyo3(signature = (records, fs, *, times, covariates, covariate_names, training, settings, whiten, reference))]
+#[pyo3(signature = (records, fs, *, times, covariates, covariate_names, training, settings, whiten, reference, environment_model=true))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn track(
     py: Python<'_>,
@@ -24,6 +24,7 @@ pub(crate) fn track(
     settings: &str,
     whiten: bool,
     reference: Option<&str>,
+    environment_model: bool,
 ) -> PyResult<Report> {
     let n = records.len();
     if times.len() != n || covariates.len() != n {
@@ -72,6 +73,7 @@ pub(crate) fn track(
     let mut opts = TrackOptions::default();
     opts.training = training.unwrap_or(opts.training.min(n / 2));
     opts.whiten = whiten;
+    opts.environment = environment_model;
     // Each record identified moves the terminal's progress line (as `hyst track`'s bar).
     let done = std::sync::atomic::AtomicUsize::new(0);
     let finished = |_: &hyst::monitor::RecordModes| {

@@ -600,7 +600,7 @@ def levels(records, fs, mass, *, by_simulation=False, data_periodic=False, fit_e
 
 
 def track(records, fs, *, times=None, covariates=None, training=None, whiten=True,
-          reference=None, block_rows=None, lag_seconds=None, lag_periods=None, decimate=None,
+          environment_model=True, reference=None, block_rows=None, lag_seconds=None, lag_periods=None, decimate=None,
           max_order=None, order_step=1, references=None, df=None, dzeta=None, dmac=None,
           dreal=None, refine=True, joint=True):
     """Track the modes of many records of one structure (``hyst track``).
@@ -636,6 +636,11 @@ def track(records, fs, *, times=None, covariates=None, training=None, whiten=Tru
         Where the training records show a slow effect the covariates leave unexplained,
         chart its model's filter's innovations (default True: the effect is then not taken
         for a change), or the residuals as they are always (``hyst track --no-whiten``).
+    environment_model : bool
+        Choose each mode's environmental model on the training records (default True: each
+        covariate through a first-order lag of whole hours, its slope changing below a
+        breakpoint; by BIC), or regress on the covariates as they are
+        (``hyst track --no-environment-model``).
     reference : path, or the result of :func:`ssi`, optional
         The reference modes (``hyst track --reference``): a ``hyst ssi --json`` document, or
         an :func:`ssi` result; default the record with the most modes among the first 24.
@@ -706,4 +711,5 @@ def track(records, fs, *, times=None, covariates=None, training=None, whiten=Tru
             joint=joint,
         ),
         whiten=bool(whiten),
+        environment_model=bool(environment_model),
     )
