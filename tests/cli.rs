@@ -2406,7 +2406,8 @@ fn track_estimates_charts_as_the_records_do() {
     let (ok, stdout, err, _) = run("track_est_nose", &pivot(false, 0.0));
     assert!(ok, "{err}");
     assert!(
-        stdout.contains("mode m0: no standard errors given"),
+        stdout
+            .contains("no standard errors given: the estimation noise read from the training rows"),
         "{stdout}"
     );
     let (ok, stdout, err, stepped) = run("track_est_step", &pivot(true, 0.01));

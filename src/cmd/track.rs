@@ -363,27 +363,12 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
 /// covariates joined by record name (a record without them is tracked, not charted).
 fn run_estimates(a: &TrackArgs, path: &Path) -> Result<(), Error> {
     let table = hyst::io::read_estimates(path)?;
-    let (covs, cov_names) = match &a.covariates {
+    let covariates = match &a.covariates {
         Some(p) => hyst::io::read_covariates(p)?,
         None => Default::default(),
     };
-    let records: Vec<hyst::monitor::RecordEstimates> = table
-        .rows
-        .iter()
-        .enumerate()
-        .map(|(i, (name, time, modes))| {
-            let (cov_time, values) = match covs.get(name) {
-                Some((t, v)) => (*t, v.clone()),
-                None => (None, vec![f64::NAN; cov_names.len()]),
-            };
-            hyst::monitor::RecordEstimates {
-                name: name.clone(),
-                time: time.or(cov_time).unwrap_or(i as f64),
-                covariates: values,
-                modes: modes.clone(),
-            }
-        })
-        .collect();
+    let records = table.records(&covariates);
+    let cov_names = covariates.1;
     let without: Vec<&str> = records
         .iter()
         .filter(|r| r.covariates.iter().any(|v| !v.is_finite()))
@@ -408,16 +393,9 @@ fn run_estimates(a: &TrackArgs, path: &Path) -> Result<(), Error> {
     opts.training = a.training.unwrap_or(opts.training.min(records.len() / 2));
     opts.whiten = !a.no_whiten;
     opts.environment = !a.no_environment_model;
-    let (mut report, noise) = hyst::monitor::track_estimates(&records, &table.modes, &opts)
+    let mut report = hyst::monitor::track_estimates(&records, &table.modes, &opts)
         .map_err(|e| fail(e.to_string()))?;
     report.covariate_names = cov_names;
-    for (name, n) in table.modes.iter().zip(&noise) {
-        if let hyst::monitor::NoiseSource::TrainingScatter(s) = n {
-            println!(
-                "mode {name}: no standard errors given; the estimation noise read from the training rows' consecutive differences: {s:.3e} Hz"
-            );
-        }
-    }
     write_outputs(a, &report)
 }
 

@@ -193,6 +193,32 @@ pub fn read_estimates(path: &Path) -> Result<EstimatesTable, IoError> {
     Ok(EstimatesTable { modes, rows: out })
 }
 
+impl EstimatesTable {
+    /// The table's records as tracking takes them, their covariates joined by record name
+    /// from `covariates` ([`super::read_covariates`]'s map and names; a record without them
+    /// gets NaN, tracked and not charted); each record's time the table's, else the
+    /// covariates file's, else its row's number.
+    pub fn records(&self, covariates: &super::Covariates) -> Vec<hyst_monitor::RecordEstimates> {
+        let (covs, names) = covariates;
+        self.rows
+            .iter()
+            .enumerate()
+            .map(|(i, (name, time, modes))| {
+                let (cov_time, values) = match covs.get(name) {
+                    Some((t, v)) => (*t, v.clone()),
+                    None => (None, vec![f64::NAN; names.len()]),
+                };
+                hyst_monitor::RecordEstimates {
+                    name: name.clone(),
+                    time: time.or(cov_time).unwrap_or(i as f64),
+                    covariates: values,
+                    modes: modes.clone(),
+                }
+            })
+            .collect()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -27,26 +27,15 @@ pub struct RecordEstimates {
     pub modes: Vec<Option<ModeEstimate>>,
 }
 
-/// How a mode's estimation noise was known.
-#[derive(Debug, Clone, Copy, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
-pub enum NoiseSource {
-    /// Each row's standard error, as given.
-    Given,
-    /// Read from the training rows (Hz), as the module says: no standard errors were given.
-    TrainingScatter(f64),
-}
-
 /// Track `records` (in time order), whose modes are named by `mode_names` (one per entry of
 /// each record's `modes`). The reference of each mode is its median frequency and damping
 /// over the training records; a mode without standard errors has them read from its
-/// training rows ([`NoiseSource`]). Returns the report and how each mode's noise was known.
+/// training rows ([module doc](self); [`TrackReport::noise_from_training`] says so).
 pub fn track_estimates(
     records: &[RecordEstimates],
     mode_names: &[String],
     opts: &TrackOptions,
-) -> Result<(TrackReport, Vec<NoiseSource>), MonitorError> {
+) -> Result<TrackReport, MonitorError> {
     let training = opts.training.min(records.len());
     let modes = mode_names.len();
     let mut reference = Vec::with_capacity(modes);
@@ -62,11 +51,7 @@ pub fn track_estimates(
             .iter()
             .filter_map(|r| r.modes.get(k).and_then(Option::as_ref))
             .any(|m| m.frequency_se_hz.is_some());
-        noise.push(if given {
-            NoiseSource::Given
-        } else {
-            NoiseSource::TrainingScatter(consecutive_scatter(&f))
-        });
+        noise.push((!given).then(|| consecutive_scatter(&f)));
         reference.push(ModeEstimate {
             frequency_hz: median(&f),
             frequency_se_hz: None,
@@ -81,10 +66,7 @@ pub fn track_estimates(
         for (k, m) in r.modes.iter().enumerate().take(modes) {
             let Some(m) = m else { continue };
             seen[k] += 1;
-            let se = match noise[k] {
-                NoiseSource::Given => m.frequency_se_hz,
-                NoiseSource::TrainingScatter(s) => Some(s),
-            };
+            let se = noise[k].or(m.frequency_se_hz);
             rows.push(TrackRow {
                 record: i,
                 name: r.name.clone(),
@@ -109,7 +91,8 @@ pub fn track_estimates(
         .iter()
         .map(|&s| s as f64 / records.len().max(1) as f64)
         .collect();
-    Ok((report, noise))
+    report.noise_from_training = noise;
+    Ok(report)
 }
 
 /// The median of `v` (NaN when empty).

@@ -40,7 +40,7 @@ pub mod whiten;
 
 pub use baseline::{Baseline, fit_baseline};
 pub use chart::{Alarm, Cusum, Side};
-pub use estimates::{NoiseSource, RecordEstimates, track_estimates};
+pub use estimates::{RecordEstimates, track_estimates};
 pub use matching::{Assignment, MatchOptions, ModeEstimate, match_modes};
 pub use track::{
     Identified, Loaded, ModeAlarm, RecordModes, TrackOptions, TrackReport, TrackRow,

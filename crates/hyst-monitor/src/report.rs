@@ -42,6 +42,12 @@ impl TrackReport {
                     b.unexplained_sd_hz,
                     b.records
                 )?;
+                if let Some(Some(s)) = self.noise_from_training.get(j) {
+                    writeln!(
+                        f,
+                        "  no standard errors given: the estimation noise read from the training rows' consecutive differences, {s:.3e} Hz"
+                    )?;
+                }
                 if let Some(Some(e)) = self.environments.get(j)
                     && e.bic_gain < 0.0
                 {

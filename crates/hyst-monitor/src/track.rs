@@ -244,6 +244,10 @@ pub struct TrackReport {
     pub baselines: Vec<Option<Baseline>>,
     /// Why a mode has no baseline.
     pub baseline_errors: Vec<Option<String>>,
+    /// Per mode, the estimation noise (Hz) read from its training rows when the estimates
+    /// came without standard errors ([`crate::estimates`]); empty or `None` otherwise.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub noise_from_training: Vec<Option<f64>>,
     /// Each mode's environmental model (`None` without a baseline).
     #[cfg_attr(feature = "serde", serde(default))]
     pub environments: Vec<Option<Environment>>,
@@ -387,6 +391,7 @@ pub(crate) fn chart_modes(
         split: Vec::new(),
         baselines,
         baseline_errors,
+        noise_from_training: Vec::new(),
         environments,
         residual_models,
         tracked: Vec::new(),

@@ -385,6 +385,7 @@ fn _hyst(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ident::refine, m)?)?;
     m.add_function(wrap_pyfunction!(ident::levels, m)?)?;
     m.add_function(wrap_pyfunction!(monitor::track, m)?)?;
+    m.add_function(wrap_pyfunction!(monitor::track_estimates, m)?)?;
     m.add_function(wrap_pyfunction!(amplitude::amplitude, m)?)?;
     m.add_class::<ident::Report>()?;
     m.add_class::<SsiResult>()?;

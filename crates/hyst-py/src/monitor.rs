@@ -8,6 +8,35 @@ use hyst::monitor::{Loaded, TrackOptions};
 
 use crate::ident::{Report, value_error};
 
+/// Track another system's modal estimates (`hyst track --estimates`); see the Python
+/// wrapper `hyst.track_estimates`.
+#[pyfunction]
+#[pyo3(signature = (estimates, *, covariates, training, whiten, environment_model))]
+pub(crate) fn track_estimates(
+    py: Python<'_>,
+    estimates: std::path::PathBuf,
+    covariates: Option<std::path::PathBuf>,
+    training: Option<usize>,
+    whiten: bool,
+    environment_model: bool,
+) -> PyResult<Report> {
+    let table = hyst::io::read_estimates(&estimates).map_err(value_error)?;
+    let covariates = match covariates {
+        Some(p) => hyst::io::read_covariates(&p).map_err(value_error)?,
+        None => Default::default(),
+    };
+    let records = table.records(&covariates);
+    let mut opts = TrackOptions::default();
+    opts.training = training.unwrap_or(opts.training.min(records.len() / 2));
+    opts.whiten = whiten;
+    opts.environment = environment_model;
+    let mut report = py
+        .detach(|| hyst::monitor::track_estimates(&records, &table.modes, &opts))
+        .map_err(value_error)?;
+    report.covariate_names = covariates.1;
+    Report::of(&estimates.display().to_string(), report)
+}
+
 /// Track the modes of `records` (each samples × channels); see the Python wrapper
 /// `hyst.track`.
 #[pyfunction]

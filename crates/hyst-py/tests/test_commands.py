@@ -249,3 +249,39 @@ def test_track_takes_the_commands_reference_and_named_covariates(data_dir, hyst_
     with pytest.raises(ValueError, match="reference: not JSON"):
         (tmp_path / "bad.json").write_text("{")
         hyst.track(windows[:2], 20.0, reference=tmp_path / "bad.json")
+
+
+def test_track_estimates_gives_the_commands_report(hyst_bin, tmp_path):
+    """`hyst.track_estimates` and `hyst track --estimates` on the same table and covariates:
+    the same report; the mode given without standard errors has its noise read from the
+    training rows (numpy's median of consecutive differences, computed here, is the
+    report's); a 1 % drop of mode b's later estimates is alarmed on b, down."""
+    rng = np.random.default_rng(46)
+    n, training = 80, 40
+    temperature = 8.0 + 5.0 * np.sin(np.arange(n) / 6.0)
+    a = 2.0 * (1.0 - 1e-3 * temperature) * (1.0 + 5e-4 * rng.standard_normal(n))
+    b = 5.0 * (1.0 - 1e-3 * temperature) * (1.0 + 5e-4 * rng.standard_normal(n))
+    b[60:] *= 0.99
+    rows = ["record,time,a_hz,a_hz_se,b_hz,b_damping"]
+    for i in range(n):
+        b_cell = "" if i == 17 else repr(float(b[i]))
+        damping = "" if i == 17 else "0.012"
+        rows.append(f"r{i},{3600.0 * i},{float(a[i])!r},{1e-3},{b_cell},{damping}")
+    (tmp_path / "est.csv").write_text("\n".join(rows) + "\n")
+    cov = ["record,temperature"] + [f"r{i},{float(t)!r}" for i, t in enumerate(temperature)]
+    (tmp_path / "cov.csv").write_text("\n".join(cov) + "\n")
+    out = tmp_path / "track"
+    run(hyst_bin, "track", "--estimates", tmp_path / "est.csv", "--covariates",
+        tmp_path / "cov.csv", "--training", training, "--out", out)
+    report = hyst.track_estimates(tmp_path / "est.csv", covariates=tmp_path / "cov.csv",
+                                  training=training)
+    doc = report.to_dict()
+    assert comparable(doc) == document(out / "report.json")
+    b_train = np.delete(b[:training], 17)
+    expected = 1.4826 * np.median(np.abs(np.diff(b_train))) / np.sqrt(2.0)
+    assert doc["noise_from_training"][0] is None
+    assert abs(doc["noise_from_training"][1] - expected) <= 1e-12 * expected
+    assert "no standard errors given" in str(report)
+    alarms = doc["alarms"]
+    assert alarms and all(x["mode"] == 1 and x["side"] == "down" for x in alarms), alarms
+    assert all(x["record"] >= 60 for x in alarms), alarms

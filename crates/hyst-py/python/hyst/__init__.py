@@ -26,7 +26,7 @@ from ._hyst import Report, SsiResult
 
 __all__ = [
     "amplitude", "excite", "identify", "levels", "read", "Record", "refine", "Report",
-    "simulate", "ssi", "SsiResult", "track",
+    "simulate", "ssi", "SsiResult", "track", "track_estimates",
 ]
 
 
@@ -710,6 +710,42 @@ def track(records, fs, *, times=None, covariates=None, training=None, whiten=Tru
             references=references, df=df, dzeta=dzeta, dmac=dmac, dreal=dreal, refine=refine,
             joint=joint,
         ),
+        whiten=bool(whiten),
+        environment_model=bool(environment_model),
+    )
+
+
+def track_estimates(estimates, *, covariates=None, training=None, whiten=True,
+                    environment_model=True):
+    """Track modal estimates made by another system (``hyst track --estimates``).
+
+    Parameters
+    ----------
+    estimates : path
+        A delimited table, one row per record in time order: ``record``, an optional
+        ``time`` (s) and per tracked mode ``<mode>_hz``, optionally ``<mode>_hz_se`` (Hz)
+        and ``<mode>_damping``; an empty cell is a mode the record did not have.
+    covariates : path, optional
+        The covariates file ``hyst track --covariates`` reads (``record``, optional
+        ``time``, one column per covariate).
+    training : int, optional
+        The first this many records train the baselines (default 336, at most half).
+    whiten, environment_model : bool
+        As for :func:`track`.
+
+    Returns
+    -------
+    Report
+        The report ``hyst track --estimates`` writes as ``report.json`` (``to_json()``,
+        ``str()`` its text). Without standard errors, each mode's estimation noise read
+        from its training rows is in ``noise_from_training``.
+    """
+    import os
+
+    return _hyst.track_estimates(
+        os.fspath(estimates),
+        covariates=None if covariates is None else os.fspath(covariates),
+        training=None if training is None else int(training),
         whiten=bool(whiten),
         environment_model=bool(environment_model),
     )
