@@ -101,6 +101,10 @@ const PAIRS: &[Pair] = &[
             ),
             ("columns", "Python selects the arrays' columns"),
             (
+                "estimates",
+                "another system's estimates: Python's hyst.track_estimates",
+            ),
+            (
                 "out",
                 "the command's store and tables; Python returns the report",
             ),

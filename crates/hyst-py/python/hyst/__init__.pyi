@@ -119,6 +119,7 @@ def track(
     covariates: Optional[Union[npt.ArrayLike, Mapping[str, npt.ArrayLike]]] = ...,
     training: Optional[int] = ...,
     whiten: bool = ...,
+    environment_model: bool = ...,
     reference: Optional[Union[str, os.PathLike[str], SsiResult]] = ...,
     block_rows: Optional[int] = ...,
     lag_seconds: Optional[float] = ...,
@@ -133,6 +134,15 @@ def track(
     dreal: Optional[float] = ...,
     refine: bool = ...,
     joint: bool = ...,
+) -> Report: ...
+
+def track_estimates(
+    estimates: Union[str, os.PathLike[str]],
+    *,
+    covariates: Optional[Union[str, os.PathLike[str]]] = ...,
+    training: Optional[int] = ...,
+    whiten: bool = ...,
+    environment_model: bool = ...,
 ) -> Report: ...
 
 @dataclass(frozen=True)
