@@ -79,7 +79,7 @@ pub fn simulate_many(
         let kernel = LaneKernel::new(&lane_models);
         // A lane with a measurement chain needs the displacement at every sub-step.
         let chains: [Option<hyst_model::MeasurementChain>; LANES] =
-            std::array::from_fn(|l| lane_models[l].extras.chain.filter(|c| !c.is_identity()));
+            std::array::from_fn(|l| crate::chain::of(lane_models[l]));
         let fine = chains.iter().any(Option::is_some);
         let mut ys = run(&kernel, &source, fs, n_samples, opts, fine);
         if fine {

@@ -10,7 +10,12 @@
 //! then reads $s(t_j - d)$ from the cubic Hermite through $s$ and $\dot s$; before $t = 0$ the
 //! chain holds the initial displacement (a run from rest reads 0 there, which is exact).
 
-use hyst_model::MeasurementChain;
+use hyst_model::{MeasurementChain, Oscillator};
+
+/// The chain `model`'s output goes through, unless it has none or it does nothing.
+pub(crate) fn of(model: &Oscillator) -> Option<MeasurementChain> {
+    model.extras.chain.filter(|c| !c.is_identity())
+}
 
 /// The weights of $s_{j+1} = E s_j + w_0 x_j + w_1 x_{j+1} + w_2 h m_j + w_3 h m_{j+1}$ ($m$ the
 /// slopes), from the integrals $I_k$ of the lag's kernel against $\theta^k$.

@@ -499,7 +499,7 @@ pub fn simulate_from(
     }
     let r = opts.oversample;
     let h = 1.0 / (fs * r as f64);
-    let chain = model.extras.chain.filter(|c| !c.is_identity());
+    let chain = chain::of(model);
     let fine = matches!(opts.decimation, Decimation::Fir(_)) || chain.is_some();
     let mut out = Vec::with_capacity(if fine {
         (n_samples - 1) * r + 1
@@ -697,7 +697,7 @@ pub fn steady_state_period(
     // A measurement chain's memory reaches into the previous period: the last period of a
     // run over all of them, as for the FIR decimation.
     match &opts.decimation {
-        Decimation::Subsample if model.extras.chain.is_none() => Ok(SteadyState {
+        Decimation::Subsample if chain::of(model).is_none() => Ok(SteadyState {
             y: prev.unwrap_or_default(),
             periods,
             change,
