@@ -104,6 +104,17 @@ impl Series {
     }
 }
 
+impl Term {
+    /// This term's covariate at time `t` (the record's own covariates `x`), through its lag.
+    fn value(&self, series: &Series, t: f64, x: &[f64]) -> f64 {
+        if self.lag_s == 0.0 {
+            x.get(self.covariate).copied().unwrap_or(f64::NAN)
+        } else {
+            series.lagged_at(self.covariate, self.lag_s, t)
+        }
+    }
+}
+
 impl Environment {
     /// The plain model: every covariate unlagged and linear.
     pub fn linear(covariates: usize) -> Environment {
@@ -125,11 +136,7 @@ impl Environment {
     pub fn features(&self, series: &Series, t: f64, x: &[f64]) -> Vec<f64> {
         let mut v = Vec::with_capacity(2 * self.terms.len());
         for term in &self.terms {
-            let value = if term.lag_s == 0.0 {
-                x.get(term.covariate).copied().unwrap_or(f64::NAN)
-            } else {
-                series.lagged_at(term.covariate, term.lag_s, t)
-            };
+            let value = term.value(series, t, x);
             v.push(value);
             if let Some(c) = term.breakpoint {
                 v.push((c - value).max(0.0));
@@ -161,24 +168,20 @@ impl Environment {
         let mut best = (linear, base_bic);
         for j in 0..q {
             for &lag in &lags {
-                let current = best.0.clone();
-                let lagged = |c| {
-                    let mut e = current.clone();
-                    e.terms[j] = Term {
-                        covariate: j,
-                        lag_s: lag,
-                        breakpoint: c,
-                    };
-                    e
+                let term = |breakpoint| Term {
+                    covariate: j,
+                    lag_s: lag,
+                    breakpoint,
                 };
                 let values: Vec<f64> = train
                     .iter()
-                    .map(|r| lagged(None).features(series, r.0, &r.1)[feature_index(&current, j)])
+                    .map(|r| term(None).value(series, r.0, &r.1))
                     .collect();
                 let mut options: Vec<Option<f64>> = vec![None];
                 options.extend(deciles(&values).into_iter().map(Some));
                 for c in options {
-                    let e = lagged(c);
+                    let mut e = best.0.clone();
+                    e.terms[j] = term(c);
                     let extra = usize::from(lag > 0.0) + usize::from(c.is_some());
                     let b = bic(&e, series, train) + extra as f64 * (train.len() as f64).ln();
                     if b < best.1 {
@@ -225,14 +228,6 @@ fn first_order_lag(s: &[(f64, f64)], tau: f64) -> Vec<(f64, f64)> {
         out.push((t, y));
     }
     out
-}
-
-/// Where covariate `j`'s own (lagged) value sits among `e`'s regressors.
-fn feature_index(e: &Environment, j: usize) -> usize {
-    e.terms[..j]
-        .iter()
-        .map(|t| 1 + usize::from(t.breakpoint.is_some()))
-        .sum()
 }
 
 /// The 10 %, 20 %, …, 90 % points of `v`.
