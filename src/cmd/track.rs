@@ -348,10 +348,12 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
         return Err(e.into());
     }
     store.rewrite(&keys, &records)?;
-    let mut opts = TrackOptions::default();
-    opts.training = a.training.unwrap_or(opts.training.min(names.len() / 2));
-    opts.whiten = !a.no_whiten;
-    opts.environment = !a.no_environment_model;
+    let opts = TrackOptions::for_campaign(
+        names.len(),
+        a.training,
+        !a.no_whiten,
+        !a.no_environment_model,
+    );
     let reference = a.reference.as_deref().map(reference_modes).transpose()?;
     let mut report = hyst::monitor::track(&records, reference.as_deref(), &opts)
         .map_err(|e| fail(e.to_string()))?;
@@ -389,10 +391,12 @@ fn run_estimates(a: &TrackArgs, path: &Path) -> Result<(), Error> {
         );
     }
     std::fs::create_dir_all(&a.out).map_err(|e| fail(format!("{}: {e}", a.out.display())))?;
-    let mut opts = TrackOptions::default();
-    opts.training = a.training.unwrap_or(opts.training.min(records.len() / 2));
-    opts.whiten = !a.no_whiten;
-    opts.environment = !a.no_environment_model;
+    let opts = TrackOptions::for_campaign(
+        records.len(),
+        a.training,
+        !a.no_whiten,
+        !a.no_environment_model,
+    );
     let mut report = hyst::monitor::track_estimates(&records, &table.modes, &opts)
         .map_err(|e| fail(e.to_string()))?;
     report.covariate_names = cov_names;

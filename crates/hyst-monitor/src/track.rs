@@ -172,6 +172,24 @@ impl Default for TrackOptions {
     }
 }
 
+impl TrackOptions {
+    /// The options for a campaign of `records` records: `training` records train the
+    /// baselines (by default 336, at most half the campaign), whitened and with the
+    /// environmental model as asked.
+    pub fn for_campaign(
+        records: usize,
+        training: Option<usize>,
+        whiten: bool,
+        environment: bool,
+    ) -> TrackOptions {
+        let mut opts = TrackOptions::default();
+        opts.training = training.unwrap_or(opts.training.min(records / 2));
+        opts.whiten = whiten;
+        opts.environment = environment;
+        opts
+    }
+}
+
 /// One record × mode of the tidy table.
 #[derive(Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]

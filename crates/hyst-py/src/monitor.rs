@@ -26,10 +26,7 @@ pub(crate) fn track_estimates(
         None => Default::default(),
     };
     let records = table.records(&covariates);
-    let mut opts = TrackOptions::default();
-    opts.training = training.unwrap_or(opts.training.min(records.len() / 2));
-    opts.whiten = whiten;
-    opts.environment = environment_model;
+    let opts = TrackOptions::for_campaign(records.len(), training, whiten, environment_model);
     let mut report = py
         .detach(|| hyst::monitor::track_estimates(&records, &table.modes, &opts))
         .map_err(value_error)?;
@@ -99,10 +96,7 @@ pub(crate) fn track(
         .map(hyst::report::reference_modes)
         .transpose()
         .map_err(|e| value_error(format!("reference: {e}")))?;
-    let mut opts = TrackOptions::default();
-    opts.training = training.unwrap_or(opts.training.min(n / 2));
-    opts.whiten = whiten;
-    opts.environment = environment_model;
+    let opts = TrackOptions::for_campaign(n, training, whiten, environment_model);
     // Each record identified moves the terminal's progress line (as `hyst track`'s bar).
     let done = std::sync::atomic::AtomicUsize::new(0);
     let finished = |_: &hyst::monitor::RecordModes| {
