@@ -107,7 +107,7 @@ pub fn read_estimates(path: &Path) -> Result<EstimatesTable, IoError> {
         let mut f: Vec<Option<f64>> = vec![None; modes.len()];
         let mut se: Vec<Option<f64>> = vec![None; modes.len()];
         let mut damping: Vec<Option<f64>> = vec![None; modes.len()];
-        for (c, text) in cols.iter().zip(cells.iter()) {
+        for ((c, column), text) in cols.iter().zip(&header).zip(cells.iter()) {
             if let Column::Record = c {
                 record = text.to_string();
                 continue;
@@ -115,7 +115,6 @@ pub fn read_estimates(path: &Path) -> Result<EstimatesTable, IoError> {
             if text.trim().is_empty() {
                 continue;
             }
-            let column = &header[cols.iter().position(|x| x == c).unwrap_or(0)];
             let v = super::delimited::number(text, sep)
                 .filter(|v| v.is_finite())
                 .ok_or_else(|| IoError::NotANumber {
