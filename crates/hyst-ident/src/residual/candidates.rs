@@ -23,36 +23,20 @@ pub struct Spectrum {
 }
 
 /// The residual's power at 511 frequencies evenly spaced on (0, fs/2), (Hz, power): a coarse
-/// DFT scan (of at most its first 16384 samples) is enough to locate it. The phasor
-/// $e^{-i\omega k}$ is advanced by one rotation a sample and set exactly every
-/// [`PHASOR_RESET`] samples (its rounding drift stays below 1e-13 of a unit phasor), the
-/// frequencies in parallel: a sine and a cosine per sample and frequency were 5 % of a
-/// loop's time.
+/// DFT scan (of at most its first 16384 samples) is enough to locate it. The frequencies are
+/// p·fs/1024, so they are bins of the FFT of the samples zero-padded to a multiple of 1024
+/// (the same sums as the DFT at those frequencies).
 pub(super) fn power_scan(r: &[f64], fs: f64) -> Vec<(f64, f64)> {
     let n = r.len().min(16384);
-    let r = &r[..n];
+    let padded_len = 1024 * n.div_ceil(1024).max(1);
+    let mut padded = vec![0.0; padded_len];
+    padded[..n].copy_from_slice(&r[..n]);
+    let spectrum = crate::fft::rfft(&padded);
+    let per = padded_len / 1024;
     (1..512)
-        .into_par_iter()
-        .map(|p| {
-            let f = fs / 2.0 * p as f64 / 512.0;
-            let w = 2.0 * std::f64::consts::PI * f / fs;
-            let (sw, cw) = w.sin_cos();
-            let (mut re, mut im) = (0.0, 0.0);
-            for (j, block) in r.chunks(PHASOR_RESET).enumerate() {
-                let (mut s, mut c) = (w * (j * PHASOR_RESET) as f64).sin_cos();
-                for v in block {
-                    re += v * c;
-                    im -= v * s;
-                    (c, s) = (c * cw - s * sw, s * cw + c * sw);
-                }
-            }
-            (f, re * re + im * im)
-        })
+        .map(|p| (fs / 2.0 * p as f64 / 512.0, spectrum[p * per].norm_sqr()))
         .collect()
 }
-
-/// Samples between exact settings of [`power_scan`]'s phasor.
-const PHASOR_RESET: usize = 512;
 
 pub(super) fn periodogram_peak(scan: &[(f64, f64)], resonance_hz: f64) -> Spectrum {
     let total: f64 = scan.iter().map(|p| p.1).sum();
@@ -769,9 +753,8 @@ pub(super) fn diagnose_on(
 
 #[cfg(test)]
 mod tests {
-    /// The rotated phasor's scan against the DFT with a sine and cosine per sample: the same
-    /// power to 1e-10 of the largest (the phasor's drift over 512 rotations is ~1e-13; the
-    /// sums over 16384 samples round alike).
+    /// The FFT's scan against the DFT with a sine and cosine per sample: the same power to
+    /// 1e-10 of the largest (both sum the same terms; they round differently).
     #[test]
     fn the_scan_is_the_direct_dft() {
         let n = 20000;
@@ -779,18 +762,24 @@ mod tests {
             .map(|k| (0.37 * k as f64).sin() + 0.2 * ((k * k % 97) as f64 - 48.0) / 48.0)
             .collect();
         let fs = 750.0;
-        let scan = super::power_scan(&r, fs);
-        let top = scan.iter().fold(0.0f64, |a, p| a.max(p.1));
-        for &(f, p) in &scan {
-            let w = 2.0 * std::f64::consts::PI * f / fs;
-            let (mut re, mut im) = (0.0, 0.0);
-            for (k, v) in r[..16384].iter().enumerate() {
-                let (s, c) = (w * k as f64).sin_cos();
-                re += v * c;
-                im -= v * s;
+        // A long record (its first 16384 samples scanned) and one of no multiple of 1024.
+        for (len, used) in [(n, 16384), (3000, 3000)] {
+            let scan = super::power_scan(&r[..len], fs);
+            let top = scan.iter().fold(0.0f64, |a, p| a.max(p.1));
+            for &(f, p) in &scan {
+                let w = 2.0 * std::f64::consts::PI * f / fs;
+                let (mut re, mut im) = (0.0, 0.0);
+                for (k, v) in r[..used].iter().enumerate() {
+                    let (s, c) = (w * k as f64).sin_cos();
+                    re += v * c;
+                    im -= v * s;
+                }
+                let direct = re * re + im * im;
+                assert!(
+                    (p - direct).abs() <= 1e-10 * top,
+                    "{len}: {f} Hz: {p} vs {direct}"
+                );
             }
-            let direct = re * re + im * im;
-            assert!((p - direct).abs() <= 1e-10 * top, "{f} Hz: {p} vs {direct}");
         }
     }
 }
