@@ -2127,8 +2127,8 @@ fn format_flag_rate_and_shapes_uff() {
 }
 
 /// `hyst track` over windows of one record: every window's modes tracked; a second run
-/// finds every record done and gives the same report (records.jsonl is not extended); a run
-/// cut short (half the lines kept) continues with the rest; an empty folder is an error.
+/// finds every record done and gives the same report (the store's rows unchanged); a run
+/// cut short (four records kept) continues with the rest; an empty folder is an error.
 #[test]
 fn track_windows_resumes_and_refuses_no_records() {
     let Some(path) = common::data_file("oma/data_3dof.csv") else {
@@ -2161,20 +2161,24 @@ fn track_windows_resumes_and_refuses_no_records() {
             "{first}"
         );
     }
-    let jsonl = out.join("records.jsonl");
-    let lines = std::fs::read_to_string(&jsonl).unwrap();
-    assert_eq!(lines.lines().count(), 10);
+    let store = out.join("store.sqlite");
+    let rows = || stored_rows(&store);
+    let stored = rows();
+    assert_eq!(stored.len(), 10);
     let (ok, again, err) = hyst(&args);
     assert!(ok, "{err}");
     assert_eq!(again, first);
-    assert_eq!(std::fs::read_to_string(&jsonl).unwrap(), lines);
+    assert_eq!(rows(), stored);
     // Cut short: the first four records kept; the rest identified again, the same report.
-    let kept: String = lines.lines().take(4).map(|l| format!("{l}\n")).collect();
-    std::fs::write(&jsonl, kept).unwrap();
+    rusqlite::Connection::open(&store)
+        .unwrap()
+        .execute("DELETE FROM records WHERE CAST(name AS INTEGER) >= 4", [])
+        .unwrap();
+    assert_eq!(rows().len(), 4);
     let (ok, resumed, err) = hyst(&args);
     assert!(ok, "{err}");
     assert_eq!(resumed, first);
-    assert_eq!(std::fs::read_to_string(&jsonl).unwrap().lines().count(), 10);
+    assert_eq!(rows().len(), 10);
     let table = std::fs::read_to_string(out.join("table.csv")).unwrap();
     assert_eq!(table.lines().count(), 1 + 30);
     let rows = std::fs::read_to_string(out.join("table.jsonl")).unwrap();
@@ -2430,8 +2434,8 @@ fn track_estimates_charts_as_the_records_do() {
 /// `--fs` gives what a fresh run with it gives (it served the first run's 1.0 Hz where the
 /// fresh run gives 2.0); records are taken in natural order (rec_2 before rec_10); a record
 /// with the channels in another order is matched by name, one with other channels skipped
-/// with the reason; a torn last line of the store is repaired; the run's own outputs inside
-/// the input folder are not read as records; a live lock on `--out` refuses a second run.
+/// with the reason; the run's own outputs inside the input folder are not read as records; a
+/// store another process holds refuses a second run.
 #[test]
 fn track_files_resume_only_what_is_unchanged() {
     let Some(path) = common::data_file("oma/data_3dof.csv") else {
@@ -2514,23 +2518,23 @@ fn track_files_resume_only_what_is_unchanged() {
     let listed: Vec<&str> = files.iter().map(|f| s(f)).collect();
     assert_eq!(at40, run("40", &fresh, &listed));
     assert_ne!(at40, first);
-    // A torn last line (a run killed mid-write): repaired, the same report.
-    let store = out.join("records.jsonl");
-    let mut text = std::fs::read_to_string(&store).unwrap();
-    text.push_str("{\"key\":\"0\",\"name\":\"rec_");
-    std::fs::write(&store, text).unwrap();
-    assert_eq!(run("40", &out, &folder), at40);
-    assert!(
-        std::fs::read_to_string(&store)
-            .unwrap()
-            .lines()
-            .all(|l| serde_json::from_str::<serde_json::Value>(l).is_ok())
-    );
-    // A lock held by a live process (this test's) refuses a second run.
-    std::fs::write(out.join(".lock"), std::process::id().to_string()).unwrap();
+    // A store held by another process (here this test's) refuses a second run.
+    let held = hyst::store::CampaignStore::open(&out).unwrap();
     let (ok, _, err) = hyst(&["track", "--inputs", s(&dir), "--fs", "20", "--out", s(&out)]);
     assert!(!ok && err.contains("another `hyst track`"), "{err}");
-    std::fs::remove_file(out.join(".lock")).unwrap();
+    drop(held);
+}
+
+/// The rows of a campaign store, `(name, key, record)`, in name order.
+fn stored_rows(store: &Path) -> Vec<(String, String, String)> {
+    let conn = rusqlite::Connection::open(store).unwrap();
+    let mut q = conn
+        .prepare("SELECT name, key, record FROM records ORDER BY name")
+        .unwrap();
+    q.query_map([], |r| Ok((r.get(0)?, r.get(1)?, r.get(2)?)))
+        .unwrap()
+        .map(Result::unwrap)
+        .collect()
 }
 
 /// `hyst ssi` without `--json` prints its report and writes nothing (it refused to run).

@@ -347,7 +347,6 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
     if let Some(e) = store_error.into_inner().ok().flatten() {
         return Err(e.into());
     }
-    store.rewrite(&keys, &records)?;
     let opts = TrackOptions::for_campaign(
         names.len(),
         a.training,
@@ -358,7 +357,10 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
     let mut report = hyst::monitor::track(&records, reference.as_deref(), &opts)
         .map_err(|e| fail(e.to_string()))?;
     report.covariate_names = cov_names;
-    write_outputs(a, &report)
+    let table = hyst::store::TrackTable::of(&report);
+    store.finish(&keys, &records, &table)?;
+    drop(store);
+    write_outputs(a, &report, &table)
 }
 
 /// `hyst track --estimates`: another system's estimates tracked as records' are, the
@@ -400,7 +402,8 @@ fn run_estimates(a: &TrackArgs, path: &Path) -> Result<(), Error> {
     let mut report = hyst::monitor::track_estimates(&records, &table.modes, &opts)
         .map_err(|e| fail(e.to_string()))?;
     report.covariate_names = cov_names;
-    write_outputs(a, &report)
+    let table = hyst::store::TrackTable::of(&report);
+    write_outputs(a, &report, &table)
 }
 
 /// `analysis` with what it leaves to the record read from the campaign's first readable
@@ -435,9 +438,14 @@ fn resolved_analysis(
 
 /// The report printed, and written into `--out` (`table.csv`, `table.jsonl`, `report.json`)
 /// and `--svg-dir`.
-fn write_outputs(a: &TrackArgs, report: &TrackReport) -> Result<(), Error> {
+fn write_outputs(
+    a: &TrackArgs,
+    report: &TrackReport,
+    table: &hyst::store::TrackTable,
+) -> Result<(), Error> {
     print!("{report}");
-    write_table(&a.out.join("table.csv"), report)?;
+    table.write_csv(&a.out.join("table.csv"))?;
+    table.write_parquet(&a.out.join("table.parquet"))?;
     write_rows(&a.out.join("table.jsonl"), report)?;
     hyst::report::write_json(report, &a.out.join("report.json"))?;
     if let Some(dir) = &a.svg_dir {
@@ -455,54 +463,4 @@ fn write_rows(path: &Path, report: &TrackReport) -> Result<(), Error> {
         writeln!(w).map_err(err)?;
     }
     w.flush().map_err(err)
-}
-
-/// The tidy table: one row per record × mode.
-fn write_table(path: &Path, report: &TrackReport) -> Result<(), Error> {
-    let mut w =
-        csv::Writer::from_path(path).map_err(|e| fail(format!("{}: {e}", path.display())))?;
-    let mut header: Vec<String> = [
-        "record",
-        "time_s",
-        "mode",
-        "frequency_hz",
-        "frequency_se_hz",
-        "damping_ratio",
-        "damping_se",
-        "mac",
-        "misfit_flag",
-        "z",
-        "innovation",
-        "alarm",
-        "extrapolated",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
-    header.extend(report.covariate_names.iter().cloned());
-    let err = |e: csv::Error| fail(format!("{}: {e}", path.display()));
-    w.write_record(&header).map_err(err)?;
-    let opt = |v: Option<f64>| v.map_or(String::new(), |x| format!("{x:e}"));
-    for r in &report.rows {
-        let mut row = vec![
-            r.name.clone(),
-            format!("{}", r.time),
-            r.mode.to_string(),
-            format!("{:e}", r.frequency_hz),
-            opt(r.frequency_se_hz),
-            format!("{:e}", r.damping_ratio),
-            opt(r.damping_se),
-            format!("{:e}", r.mac),
-            r.misfit_flag.to_string(),
-            opt(r.z),
-            opt(r.innovation),
-            r.alarm
-                .map_or(String::new(), |s| format!("{s:?}").to_lowercase()),
-            r.extrapolated.to_string(),
-        ];
-        row.extend(r.covariates.iter().map(|v| format!("{v:e}")));
-        w.write_record(&row).map_err(err)?;
-    }
-    w.flush()
-        .map_err(|e| fail(format!("{}: {e}", path.display())))
 }

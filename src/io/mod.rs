@@ -64,15 +64,21 @@ pub enum IoError {
         /// Bytes of memory free.
         available: u64,
     },
-    /// Another run holds the campaign store's lock.
+    /// Another run holds the campaign store.
     #[error(
-        "{path}: another `hyst track` (process {pid}) is writing this --out folder; wait for it, or give another --out"
+        "{path}: another `hyst track` is writing this --out folder (its store is locked); wait for it, or give another --out"
     )]
     StoreLocked {
-        /// The lock file.
+        /// The store's file.
         path: PathBuf,
-        /// The process holding it.
-        pid: u32,
+    },
+    /// The campaign store could not be read or written.
+    #[error("{path}: the campaign store: {message}")]
+    Store {
+        /// The store's file.
+        path: PathBuf,
+        /// What went wrong.
+        message: String,
     },
     /// The first line holds numbers only: the file has no header line of names.
     #[error(

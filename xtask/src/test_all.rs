@@ -13,8 +13,15 @@ use std::process::Command;
 use crate::compare::run_ok as run;
 
 /// What the Python tests need besides the package (pyuff and scipy write the Universal and
-/// MATLAB files the readers are checked against).
-const PYTHON_NEEDS: [&str; 5] = ["maturin>=1.7,<2", "numpy", "pytest", "pyuff", "scipy"];
+/// MATLAB files the readers are checked against; pyarrow reads `hyst track`'s Parquet table).
+const PYTHON_NEEDS: [&str; 6] = [
+    "maturin>=1.7,<2",
+    "numpy",
+    "pytest",
+    "pyuff",
+    "scipy",
+    "pyarrow",
+];
 
 /// `python -m pip install --quiet`, the arguments to follow.
 fn pip(python: &Path) -> Command {

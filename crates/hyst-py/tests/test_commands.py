@@ -245,10 +245,51 @@ def test_track_takes_the_commands_reference_and_named_covariates(data_dir, hyst_
     from_ssi = hyst.track(windows, 20.0, reference=hyst.ssi(windows[0], 20.0), **kwargs)
     assert comparable(from_ssi.to_dict()) == comparable(from_file.to_dict())
     assert "Hz per unit of temperature" in p.stdout, p.stdout
+    assert_exports_agree(out)
     assert str(from_file).splitlines()[1:] == p.stdout.splitlines()[-len(str(from_file).splitlines()) + 1:]
     with pytest.raises(ValueError, match="reference: not JSON"):
         (tmp_path / "bad.json").write_text("{")
         hyst.track(windows[:2], 20.0, reference=tmp_path / "bad.json")
+
+
+def assert_exports_agree(out):
+    """`hyst track`'s three copies of its tidy table, each read by another program: the
+    Parquet file by pyarrow and the store's `tracked` table by Python's sqlite3 hold the
+    cells of `table.csv` (read by the csv module): the same numbers, an empty cell null,
+    NaN a number (null in SQLite, which has no NaN)."""
+    import csv
+    import math
+    import sqlite3
+
+    import pyarrow.parquet as pq
+
+    with open(out / "table.csv", newline="") as f:
+        rows = list(csv.reader(f))
+    header, rows = rows[0], rows[1:]
+    parquet = pq.read_table(out / "table.parquet").to_pydict()
+    assert list(parquet) == header
+    db = sqlite3.connect(out / "store.sqlite")
+    sql = db.execute("SELECT * FROM tracked").fetchall()
+    assert [d[0] for d in db.execute("SELECT * FROM tracked").description] == header
+    assert len(sql) == len(rows) == len(parquet["record"]) > 0
+    for i, row in enumerate(rows):
+        for j, (name, cell) in enumerate(zip(header, row)):
+            p, s = parquet[name][i], sql[i][j]
+            if cell == "":
+                assert p is None and s is None, (name, i)
+            elif name in ("record", "alarm"):
+                assert p == s == cell, (name, i)
+            elif name in ("misfit_flag", "extrapolated"):
+                assert p == bool(s) == (cell == "true"), (name, i)
+            elif math.isnan(float(cell)):
+                assert math.isnan(p) and s is None, (name, i)
+            else:
+                assert p == s == float(cell), (name, i, p, s, cell)
+    # The store's records: one row per record, each a whole JSON record.
+    names = [r[0] for r in db.execute("SELECT name FROM records ORDER BY rowid")]
+    assert sorted(names, key=int) == sorted({r[0] for r in rows} | set(names), key=int)
+    for (text,) in db.execute("SELECT record FROM records"):
+        assert "outcome" in json.loads(text)
 
 
 def test_track_estimates_gives_the_commands_report(hyst_bin, tmp_path):
