@@ -110,10 +110,16 @@ const PAIRS: &[Pair] = &[
             ),
             ("svg-dir", FILES),
         ],
-        python_only: &[(
-            "times",
-            "each array's time; the command reads it from --covariates' `time` column",
-        )],
+        python_only: &[
+            (
+                "times",
+                "each array's time; the command reads it from --covariates' `time` column",
+            ),
+            (
+                "client",
+                "a Dask cluster identifies the records; the command runs on one machine",
+            ),
+        ],
     },
     Pair {
         command: "ident",

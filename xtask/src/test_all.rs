@@ -13,14 +13,16 @@ use std::process::Command;
 use crate::compare::run_ok as run;
 
 /// What the Python tests need besides the package (pyuff and scipy write the Universal and
-/// MATLAB files the readers are checked against; pyarrow reads `hyst track`'s Parquet table).
-const PYTHON_NEEDS: [&str; 6] = [
+/// MATLAB files the readers are checked against; pyarrow reads `hyst track`'s Parquet table;
+/// distributed runs `hyst.track` on a local Dask cluster).
+const PYTHON_NEEDS: [&str; 7] = [
     "maturin>=1.7,<2",
     "numpy",
     "pytest",
     "pyuff",
     "scipy",
     "pyarrow",
+    "distributed",
 ];
 
 /// `python -m pip install --quiet`, the arguments to follow.

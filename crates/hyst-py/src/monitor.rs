@@ -4,7 +4,7 @@
 use numpy::PyReadonlyArray2;
 use pyo3::prelude::*;
 
-use hyst::monitor::{Loaded, TrackOptions};
+use hyst::monitor::{Loaded, RecordModes, TrackOptions};
 
 use crate::ident::{Report, value_error};
 
@@ -37,7 +37,7 @@ pub(crate) fn track_estimates(
 /// Track the modes of `records` (each samples × channels); see the Python wrapper
 /// `hyst.track`.
 #[pyfunction]
-#[pyo3(signature = (records, fs, *, times, covariates, covariate_names, training, settings, whiten, reference, environment_model=true))]
+#[pyo3(signature = (records, fs, *, times, covariates, covariate_names, training, settings, whiten, reference, environment_model=true, names=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn track(
     py: Python<'_>,
@@ -51,6 +51,7 @@ pub(crate) fn track(
     whiten: bool,
     reference: Option<&str>,
     environment_model: bool,
+    names: Option<Vec<String>>,
 ) -> PyResult<Report> {
     let n = records.len();
     if times.len() != n || covariates.len() != n {
@@ -74,7 +75,13 @@ pub(crate) fn track(
             )
         })
         .collect();
-    let names: Vec<String> = (0..n).map(|i| i.to_string()).collect();
+    let names: Vec<String> = names.unwrap_or_else(|| (0..n).map(|i| i.to_string()).collect());
+    if names.len() != n {
+        return Err(value_error(format!(
+            "{n} records but {} names",
+            names.len()
+        )));
+    }
     let analysis = crate::analysis_options(settings)?;
     let load = |i: usize| -> Result<Loaded, String> {
         Ok(Loaded {
@@ -92,25 +99,73 @@ pub(crate) fn track(
         analysis.resolved_for(&views, fs).ok()
     };
     let (analysis, _) = hyst::monitor::campaign_analysis(&analysis, n, &resolve);
-    let reference = reference
-        .map(hyst::report::reference_modes)
-        .transpose()
-        .map_err(|e| value_error(format!("reference: {e}")))?;
-    let opts = TrackOptions::for_campaign(n, training, whiten, environment_model);
+    // A bad reference said before the records are identified.
+    let campaign = Campaign::new(
+        covariate_names,
+        training,
+        whiten,
+        reference,
+        environment_model,
+    )?;
     // Each record identified moves the terminal's progress line (as `hyst track`'s bar).
     let done = std::sync::atomic::AtomicUsize::new(0);
     let finished = |_: &hyst::monitor::RecordModes| {
         let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
         crate::to_terminal(&format!("{k}/{n} records identified"));
     };
-    let mut report = py
-        .detach(|| {
-            let identified =
-                hyst::monitor::identify_records(&names, &load, &analysis, &[], &finished);
-            crate::to_terminal("");
-            hyst::monitor::track(&identified, reference.as_deref(), &opts)
+    let identified = py.detach(|| {
+        let identified = hyst::monitor::identify_records(&names, &load, &analysis, &[], &finished);
+        crate::to_terminal("");
+        identified
+    });
+    campaign.track(py, &identified)
+}
+
+/// How identified records are tracked: what `hyst.track` is given besides the records.
+pub(crate) struct Campaign {
+    covariate_names: Vec<String>,
+    training: Option<usize>,
+    whiten: bool,
+    reference: Option<Vec<hyst::monitor::ModeEstimate>>,
+    environment_model: bool,
+}
+
+impl Campaign {
+    /// The campaign's tracking, `reference` a `hyst ssi --json` document (read here: a bad
+    /// one is said before any record is identified).
+    pub(crate) fn new(
+        covariate_names: Vec<String>,
+        training: Option<usize>,
+        whiten: bool,
+        reference: Option<&str>,
+        environment_model: bool,
+    ) -> PyResult<Campaign> {
+        let reference = reference
+            .map(hyst::report::reference_modes)
+            .transpose()
+            .map_err(|e| value_error(format!("reference: {e}")))?;
+        Ok(Campaign {
+            covariate_names,
+            training,
+            whiten,
+            reference,
+            environment_model,
         })
-        .map_err(value_error)?;
-    report.covariate_names = covariate_names;
-    Report::of("records", report)
+    }
+
+    /// Track `records` (identified, in time order): the report `hyst.track` returns.
+    pub(crate) fn track(self, py: Python<'_>, records: &[RecordModes]) -> PyResult<Report> {
+        let opts = TrackOptions::for_campaign(
+            records.len(),
+            self.training,
+            self.whiten,
+            self.environment_model,
+        );
+        let reference = self.reference.as_deref();
+        let mut report = py
+            .detach(|| hyst::monitor::track(records, reference, &opts))
+            .map_err(value_error)?;
+        report.covariate_names = self.covariate_names;
+        Report::of("records", report)
+    }
 }

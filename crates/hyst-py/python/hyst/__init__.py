@@ -602,7 +602,7 @@ def levels(records, fs, mass, *, by_simulation=False, data_periodic=False, fit_e
 def track(records, fs, *, times=None, covariates=None, training=None, whiten=True,
           environment_model=True, reference=None, block_rows=None, lag_seconds=None, lag_periods=None, decimate=None,
           max_order=None, order_step=1, references=None, df=None, dzeta=None, dmac=None,
-          dreal=None, refine=True, joint=True):
+          dreal=None, refine=True, joint=True, client=None):
     """Track the modes of many records of one structure (``hyst track``).
 
     Each record is identified as :func:`ssi` does (in parallel), its modes matched to a
@@ -614,7 +614,8 @@ def track(records, fs, *, times=None, covariates=None, training=None, whiten=Tru
     Parameters
     ----------
     records : list of array_like (samples, channels), or of file paths
-        The records, in time order; a path is read as :func:`read` reads it.
+        The records, in time order; a path is read as :func:`read` reads it, and the record
+        is named by its file's name (an array by its place), as ``hyst track`` names it.
     fs : float or None
         Sampling rate (Hz); None when the files state it (Universal Files).
     times : list of float, optional
@@ -645,6 +646,14 @@ def track(records, fs, *, times=None, covariates=None, training=None, whiten=Tru
         The reference modes (``hyst track --reference``): a ``hyst ssi --json`` document, or
         an :func:`ssi` result; default the record with the most modes among the first 24.
 
+    client : dask.distributed.Client, or "local", optional
+        Identify the records on a Dask cluster: each worker reads its records' files
+        itself (only the paths travel; ``records`` must be paths the workers can read) and
+        identifies them; the tracking runs here on the gathered modes. ``"local"`` starts a
+        ``LocalCluster`` of 2 worker processes for the call. A file a worker cannot read is
+        skipped with the reason, as ``hyst track`` skips it. The report is the one this
+        function gives without a client (see docs/monitoring.md).
+
     Returns
     -------
     Report
@@ -654,7 +663,19 @@ def track(records, fs, *, times=None, covariates=None, training=None, whiten=Tru
     """
     import os
 
+    if client is not None:
+        return _track_on_dask(
+            client, records, fs, times=times, covariates=covariates, training=training,
+            whiten=whiten, environment_model=environment_model, reference=reference,
+            settings=_settings(
+                block_rows=block_rows, lag_seconds=lag_seconds, lag_periods=lag_periods,
+                decimate=decimate, max_order=max_order, order_step=order_step,
+                references=references, df=df, dzeta=dzeta, dmac=dmac, dreal=dreal,
+                refine=refine, joint=joint,
+            ),
+        )
     arrays = []
+    names = []
     for i, r in enumerate(records):
         if isinstance(r, (str, os.PathLike)):
             # A file, read as hyst.read reads it; a Universal File brings its own rate.
@@ -663,7 +684,10 @@ def track(records, fs, *, times=None, covariates=None, training=None, whiten=Tru
                 fs = rec.fs
             elif rec.fs is not None and abs(rec.fs - float(fs)) > 1e-5 * rec.fs:
                 raise ValueError(f"{os.fspath(r)}: states {rec.fs} Hz, but fs={fs} was given")
+            names.append(os.path.basename(os.fspath(r)))
             r = rec.data
+        else:
+            names.append(str(i))
         a = _real(r, f"record {i}")
         if a.ndim == 1:
             a = a.reshape(-1, 1)
@@ -673,36 +697,15 @@ def track(records, fs, *, times=None, covariates=None, training=None, whiten=Tru
     n = len(arrays)
     if n == 0:
         raise ValueError("no records: give at least one array or file")
-    t = [float(i) for i in range(n)] if times is None else [float(v) for v in times]
-    names = []
-    if covariates is None:
-        x = [[] for _ in range(n)]
-    else:
-        if hasattr(covariates, "keys"):
-            # A dict or a DataFrame: one named column per covariate.
-            names = [str(k) for k in covariates.keys()]
-            covariates = _np.column_stack([_np.asarray(covariates[k], dtype=_np.float64)
-                                           for k in covariates.keys()])
-        c = _np.asarray(covariates, dtype=_np.float64)
-        if c.ndim == 1:
-            c = c.reshape(-1, 1)
-        x = c.tolist()
-    if reference is None:
-        ref = None
-    elif isinstance(reference, (str, os.PathLike)):
-        with open(reference, encoding="utf-8") as f:
-            ref = f.read()
-    elif hasattr(reference, "to_json"):
-        ref = reference.to_json()
-    else:
-        raise ValueError("reference must be a path to a `hyst ssi --json` document or an "
-                         f"ssi() result, got {type(reference).__name__}")
+    t = _times(times, n)
+    x, cov_names = _covariates(covariates, n)
+    ref = _reference(reference)
     if fs is None:
         raise ValueError("fs is needed: the records do not state their sampling rate")
     if not (float(fs) > 0.0 and _np.isfinite(float(fs))):
         raise ValueError(f"fs must be a positive finite rate (Hz), got {fs}")
     return _hyst.track(
-        arrays, float(fs), times=t, covariates=x, covariate_names=names,
+        arrays, float(fs), times=t, covariates=x, covariate_names=cov_names, names=names,
         training=None if training is None else int(training), reference=ref,
         settings=_settings(
             block_rows=block_rows, lag_seconds=lag_seconds, lag_periods=lag_periods,
@@ -712,6 +715,129 @@ def track(records, fs, *, times=None, covariates=None, training=None, whiten=Tru
         ),
         whiten=bool(whiten),
         environment_model=bool(environment_model),
+    )
+
+
+def _times(times, n):
+    """Each record's time (s): given, or its place."""
+    return [float(i) for i in range(n)] if times is None else [float(v) for v in times]
+
+
+def _covariates(covariates, n):
+    """The covariates as rows of floats, one per record, and their names (a dict or a
+    DataFrame names them)."""
+    if covariates is None:
+        return [[] for _ in range(n)], []
+    names = []
+    if hasattr(covariates, "keys"):
+        names = [str(k) for k in covariates.keys()]
+        covariates = _np.column_stack([_np.asarray(covariates[k], dtype=_np.float64)
+                                       for k in covariates.keys()])
+    c = _np.asarray(covariates, dtype=_np.float64)
+    if c.ndim == 1:
+        c = c.reshape(-1, 1)
+    return c.tolist(), names
+
+
+def _reference(reference):
+    """The reference modes as a `hyst ssi --json` document's text, or None."""
+    import os
+
+    if reference is None:
+        return None
+    if isinstance(reference, (str, os.PathLike)):
+        with open(reference, encoding="utf-8") as f:
+            return f.read()
+    if hasattr(reference, "to_json"):
+        return reference.to_json()
+    raise ValueError("reference must be a path to a `hyst ssi --json` document or an "
+                     f"ssi() result, got {type(reference).__name__}")
+
+
+def _read_on_worker(path, fs):
+    """A record's data and rate as a Dask worker reads it (the file's rate when ``fs`` is
+    None)."""
+    rec = read(path)
+    rate = rec.fs if fs is None else float(fs)
+    if rate is None:
+        raise ValueError(f"{path}: the file states no sampling rate and fs was not given")
+    if rec.fs is not None and abs(rec.fs - rate) > 1e-5 * rec.fs:
+        raise ValueError(f"{path}: states {rec.fs} Hz, but fs={fs} was given")
+    a = _real(rec.data, str(path))
+    return (a.reshape(-1, 1) if a.ndim == 1 else a), rate
+
+
+def _resolve_on_worker(path, fs, settings):
+    """The campaign's analysis read from one record on a worker, or None."""
+    try:
+        a, rate = _read_on_worker(path, fs)
+    except (OSError, ValueError):
+        return None
+    return _hyst.resolve_analysis(a, rate, settings)
+
+
+def _identify_on_worker(path, fs, time, covariates, name, analysis):
+    """One record read and identified on a worker: its modes as JSON (why not, if the file
+    cannot be read)."""
+    try:
+        a, rate = _read_on_worker(path, fs)
+    except (OSError, ValueError) as e:
+        return _hyst.identify_record(None, 0.0, time, covariates, name, analysis, why=str(e))
+    return _hyst.identify_record(a, rate, time, covariates, name, analysis)
+
+
+def _track_on_dask(client, records, fs, *, times, covariates, training, whiten,
+                   environment_model, reference, settings):
+    """:func:`track` with the identification on a Dask cluster (``client``)."""
+    import os
+
+    paths = []
+    for i, r in enumerate(records):
+        if not isinstance(r, (str, os.PathLike)):
+            raise ValueError(f"record {i}: with client=, give file paths (the workers read "
+                             f"the files), not {type(r).__name__}")
+        paths.append(os.path.abspath(os.fspath(r)))
+    n = len(paths)
+    if n == 0:
+        raise ValueError("no records: give at least one file")
+    if fs is not None and not (float(fs) > 0.0 and _np.isfinite(float(fs))):
+        raise ValueError(f"fs must be a positive finite rate (Hz), got {fs}")
+    t = _times(times, n)
+    x, cov_names = _covariates(covariates, n)
+    if len(t) != n or len(x) != n:
+        raise ValueError(f"{n} records but {len(t)} times and {len(x)} rows of covariates")
+    ref = _reference(reference)
+    _hyst.resolve_analysis(None, 1.0, settings)  # bad settings said before any work
+    cluster = None
+    if isinstance(client, str):
+        if client != "local":
+            raise ValueError(f"client must be a dask.distributed.Client or \"local\", got {client!r}")
+        from dask.distributed import Client, LocalCluster
+
+        cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True)
+        client = Client(cluster)
+    try:
+        # As hyst track: what the settings leave to the record read from the first of the
+        # first 24 records that gives it, and kept for every record.
+        analysis = None
+        for p in paths[:24]:
+            analysis = client.submit(_resolve_on_worker, p, fs, settings, pure=False).result()
+            if analysis is not None:
+                break
+        if analysis is None:
+            analysis = _hyst.resolve_analysis(None, 1.0, settings)
+        names = [os.path.basename(p) for p in paths]
+        futures = client.map(_identify_on_worker, paths, [fs] * n, t, x, names,
+                             [analysis] * n, pure=False)
+        identified = client.gather(futures)
+    finally:
+        if cluster is not None:
+            client.close()
+            cluster.close()
+    return _hyst.track_identified(
+        identified, covariate_names=cov_names,
+        training=None if training is None else int(training), whiten=bool(whiten),
+        reference=ref, environment_model=bool(environment_model),
     )
 
 

@@ -134,6 +134,7 @@ def track(
     dreal: Optional[float] = ...,
     refine: bool = ...,
     joint: bool = ...,
+    client: Optional[Any] = ...,
 ) -> Report: ...
 
 def track_estimates(

@@ -1,0 +1,113 @@
+//! `hyst.track(..., client=...)`: the campaign's steps as pieces a cluster runs apart — the
+//! analysis read from a record, one record identified (on a worker, from the file it read),
+//! and the tracking of the gathered records — each the step `hyst.track` and `hyst track`
+//! run, so that the report is theirs. Records travel between them as `RecordModes` JSON.
+
+use numpy::PyReadonlyArray2;
+use pyo3::prelude::*;
+
+use hyst::monitor::RecordModes;
+
+use crate::ident::{Report, value_error};
+
+/// The columns of a (samples × channels) array.
+fn columns(record: &PyReadonlyArray2<'_, f64>) -> Vec<Vec<f64>> {
+    record
+        .as_array()
+        .columns()
+        .into_iter()
+        .map(|c| c.to_vec())
+        .collect()
+}
+
+/// The analysis `settings` ask for with what they leave to the record read from `record`
+/// (as JSON), or `None` when this record cannot give it; without a record, the analysis as
+/// the settings give it.
+#[pyfunction]
+#[pyo3(signature = (record, fs, settings))]
+pub(crate) fn resolve_analysis(
+    record: Option<PyReadonlyArray2<'_, f64>>,
+    fs: f64,
+    settings: &str,
+) -> PyResult<Option<String>> {
+    let analysis = crate::analysis_options(settings)?;
+    let resolved = match record {
+        None => Some(analysis),
+        Some(r) => {
+            let data = columns(&r);
+            let views: Vec<&[f64]> = data.iter().map(|c| c.as_slice()).collect();
+            analysis.resolved_for(&views, fs).ok()
+        }
+    };
+    resolved
+        .map(|a| serde_json::to_string(&a).map_err(value_error))
+        .transpose()
+}
+
+/// One record identified with the analysis `analysis` (JSON, from [`resolve_analysis`]),
+/// as a `RecordModes` JSON document; a record that could not be read (`record` None) is
+/// kept with the reason `why`, as `hyst track` keeps it.
+#[pyfunction]
+#[pyo3(signature = (record, fs, time, covariates, name, analysis, why=None))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn identify_record(
+    py: Python<'_>,
+    record: Option<PyReadonlyArray2<'_, f64>>,
+    fs: f64,
+    time: f64,
+    covariates: Vec<f64>,
+    name: String,
+    analysis: &str,
+    why: Option<String>,
+) -> PyResult<String> {
+    let analysis: covssi::AnalysisOptions =
+        serde_json::from_str(analysis).map_err(|e| value_error(format!("analysis: {e}")))?;
+    let outcome = match record {
+        Some(r) => {
+            let data = columns(&r);
+            py.detach(|| {
+                let views: Vec<&[f64]> = data.iter().map(|c| c.as_slice()).collect();
+                hyst::monitor::identify(&views, fs, &analysis).map_err(|e| e.to_string())
+            })
+        }
+        None => Err(why.unwrap_or_else(|| "not read".into())),
+    };
+    let r = RecordModes {
+        name,
+        time,
+        covariates,
+        outcome,
+    };
+    serde_json::to_string(&r).map_err(value_error)
+}
+
+/// Track records identified apart (each a `RecordModes` JSON document, in time order), as
+/// `hyst.track` tracks the records it identifies.
+#[pyfunction]
+#[pyo3(signature = (records, *, covariate_names, training, whiten, reference, environment_model))]
+pub(crate) fn track_identified(
+    py: Python<'_>,
+    records: Vec<String>,
+    covariate_names: Vec<String>,
+    training: Option<usize>,
+    whiten: bool,
+    reference: Option<&str>,
+    environment_model: bool,
+) -> PyResult<Report> {
+    let records = records
+        .iter()
+        .enumerate()
+        .map(|(i, r)| {
+            serde_json::from_str::<RecordModes>(r)
+                .map_err(|e| value_error(format!("record {i}: {e}")))
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    crate::monitor::Campaign::new(
+        covariate_names,
+        training,
+        whiten,
+        reference,
+        environment_model,
+    )?
+    .track(py, &records)
+}
