@@ -2574,3 +2574,76 @@ fn amplitude_options_are_named_by_their_flags_before_reading() {
         assert!(err.contains(says), "{flag}: {err}");
     }
 }
+
+/// A file missing from a campaign whose covariates give every record a time leaves a gap at
+/// its time, said, never a shift: the later records keep their places (their record numbers
+/// in the table), and the gap is skipped with the reason.
+#[test]
+fn track_a_missing_file_leaves_a_gap() {
+    let Some(path) = common::data_file("oma/data_3dof.csv") else {
+        return;
+    };
+    let t = hyst::io::read_csv(&path).unwrap();
+    let dir = tmp("track_gap");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut cov = "record,time,temperature\n".to_string();
+    for k in 0..6 {
+        cov.push_str(&format!("rec_{k}.csv,{},{}\n", 3600 * k, 10 + k));
+        if k == 3 {
+            continue;
+        }
+        let r = k * 6000..(k + 1) * 6000;
+        let cols: Vec<&[f64]> = ["y1", "y2", "y3"]
+            .iter()
+            .map(|c| &t.column(c).unwrap()[r.clone()])
+            .collect();
+        hyst::io::write_csv(
+            &dir.join(format!("rec_{k}.csv")),
+            &["y1", "y2", "y3"],
+            &cols,
+        )
+        .unwrap();
+    }
+    let covariates = tmp("track_gap_cov.csv");
+    std::fs::write(&covariates, cov).unwrap();
+    let out = tmp("track_gap_out");
+    let _ = std::fs::remove_dir_all(&out);
+    let (ok, stdout, err) = hyst(&[
+        "track",
+        "--inputs",
+        s(&dir),
+        "--fs",
+        "20",
+        "--covariates",
+        s(&covariates),
+        "--out",
+        s(&out),
+    ]);
+    assert!(ok, "{err}");
+    assert!(
+        stdout.contains("6 records, in the order of their time"),
+        "{stdout}"
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let skipped = report["skipped"].to_string();
+    assert!(
+        skipped.contains("rec_3.csv") && skipped.contains("a gap in the campaign"),
+        "{skipped}"
+    );
+    let table = std::fs::read_to_string(out.join("table.csv")).unwrap();
+    let places: Vec<(String, String)> = table
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let c: Vec<&str> = l.split(',').collect();
+            (c[0].to_string(), c[1].to_string())
+        })
+        .collect();
+    assert!(
+        places.contains(&("rec_4.csv".into(), "14400".into())),
+        "{table}"
+    );
+    assert!(!places.iter().any(|(r, _)| r == "rec_3.csv"), "{table}");
+}

@@ -134,6 +134,32 @@ fn reference_modes(path: &Path) -> Result<Vec<hyst::monitor::ModeEstimate>, Erro
         .map_err(|e| fail(format!("--reference {}: {e}", path.display())))
 }
 
+/// The records the covariates file gives a time but `files` do not have (a file missing
+/// from the campaign), added to `files` by name, so that each takes its place in time as a
+/// gap, said, rather than the next record's; none when some record has no time (the order is
+/// then the names').
+fn missing_files(
+    files: &mut Vec<PathBuf>,
+    covs: &HashMap<String, (Option<f64>, Vec<f64>)>,
+) -> Vec<String> {
+    let have: std::collections::HashSet<String> = files
+        .iter()
+        .filter_map(|f| f.file_name().map(|n| n.to_string_lossy().into_owned()))
+        .collect();
+    let timed = |n: &String| covs.get(n).is_some_and(|(t, _)| t.is_some());
+    if covs.is_empty() || !have.iter().all(timed) {
+        return Vec::new();
+    }
+    let mut missing: Vec<String> = covs
+        .keys()
+        .filter(|n| !have.contains(*n) && timed(n))
+        .cloned()
+        .collect();
+    missing.sort();
+    files.extend(missing.iter().map(PathBuf::from));
+    missing
+}
+
 /// Put `files` in time order: the covariates' times when they give one for every record,
 /// else the names' natural order (as listed); and say which.
 fn order_files(files: &mut [PathBuf], covs: &HashMap<String, (Option<f64>, Vec<f64>)>) {
@@ -271,7 +297,9 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
         Some(p) => hyst::io::read_covariates(p)?,
         None => Default::default(),
     };
+    let mut gaps = Vec::new();
     if let Sources::Files(files) = &mut sources {
+        gaps = missing_files(files, &covs);
         order_files(files, &covs);
     }
     let names = sources.names();
@@ -294,12 +322,19 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
     // Without --columns, the first record's channels are every record's.
     let first_channels = match (&sources, &a.columns) {
         (Sources::Files(files), None) => files
-            .first()
-            .and_then(|f| read_record(f).ok())
+            .iter()
+            .filter(|f| !gaps.iter().any(|g| f.as_os_str() == g.as_str()))
+            .find_map(|f| read_record(f).ok())
             .map(|t| channel_names(&t, None, &[])),
         _ => None,
     };
     let load = |i: usize| -> Result<Loaded, String> {
+        if gaps.contains(&names[i]) {
+            return Err(
+                "no such file: listed with a time in the covariates file, not among the records (a gap in the campaign)"
+                    .into(),
+            );
+        }
         let (channels, fs) = sources.channels(i, a, first_channels.as_deref())?;
         let (time, covariates) = covariates_of(&names[i], start_of(i));
         Ok(Loaded {

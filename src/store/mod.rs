@@ -256,10 +256,7 @@ mod tests {
             time: 1.0,
             covariates: vec![],
             outcome: if ok {
-                Ok(hyst_monitor::Identified {
-                    modes: vec![],
-                    misfit: None,
-                })
+                Ok(hyst_monitor::Identified::default())
             } else {
                 Err("bad".into())
             },

@@ -35,6 +35,7 @@ pub mod environment;
 pub mod estimates;
 pub mod matching;
 mod report;
+pub mod screen;
 pub mod track;
 pub mod whiten;
 
@@ -43,7 +44,7 @@ pub use chart::{Alarm, Cusum, Side};
 pub use estimates::{RecordEstimates, track_estimates};
 pub use matching::{Assignment, MatchOptions, ModeEstimate, match_modes};
 pub use track::{
-    Identified, Loaded, ModeAlarm, RecordModes, TrackOptions, TrackReport, TrackRow,
+    Harmonic, Identified, Loaded, ModeAlarm, RecordModes, TrackOptions, TrackReport, TrackRow,
     campaign_analysis, identify, identify_records, reported_modes, track,
 };
 pub use whiten::ResidualModel;
@@ -85,6 +86,12 @@ pub enum MonitorError {
         /// Covariate rows.
         rows: usize,
     },
+    /// A record not fit to be identified (a NaN burst, a stuck or clipped channel).
+    #[error(transparent)]
+    Unfit(#[from] screen::Unfit),
+    /// A record's identification failed.
+    #[error(transparent)]
+    Ssi(#[from] covssi::SsiError),
     /// A CUSUM parameter out of range.
     #[error("CUSUM {parameter} must be positive and finite, got {value}")]
     ChartParameter {

@@ -147,6 +147,26 @@ impl fmt::Display for TrackReport {
                 )?;
             }
         }
+        if !self.harmonics.is_empty() {
+            let mut lines: Vec<(f64, usize)> = Vec::new();
+            for &(_, f) in &self.harmonics {
+                // One line per harmonic: its estimates within 0.5 % of each other.
+                match lines.iter_mut().find(|(g, _)| (f - *g).abs() <= 0.005 * g) {
+                    Some(l) => l.1 += 1,
+                    None => lines.push((f, 1)),
+                }
+            }
+            lines.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let said: Vec<String> = lines
+                .iter()
+                .map(|(f, n)| format!("{f:.4} Hz in {n} record(s)"))
+                .collect();
+            writeln!(
+                f,
+                "harmonics (steady spectral lines: a machine's, not the structure's; not tracked): {}",
+                said.join(", ")
+            )?;
+        }
         if !self.new_modes.is_empty() {
             writeln!(
                 f,

@@ -23,7 +23,7 @@ pub struct RecordModes {
 }
 
 /// The modes a record gave.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Default)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Identified {
     /// The reported modes.
@@ -31,18 +31,62 @@ pub struct Identified {
     /// The refinement's misfit (above `covssi::MISFIT_LIMIT` the record does not follow the
     /// model, and the modes are SSI's).
     pub misfit: Option<f64>,
+    /// Poles taken for harmonics (a machine's, not the structure's; see
+    /// [`covssi::harmonic`]): not among the modes.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub harmonics: Vec<Harmonic>,
+    /// The record's length (samples; 0 when not known), to tell a record far shorter than
+    /// the campaign's others.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub samples: usize,
 }
 
-/// The modes of one record, identified by SSI-COV and refined as `hyst ssi` does.
+/// A pole taken for a harmonic.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Harmonic {
+    /// Its frequency (Hz).
+    pub frequency_hz: f64,
+    /// The kurtosis of the response band-passed around it (1.5 for a sinusoid, 3 for a
+    /// mode under random loads).
+    pub kurtosis: f64,
+}
+
+/// The modes of one record, identified by SSI-COV and refined as `hyst ssi` does, once the
+/// record has passed [`screen`](crate::screen::screen) (no value that is not a number, no
+/// stuck or clipped channel); the poles [`covssi::harmonic`] takes for harmonics set apart.
 pub fn identify(
     channels: &[&[f64]],
     fs: f64,
     opts: &covssi::AnalysisOptions,
-) -> Result<Identified, covssi::SsiError> {
+) -> Result<Identified, MonitorError> {
+    crate::screen::screen(channels)?;
     let analysis = covssi::analyze(channels, fs, opts)?;
+    let mut modes = reported_modes(&analysis);
+    let mut harmonics = Vec::new();
+    if modes
+        .iter()
+        .any(|m| m.damping_ratio < covssi::harmonic::MAX_HARMONIC_DAMPING)
+    {
+        let test = covssi::harmonic::HarmonicTest::new(channels, fs);
+        modes.retain(
+            |m| match test.is_harmonic(m.frequency_hz, m.damping_ratio) {
+                Some(kurtosis) => {
+                    harmonics.push(Harmonic {
+                        frequency_hz: m.frequency_hz,
+                        kurtosis,
+                    });
+                    false
+                }
+                None => true,
+            },
+        );
+    }
     Ok(Identified {
-        modes: reported_modes(&analysis),
+        modes,
         misfit: analysis.refined.as_ref().map(|r| r.misfit),
+        harmonics,
+        samples: channels.first().map_or(0, |c| c.len()),
     })
 }
 
@@ -253,6 +297,9 @@ pub struct TrackReport {
     pub rows: Vec<TrackRow>,
     /// Records that gave no modes, and why.
     pub skipped: Vec<(String, String)>,
+    /// Poles taken for harmonics, not modes: (record, frequency).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub harmonics: Vec<(usize, f64)>,
     /// Modes a record had that the reference does not: (record, frequency).
     pub new_modes: Vec<(usize, f64)>,
     /// (record, reference mode) where the record held the mode twice, with one shape (see
@@ -284,6 +331,56 @@ pub struct TrackReport {
     pub covariate_names: Vec<String>,
 }
 
+/// What the campaign's records have in common, against which one is unlike the rest: the
+/// median length, and the reference's channel count.
+struct Unlike {
+    median_samples: usize,
+    channels: Option<usize>,
+}
+
+impl Unlike {
+    fn of(records: &[RecordModes], reference: &[ModeEstimate]) -> Unlike {
+        let mut lengths: Vec<usize> = records
+            .iter()
+            .filter_map(|r| r.outcome.as_ref().ok())
+            .map(|id| id.samples)
+            .filter(|&n| n > 0)
+            .collect();
+        lengths.sort_unstable();
+        Unlike {
+            median_samples: lengths.get(lengths.len() / 2).copied().unwrap_or(0),
+            channels: reference
+                .iter()
+                .find_map(|m| m.shape.as_ref().map(|s| s.len())),
+        }
+    }
+
+    /// Why the record is unlike the campaign's others, if it is: far shorter (under half
+    /// the median length: its estimates' errors are more than √2 the others' and its
+    /// lowest modes barely resolved), or its modes on another number of channels (the
+    /// shapes cannot be compared with the reference's).
+    fn why(&self, id: &Identified) -> Option<String> {
+        if id.samples > 0 && 2 * id.samples < self.median_samples {
+            return Some(format!(
+                "its {} samples are {:.0} % of the campaign's median {}: far shorter than the rest; skipped",
+                id.samples,
+                100.0 * id.samples as f64 / self.median_samples as f64,
+                self.median_samples
+            ));
+        }
+        let expected = self.channels?;
+        let got = id
+            .modes
+            .iter()
+            .find_map(|m| m.shape.as_ref().map(|s| s.len()))?;
+        (got != expected).then(|| {
+            format!(
+                "its modes are on {got} channels, the reference's on {expected}: another sensor layout; skipped"
+            )
+        })
+    }
+}
+
 /// Track `records` (in time order) against `reference`, or against the reference the first
 /// records give.
 pub fn track(
@@ -311,6 +408,8 @@ pub fn track(
     let mut split = Vec::new();
     let mut seen = vec![0usize; reference.len()];
     let mut identified = 0usize;
+    let mut harmonics = Vec::new();
+    let unlike = Unlike::of(records, &reference);
     for (i, r) in records.iter().enumerate() {
         let id = match &r.outcome {
             Ok(id) => id,
@@ -319,7 +418,12 @@ pub fn track(
                 continue;
             }
         };
+        if let Some(why) = unlike.why(id) {
+            skipped.push((r.name.clone(), why));
+            continue;
+        }
         identified += 1;
+        harmonics.extend(id.harmonics.iter().map(|h| (i, h.frequency_hz)));
         let a = match_modes(&reference, &id.modes, &opts.matching);
         for (mode, m) in a.matched.iter().enumerate() {
             let Some((j, mac)) = m else { continue };
@@ -352,6 +456,7 @@ pub fn track(
         .collect();
     let mut report = chart_modes(reference, rows, records.len(), opts);
     report.skipped = skipped;
+    report.harmonics = harmonics;
     report.new_modes = new_modes;
     report.split = split;
     report.tracked = tracked;
@@ -405,6 +510,7 @@ pub(crate) fn chart_modes(
         reference,
         rows,
         skipped: Vec::new(),
+        harmonics: Vec::new(),
         new_modes: Vec::new(),
         split: Vec::new(),
         baselines,
@@ -547,6 +653,7 @@ mod tests {
                             shape: None,
                         }],
                         misfit: Some(0.01),
+                        ..Default::default()
                     }),
                 }
             })

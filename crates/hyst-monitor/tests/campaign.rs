@@ -67,29 +67,47 @@ fn a_short_campaign_finds_its_change_and_nothing_else() {
     }
 }
 
-/// A record with a NaN, a dead (constant) channel, or far shorter than the others gives no
-/// modes: it is skipped with the reason, and the others are tracked.
+/// Records that break a real campaign: a NaN, a dead (constant) channel, one too short to
+/// identify, a clipped channel, one channel fewer, one far shorter than the rest (but
+/// identifiable), each skipped with the reason; a machine's harmonic in a record named a
+/// harmonic and not tracked, that record's modes tracked; the good records tracked.
 #[test]
 fn a_broken_record_is_skipped_with_its_reason() {
     let mut c = Campaign::default();
     c.days = 1;
-    c.per_day = 6;
+    c.per_day = 10;
     c.seconds = 300.0;
     c.seed = 740_000;
     let records: Vec<RecordModes> = (0..c.len())
         .map(|i| {
-            identified(&c, i, |ch| {
-                if i == 2 {
-                    ch[3][100] = f64::NAN;
-                }
+            identified(&c, i, |ch| match i {
+                2 => ch[3][100] = f64::NAN,
                 // A dead sensor: its channel constant.
-                if i == 3 {
-                    ch[1].iter_mut().for_each(|v| *v = 0.0);
+                3 => ch[1].iter_mut().for_each(|v| *v = 0.0),
+                4 => ch.iter_mut().for_each(|v| v.truncate(40)),
+                // Clipped: 1 % of channel 0's samples at its limits.
+                5 => {
+                    let mut a: Vec<f64> = ch[0].iter().map(|v| v.abs()).collect();
+                    a.sort_by(f64::total_cmp);
+                    let level = a[a.len() * 99 / 100];
+                    ch[0].iter_mut().for_each(|v| *v = v.clamp(-level, level));
                 }
-                // A record far shorter than the others.
-                if i == 4 {
-                    ch.iter_mut().for_each(|v| v.truncate(40));
+                6 => {
+                    ch.pop();
                 }
+                7 => ch.iter_mut().for_each(|v| v.truncate(v.len() * 35 / 100)),
+                // A machine at 2.2 Hz, between modes 1 and 2, on every channel.
+                8 => {
+                    for (k, v) in ch.iter_mut().enumerate() {
+                        let rms = (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt();
+                        for (n, x) in v.iter_mut().enumerate() {
+                            let t = n as f64 / 25.0;
+                            *x +=
+                                2.0 * rms * (2.0 * std::f64::consts::PI * 2.2 * t + k as f64).sin();
+                        }
+                    }
+                }
+                _ => {}
             })
         })
         .collect();
@@ -104,26 +122,50 @@ fn a_broken_record_is_skipped_with_its_reason() {
         .iter()
         .map(|(n, why)| (n.as_str(), why.as_str()))
         .collect();
-    assert_eq!(skipped.len(), 3, "{skipped:?}");
-    assert_eq!(skipped[0].0, "2");
-    assert!(
-        skipped[0].1.contains("sample 100: value NaN is not finite"),
-        "{skipped:?}"
-    );
-    assert_eq!(skipped[1].0, "3");
-    assert!(
-        skipped[1].1.contains("channel 1 is constant"),
-        "{skipped:?}"
-    );
-    assert_eq!(skipped[2].0, "4");
-    assert!(
-        skipped[2].1.contains("40 samples are too few"),
-        "{skipped:?}"
-    );
-    for broken in [2, 3, 4] {
+    let says = [
+        (
+            "2",
+            "channel 3 has 1 value(s) that are not finite numbers, the first at sample 100",
+        ),
+        (
+            "3",
+            "channel 1 holds 0 for 7500 consecutive samples from sample 0: stuck",
+        ),
+        ("4", "40 samples are too few"),
+        ("5", "channel 0 has"),
+        (
+            "6",
+            "its modes are on 5 channels, the reference's on 6: another sensor layout",
+        ),
+        (
+            "7",
+            "its 2625 samples are 35 % of the campaign's median 7500: far shorter",
+        ),
+    ];
+    assert_eq!(skipped.len(), says.len(), "{skipped:?}");
+    for ((name, why), (n, w)) in skipped.iter().zip(says) {
+        assert!(*name == n && why.contains(w), "{name}: {why}, not {w}");
+    }
+    assert!(skipped[3].1.contains("clipped"), "{skipped:?}");
+    for broken in [2, 3, 4, 5, 6, 7] {
         assert_eq!(report.rows.iter().filter(|r| r.record == broken).count(), 0);
     }
-    assert_eq!(report.rows.iter().filter(|r| r.record == 5).count(), 4);
+    // The harmonic named at its frequency, in record 8 alone, and its modes all tracked.
+    assert_eq!(report.harmonics.len(), 1, "{:?}", report.harmonics);
+    let (record, f) = report.harmonics[0];
+    assert!(
+        record == 8 && (f - 2.2).abs() < 0.01,
+        "{:?}",
+        report.harmonics
+    );
+    assert!(
+        report
+            .to_string()
+            .contains("harmonics (steady spectral lines")
+    );
+    for good in [8, 9] {
+        assert_eq!(report.rows.iter().filter(|r| r.record == good).count(), 4);
+    }
     assert!(
         report.baseline_errors.iter().all(|e| e
             .as_deref()

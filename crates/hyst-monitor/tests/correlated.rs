@@ -36,6 +36,7 @@ fn estimated(c: &Campaign, i: usize) -> RecordModes {
         outcome: Ok(Identified {
             modes,
             misfit: Some(0.01),
+            ..Default::default()
         }),
     }
 }
