@@ -82,5 +82,57 @@ pub fn track_figures(dir: &std::path::Path, r: &TrackReport) -> Result<(), Strin
             )?;
         }
     }
+    if let Some(c) = &r.subspace {
+        subspace_figure(dir, c)?;
+    }
     Ok(())
+}
+
+/// The subspace test's T² against time: the training records, the later ones, those the
+/// CUSUM alarmed at, and the single-record threshold.
+fn subspace_figure(
+    dir: &std::path::Path,
+    c: &crate::monitor::subspace::SubspaceChart,
+) -> Result<(), String> {
+    use crate::plot::{colors, scatter};
+    let day = |i: usize| c.time.get(i).copied().unwrap_or(i as f64) / 86400.0;
+    let points = |range: std::ops::Range<usize>| -> Vec<(f64, f64)> {
+        range
+            .filter(|&i| c.t2[i].is_finite())
+            .map(|i| (day(i), c.t2[i]))
+            .collect()
+    };
+    let n = c.t2.len();
+    let (start, end) = (day(0), day(n.saturating_sub(1)));
+    let threshold: Vec<(f64, f64)> = (0..=200)
+        .map(|k| (start + (end - start) * k as f64 / 200.0, c.threshold))
+        .collect();
+    scatter(
+        &dir.join("subspace.svg"),
+        &format!(
+            "Subspace damage test: T² of {} entries (threshold at {} % per record)",
+            c.dof,
+            100.0 * c.alpha
+        ),
+        "time (days)",
+        "T²",
+        &[
+            (
+                "training".to_string(),
+                points(0..c.training.min(n)),
+                colors::GREY,
+            ),
+            (
+                "later records".to_string(),
+                points(c.training.min(n)..n),
+                colors::BLUE,
+            ),
+            (
+                "CUSUM alarm".to_string(),
+                c.alarms.iter().map(|&i| (day(i), c.t2[i])).collect(),
+                colors::RED,
+            ),
+            ("threshold".to_string(), threshold, colors::GREY),
+        ],
+    )
 }

@@ -137,6 +137,7 @@ pub fn run(a: &DemoArgs) -> Result<(), String> {
             None => println!("monitor_detection_delay_h none (not detected)"),
         }
     }
+    subspace_lines(&report, change.map(|(day, _, _)| day));
     println!(
         "monitor_in_control_run_length {:.3e} records per mode",
         report.in_control_run_length
@@ -155,6 +156,44 @@ pub fn run(a: &DemoArgs) -> Result<(), String> {
     hyst::figures::track_figures(&dir, &report)?;
     println!("figures in {}", dir.display());
     Ok(())
+}
+
+/// The subspace test's figures beside the modal chart's: records above its single-record
+/// threshold before the change (against the nominal rate), its CUSUM's false alarms, and its
+/// delay.
+fn subspace_lines(report: &hyst::monitor::TrackReport, change_day: Option<f64>) {
+    let Some(c) = &report.subspace else {
+        println!(
+            "monitor_subspace not run: {}",
+            report
+                .subspace_error
+                .as_deref()
+                .unwrap_or("no correlations")
+        );
+        return;
+    };
+    let change = change_day.map_or(f64::INFINITY, |d| d * 86400.0);
+    let undamaged = (c.training..c.t2.len())
+        .filter(|&i| c.time[i] < change)
+        .count();
+    let above = c
+        .above_threshold
+        .iter()
+        .filter(|&&i| c.time[i] < change)
+        .count();
+    let early = c.alarms.iter().filter(|&&i| c.time[i] < change).count();
+    println!(
+        "monitor_subspace_above_threshold {above} of {undamaged} undamaged records (nominal {} %)",
+        100.0 * c.alpha
+    );
+    println!("monitor_subspace_false_alarms {early}");
+    match c.alarms.iter().find(|&&i| c.time[i] >= change) {
+        Some(&i) => println!(
+            "monitor_subspace_detection_delay_h {:.1}",
+            (c.time[i] - change) / 3600.0
+        ),
+        None => println!("monitor_subspace_detection_delay_h none (not detected)"),
+    }
 }
 
 /// `cargo xtask bench monitor`: issue 33's throughput figure. Four 1-hour records of the

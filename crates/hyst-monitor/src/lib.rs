@@ -36,6 +36,7 @@ pub mod estimates;
 pub mod matching;
 mod report;
 pub mod screen;
+pub mod subspace;
 pub mod track;
 pub mod whiten;
 
@@ -85,6 +86,16 @@ pub enum MonitorError {
         records: usize,
         /// Covariate rows.
         rows: usize,
+    },
+    /// Too few training records for the subspace test's residual covariance.
+    #[error(
+        "{records} training record(s) with correlations for a residual of {entries} entries; the subspace test needs more records than entries (a longer training period, or fewer modes)"
+    )]
+    TooFewForSubspace {
+        /// Training records with correlations.
+        records: usize,
+        /// Entries of the residual.
+        entries: usize,
     },
     /// A record not fit to be identified (a NaN burst, a stuck or clipped channel).
     #[error(transparent)]

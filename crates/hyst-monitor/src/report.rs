@@ -179,6 +179,28 @@ impl fmt::Display for TrackReport {
                     .len()
             )?;
         }
+        if let Some(c) = &self.subspace {
+            let after = c.t2.len().saturating_sub(c.training);
+            writeln!(
+                f,
+                "subspace damage test (no mode picking; a residual of {} entries, trained on {} records): {} of {} later records above its threshold T² {:.1} at {} % per record (normal theory's {:.1}); its CUSUM {}",
+                c.dof,
+                c.trained_on,
+                c.above_threshold.len(),
+                after,
+                c.threshold,
+                100.0 * c.alpha,
+                c.nominal_threshold,
+                if c.alarms.is_empty() {
+                    "raised no alarm".to_string()
+                } else {
+                    format!("alarmed at record(s) {:?}", c.alarms)
+                }
+            )?;
+        }
+        if let Some(e) = &self.subspace_error {
+            writeln!(f, "subspace damage test not run: {e}")?;
+        }
         writeln!(
             f,
             "CUSUM of the standardized residuals (of their filter's innovations where a slow effect was found): one false alarm per {:.3e} records per mode when nothing changes and the values charted are independent",

@@ -39,6 +39,10 @@ pub struct Identified {
     /// the campaign's others.
     #[cfg_attr(feature = "serde", serde(default))]
     pub samples: usize,
+    /// The record's output correlations, for the subspace damage test
+    /// ([`crate::subspace`]).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub correlations: Option<crate::subspace::Correlations>,
 }
 
 /// A pole taken for a harmonic.
@@ -87,6 +91,10 @@ pub fn identify(
         misfit: analysis.refined.as_ref().map(|r| r.misfit),
         harmonics,
         samples: channels.first().map_or(0, |c| c.len()),
+        correlations: Some(crate::subspace::Correlations::of(
+            channels,
+            crate::subspace::lags_kept(channels.len()),
+        )),
     })
 }
 
@@ -329,6 +337,57 @@ pub struct TrackReport {
     /// set: [`track`] leaves it empty, and the text then numbers them).
     #[cfg_attr(feature = "serde", serde(default))]
     pub covariate_names: Vec<String>,
+    /// The subspace damage test over the same records ([`crate::subspace`]), when the
+    /// records carry their correlations.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub subspace: Option<crate::subspace::SubspaceChart>,
+    /// Why the subspace test could not be run, when it could not.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub subspace_error: Option<String>,
+}
+
+/// The subspace test over the `usable` records that carry their correlations (on the
+/// channels of the first that does), for a model of order `order`; `None` when no record
+/// carries them (estimates made elsewhere).
+fn subspace_over(
+    records: &[RecordModes],
+    usable: &[bool],
+    order: usize,
+    opts: &TrackOptions,
+) -> Result<Option<crate::subspace::SubspaceChart>, MonitorError> {
+    let correlations: Vec<Option<&crate::subspace::Correlations>> = records
+        .iter()
+        .zip(usable)
+        .map(|(r, &ok)| {
+            r.outcome
+                .as_ref()
+                .ok()
+                .filter(|_| ok)
+                .and_then(|id| id.correlations.as_ref())
+        })
+        .collect();
+    let Some(channels) = correlations.iter().flatten().map(|c| c.channels).next() else {
+        return Ok(None);
+    };
+    let blocks = crate::subspace::blocks_for(order, channels);
+    let hankels: Vec<_> = correlations
+        .iter()
+        .map(|c| {
+            c.filter(|c| c.channels == channels)
+                .and_then(|c| c.hankel(blocks))
+        })
+        .collect();
+    crate::subspace::subspace_chart(
+        &hankels,
+        opts.training,
+        order,
+        crate::subspace::ALPHA,
+        &opts.chart,
+    )
+    .map(|mut c| {
+        c.time = records.iter().map(|r| r.time).collect();
+        Some(c)
+    })
 }
 
 /// What the campaign's records have in common, against which one is unlike the rest: the
@@ -410,6 +469,7 @@ pub fn track(
     let mut identified = 0usize;
     let mut harmonics = Vec::new();
     let unlike = Unlike::of(records, &reference);
+    let mut usable = vec![false; records.len()];
     for (i, r) in records.iter().enumerate() {
         let id = match &r.outcome {
             Ok(id) => id,
@@ -422,6 +482,7 @@ pub fn track(
             skipped.push((r.name.clone(), why));
             continue;
         }
+        usable[i] = true;
         identified += 1;
         harmonics.extend(id.harmonics.iter().map(|h| (i, h.frequency_hz)));
         let a = match_modes(&reference, &id.modes, &opts.matching);
@@ -455,6 +516,10 @@ pub fn track(
         .map(|&s| s as f64 / identified.max(1) as f64)
         .collect();
     let mut report = chart_modes(reference, rows, records.len(), opts);
+    match subspace_over(records, &usable, 2 * report.reference.len(), opts) {
+        Ok(chart) => report.subspace = chart,
+        Err(e) => report.subspace_error = Some(e.to_string()),
+    }
     report.skipped = skipped;
     report.harmonics = harmonics;
     report.new_modes = new_modes;
@@ -522,6 +587,8 @@ pub(crate) fn chart_modes(
         alarms,
         in_control_run_length: opts.chart.in_control_run_length(),
         covariate_names: Vec::new(),
+        subspace: None,
+        subspace_error: None,
     }
 }
 

@@ -1,0 +1,430 @@
+//! The subspace-based damage test (Basseville et al. 2000; Döhler and Mevel 2013): a second
+//! detector that needs no mode picking. A record's output correlations R_k = E[y_{t+k} y_tᵀ]
+//! fill a block Hankel matrix H (block (i, j) = R_{i+j+1}, i < p + 1 block rows, j < q block
+//! columns), whose column space is the observability matrix's: the structure's modes, and
+//! nothing of the excitation but its level. The reference's left null space S (the
+//! eigenvectors of H₀H₀ᵀ beyond the model order n, H₀ the training records' mean) is
+//! orthogonal to it, so the residual ζ = vec(Sᵀ H V₀) of a record of the same structure is
+//! zero up to estimation noise, and moves when the modes do. (V₀, the n leading right
+//! singular vectors of H₀, compresses the columns: ζ has (p + 1)r − n by n entries.)
+//!
+//! - **Excitation level**: each H is divided by its Frobenius norm (the null space does not
+//!   depend on the scale; the level would).
+//! - **Environmental variability**: the residuals' mean μ and covariance Σ are estimated from
+//!   the training records themselves, so the reference spans the range of temperature and
+//!   excitation the training period saw (the scatter within a record, Döhler's usual Σ,
+//!   would call every change of temperature a damage).
+//! - **The test**: Hotelling's T² = (ζ − μ)ᵀ Σ⁻¹ (ζ − μ) of a new record; with m training
+//!   records and d entries, T² (m − d) m / (d (m − 1)(m + 1)) follows F(d, m − d) when the
+//!   records are independent and normal, from which the threshold at the nominal
+//!   false-alarm probability α per record. The campaign's records are neither (temperature
+//!   cycles, slow effects): the false-alarm rate measured on undamaged records is reported
+//!   beside α.
+
+use nalgebra::{DMatrix, DVector};
+use statrs::distribution::{ContinuousCDF, FisherSnedecor, Gamma, Normal};
+
+use crate::chart::{Cusum, Side};
+
+use crate::MonitorError;
+
+/// A record's output correlations R_1 … R_lags (each channels × channels, row-major in
+/// one vector: R_k(a, b) = mean of y_a(t + k) y_b(t), the means removed), kept with the
+/// record so that the test can be run on a campaign's records after their identification.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Correlations {
+    /// Channels.
+    pub channels: usize,
+    /// R_1 … R_lags, each `channels²` values, row by row.
+    pub values: Vec<f64>,
+}
+
+/// Lags kept with each record: enough for block Hankel matrices of up to
+/// max(2, ⌈24 / channels⌉) block rows and columns (model orders to about 22).
+pub fn lags_kept(channels: usize) -> usize {
+    2 * 24usize.div_ceil(channels.max(1)).max(2) - 1
+}
+
+impl Correlations {
+    /// The correlations of `channels` up to `lags`.
+    pub fn of(channels: &[&[f64]], lags: usize) -> Correlations {
+        let r = channels.len();
+        let n = channels.first().map_or(0, |c| c.len());
+        let means: Vec<f64> = channels
+            .iter()
+            .map(|c| c.iter().sum::<f64>() / n.max(1) as f64)
+            .collect();
+        let mut values = vec![0.0; lags * r * r];
+        for k in 1..=lags.min(n.saturating_sub(1)) {
+            for a in 0..r {
+                for b in 0..r {
+                    let (ya, yb) = (channels[a], channels[b]);
+                    let s: f64 = (0..n - k)
+                        .map(|t| (ya[t + k] - means[a]) * (yb[t] - means[b]))
+                        .sum();
+                    values[((k - 1) * r + a) * r + b] = s / (n - k) as f64;
+                }
+            }
+        }
+        Correlations {
+            channels: r,
+            values,
+        }
+    }
+
+    /// Lags held.
+    pub fn lags(&self) -> usize {
+        self.values.len() / (self.channels * self.channels).max(1)
+    }
+
+    /// The block Hankel matrix of `blocks` block rows and columns (block (i, j) = R_{i+j+1}),
+    /// divided by its Frobenius norm; `None` when the lags held do not reach.
+    pub fn hankel(&self, blocks: usize) -> Option<DMatrix<f64>> {
+        let r = self.channels;
+        if 2 * blocks - 1 > self.lags() {
+            return None;
+        }
+        let mut h = DMatrix::<f64>::zeros(blocks * r, blocks * r);
+        for i in 0..blocks {
+            for j in 0..blocks {
+                let k = i + j; // R_{k+1}
+                for a in 0..r {
+                    for b in 0..r {
+                        h[(i * r + a, j * r + b)] = self.values[(k * r + a) * r + b];
+                    }
+                }
+            }
+        }
+        let norm = h.norm();
+        Some(if norm > 0.0 { h / norm } else { h })
+    }
+}
+
+/// A record's block Hankel matrix of output correlations, `blocks` block rows and columns
+/// (lags 1 to 2·blocks − 1), divided by its Frobenius norm.
+pub fn hankel(channels: &[&[f64]], blocks: usize) -> DMatrix<f64> {
+    let lags = 2 * blocks - 1;
+    Correlations::of(channels, lags)
+        .hankel(blocks)
+        .unwrap_or_else(|| DMatrix::zeros(blocks * channels.len(), blocks * channels.len()))
+}
+
+/// The block rows (and columns) for a model of order `order` on `channels` channels: the
+/// fewest with at least `order` + 2 rows (a null space of two or more directions).
+pub fn blocks_for(order: usize, channels: usize) -> usize {
+    (order + 2).div_ceil(channels.max(1)).max(2)
+}
+
+/// The nominal false-alarm probability per record of the single-record threshold
+/// `hyst track` reports.
+pub const ALPHA: f64 = 0.01;
+
+/// The reference of the subspace test, trained on the training records' Hankel matrices.
+#[derive(Debug, Clone)]
+pub struct SubspaceTest {
+    null: DMatrix<f64>,
+    columns: DMatrix<f64>,
+    mean: DVector<f64>,
+    /// Σ⁻¹ through its Cholesky factor.
+    cholesky: nalgebra::Cholesky<f64, nalgebra::Dyn>,
+    /// Entries of ζ.
+    pub dof: usize,
+    /// Training records.
+    pub training: usize,
+    /// T² above which a record is alarmed: the (1 − α) quantile of a gamma law fitted by
+    /// moments to the training records' leave-one-out T².
+    pub threshold: f64,
+    /// The same quantile under normal theory (the scaled F law), beside it.
+    pub nominal_threshold: f64,
+    /// The nominal false-alarm probability per record.
+    pub alpha: f64,
+    /// The law of an undamaged record's T² (fitted to the leave-one-out values).
+    law: Gamma,
+}
+
+impl SubspaceTest {
+    /// Train on `hankels` (of the training records, each from [`hankel`]) for a model of
+    /// order `order` (twice the modes), alarms at the nominal false-alarm probability
+    /// `alpha` per record.
+    pub fn train(
+        hankels: &[DMatrix<f64>],
+        order: usize,
+        alpha: f64,
+    ) -> Result<SubspaceTest, MonitorError> {
+        let m = hankels.len();
+        let Some(first) = hankels.first() else {
+            return Err(MonitorError::TooFewForSubspace {
+                records: 0,
+                entries: 0,
+            });
+        };
+        let (rows, cols) = first.shape();
+        let order = order.min(rows.saturating_sub(1)).min(cols);
+        let dof = (rows - order) * order;
+        if m <= dof + 1 {
+            return Err(MonitorError::TooFewForSubspace {
+                records: m,
+                entries: dof,
+            });
+        }
+        let mut h0 = DMatrix::<f64>::zeros(rows, cols);
+        for h in hankels {
+            h0 += h;
+        }
+        h0 /= m as f64;
+        // Left null space: the eigenvectors of H₀H₀ᵀ with the smallest eigenvalues.
+        let eig = (&h0 * h0.transpose()).symmetric_eigen();
+        let mut order_of: Vec<usize> = (0..rows).collect();
+        order_of.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
+        let null = DMatrix::from_columns(
+            &order_of[..rows - order]
+                .iter()
+                .map(|&i| eig.eigenvectors.column(i).into_owned())
+                .collect::<Vec<_>>(),
+        );
+        // Column compression: the n leading right singular vectors.
+        let eig = (h0.transpose() * &h0).symmetric_eigen();
+        let mut by_size: Vec<usize> = (0..cols).collect();
+        by_size.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
+        let columns = DMatrix::from_columns(
+            &by_size[..order]
+                .iter()
+                .map(|&i| eig.eigenvectors.column(i).into_owned())
+                .collect::<Vec<_>>(),
+        );
+        let residuals: Vec<DVector<f64>> = hankels
+            .iter()
+            .map(|h| residual(&null, &columns, h))
+            .collect();
+        let mut mean = DVector::<f64>::zeros(dof);
+        for z in &residuals {
+            mean += z;
+        }
+        mean /= m as f64;
+        let mut cov = DMatrix::<f64>::zeros(dof, dof);
+        for z in &residuals {
+            let d = z - &mean;
+            cov += &d * d.transpose();
+        }
+        cov /= (m - 1) as f64;
+        let cholesky = cov.cholesky().ok_or(MonitorError::Collinear)?;
+        let (mf, df) = (m as f64, dof as f64);
+        let f = FisherSnedecor::new(df, mf - df).map_err(|_| MonitorError::Collinear)?;
+        let nominal_threshold =
+            f.inverse_cdf(1.0 - alpha) * df * (mf - 1.0) * (mf + 1.0) / ((mf - df) * mf);
+        // Each training record's T² against the others (leave one out, by Sherman–Morrison
+        // from the in-sample D² = dᵀΣ⁻¹d): as a new record's would be.
+        let c = mf / ((mf - 1.0) * (mf - 1.0));
+        let loo: Vec<f64> = residuals
+            .iter()
+            .map(|z| {
+                let d = z - &mean;
+                let w = cholesky.l().solve_lower_triangular(&d).unwrap_or(d);
+                let big_d = w.norm_squared();
+                (mf / (mf - 1.0)).powi(2) * (mf - 2.0) / (mf - 1.0) * big_d / (1.0 - c * big_d)
+            })
+            .collect();
+        let mean_t2 = loo.iter().sum::<f64>() / mf;
+        let var_t2 = loo.iter().map(|t| (t - mean_t2).powi(2)).sum::<f64>() / (mf - 1.0);
+        let law = Gamma::new(mean_t2 * mean_t2 / var_t2, mean_t2 / var_t2)
+            .map_err(|_| MonitorError::Collinear)?;
+        let threshold = law.inverse_cdf(1.0 - alpha);
+        Ok(SubspaceTest {
+            null,
+            columns,
+            mean,
+            cholesky,
+            dof,
+            training: m,
+            threshold,
+            nominal_threshold,
+            alpha,
+            law,
+        })
+    }
+
+    /// A record's T² (from its [`hankel`]).
+    pub fn statistic(&self, h: &DMatrix<f64>) -> f64 {
+        let d = residual(&self.null, &self.columns, h) - &self.mean;
+        let w = self.cholesky.l().solve_lower_triangular(&d).unwrap_or(d);
+        w.norm_squared()
+    }
+}
+
+impl SubspaceTest {
+    /// A record's T² as a standard normal score, Φ⁻¹(G(T²)) with G the fitted law: standard
+    /// normal for undamaged records, larger when the structure changed (±8 at most).
+    pub fn score(&self, h: &DMatrix<f64>) -> f64 {
+        let p = self.law.cdf(self.statistic(h));
+        Normal::standard().inverse_cdf(p).clamp(-8.0, 8.0)
+    }
+}
+
+/// The subspace test over a campaign, charted as the modes are.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct SubspaceChart {
+    /// Each record's time (s; the caller's to set: [`subspace_chart`] leaves it empty).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub time: Vec<f64>,
+    /// Each record's T² (NaN for a record without a Hankel matrix).
+    pub t2: Vec<f64>,
+    /// Its score (standard normal when undamaged), charted.
+    pub score: Vec<f64>,
+    /// Entries of the residual.
+    pub dof: usize,
+    /// The records before charting (the training period).
+    pub training: usize,
+    /// Those of them the reference was trained on (with correlations, not skipped).
+    pub trained_on: usize,
+    /// The single-record threshold of T² at the nominal false-alarm probability `alpha`
+    /// (fitted), and under normal theory.
+    pub threshold: f64,
+    /// Under normal theory (the scaled F law).
+    pub nominal_threshold: f64,
+    /// The nominal false-alarm probability per record.
+    pub alpha: f64,
+    /// Records after training whose T² passed `threshold`.
+    pub above_threshold: Vec<usize>,
+    /// Records at which the CUSUM of the scores (upper side) passed its limit.
+    pub alarms: Vec<usize>,
+}
+
+/// The subspace test over `hankels` (each record's, from [`hankel`]; `None` for a record
+/// that has none), trained on the first `training`, for a model of order `order`; its
+/// scores after training charted by `chart`'s upper side (a change makes T² larger).
+pub fn subspace_chart(
+    hankels: &[Option<DMatrix<f64>>],
+    training: usize,
+    order: usize,
+    alpha: f64,
+    chart: &Cusum,
+) -> Result<SubspaceChart, MonitorError> {
+    let train: Vec<DMatrix<f64>> = hankels.iter().take(training).flatten().cloned().collect();
+    let test = SubspaceTest::train(&train, order, alpha)?;
+    let t2: Vec<f64> = hankels
+        .iter()
+        .map(|h| h.as_ref().map_or(f64::NAN, |h| test.statistic(h)))
+        .collect();
+    let score: Vec<f64> = hankels
+        .iter()
+        .map(|h| h.as_ref().map_or(f64::NAN, |h| test.score(h)))
+        .collect();
+    let later: Vec<f64> = score.iter().skip(training).copied().collect();
+    let alarms = chart
+        .alarms(&later)
+        .into_iter()
+        .filter(|a| a.side == Side::Up)
+        .map(|a| a.index + training)
+        .collect();
+    let above_threshold = (training..hankels.len())
+        .filter(|&i| t2[i] > test.threshold)
+        .collect();
+    Ok(SubspaceChart {
+        time: Vec::new(),
+        t2,
+        score,
+        dof: test.dof,
+        training,
+        trained_on: test.training,
+        threshold: test.threshold,
+        nominal_threshold: test.nominal_threshold,
+        alpha,
+        above_threshold,
+        alarms,
+    })
+}
+
+/// ζ = vec(Sᵀ H V₀).
+fn residual(null: &DMatrix<f64>, columns: &DMatrix<f64>, h: &DMatrix<f64>) -> DVector<f64> {
+    let z = null.transpose() * h * columns;
+    DVector::from_column_slice(z.as_slice())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use covssi::synth::ModalRecord;
+
+    fn record(f2: f64, level: f64, seed: u64) -> DMatrix<f64> {
+        let gains: Vec<Vec<f64>> = (0..4)
+            .map(|c| {
+                (0..2)
+                    .flat_map(|j| {
+                        let x = (c + 1) as f64 / 5.0;
+                        [
+                            level * ((j + 1) as f64 * std::f64::consts::PI * x).sin(),
+                            0.0,
+                        ]
+                    })
+                    .collect()
+            })
+            .collect();
+        let y = ModalRecord::new(20.0, &[(1.3, 0.02), (f2, 0.02)])
+            .with_gains(gains)
+            .with_noise(0.05 / level)
+            .generate(6000, seed);
+        let views: Vec<&[f64]> = y.iter().map(|c| c.as_slice()).collect();
+        hankel(&views, 2)
+    }
+
+    /// Trained on 120 records of a 2-mode structure (4 channels, 2 block rows: 16 entries of
+    /// ζ), over levels spread by a factor e^{±0.5}: of 300 fresh records of the same
+    /// structure, about the nominal 1 % pass the fitted threshold (binomial 3 ± 1.7; at most
+    /// 9 taken), while under normal theory's threshold more do (the level's spread makes the
+    /// T² heavier-tailed than F); the CUSUM of the scores raises no alarm over them, and
+    /// alarms within 60 records of the second mode dropping 2 % (41 here: the change moves
+    /// the score by under one standard deviation, and each record alone shows it in under a
+    /// third of the records).
+    #[test]
+    fn a_change_of_one_mode_is_charted_and_noise_is_not() {
+        let level = |i: u64| (0.5 * ((i as f64 * 0.7).sin())).exp();
+        let mut hankels: Vec<Option<DMatrix<f64>>> = (0..120)
+            .map(|i| Some(record(3.4, level(i), 4_610_000 + i)))
+            .collect();
+        hankels.extend((0..300).map(|i| Some(record(3.4, level(i + 7), 4_620_000 + i))));
+        let undamaged = hankels.len();
+        hankels.extend((0..60).map(|i| Some(record(3.4 * 0.98, level(i + 3), 4_630_000 + i))));
+        let c = subspace_chart(&hankels, 120, 4, 0.01, &Cusum::default()).unwrap();
+        assert_eq!(c.dof, 16);
+        let passed = c.above_threshold.iter().filter(|&&i| i < undamaged).count();
+        let nominal = (120..undamaged)
+            .filter(|&i| c.t2[i] > c.nominal_threshold)
+            .count();
+        eprintln!(
+            "fitted threshold {:.1}: {passed} of 300; normal theory's {:.1}: {nominal} of 300; alarms {:?}",
+            c.threshold, c.nominal_threshold, c.alarms
+        );
+        assert!(passed <= 9, "{passed} of 300");
+        assert!(nominal > passed, "{nominal} against {passed}");
+        let first = c.alarms.first().copied().unwrap_or(usize::MAX);
+        assert!(
+            first >= undamaged && first < undamaged + 60,
+            "{:?}",
+            c.alarms
+        );
+        let single = c
+            .above_threshold
+            .iter()
+            .filter(|&&i| i >= undamaged)
+            .count();
+        assert!(single < 20, "{single} of 60 alone");
+    }
+
+    #[test]
+    fn too_few_training_records_are_said() {
+        let h: Vec<DMatrix<f64>> = (0..5).map(|i| record(3.4, 1.0, 4_640_000 + i)).collect();
+        let e = SubspaceTest::train(&h, 4, 0.01).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                MonitorError::TooFewForSubspace {
+                    records: 5,
+                    entries: 16
+                }
+            ),
+            "{e}"
+        );
+    }
+}
