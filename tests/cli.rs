@@ -2609,17 +2609,22 @@ fn track_a_missing_file_leaves_a_gap() {
     std::fs::write(&covariates, cov).unwrap();
     let out = tmp("track_gap_out");
     let _ = std::fs::remove_dir_all(&out);
-    let (ok, stdout, err) = hyst(&[
-        "track",
-        "--inputs",
-        s(&dir),
-        "--fs",
-        "20",
-        "--covariates",
-        s(&covariates),
-        "--out",
-        s(&out),
-    ]);
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "track",
+            "--inputs",
+            s(&dir),
+            "--fs",
+            "20",
+            "--covariates",
+            s(&covariates),
+            "--out",
+            s(&out),
+        ];
+        args.extend_from_slice(extra);
+        hyst(&args)
+    };
+    let (ok, stdout, err) = run(&[]);
     assert!(ok, "{err}");
     assert!(
         stdout.contains("6 records, in the order of their time"),
@@ -2646,4 +2651,17 @@ fn track_a_missing_file_leaves_a_gap() {
         "{table}"
     );
     assert!(!places.iter().any(|(r, _)| r == "rec_3.csv"), "{table}");
+    // The excitation level as a covariate: a column after the file's, named in the text.
+    let (ok, stdout, err) = run(&["--level-covariate"]);
+    assert!(ok, "{err}");
+    let table = std::fs::read_to_string(out.join("table.csv")).unwrap();
+    assert!(
+        table
+            .lines()
+            .next()
+            .unwrap()
+            .ends_with(",temperature,log_rms"),
+        "{table}"
+    );
+    assert!(stdout.contains("log_rms"), "{stdout}");
 }

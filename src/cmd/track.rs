@@ -64,9 +64,13 @@ pub(crate) struct TrackArgs {
     /// (column `extrapolated`).
     #[arg(long)]
     pub(crate) no_environment_model: bool,
-    /// Folder for `records.jsonl` (each record's modes, appended as they come: a run
-    /// interrupted continues where it stopped), `table.csv` and `table.jsonl` (record ×
-    /// mode) and `report.json`.
+    /// Add each record's excitation level as a covariate (`log_rms`: ln of its RMS
+    /// response, in the record's units), for frequencies that drift with amplitude.
+    #[arg(long, conflicts_with = "estimates")]
+    pub(crate) level_covariate: bool,
+    /// Folder for the campaign's store `store.sqlite` (each record's modes, committed as
+    /// they come: a run interrupted continues where it stopped), the tidy table (record ×
+    /// mode) as `table.csv`, `table.parquet` and `table.jsonl`, and `report.json`.
     #[arg(help_heading = "Output files", long)]
     pub(crate) out: PathBuf,
     /// Draw each mode's frequency and damping against time (± standard error, alarms in
@@ -382,16 +386,17 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
     if let Some(e) = store_error.into_inner().ok().flatten() {
         return Err(e.into());
     }
-    let opts = TrackOptions::for_campaign(
+    let mut opts = TrackOptions::for_campaign(
         names.len(),
         a.training,
         !a.no_whiten,
         !a.no_environment_model,
     );
+    opts.level_covariate = a.level_covariate;
     let reference = a.reference.as_deref().map(reference_modes).transpose()?;
     let mut report = hyst::monitor::track(&records, reference.as_deref(), &opts)
         .map_err(|e| fail(e.to_string()))?;
-    report.covariate_names = cov_names;
+    report.name_covariates(cov_names);
     let table = hyst::store::TrackTable::of(&report);
     store.finish(&keys, &records, &table)?;
     drop(store);
@@ -436,7 +441,7 @@ fn run_estimates(a: &TrackArgs, path: &Path) -> Result<(), Error> {
     );
     let mut report = hyst::monitor::track_estimates(&records, &table.modes, &opts)
         .map_err(|e| fail(e.to_string()))?;
-    report.covariate_names = cov_names;
+    report.name_covariates(cov_names);
     let table = hyst::store::TrackTable::of(&report);
     write_outputs(a, &report, &table)
 }

@@ -62,7 +62,7 @@ pub fn run(a: &DemoArgs) -> Result<(), String> {
     opts.training = (campaign.per_day * 14).min(n / 2);
     let mut report = track(&records, None, &opts).map_err(|e| e.to_string())?;
     // The campaign's one covariate.
-    report.covariate_names = vec!["temperature".to_string()];
+    report.name_covariates(vec!["temperature".to_string()]);
     let total_s = t0.elapsed().as_secs_f64();
     println!(
         "monitor_records {n} ({} days × {}/day, {} s at {} Hz, {} channels; unexplained {:e} correlated over {} h)",

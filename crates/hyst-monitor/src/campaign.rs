@@ -9,7 +9,10 @@
 //! j's frequency is f_j (1 + a (T − T₀)) (1 + η_ij), with η_ij an environmental effect the
 //! temperature does not explain (of standard deviation `unexplained`; independent from record
 //! to record, or with `unexplained_hours` a first-order autoregression), times
-//! (1 + `change`) for the changed mode from `change_day` on. The excitation level is
+//! (1 + `change`) for the changed mode from `change_day` on; with `frost`, times
+//! (1 + c_f min(0, T_s − T_f)) for the structure's temperature T_s below T_f; with
+//! `amplitude_coefficient` b, times (1 + b ln level). A `harmonic` (a machine) adds a
+//! sinusoid to every channel of a share of the records. The excitation level is
 //! log-normal (its log's standard deviation `level_spread`); the sensors' noise has a fixed
 //! size, so its fraction of the response is `noise` / level. The temperature is measured with
 //! white error `temperature_noise`.
@@ -57,6 +60,16 @@ pub struct Campaign {
     pub noise: f64,
     /// The day the change starts, the mode it lowers (0-based) and the relative change.
     pub change: Option<(f64, usize, f64)>,
+    /// Frost: below the first temperature (°C, the structure's), each frequency changes by
+    /// the second value (relative, per °C) times the degrees below it — negative makes it
+    /// stiffer as it freezes, as a bridge's asphalt and soil do (default none: 0 per °C).
+    pub frost: (f64, f64),
+    /// Relative frequency change per unit of ln(level): amplitude dependence (negative:
+    /// softer when shaken harder; default 0).
+    pub amplitude_coefficient: f64,
+    /// A machine: its frequency (Hz), its amplitude (of the response's RMS at level 1) and
+    /// the share of records in which it runs (default none).
+    pub harmonic: Option<(f64, f64, f64)>,
     /// The campaign's seed (record i uses seed + i).
     pub seed: u64,
 }
@@ -83,6 +96,9 @@ impl Default for Campaign {
             level_spread: 0.5,
             noise: 0.05,
             change: Some((45.0, 1, -0.005)),
+            frost: (0.0, 0.0),
+            amplitude_coefficient: 0.0,
+            harmonic: None,
             seed: 700_000,
         }
     }
@@ -180,8 +196,10 @@ impl Campaign {
                 // effect's campaign.
                 let independent = normal.sample(&mut rng);
                 let eta = correlated.as_ref().map_or(independent, |c| c[j]);
+                let (freezing, per_degree) = self.frost;
                 let mut f = f
                     * (1.0 + self.temperature_coefficient * (structure - t0))
+                    * (1.0 + per_degree * (structure - freezing).min(0.0))
                     * (1.0 + self.unexplained * eta);
                 if let Some((day, mode, change)) = self.change
                     && t >= day
@@ -193,6 +211,11 @@ impl Campaign {
             })
             .collect();
         let level = (self.level_spread * normal.sample(&mut rng)).exp();
+        // Drawn after the frequencies, so that the draws are those of a campaign without it.
+        let frequencies: Vec<f64> = frequencies
+            .iter()
+            .map(|f| f * (1.0 + self.amplitude_coefficient * level.ln()))
+            .collect();
         let measured = temp + self.temperature_noise * normal.sample(&mut rng);
         CampaignState {
             time_s: t * 86400.0,
@@ -200,6 +223,13 @@ impl Campaign {
             frequencies,
             level,
         }
+    }
+
+    /// Whether the machine runs during record `i` (a share `share` of the records, drawn
+    /// from the record's own seed).
+    pub fn machine_runs(&self, i: usize, share: f64) -> bool {
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64((self.seed + i as u64) ^ 0x4a41);
+        rand::RngExt::random::<f64>(&mut rng) < share
     }
 
     /// Record `i`.
@@ -227,10 +257,23 @@ impl Campaign {
             .map(|(&f, &(_, z))| (f, z))
             .collect();
         let n = (self.seconds * self.fs).round() as usize;
-        let channels = ModalRecord::new(self.fs, &modes)
+        let mut channels = ModalRecord::new(self.fs, &modes)
             .with_gains(gains)
             .with_noise(self.noise / level)
             .generate(n, self.seed + i as u64);
+        if let Some((f, amplitude, share)) = self.harmonic
+            && self.machine_runs(i, share)
+        {
+            let w = 2.0 * std::f64::consts::PI * f / self.fs;
+            for (c, y) in channels.iter_mut().enumerate() {
+                // The sinusoid's amplitude: `amplitude` times the channel's response RMS at
+                // level 1 (its RMS in this record over the record's level).
+                let rms = (y.iter().map(|v| v * v).sum::<f64>() / n as f64).sqrt() / level;
+                for (t, v) in y.iter_mut().enumerate() {
+                    *v += amplitude * rms * (w * t as f64 + 0.7 * c as f64).sin();
+                }
+            }
+        }
         CampaignRecord {
             time_s: state.time_s,
             temperature: state.temperature,

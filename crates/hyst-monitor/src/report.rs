@@ -127,6 +127,18 @@ impl fmt::Display for TrackReport {
             records.len(),
             self.skipped.len()
         )?;
+        if !self.covariate_names.is_empty() {
+            writeln!(
+                f,
+                "covariates: {}{}",
+                self.covariate_names.join(", "),
+                if self.level_covariate {
+                    " (log_rms: ln of each record's RMS response, its excitation level)"
+                } else {
+                    ""
+                }
+            )?;
+        }
         for (j, m) in self.reference.iter().enumerate() {
             self.fmt_mode(f, j, m)?;
         }

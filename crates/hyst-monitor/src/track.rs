@@ -39,6 +39,10 @@ pub struct Identified {
     /// the campaign's others.
     #[cfg_attr(feature = "serde", serde(default))]
     pub samples: usize,
+    /// The record's RMS response: the root of its channels' mean variance (0 when not
+    /// known).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub rms: f64,
     /// The record's output correlations, for the subspace damage test
     /// ([`crate::subspace`]).
     #[cfg_attr(feature = "serde", serde(default))]
@@ -58,21 +62,40 @@ pub struct Harmonic {
 
 /// The modes of one record, identified by SSI-COV and refined as `hyst ssi` does, once the
 /// record has passed [`screen`](crate::screen::screen) (no value that is not a number, no
-/// stuck or clipped channel); the poles [`covssi::harmonic`] takes for harmonics set apart.
+/// stuck or clipped channel); a machine's steady spectral lines subtracted first and the
+/// poles [`covssi::harmonic`] takes for harmonics set apart, both named in `harmonics`.
 pub fn identify(
     channels: &[&[f64]],
     fs: f64,
     opts: &covssi::AnalysisOptions,
 ) -> Result<Identified, MonitorError> {
     crate::screen::screen(channels)?;
-    let analysis = covssi::analyze(channels, fs, opts)?;
-    let mut modes = reported_modes(&analysis);
+    // A machine's steady lines taken out before the analysis: left in, a line bends the
+    // refinement's fit into spurious poles beside the modes.
     let mut harmonics = Vec::new();
+    let lines = covssi::harmonic::HarmonicTest::new(channels, fs).harmonic_lines();
+    let cleaned: Option<Vec<Vec<f64>>> = (!lines.is_empty()).then(|| {
+        let mut data: Vec<Vec<f64>> = channels.iter().map(|c| c.to_vec()).collect();
+        for &(f, kurtosis) in &lines {
+            let frequency_hz = covssi::harmonic::subtract_sinusoid(&mut data, fs, f);
+            harmonics.push(Harmonic {
+                frequency_hz,
+                kurtosis,
+            });
+        }
+        data
+    });
+    let views: Vec<&[f64]> = match &cleaned {
+        Some(data) => data.iter().map(|c| c.as_slice()).collect(),
+        None => channels.to_vec(),
+    };
+    let analysis = covssi::analyze(&views, fs, opts)?;
+    let mut modes = reported_modes(&analysis);
     if modes
         .iter()
         .any(|m| m.damping_ratio < covssi::harmonic::MAX_HARMONIC_DAMPING)
     {
-        let test = covssi::harmonic::HarmonicTest::new(channels, fs);
+        let test = covssi::harmonic::HarmonicTest::new(&views, fs);
         modes.retain(
             |m| match test.is_harmonic(m.frequency_hz, m.damping_ratio) {
                 Some(kurtosis) => {
@@ -91,11 +114,22 @@ pub fn identify(
         misfit: analysis.refined.as_ref().map(|r| r.misfit),
         harmonics,
         samples: channels.first().map_or(0, |c| c.len()),
+        rms: rms(&views),
         correlations: Some(crate::subspace::Correlations::of(
-            channels,
-            crate::subspace::lags_kept(channels.len()),
+            &views,
+            crate::subspace::lags_kept(views.len()),
         )),
     })
+}
+
+/// The root of the channels' mean variance.
+fn rms(channels: &[&[f64]]) -> f64 {
+    let var = |c: &[f64]| {
+        let n = c.len().max(1) as f64;
+        let mean = c.iter().sum::<f64>() / n;
+        c.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n
+    };
+    (channels.iter().map(|c| var(c)).sum::<f64>() / channels.len().max(1) as f64).sqrt()
 }
 
 /// The modes an analysis reports (the refined ones when the refinement holds, else SSI's),
@@ -196,8 +230,9 @@ pub struct TrackOptions {
     /// The first this many records train the baselines (default 336: two weeks of hourly
     /// records).
     pub training: usize,
-    /// Without a reference given, it is the modes of the record with the most modes among
-    /// the first this many (default 24).
+    /// Without a reference given, it is the modes the first this many records agree on
+    /// (default 24): the candidate record whose modes the others hold most often, each of
+    /// its modes kept when at least half the others hold it.
     pub reference_pool: usize,
     /// The chart of the standardized residuals.
     pub chart: Cusum,
@@ -209,6 +244,13 @@ pub struct TrackOptions {
     /// through a first-order lag, a breakpoint; [`crate::environment`]; from 20 training
     /// records; default), rather than regress on the covariates as they are.
     pub environment: bool,
+    /// Add each record's excitation level as a covariate, after the given ones: ln of its
+    /// RMS response (the root of the channels' mean variance, in the record's units), named
+    /// `log_rms` (default off). Real frequencies drift with amplitude (friction, cracks
+    /// opening, the hysteresis hyst identifies); the environmental model then regresses on
+    /// it as on the temperature.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub level_covariate: bool,
 }
 
 impl Default for TrackOptions {
@@ -220,6 +262,7 @@ impl Default for TrackOptions {
             chart: Cusum::default(),
             whiten: true,
             environment: true,
+            level_covariate: false,
         }
     }
 }
@@ -239,6 +282,17 @@ impl TrackOptions {
         opts.whiten = whiten;
         opts.environment = environment;
         opts
+    }
+}
+
+impl TrackReport {
+    /// Name the covariates the records were given (in their order); the excitation level,
+    /// when [`track`] added it, keeps its name `log_rms` after them.
+    pub fn name_covariates(&mut self, names: Vec<String>) {
+        self.covariate_names = names;
+        if self.level_covariate {
+            self.covariate_names.push("log_rms".into());
+        }
     }
 }
 
@@ -337,6 +391,9 @@ pub struct TrackReport {
     /// set: [`track`] leaves it empty, and the text then numbers them).
     #[cfg_attr(feature = "serde", serde(default))]
     pub covariate_names: Vec<String>,
+    /// The excitation level is the last covariate (`log_rms`, added by [`track`]).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub level_covariate: bool,
     /// The subspace damage test over the same records ([`crate::subspace`]), when the
     /// records carry their correlations.
     #[cfg_attr(feature = "serde", serde(default))]
@@ -344,6 +401,50 @@ pub struct TrackReport {
     /// Why the subspace test could not be run, when it could not.
     #[cfg_attr(feature = "serde", serde(default))]
     pub subspace_error: Option<String>,
+}
+
+/// The reference the first records agree on: among the first `opts.reference_pool` records
+/// that gave modes, each candidate's modes matched to every other's; a mode is confirmed
+/// when at least half the others hold it; the candidate whose confirmed modes the others
+/// hold most often (in all) gives them. A spurious pole of one record, or one mode held
+/// twice (a mode moved by frost between two records' worth of frequency), is not confirmed,
+/// and so never tracked as a mode of its own. With one record, its modes.
+fn consensus_reference(records: &[RecordModes], opts: &TrackOptions) -> Vec<ModeEstimate> {
+    let pool: Vec<&Identified> = records
+        .iter()
+        .take(opts.reference_pool.max(1))
+        .filter_map(|r| r.outcome.as_ref().ok())
+        .filter(|id| !id.modes.is_empty())
+        .collect();
+    if pool.len() < 2 {
+        return pool.first().map(|id| id.modes.clone()).unwrap_or_default();
+    }
+    let others = (pool.len() - 1) as f64;
+    let mut best: Option<(usize, Vec<ModeEstimate>)> = None;
+    for (c, candidate) in pool.iter().enumerate() {
+        let mut held = vec![0usize; candidate.modes.len()];
+        for (o, other) in pool.iter().enumerate() {
+            if o == c {
+                continue;
+            }
+            let a = match_modes(&candidate.modes, &other.modes, &opts.matching);
+            for (j, m) in a.matched.iter().enumerate() {
+                held[j] += usize::from(m.is_some());
+            }
+        }
+        let confirmed: Vec<usize> = (0..held.len())
+            .filter(|&j| held[j] as f64 >= 0.5 * others)
+            .collect();
+        let score: usize = confirmed.iter().map(|&j| held[j]).sum();
+        if best.as_ref().is_none_or(|(b, _)| score > *b) {
+            let modes = confirmed
+                .iter()
+                .map(|&j| candidate.modes[j].clone())
+                .collect();
+            best = Some((score, modes));
+        }
+    }
+    best.map(|(_, m)| m).unwrap_or_default()
 }
 
 /// The subspace test over the `usable` records that carry their correlations (on the
@@ -449,16 +550,7 @@ pub fn track(
 ) -> Result<TrackReport, MonitorError> {
     let reference: Vec<ModeEstimate> = match reference {
         Some(r) => r.to_vec(),
-        None => records
-            .iter()
-            .take(opts.reference_pool.max(1))
-            .filter_map(|r| r.outcome.as_ref().ok())
-            .fold(None::<&Identified>, |best, r| match best {
-                Some(b) if b.modes.len() >= r.modes.len() => Some(b),
-                _ => Some(r),
-            })
-            .map(|r| r.modes.clone())
-            .unwrap_or_default(),
+        None => consensus_reference(records, opts),
     };
     let misfit_limit = covssi::MISFIT_LIMIT;
     let mut rows = Vec::new();
@@ -483,6 +575,10 @@ pub fn track(
             continue;
         }
         usable[i] = true;
+        let mut covariates = r.covariates.clone();
+        if opts.level_covariate {
+            covariates.push(if id.rms > 0.0 { id.rms.ln() } else { f64::NAN });
+        }
         identified += 1;
         harmonics.extend(id.harmonics.iter().map(|h| (i, h.frequency_hz)));
         let a = match_modes(&reference, &id.modes, &opts.matching);
@@ -504,7 +600,7 @@ pub fn track(
                 z: None,
                 innovation: None,
                 alarm: None,
-                covariates: r.covariates.clone(),
+                covariates: covariates.clone(),
                 extrapolated: false,
             });
         }
@@ -520,6 +616,7 @@ pub fn track(
         Ok(chart) => report.subspace = chart,
         Err(e) => report.subspace_error = Some(e.to_string()),
     }
+    report.level_covariate = opts.level_covariate;
     report.skipped = skipped;
     report.harmonics = harmonics;
     report.new_modes = new_modes;
@@ -589,6 +686,7 @@ pub(crate) fn chart_modes(
         covariate_names: Vec::new(),
         subspace: None,
         subspace_error: None,
+        level_covariate: false,
     }
 }
 

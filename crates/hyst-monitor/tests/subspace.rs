@@ -5,17 +5,11 @@
 //! after it measured over fresh campaigns (`HYST_CAMPAIGN_SEED` moves them; `--nocapture`
 //! prints each).
 
-use hyst_monitor::campaign::Campaign;
+mod common;
+
 use hyst_monitor::subspace::{hankel, subspace_chart};
 use hyst_monitor::{Cusum, RecordModes, Side, TrackOptions, identify, track};
 use rayon::prelude::*;
-
-fn from_env(name: &str, default: u64) -> u64 {
-    std::env::var(name)
-        .ok()
-        .and_then(|s| s.parse::<u64>().ok())
-        .unwrap_or(default)
-}
 
 /// Twelve days of records every two hours (`HYST_CAMPAIGN_DAYS` more), the first half
 /// training, mode 2 (index 1) lowered by 1 % from three quarters on: the modal chart (its baseline regressed on the temperature)
@@ -26,19 +20,12 @@ fn from_env(name: &str, default: u64) -> u64 {
 /// or none, printed beside the modal chart's.
 #[test]
 fn subspace_test_beside_the_modal_chart() {
-    let first = from_env("HYST_CAMPAIGN_SEED", 9_920_001);
-    for seed in first..first + from_env("HYST_CAMPAIGNS", 1) {
-        let mut c = Campaign::default();
-        c.days = from_env("HYST_CAMPAIGN_DAYS", 12) as usize;
-        c.per_day = 12;
-        c.seed = seed;
+    for mut c in common::campaigns(9_920_001, 12) {
+        let seed = c.seed;
         let change_day = (0.75 * c.days as f64).round();
         c.change = Some((change_day, 1, -0.01));
         let training = c.days / 2 * c.per_day;
-        let opts = covssi::AnalysisOptions::default().with_ssi(covssi::SsiOptions {
-            block_rows: covssi::BlockRows::Seconds(3.0),
-            ..covssi::SsiOptions::default()
-        });
+        let opts = common::analysis();
         let (records, hankels): (Vec<RecordModes>, Vec<_>) = (0..c.len())
             .into_par_iter()
             .map(|i| {

@@ -84,7 +84,8 @@ pub(crate) fn identify_record(
 /// Track records identified apart (each a `RecordModes` JSON document, in time order), as
 /// `hyst.track` tracks the records it identifies.
 #[pyfunction]
-#[pyo3(signature = (records, *, covariate_names, training, whiten, reference, environment_model))]
+#[pyo3(signature = (records, *, covariate_names, training, whiten, reference, environment_model, level_covariate=false))]
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn track_identified(
     py: Python<'_>,
     records: Vec<String>,
@@ -93,6 +94,7 @@ pub(crate) fn track_identified(
     whiten: bool,
     reference: Option<&str>,
     environment_model: bool,
+    level_covariate: bool,
 ) -> PyResult<Report> {
     let records = records
         .iter()
@@ -102,12 +104,13 @@ pub(crate) fn track_identified(
                 .map_err(|e| value_error(format!("record {i}: {e}")))
         })
         .collect::<PyResult<Vec<_>>>()?;
-    crate::monitor::Campaign::new(
+    let mut campaign = crate::monitor::Campaign::new(
         covariate_names,
         training,
         whiten,
         reference,
         environment_model,
-    )?
-    .track(py, &records)
+    )?;
+    campaign.level_covariate = level_covariate;
+    campaign.track(py, &records)
 }

@@ -30,14 +30,14 @@ pub(crate) fn track_estimates(
     let mut report = py
         .detach(|| hyst::monitor::track_estimates(&records, &table.modes, &opts))
         .map_err(value_error)?;
-    report.covariate_names = covariates.1;
+    report.name_covariates(covariates.1);
     Report::of(&estimates.display().to_string(), report)
 }
 
 /// Track the modes of `records` (each samples × channels); see the Python wrapper
 /// `hyst.track`.
 #[pyfunction]
-#[pyo3(signature = (records, fs, *, times, covariates, covariate_names, training, settings, whiten, reference, environment_model=true, names=None))]
+#[pyo3(signature = (records, fs, *, times, covariates, covariate_names, training, settings, whiten, reference, environment_model=true, names=None, level_covariate=false))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn track(
     py: Python<'_>,
@@ -52,6 +52,7 @@ pub(crate) fn track(
     reference: Option<&str>,
     environment_model: bool,
     names: Option<Vec<String>>,
+    level_covariate: bool,
 ) -> PyResult<Report> {
     let n = records.len();
     if times.len() != n || covariates.len() != n {
@@ -100,13 +101,14 @@ pub(crate) fn track(
     };
     let (analysis, _) = hyst::monitor::campaign_analysis(&analysis, n, &resolve);
     // A bad reference said before the records are identified.
-    let campaign = Campaign::new(
+    let mut campaign = Campaign::new(
         covariate_names,
         training,
         whiten,
         reference,
         environment_model,
     )?;
+    campaign.level_covariate = level_covariate;
     // Each record identified moves the terminal's progress line (as `hyst track`'s bar).
     let done = std::sync::atomic::AtomicUsize::new(0);
     let finished = |_: &hyst::monitor::RecordModes| {
@@ -128,6 +130,8 @@ pub(crate) struct Campaign {
     whiten: bool,
     reference: Option<Vec<hyst::monitor::ModeEstimate>>,
     environment_model: bool,
+    /// The excitation level as a covariate.
+    pub(crate) level_covariate: bool,
 }
 
 impl Campaign {
@@ -150,22 +154,24 @@ impl Campaign {
             whiten,
             reference,
             environment_model,
+            level_covariate: false,
         })
     }
 
     /// Track `records` (identified, in time order): the report `hyst.track` returns.
     pub(crate) fn track(self, py: Python<'_>, records: &[RecordModes]) -> PyResult<Report> {
-        let opts = TrackOptions::for_campaign(
+        let mut opts = TrackOptions::for_campaign(
             records.len(),
             self.training,
             self.whiten,
             self.environment_model,
         );
+        opts.level_covariate = self.level_covariate;
         let reference = self.reference.as_deref();
         let mut report = py
             .detach(|| hyst::monitor::track(records, reference, &opts))
             .map_err(value_error)?;
-        report.covariate_names = self.covariate_names;
+        report.name_covariates(self.covariate_names);
         Report::of("records", report)
     }
 }

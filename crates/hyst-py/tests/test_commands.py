@@ -262,6 +262,27 @@ def test_track_on_a_local_dask_cluster_gives_the_commands_report(data_dir, hyst_
         hyst.track([y[:4000]], 20.0, client=client)
 
 
+def test_track_with_the_level_covariate_gives_the_commands_report(data_dir, hyst_bin, tmp_path):
+    """`hyst track --level-covariate` and `hyst.track(level_covariate=True)` on the same ten
+    windows: the same report, its covariate named log_rms; each record's level is the root
+    of its channels' mean variance, as numpy computes it."""
+    from test_ssi import read_record
+
+    y, _ = read_record(data_dir / "oma" / "data_3dof.csv")
+    out = tmp_path / "track"
+    run(hyst_bin, "track", "--input", data_dir / "oma" / "data_3dof.csv", "--fs", 20,
+        "--window", 300, "--columns", "y1,y2,y3", "--level-covariate", "--out", out)
+    windows = [y[i * 6000:(i + 1) * 6000] for i in range(10)]
+    report = hyst.track(windows, 20.0, times=[300.0 * i for i in range(10)],
+                        level_covariate=True)
+    doc = comparable(report.to_dict())
+    assert doc == document(out / "report.json")
+    assert doc["covariate_names"] == ["log_rms"]
+    for row in doc["rows"]:
+        w = windows[int(row["name"])]
+        assert abs(row["covariates"][0] - np.log(np.sqrt(np.mean(np.var(w, axis=0))))) < 1e-9
+
+
 def test_track_takes_the_commands_reference_and_named_covariates(data_dir, hyst_bin, tmp_path):
     """`hyst track --reference ref.json --covariates cov.csv` and `hyst.track(reference=...,
     covariates={name: values})` on the same windows: the same report, the reference given as

@@ -602,7 +602,7 @@ def levels(records, fs, mass, *, by_simulation=False, data_periodic=False, fit_e
 def track(records, fs, *, times=None, covariates=None, training=None, whiten=True,
           environment_model=True, reference=None, block_rows=None, lag_seconds=None, lag_periods=None, decimate=None,
           max_order=None, order_step=1, references=None, df=None, dzeta=None, dmac=None,
-          dreal=None, refine=True, joint=True, client=None):
+          dreal=None, refine=True, joint=True, client=None, level_covariate=False):
     """Track the modes of many records of one structure (``hyst track``).
 
     Each record is identified as :func:`ssi` does (in parallel), its modes matched to a
@@ -646,6 +646,10 @@ def track(records, fs, *, times=None, covariates=None, training=None, whiten=Tru
         The reference modes (``hyst track --reference``): a ``hyst ssi --json`` document, or
         an :func:`ssi` result; default the record with the most modes among the first 24.
 
+    level_covariate : bool
+        Add each record's excitation level as a covariate after the given ones
+        (``log_rms``: ln of its RMS response, in the record's units; ``hyst track
+        --level-covariate``), for frequencies that drift with amplitude.
     client : dask.distributed.Client, or "local", optional
         Identify the records on a Dask cluster: each worker reads its records' files
         itself (only the paths travel; ``records`` must be paths the workers can read) and
@@ -667,7 +671,7 @@ def track(records, fs, *, times=None, covariates=None, training=None, whiten=Tru
         return _track_on_dask(
             client, records, fs, times=times, covariates=covariates, training=training,
             whiten=whiten, environment_model=environment_model, reference=reference,
-            settings=_settings(
+            level_covariate=level_covariate, settings=_settings(
                 block_rows=block_rows, lag_seconds=lag_seconds, lag_periods=lag_periods,
                 decimate=decimate, max_order=max_order, order_step=order_step,
                 references=references, df=df, dzeta=dzeta, dmac=dmac, dreal=dreal,
@@ -715,6 +719,7 @@ def track(records, fs, *, times=None, covariates=None, training=None, whiten=Tru
         ),
         whiten=bool(whiten),
         environment_model=bool(environment_model),
+        level_covariate=bool(level_covariate),
     )
 
 
@@ -787,7 +792,7 @@ def _identify_on_worker(path, fs, time, covariates, name, analysis):
 
 
 def _track_on_dask(client, records, fs, *, times, covariates, training, whiten,
-                   environment_model, reference, settings):
+                   environment_model, reference, level_covariate, settings):
     """:func:`track` with the identification on a Dask cluster (``client``)."""
     import os
 
@@ -838,6 +843,7 @@ def _track_on_dask(client, records, fs, *, times, covariates, training, whiten,
         identified, covariate_names=cov_names,
         training=None if training is None else int(training), whiten=bool(whiten),
         reference=ref, environment_model=bool(environment_model),
+        level_covariate=bool(level_covariate),
     )
 
 

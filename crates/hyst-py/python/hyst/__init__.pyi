@@ -135,6 +135,7 @@ def track(
     refine: bool = ...,
     joint: bool = ...,
     client: Optional[Any] = ...,
+    level_covariate: bool = ...,
 ) -> Report: ...
 
 def track_estimates(
