@@ -3,11 +3,13 @@
 //! a lumped heat capacity does, $\tau_j\dot{\tilde x}_j + \tilde x_j = x_j$) and, where
 //! the data call for it, with its slope changing below a breakpoint (frozen soil and asphalt
 //! stiffen a bridge steeply below 0 °C):
-//! $$f = \beta_0 + \sum_j \big(\beta_j\,\tilde x_j(t) + \gamma_j \max(0,\ c_j - \tilde x_j(t))\big).$$
+//! $$f = \beta_0 + \sum_j \big(\beta_j\,\tilde x_j(t) + \gamma_j \max(0,\ c_j - \tilde x_j(t))\big),$$
+//! or, for a response that bends smoothly rather than at a point, $\gamma_j(\tilde x_j - m_j)^2$
+//! about the training mean $m_j$ in place of the hinge.
 //! Each covariate's time constant $\tau_j$ (whole hours up to [`MAX_LAG_HOURS`], and no more
-//! than a quarter of the training span) and breakpoint $c_j$ (none, or one of the training
-//! values' deciles) are chosen by BIC, $n\ln(\mathrm{RSS}/n) + p\ln n$, counting a lag and
-//! a breakpoint as a parameter each, so that the linear model stands unless the data pay for
+//! than a quarter of the training span) and shape (linear; a breakpoint $c_j$ at one of the
+//! training values' deciles; or the smooth curvature) are chosen by BIC, $n\ln(\mathrm{RSS}/n) + p\ln n$, counting a lag and
+//! a breakpoint or a curvature as a parameter each, so that the linear model stands unless the data pay for
 //! more. The lag runs over the covariate's series (every record that has it, in time order),
 //! exactly for a covariate linear between records:
 //! $\tilde x_i = E\tilde x_{i-1} + (1 - E)x_{i-1} + (x_i - x_{i-1})\big(1 - \tfrac{\tau}{\Delta}(1 - E)\big)$,
@@ -28,6 +30,18 @@ pub struct Term {
     pub lag_s: f64,
     /// The breakpoint below which its slope changes, if any (the covariate's unit).
     pub breakpoint: Option<f64>,
+    /// A smooth curvature instead: the square of the (lagged) covariate's distance from this
+    /// centre (its training mean) as a further regressor, if any.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub quadratic_about: Option<f64>,
+}
+
+/// The shape of a term beyond its slope.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Shape {
+    Linear,
+    Hinge(f64),
+    Quadratic(f64),
 }
 
 /// The environmental model of one mode, and what it gained over the plain linear one.
@@ -124,6 +138,7 @@ impl Environment {
                     covariate,
                     lag_s: 0.0,
                     breakpoint: None,
+                    quadratic_about: None,
                 })
                 .collect(),
             bic_gain: 0.0,
@@ -140,6 +155,9 @@ impl Environment {
             v.push(value);
             if let Some(c) = term.breakpoint {
                 v.push((c - value).max(0.0));
+            }
+            if let Some(m) = term.quadratic_about {
+                v.push((value - m) * (value - m));
             }
         }
         v
@@ -168,21 +186,34 @@ impl Environment {
         let mut best = (linear, base_bic);
         for j in 0..q {
             for &lag in &lags {
-                let term = |breakpoint| Term {
+                let term = |shape| Term {
                     covariate: j,
                     lag_s: lag,
-                    breakpoint,
+                    breakpoint: match shape {
+                        Shape::Hinge(c) => Some(c),
+                        _ => None,
+                    },
+                    quadratic_about: match shape {
+                        Shape::Quadratic(m) => Some(m),
+                        _ => None,
+                    },
                 };
                 let values: Vec<f64> = train
                     .iter()
-                    .map(|r| term(None).value(series, r.0, &r.1))
+                    .map(|r| term(Shape::Linear).value(series, r.0, &r.1))
                     .collect();
-                let mut options: Vec<Option<f64>> = vec![None];
-                options.extend(deciles(&values).into_iter().map(Some));
-                for c in options {
+                let mut options = vec![Shape::Linear];
+                options.extend(deciles(&values).into_iter().map(Shape::Hinge));
+                let finite: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
+                if !finite.is_empty() {
+                    options.push(Shape::Quadratic(
+                        finite.iter().sum::<f64>() / finite.len() as f64,
+                    ));
+                }
+                for shape in options {
                     let mut e = best.0.clone();
-                    e.terms[j] = term(c);
-                    let extra = usize::from(lag > 0.0) + usize::from(c.is_some());
+                    e.terms[j] = term(shape);
+                    let extra = usize::from(lag > 0.0) + usize::from(shape != Shape::Linear);
                     let b = bic(&e, series, train) + extra as f64 * (train.len() as f64).ln();
                     if b < best.1 {
                         best = (e, b);
@@ -313,5 +344,36 @@ mod tests {
             .collect();
         let e = Environment::choose(&series, &plain);
         assert_eq!(e.terms, Environment::linear(1).terms, "{e:?}");
+    }
+
+    /// A frequency that bends smoothly with the temperature (a parabola, no lag) takes the
+    /// curvature, centred on the training mean, not a breakpoint, and beats the linear
+    /// model; the frost case above keeps its breakpoint.
+    #[test]
+    fn a_smooth_bend_takes_the_curvature() {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(6);
+        let noise = Normal::new(0.0, 0.001).unwrap();
+        let records: Vec<(f64, Vec<f64>)> = (0..336)
+            .map(|h| {
+                let day = h as f64 / 24.0;
+                let x = 10.0 + 8.0 * (2.0 * std::f64::consts::PI * day / 5.0).sin();
+                (3600.0 * h as f64, vec![x])
+            })
+            .collect();
+        let series = Series::new(&records);
+        let train: Vec<(f64, Vec<f64>, f64)> = records
+            .iter()
+            .map(|(t, x)| {
+                let f = 2.0 - 0.004 * x[0] + 0.0004 * (x[0] - 10.0).powi(2);
+                (*t, x.clone(), f + noise.sample(&mut rng))
+            })
+            .collect();
+        let e = Environment::choose(&series, &train);
+        let t = e.terms[0];
+        assert!(
+            t.breakpoint.is_none() && t.quadratic_about.is_some_and(|m| (m - 10.0).abs() < 0.5),
+            "{e:?}"
+        );
+        assert!(t.lag_s == 0.0 && e.bic_gain < -50.0, "{e:?}");
     }
 }

@@ -84,7 +84,60 @@ impl TrackReport {
         Ok(())
     }
 
-    /// The names of mode `j`'s `count` regressors: each covariate, lagged, and its hinge.
+    /// The harmonics named, one line for all: each line's frequency and its records.
+    fn fmt_harmonics(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if !self.harmonics.is_empty() {
+            let mut lines: Vec<(f64, usize)> = Vec::new();
+            for &(_, hz) in &self.harmonics {
+                // One line per harmonic: its estimates within 0.5 % of each other.
+                match lines.iter_mut().find(|(g, _)| (hz - *g).abs() <= 0.005 * g) {
+                    Some(l) => l.1 += 1,
+                    None => lines.push((hz, 1)),
+                }
+            }
+            lines.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let said: Vec<String> = lines
+                .iter()
+                .map(|(hz, n)| format!("{hz:.4} Hz in {n} record(s)"))
+                .collect();
+            writeln!(
+                f,
+                "harmonics (steady spectral lines: a machine's, not the structure's; not tracked): {}",
+                said.join(", ")
+            )?;
+        }
+        Ok(())
+    }
+
+    /// The subspace test's line, or why it was not run.
+    fn fmt_subspace(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if let Some(c) = &self.subspace {
+            let after = c.t2.len().saturating_sub(c.training);
+            writeln!(
+                f,
+                "subspace damage test (no mode picking; a residual of {} entries, trained on {} records): {} of {} later records above its threshold T² {:.1} at {} % per record (normal theory's {:.1}); its CUSUM {}",
+                c.dof,
+                c.trained_on,
+                c.above_threshold.len(),
+                after,
+                c.threshold,
+                100.0 * c.alpha,
+                c.nominal_threshold,
+                if c.alarms.is_empty() {
+                    "raised no alarm".to_string()
+                } else {
+                    format!("alarmed at record(s) {:?}", c.alarms)
+                }
+            )?;
+        }
+        if let Some(e) = &self.subspace_error {
+            writeln!(f, "subspace damage test not run: {e}")?;
+        }
+        Ok(())
+    }
+
+    /// The names of mode `j`'s `count` regressors: each covariate, lagged, and its hinge or
+    /// curvature.
     fn regressor_names(&self, j: usize, count: usize) -> Vec<String> {
         let name = |c: usize| {
             self.covariate_names
@@ -101,11 +154,12 @@ impl TrackReport {
                     } else {
                         name(t.covariate)
                     };
+                    names.push(lagged.clone());
                     if let Some(c) = t.breakpoint {
-                        names.push(lagged.clone());
                         names.push(format!("{lagged} below {c:.4}"));
-                    } else {
-                        names.push(lagged);
+                    }
+                    if let Some(m) = t.quadratic_about {
+                        names.push(format!("({lagged} − {m:.4})²"));
                     }
                 }
             }
@@ -159,26 +213,7 @@ impl fmt::Display for TrackReport {
                 )?;
             }
         }
-        if !self.harmonics.is_empty() {
-            let mut lines: Vec<(f64, usize)> = Vec::new();
-            for &(_, f) in &self.harmonics {
-                // One line per harmonic: its estimates within 0.5 % of each other.
-                match lines.iter_mut().find(|(g, _)| (f - *g).abs() <= 0.005 * g) {
-                    Some(l) => l.1 += 1,
-                    None => lines.push((f, 1)),
-                }
-            }
-            lines.sort_by(|a, b| a.0.total_cmp(&b.0));
-            let said: Vec<String> = lines
-                .iter()
-                .map(|(f, n)| format!("{f:.4} Hz in {n} record(s)"))
-                .collect();
-            writeln!(
-                f,
-                "harmonics (steady spectral lines: a machine's, not the structure's; not tracked): {}",
-                said.join(", ")
-            )?;
-        }
+        self.fmt_harmonics(f)?;
         if !self.new_modes.is_empty() {
             writeln!(
                 f,
@@ -191,28 +226,7 @@ impl fmt::Display for TrackReport {
                     .len()
             )?;
         }
-        if let Some(c) = &self.subspace {
-            let after = c.t2.len().saturating_sub(c.training);
-            writeln!(
-                f,
-                "subspace damage test (no mode picking; a residual of {} entries, trained on {} records): {} of {} later records above its threshold T² {:.1} at {} % per record (normal theory's {:.1}); its CUSUM {}",
-                c.dof,
-                c.trained_on,
-                c.above_threshold.len(),
-                after,
-                c.threshold,
-                100.0 * c.alpha,
-                c.nominal_threshold,
-                if c.alarms.is_empty() {
-                    "raised no alarm".to_string()
-                } else {
-                    format!("alarmed at record(s) {:?}", c.alarms)
-                }
-            )?;
-        }
-        if let Some(e) = &self.subspace_error {
-            writeln!(f, "subspace damage test not run: {e}")?;
-        }
+        self.fmt_subspace(f)?;
         writeln!(
             f,
             "CUSUM of the standardized residuals (of their filter's innovations where a slow effect was found): one false alarm per {:.3e} records per mode when nothing changes and the values charted are independent",
