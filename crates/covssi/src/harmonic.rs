@@ -2,7 +2,7 @@
 //! blade pass — that the response carries: both are sharp spectral lines, but a mode driven
 //! by random loads is a narrowband Gaussian process, whose amplitude varies from cycle to
 //! cycle, while a harmonic's amplitude is steady. The test is the kurtosis
-//! κ = E[x⁴] / E[x²]² of the response band-passed around the pole (Brincker, Andersen and
+//! κ = E(x⁴) / E(x²)² of the response band-passed around the pole (Brincker, Andersen and
 //! Møller, 2000): 3 for a Gaussian process, 1.5 for a sinusoid.
 //!
 //! - **The band**: f ± max(3 ζ f, 100 / T), T the record's length: wide enough to hold the
@@ -23,7 +23,7 @@
 //! The band is cut by zeroing the record's discrete Fourier transform outside it (an ideal
 //! filter, circular over the record: its edges' wrap-around is one band-width's time in a
 //! record a hundred of those long). The kurtosis is taken of the band's envelope rather than
-//! of its samples, κ = 1.5 E|z|⁴ / (E|z|²)² with z = x + i H[x] the analytic signal — the
+//! of its samples, κ = 1.5 E|z|⁴ / (E|z|²)² with z = x + i H(x) the analytic signal — the
 //! same for a narrowband process, but a sinusoid's samples follow the arcsine law only when
 //! its frequency is incommensurate with the sampling (at f_s/4 its samples take four values,
 //! and their kurtosis is 1.68 at one phase), while its envelope is constant at any phase.
