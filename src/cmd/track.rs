@@ -476,8 +476,8 @@ fn resolved_analysis(
     fixed
 }
 
-/// The report printed, and written into `--out` (`table.csv`, `table.jsonl`, `report.json`)
-/// and `--svg-dir`.
+/// The report printed, and written into `--out` (`table.csv`, `table.parquet`,
+/// `table.jsonl`, `report.json`) and `--svg-dir`.
 fn write_outputs(
     a: &TrackArgs,
     report: &TrackReport,

@@ -164,11 +164,6 @@ impl CampaignStore {
         })
     }
 
-    /// The store's file.
-    pub fn path(&self) -> &Path {
-        &self.path
-    }
-
     /// The stored result of the record `name` made with `key`, if it succeeded.
     pub fn cached(&self, name: &str, key: &str) -> Option<&RecordModes> {
         self.stored
@@ -177,14 +172,18 @@ impl CampaignStore {
             .map(|(_, r)| r)
     }
 
+    /// The connection, for this thread.
+    fn connection(&self) -> Result<std::sync::MutexGuard<'_, Connection>, IoError> {
+        self.conn.lock().map_err(|_| IoError::Store {
+            path: self.path.clone(),
+            message: "a thread writing it failed".into(),
+        })
+    }
+
     /// Store one record made with `key`, in a transaction of its own (a run killed later
     /// keeps it; one killed during it has not written it).
     pub fn append(&self, key: &str, record: &RecordModes) -> Result<(), IoError> {
-        let conn = self.conn.lock().map_err(|_| IoError::Store {
-            path: self.path.clone(),
-            message: "a thread writing it failed".into(),
-        })?;
-        insert(&conn, key, record).map_err(sql_error(&self.path))
+        insert(&*self.connection()?, key, record).map_err(sql_error(&self.path))
     }
 
     /// End a run in one transaction: the store holds exactly `records`, each made with the
@@ -196,10 +195,7 @@ impl CampaignStore {
         table: &TrackTable,
     ) -> Result<(), IoError> {
         let err = sql_error(&self.path);
-        let mut conn = self.conn.lock().map_err(|_| IoError::Store {
-            path: self.path.clone(),
-            message: "a thread writing it failed".into(),
-        })?;
+        let mut conn = self.connection()?;
         let tx = conn.transaction().map_err(&err)?;
         tx.execute("DELETE FROM records", []).map_err(&err)?;
         for (key, record) in keys.iter().zip(records) {

@@ -114,6 +114,8 @@ pub fn subtract_sinusoid(channels: &mut [Vec<f64>], fs: f64, frequency_hz: f64) 
 /// A record's spectra, kept to test several poles.
 pub struct HarmonicTest {
     spectra: Vec<Vec<Complex<f64>>>,
+    /// The inverse transform of the record's length, planned once for every band.
+    inverse: std::sync::Arc<dyn realfft::ComplexToReal<f64>>,
     n: usize,
     fs: f64,
 }
@@ -135,7 +137,12 @@ impl HarmonicTest {
                 s
             })
             .collect();
-        HarmonicTest { spectra, n, fs }
+        HarmonicTest {
+            spectra,
+            inverse: planner.plan_fft_inverse(n.max(1)),
+            n,
+            fs,
+        }
     }
 
     /// The band-passed kurtosis of the pole at `frequency_hz` with damping ratio
@@ -164,8 +171,7 @@ impl HarmonicTest {
         };
         // The analytic signal z = x + i H[x] of the band: x from the band's bins, its
         // Hilbert transform from the same bins turned by −90°.
-        let mut planner = RealFftPlanner::<f64>::new();
-        let ifft = planner.plan_fft_inverse(self.n);
+        let ifft = &self.inverse;
         let inverse = |turn: Complex<f64>| {
             let mut band = vec![Complex::new(0.0, 0.0); bins];
             for k in lo..=hi {

@@ -173,26 +173,10 @@ impl SubspaceTest {
             h0 += h;
         }
         h0 /= m as f64;
-        // Left null space: the eigenvectors of H₀H₀ᵀ with the smallest eigenvalues.
-        let eig = (&h0 * h0.transpose()).symmetric_eigen();
-        let mut order_of: Vec<usize> = (0..rows).collect();
-        order_of.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
-        let null = DMatrix::from_columns(
-            &order_of[..rows - order]
-                .iter()
-                .map(|&i| eig.eigenvectors.column(i).into_owned())
-                .collect::<Vec<_>>(),
-        );
-        // Column compression: the n leading right singular vectors.
-        let eig = (h0.transpose() * &h0).symmetric_eigen();
-        let mut by_size: Vec<usize> = (0..cols).collect();
-        by_size.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
-        let columns = DMatrix::from_columns(
-            &by_size[..order]
-                .iter()
-                .map(|&i| eig.eigenvectors.column(i).into_owned())
-                .collect::<Vec<_>>(),
-        );
+        // Left null space: the eigenvectors of H₀H₀ᵀ with the smallest eigenvalues; column
+        // compression: those of H₀ᵀH₀ with the largest (the leading right singular vectors).
+        let null = eigenvectors(&h0 * h0.transpose(), rows - order, false);
+        let columns = eigenvectors(h0.transpose() * &h0, order, true);
         let residuals: Vec<DVector<f64>> = hankels
             .iter()
             .map(|h| residual(&null, &columns, h))
@@ -219,9 +203,7 @@ impl SubspaceTest {
         let loo: Vec<f64> = residuals
             .iter()
             .map(|z| {
-                let d = z - &mean;
-                let w = cholesky.l().solve_lower_triangular(&d).unwrap_or(d);
-                let big_d = w.norm_squared();
+                let big_d = mahalanobis(&cholesky, z - &mean);
                 (mf / (mf - 1.0)).powi(2) * (mf - 2.0) / (mf - 1.0) * big_d / (1.0 - c * big_d)
             })
             .collect();
@@ -246,26 +228,52 @@ impl SubspaceTest {
 
     /// A record's T² (from its [`hankel`]).
     pub fn statistic(&self, h: &DMatrix<f64>) -> f64 {
-        let d = residual(&self.null, &self.columns, h) - &self.mean;
-        let w = self.cholesky.l().solve_lower_triangular(&d).unwrap_or(d);
-        w.norm_squared()
+        mahalanobis(
+            &self.cholesky,
+            residual(&self.null, &self.columns, h) - &self.mean,
+        )
+    }
+
+    /// A record's T² as a standard normal score, Φ⁻¹(G(T²)) with G the fitted law: standard
+    /// normal for undamaged records, larger when the structure changed (±8 at most).
+    pub fn score(&self, t2: f64) -> f64 {
+        Normal::standard()
+            .inverse_cdf(self.law.cdf(t2))
+            .clamp(-8.0, 8.0)
     }
 }
 
-impl SubspaceTest {
-    /// A record's T² as a standard normal score, Φ⁻¹(G(T²)) with G the fitted law: standard
-    /// normal for undamaged records, larger when the structure changed (±8 at most).
-    pub fn score(&self, h: &DMatrix<f64>) -> f64 {
-        let p = self.law.cdf(self.statistic(h));
-        Normal::standard().inverse_cdf(p).clamp(-8.0, 8.0)
+/// dᵀΣ⁻¹d, Σ given by its Cholesky factor.
+fn mahalanobis(cholesky: &nalgebra::Cholesky<f64, nalgebra::Dyn>, d: DVector<f64>) -> f64 {
+    cholesky
+        .l()
+        .solve_lower_triangular(&d)
+        .unwrap_or(d)
+        .norm_squared()
+}
+
+/// The `count` eigenvectors of the symmetric `m` with the largest eigenvalues (`largest`),
+/// or the smallest, as columns.
+fn eigenvectors(m: DMatrix<f64>, count: usize, largest: bool) -> DMatrix<f64> {
+    let eig = m.symmetric_eigen();
+    let mut by_size: Vec<usize> = (0..eig.eigenvalues.len()).collect();
+    by_size.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
+    if largest {
+        by_size.reverse();
     }
+    DMatrix::from_columns(
+        &by_size[..count]
+            .iter()
+            .map(|&i| eig.eigenvectors.column(i).into_owned())
+            .collect::<Vec<_>>(),
+    )
 }
 
 /// The subspace test over a campaign, charted as the modes are.
 #[derive(Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct SubspaceChart {
-    /// Each record's time (s; the caller's to set: [`subspace_chart`] leaves it empty).
+    /// Each record's time (s).
     #[cfg_attr(feature = "serde", serde(default))]
     pub time: Vec<f64>,
     /// Each record's T² (NaN for a record without a Hankel matrix).
@@ -292,10 +300,12 @@ pub struct SubspaceChart {
 }
 
 /// The subspace test over `hankels` (each record's, from [`hankel`]; `None` for a record
-/// that has none), trained on the first `training`, for a model of order `order`; its
-/// scores after training charted by `chart`'s upper side (a change makes T² larger).
+/// that has none; recorded at `time`, s), trained on the first `training`, for a model of
+/// order `order`; its scores after training charted by `chart`'s upper side (a change makes
+/// T² larger).
 pub fn subspace_chart(
     hankels: &[Option<DMatrix<f64>>],
+    time: &[f64],
     training: usize,
     order: usize,
     alpha: f64,
@@ -307,9 +317,9 @@ pub fn subspace_chart(
         .iter()
         .map(|h| h.as_ref().map_or(f64::NAN, |h| test.statistic(h)))
         .collect();
-    let score: Vec<f64> = hankels
+    let score: Vec<f64> = t2
         .iter()
-        .map(|h| h.as_ref().map_or(f64::NAN, |h| test.score(h)))
+        .map(|&t| if t.is_nan() { t } else { test.score(t) })
         .collect();
     let later: Vec<f64> = score.iter().skip(training).copied().collect();
     let alarms = chart
@@ -322,7 +332,7 @@ pub fn subspace_chart(
         .filter(|&i| t2[i] > test.threshold)
         .collect();
     Ok(SubspaceChart {
-        time: Vec::new(),
+        time: time.to_vec(),
         t2,
         score,
         dof: test.dof,
@@ -386,7 +396,8 @@ mod tests {
         hankels.extend((0..300).map(|i| Some(record(3.4, level(i + 7), 4_620_000 + i))));
         let undamaged = hankels.len();
         hankels.extend((0..60).map(|i| Some(record(3.4 * 0.98, level(i + 3), 4_630_000 + i))));
-        let c = subspace_chart(&hankels, 120, 4, 0.01, &Cusum::default()).unwrap();
+        let time: Vec<f64> = (0..hankels.len()).map(|i| 3600.0 * i as f64).collect();
+        let c = subspace_chart(&hankels, &time, 120, 4, 0.01, &Cusum::default()).unwrap();
         assert_eq!(c.dof, 16);
         let passed = c.above_threshold.iter().filter(|&&i| i < undamaged).count();
         let nominal = (120..undamaged)

@@ -73,7 +73,8 @@ pub fn identify(
     // A machine's steady lines taken out before the analysis: left in, a line bends the
     // refinement's fit into spurious poles beside the modes.
     let mut harmonics = Vec::new();
-    let lines = covssi::harmonic::HarmonicTest::new(channels, fs).harmonic_lines();
+    let raw = covssi::harmonic::HarmonicTest::new(channels, fs);
+    let lines = raw.harmonic_lines();
     let cleaned: Option<Vec<Vec<f64>>> = (!lines.is_empty()).then(|| {
         let mut data: Vec<Vec<f64>> = channels.iter().map(|c| c.to_vec()).collect();
         for &(f, kurtosis) in &lines {
@@ -95,7 +96,11 @@ pub fn identify(
         .iter()
         .any(|m| m.damping_ratio < covssi::harmonic::MAX_HARMONIC_DAMPING)
     {
-        let test = covssi::harmonic::HarmonicTest::new(&views, fs);
+        // The record's spectra, or the cleaned record's when lines were taken out.
+        let test = match cleaned {
+            Some(_) => covssi::harmonic::HarmonicTest::new(&views, fs),
+            None => raw,
+        };
         modes.retain(
             |m| match test.is_harmonic(m.frequency_hz, m.damping_ratio) {
                 Some(kurtosis) => {
@@ -478,17 +483,16 @@ fn subspace_over(
                 .and_then(|c| c.hankel(blocks))
         })
         .collect();
+    let time: Vec<f64> = records.iter().map(|r| r.time).collect();
     crate::subspace::subspace_chart(
         &hankels,
+        &time,
         opts.training,
         order,
         crate::subspace::ALPHA,
         &opts.chart,
     )
-    .map(|mut c| {
-        c.time = records.iter().map(|r| r.time).collect();
-        Some(c)
-    })
+    .map(Some)
 }
 
 /// What the campaign's records have in common, against which one is unlike the rest: the

@@ -57,7 +57,9 @@ fn subspace_test_beside_the_modal_chart() {
         let modal_delay = (found.time - change) / 3600.0;
         assert!(modal_delay <= 24.0, "seed {seed}: {modal_delay} h");
         let order = 2 * report.reference.len();
-        let chart = subspace_chart(&hankels, training, order, 0.01, &Cusum::default()).unwrap();
+        let time: Vec<f64> = records.iter().map(|r| r.time).collect();
+        let chart =
+            subspace_chart(&hankels, &time, training, order, 0.01, &Cusum::default()).unwrap();
         let undamaged = first_change - training;
         let passed = chart
             .above_threshold

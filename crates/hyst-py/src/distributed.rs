@@ -104,13 +104,13 @@ pub(crate) fn track_identified(
                 .map_err(|e| value_error(format!("record {i}: {e}")))
         })
         .collect::<PyResult<Vec<_>>>()?;
-    let mut campaign = crate::monitor::Campaign::new(
+    crate::monitor::Campaign::new(
         covariate_names,
         training,
         whiten,
         reference,
         environment_model,
-    )?;
-    campaign.level_covariate = level_covariate;
-    campaign.track(py, &records)
+        level_covariate,
+    )?
+    .track(py, &records)
 }

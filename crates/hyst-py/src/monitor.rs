@@ -101,14 +101,14 @@ pub(crate) fn track(
     };
     let (analysis, _) = hyst::monitor::campaign_analysis(&analysis, n, &resolve);
     // A bad reference said before the records are identified.
-    let mut campaign = Campaign::new(
+    let campaign = Campaign::new(
         covariate_names,
         training,
         whiten,
         reference,
         environment_model,
+        level_covariate,
     )?;
-    campaign.level_covariate = level_covariate;
     // Each record identified moves the terminal's progress line (as `hyst track`'s bar).
     let done = std::sync::atomic::AtomicUsize::new(0);
     let finished = |_: &hyst::monitor::RecordModes| {
@@ -131,7 +131,7 @@ pub(crate) struct Campaign {
     reference: Option<Vec<hyst::monitor::ModeEstimate>>,
     environment_model: bool,
     /// The excitation level as a covariate.
-    pub(crate) level_covariate: bool,
+    level_covariate: bool,
 }
 
 impl Campaign {
@@ -143,6 +143,7 @@ impl Campaign {
         whiten: bool,
         reference: Option<&str>,
         environment_model: bool,
+        level_covariate: bool,
     ) -> PyResult<Campaign> {
         let reference = reference
             .map(hyst::report::reference_modes)
@@ -154,7 +155,7 @@ impl Campaign {
             whiten,
             reference,
             environment_model,
-            level_covariate: false,
+            level_covariate,
         })
     }
 

@@ -684,10 +684,7 @@ def track(records, fs, *, times=None, covariates=None, training=None, whiten=Tru
         if isinstance(r, (str, os.PathLike)):
             # A file, read as hyst.read reads it; a Universal File brings its own rate.
             rec = read(r)
-            if fs is None:
-                fs = rec.fs
-            elif rec.fs is not None and abs(rec.fs - float(fs)) > 1e-5 * rec.fs:
-                raise ValueError(f"{os.fspath(r)}: states {rec.fs} Hz, but fs={fs} was given")
+            fs = _rate_of(r, rec, fs)
             names.append(os.path.basename(os.fspath(r)))
             r = rec.data
         else:
@@ -706,8 +703,7 @@ def track(records, fs, *, times=None, covariates=None, training=None, whiten=Tru
     ref = _reference(reference)
     if fs is None:
         raise ValueError("fs is needed: the records do not state their sampling rate")
-    if not (float(fs) > 0.0 and _np.isfinite(float(fs))):
-        raise ValueError(f"fs must be a positive finite rate (Hz), got {fs}")
+    _check_rate(fs)
     return _hyst.track(
         arrays, float(fs), times=t, covariates=x, covariate_names=cov_names, names=names,
         training=None if training is None else int(training), reference=ref,
@@ -759,15 +755,31 @@ def _reference(reference):
                      f"ssi() result, got {type(reference).__name__}")
 
 
+def _check_rate(fs):
+    """Refuse a sampling rate that is not a positive finite number."""
+    if not (float(fs) > 0.0 and _np.isfinite(float(fs))):
+        raise ValueError(f"fs must be a positive finite rate (Hz), got {fs}")
+
+
+def _rate_of(path, rec, fs):
+    """The rate of the record ``rec`` read from ``path``: ``fs`` when given (a file that
+    states another is refused), else the file's own (None when it states none)."""
+    import os
+
+    if fs is None:
+        return rec.fs
+    if rec.fs is not None and abs(rec.fs - float(fs)) > 1e-5 * rec.fs:
+        raise ValueError(f"{os.fspath(path)}: states {rec.fs} Hz, but fs={fs} was given")
+    return float(fs)
+
+
 def _read_on_worker(path, fs):
     """A record's data and rate as a Dask worker reads it (the file's rate when ``fs`` is
     None)."""
     rec = read(path)
-    rate = rec.fs if fs is None else float(fs)
+    rate = _rate_of(path, rec, fs)
     if rate is None:
         raise ValueError(f"{path}: the file states no sampling rate and fs was not given")
-    if rec.fs is not None and abs(rec.fs - rate) > 1e-5 * rec.fs:
-        raise ValueError(f"{path}: states {rec.fs} Hz, but fs={fs} was given")
     a = _real(rec.data, str(path))
     return (a.reshape(-1, 1) if a.ndim == 1 else a), rate
 
@@ -805,8 +817,8 @@ def _track_on_dask(client, records, fs, *, times, covariates, training, whiten,
     n = len(paths)
     if n == 0:
         raise ValueError("no records: give at least one file")
-    if fs is not None and not (float(fs) > 0.0 and _np.isfinite(float(fs))):
-        raise ValueError(f"fs must be a positive finite rate (Hz), got {fs}")
+    if fs is not None:
+        _check_rate(fs)
     t = _times(times, n)
     x, cov_names = _covariates(covariates, n)
     if len(t) != n or len(x) != n:
