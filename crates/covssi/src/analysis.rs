@@ -297,6 +297,7 @@ impl ModalAnalysis {
                         damping_ratio: m.damping_ratio,
                         damping_se: m.damping_se,
                         shape_from_ssi: m.shape.is_none() && ssi_shape.is_some(),
+                        shape_se: m.shape.as_ref().and(m.shape_se.clone()),
                         shape: m.shape.clone().or(ssi_shape),
                     }
                 })
@@ -311,6 +312,7 @@ impl ModalAnalysis {
                     damping_ratio: m.damping_ratio,
                     damping_se: None,
                     shape: Some(m.shape.clone()),
+                    shape_se: None,
                     shape_from_ssi: true,
                 })
                 .collect(),
@@ -334,6 +336,9 @@ pub struct ReportedMode {
     pub shape: Option<Vec<crate::Complex64>>,
     /// Whether `shape` is SSI's (the mode's SSI mode's, where the refinement gave none).
     pub shape_from_ssi: bool,
+    /// Standard error of each entry of `shape` (√E|δ|², 0 for the entry scaled to 1): the
+    /// refinement's; `None` for SSI's shapes.
+    pub shape_se: Option<Vec<f64>>,
 }
 
 /// A mode shape as "magnitude∠phase°" per entry (phase rounded to a degree), entries joined

@@ -56,6 +56,7 @@ mod error;
 pub mod harmonic;
 mod identify;
 mod linalg;
+pub mod multisetup;
 mod options;
 pub mod plausibility;
 pub mod progress;
