@@ -19,6 +19,7 @@ pub mod plot;
 
 pub mod report;
 pub mod settings;
+pub mod setups;
 pub mod store;
 
 pub use covssi::shape_text;

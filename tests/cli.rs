@@ -2665,3 +2665,110 @@ fn track_a_missing_file_leaves_a_gap() {
     );
     assert!(stdout.contains("log_rms"), "{stdout}");
 }
+
+/// Two setups of a two-mode system as CSV records (columns `a`, `b`: references; `r`: the
+/// roving channel, a velocity), at `fs` 20 Hz.
+fn write_two_setups() -> [PathBuf; 2] {
+    use covssi::synth::{ModalRecord, pole};
+    let modes = [(1.5, 0.02), (4.0, 0.02)];
+    let shape = |node: f64| [(node * 0.3).sin(), (node * 0.9).sin()];
+    [(1.0, 3.0), (2.0, 4.0)].map(|(level, node)| {
+        let rows: Vec<[f64; 2]> = vec![shape(6.0), shape(5.0), shape(node)];
+        let gains = rows
+            .iter()
+            .enumerate()
+            .map(|(c, phi)| {
+                (0..2)
+                    .flat_map(|j| {
+                        // the roving channel reads velocity: its gain is φ λ
+                        let p = if c == 2 {
+                            pole(modes[j].0, modes[j].1)
+                        } else {
+                            1.0.into()
+                        };
+                        let g = level * phi[j] * p;
+                        [g.re, -g.im]
+                    })
+                    .collect()
+            })
+            .collect();
+        let y = ModalRecord::new(20.0, &modes)
+            .with_gains(gains)
+            .with_noise(0.02)
+            .generate(6000, 77 + node as u64);
+        let mut text = String::from("a,b,r\n");
+        for ((a, b), r) in y[0].iter().zip(&y[1]).zip(&y[2]) {
+            text.push_str(&format!("{a},{b},{r}\n"));
+        }
+        write(&format!("setup_{node}.csv"), &text)
+    })
+}
+
+#[test]
+fn ssi_merges_setups_on_their_references() {
+    let [one, two] = write_two_setups();
+    let head = "setup,file,column,node,direction,quantity,reference\n";
+    // Setup two's references at nodes `ra` and `rb` (setup one's: 6 and 5).
+    let rows = |ra: &str, rb: &str| {
+        format!(
+            "{head}one,{a},a,6,x,displacement,yes\none,{a},b,5,x,displacement,yes\none,{a},r,3,x,velocity,no\n\
+             two,{b},a,{ra},x,displacement,yes\ntwo,{b},b,{rb},x,displacement,yes\ntwo,{b},r,4,x,velocity,no\n",
+            a = s(&one),
+            b = s(&two)
+        )
+    };
+    let setups = write("setups.csv", &rows("6", "5"));
+    let json = tmp("setups.json");
+    let (ok, out, err) = hyst(&[
+        "ssi",
+        "--setups",
+        s(&setups),
+        "--fs",
+        "20",
+        "--json",
+        s(&json),
+    ]);
+    assert!(ok, "{err}");
+    assert!(out.contains("2 setups, each identified alone"), "{out}");
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let modes = doc["merged"]["modes"].as_array().unwrap();
+    assert_eq!(modes.len(), 2, "{out}");
+    for (m, f) in modes.iter().zip([1.5, 4.0]) {
+        assert!(
+            (m["frequency_hz"].as_f64().unwrap() - f).abs() < 0.02 * f,
+            "{m}"
+        );
+        assert_eq!(m["seen_in"].as_array().unwrap().len(), 2);
+    }
+    // A reference that moved between setups is said, and the other carries the merge.
+    let moved = write("setups_moved.csv", &rows("6", "7"));
+    let (ok, out, err) = hyst(&["ssi", "--setups", s(&moved), "--fs", "20"]);
+    assert!(ok, "{err}");
+    assert!(
+        out.contains("note: the reference at node 5") && out.contains("it moved"),
+        "{out}"
+    );
+    // No reference common to the setups: refused, naming each setup's references.
+    let none = write("setups_none.csv", &rows("8", "9"));
+    let (ok, _, err) = hyst(&["ssi", "--setups", s(&none), "--fs", "20"]);
+    assert!(!ok);
+    assert!(
+        err.contains("no reference is common to every setup"),
+        "{err}"
+    );
+    // --setups and --input together, and a setups flag the merge has no use for.
+    let (ok, _, err) = hyst(&["ssi", "--setups", s(&setups), "--input", s(&one)]);
+    assert!(!ok && err.contains("cannot be used with"), "{err}");
+    // The setup file is an input: --json may not overwrite it.
+    let (ok, _, err) = hyst(&[
+        "ssi",
+        "--setups",
+        s(&setups),
+        "--fs",
+        "20",
+        "--json",
+        s(&setups),
+    ]);
+    assert!(!ok && err.contains("would overwrite the input"), "{err}");
+}

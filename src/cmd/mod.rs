@@ -337,7 +337,10 @@ pub(crate) fn input_files(c: &Command) -> Vec<(&'static str, &std::path::Path)> 
             v.extend(one("--params", a.params.as_ref()));
         }
         Command::Excite(_) => {}
-        Command::Ssi(a) => v.push(("--input", &a.input)),
+        Command::Ssi(a) => {
+            v.extend(one("--input", a.input.as_ref()));
+            v.extend(one("--setups", a.setups.as_ref()));
+        }
         Command::Amplitude(a) => v.extend(a.input.iter().map(|p| ("--input", p.as_path()))),
         Command::Ident(a) => {
             v.extend(one("--data", a.data.as_ref()));

@@ -28,8 +28,18 @@ pub(crate) struct SsiArgs {
     /// The record: CSV with a header line; a NumPy `.npy` array or `.npz` archive, or a
     /// MATLAB `.mat` variable (samples × channels, columns named 0, 1, …); a Universal File
     /// of dataset 58 functions (columns named by their point, `12+Z`).
-    #[arg(long)]
-    pub(crate) input: PathBuf,
+    #[arg(long, required_unless_present = "setups")]
+    pub(crate) input: Option<PathBuf>,
+    /// Instead of --input: a setup file (CSV: setup, file, column, node, direction,
+    /// quantity, reference, gain; see the README) naming several setups of one test that
+    /// share reference channels. Each setup is identified alone, then the modes are merged
+    /// on the references, with standard errors.
+    #[arg(
+        long,
+        value_name = "FILE",
+        conflicts_with_all = ["input", "columns", "skip", "references", "svg", "shapes_uff"]
+    )]
+    pub(crate) setups: Option<PathBuf>,
     #[command(flatten)]
     pub(crate) record: ChannelArgs,
     #[command(flatten)]
@@ -279,26 +289,31 @@ pub(crate) fn run(a: &SsiArgs) -> Result<(), Error> {
     use hyst::covssi;
     // Settings that are wrong whatever the record, before it is read.
     let opts = a.ssi.analysis()?;
+    let input = match (&a.input, &a.setups) {
+        (_, Some(setups)) => return run_setups(a, setups, &opts),
+        (Some(input), None) => input,
+        (None, None) => return Err(fail("give --input or --setups".to_string())),
+    };
     let Channels {
         names,
         data,
         fs,
         points,
-    } = channels(&a.input, &a.record)?;
+    } = channels(input, &a.record)?;
     let views: Vec<&[f64]> = data.iter().map(|c| c.as_slice()).collect();
     let bar = steps_bar();
     let analysis = covssi::analyze_with_progress(&views, fs, &opts, &|p| show(&bar, p));
     bar.finish_and_clear();
     let fs_used = fs / a.ssi.decimate.unwrap_or(1) as f64;
-    let mut analysis = analysis.map_err(|e| flag_error(&a.input, &a.ssi, e, &names, fs_used))?;
+    let mut analysis = analysis.map_err(|e| flag_error(input, &a.ssi, e, &names, fs_used))?;
     analysis.channels = names;
-    let report = hyst::report::FileReport::new(a.input.display().to_string(), analysis);
+    let report = hyst::report::FileReport::new(input.display().to_string(), analysis);
     print!("{}", report.report);
     if let Some(json) = &a.json {
         report.write_json(json)?;
     }
     if let Some(svg) = &a.svg {
-        let title = format!("Stabilization diagram: {}", a.input.display());
+        let title = format!("Stabilization diagram: {}", input.display());
         std::fs::write(
             svg,
             covssi::svg::stabilization_svg(&report.report.ssi.diagram, None, &title),
@@ -306,7 +321,32 @@ pub(crate) fn run(a: &SsiArgs) -> Result<(), Error> {
         .map_err(|e| fail(format!("{}: {e}", svg.display())))?;
     }
     if let Some(path) = &a.shapes_uff {
-        write_shapes(path, &report.report, points.as_deref(), &a.input)?;
+        write_shapes(path, &report.report, points.as_deref(), input)?;
+    }
+    Ok(())
+}
+
+/// `hyst ssi --setups`: every setup identified, the modes merged, the report printed.
+fn run_setups(a: &SsiArgs, path: &Path, opts: &hyst::covssi::AnalysisOptions) -> Result<(), Error> {
+    if let Some(fs) = a.record.fs {
+        check_fs(fs)?;
+    }
+    let setups = hyst::io::read_setups(path)?;
+    let read = READ_OPTIONS.get().cloned().unwrap_or_default();
+    let bar = spinner();
+    bar.set_message(format!("identifying {} setups", setups.len()));
+    let report = hyst::setups::analyze_setups(
+        &setups,
+        a.record.fs,
+        &read,
+        opts,
+        &hyst::covssi::multisetup::MergeOptions::default(),
+    );
+    bar.finish_and_clear();
+    let report = hyst::report::FileReport::new(path.display().to_string(), report?);
+    print!("{report}");
+    if let Some(json) = &a.json {
+        report.write_json(json)?;
     }
     Ok(())
 }

@@ -295,6 +295,8 @@ mod estimates;
 mod mat;
 mod npy;
 mod paths;
+mod setups;
+mod setups_pyoma;
 mod shapes_uff;
 mod uff;
 pub use covariates::{Covariates, list_records, read_covariates};
@@ -303,6 +305,8 @@ pub use estimates::{EstimatesTable, read_estimates};
 pub use mat::read_mat;
 pub use npy::{read_npy, read_npz};
 pub use paths::check_outputs;
+pub use setups::{SetupSpec, read_setups};
+pub use setups_pyoma::read_pyoma_setups;
 pub use shapes_uff::{ShapeMode, write_shapes_uff};
 pub use uff::read_uff;
 

@@ -329,6 +329,33 @@ fn ssi(
     })
 }
 
+/// Several setups of one test, described by the setup file (or pyOMA folder) `path`, each
+/// identified with `settings` at `fs` Hz (or each record's or setup's stated rate) and merged:
+/// `hyst ssi --setups`; see the Python wrapper `hyst.ssi`.
+#[pyfunction]
+#[pyo3(signature = (path, fs, *, settings))]
+fn ssi_setups(
+    py: Python<'_>,
+    path: std::path::PathBuf,
+    fs: Option<f64>,
+    settings: &str,
+) -> PyResult<ident::Report> {
+    let opts = analysis_options(settings)?;
+    let report = py
+        .detach(|| {
+            let setups = hyst::io::read_setups(&path)?;
+            hyst::setups::analyze_setups(
+                &setups,
+                fs,
+                &hyst::io::ReadOptions::default(),
+                &opts,
+                &covssi::multisetup::MergeOptions::default(),
+            )
+        })
+        .map_err(|e: hyst::setups::SetupsError| PyValueError::new_err(e.to_string()))?;
+    ident::Report::of(&path.display().to_string(), report)
+}
+
 /// What `read_record` gives: the data (samples × channels), the column names, the sampling
 /// rate the file states, and each channel's (node, direction) if the file gives them.
 type RecordParts<'py> = (
@@ -379,6 +406,7 @@ fn read_record<'py>(
 #[pymodule]
 fn _hyst(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ssi, m)?)?;
+    m.add_function(wrap_pyfunction!(ssi_setups, m)?)?;
     m.add_function(wrap_pyfunction!(read_record, m)?)?;
     m.add_function(wrap_pyfunction!(ident::simulate, m)?)?;
     m.add_function(wrap_pyfunction!(ident::excite, m)?)?;

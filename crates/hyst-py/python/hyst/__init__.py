@@ -16,6 +16,7 @@ dicts in the JSON schema ``--params`` reads, reports are :class:`Report` objects
 ``to_dict()`` is the command's ``--json`` document.
 """
 
+import os as _os
 from dataclasses import dataclass as _dataclass
 from typing import List as _List, Optional as _Optional, Tuple as _Tuple
 
@@ -95,8 +96,8 @@ def read(path, *, format=None, variable=None, delimiter=None):
 
 
 def ssi(
-    y,
-    fs,
+    y=None,
+    fs=None,
     *,
     block_rows=None,
     lag_seconds=None,
@@ -113,6 +114,7 @@ def ssi(
     joint=True,
     channels=None,
     record="array",
+    setups=None,
 ):
     """Modes of a structure from its response alone: SSI-COV, then maximum likelihood.
 
@@ -161,6 +163,16 @@ def ssi(
         Names of the channels (they head the shapes in ``str(result)`` and the JSON).
     record : str
         What the data is, for the report (the JSON's ``record``).
+    setups : str or os.PathLike, optional
+        Instead of ``y``: a setup file (``hyst ssi --setups``: CSV of setup, file, column,
+        node, direction, quantity, reference, gain), or a folder of setups in pyOMA's layout.
+        Each setup is identified alone, then the modes are merged on the references shared
+        by every setup, velocities and accelerations reconciled, each node's x, y, z solved
+        from its directions, and every setup's standard errors carried into the merged
+        frequencies, damping ratios and shapes. ``fs`` is then optional (each record's or
+        setup's stated rate), and ``references`` and ``channels`` are the file's. Returns a
+        ``Report``: ``str(report)`` as the command prints it, ``report.to_dict()`` its JSON
+        (``setups``, ``merged``).
 
     Returns
     -------
@@ -179,6 +191,26 @@ def ssi(
         With the library's message: a record too short or constant, an option out of
         range, a non-finite value.
     """
+    if setups is not None:
+        if y is not None:
+            raise ValueError("give y or setups, not both")
+        for name, value in (("references", references), ("channels", channels)):
+            if value is not None:
+                raise ValueError(f"{name} is the setup file's with setups: leave it out")
+        settings = _settings(
+            block_rows=block_rows, lag_seconds=lag_seconds, lag_periods=lag_periods,
+            decimate=decimate, max_order=max_order, order_step=order_step, references=None,
+            df=df, dzeta=dzeta, dmac=dmac, dreal=dreal, refine=refine, joint=joint,
+        )
+        if fs is not None:
+            _check_rate(fs)
+        return _hyst.ssi_setups(
+            _os.fspath(setups),
+            None if fs is None else float(fs),
+            settings=settings,
+        )
+    if y is None or fs is None:
+        raise ValueError("give y and fs (or setups)")
     a = _real(y, "y")
     if a.ndim == 1:
         a = a.reshape(-1, 1)

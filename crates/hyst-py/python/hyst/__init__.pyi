@@ -1,6 +1,6 @@
 import os
 from dataclasses import dataclass
-from typing import Any, Literal, Mapping, Optional, Sequence, Union
+from typing import Any, Literal, Mapping, Optional, Sequence, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -163,6 +163,7 @@ def read(
     delimiter: Optional[Literal[",", ";", "\t"]] = ...,
 ) -> Record: ...
 
+@overload
 def ssi(
     y: npt.ArrayLike,
     fs: float,
@@ -182,7 +183,30 @@ def ssi(
     joint: bool = ...,
     channels: Optional[Sequence[str]] = ...,
     record: str = ...,
+    setups: None = ...,
 ) -> SsiResult: ...
+@overload
+def ssi(
+    y: None = ...,
+    fs: Optional[float] = ...,
+    *,
+    block_rows: Optional[int] = ...,
+    lag_seconds: Optional[float] = ...,
+    lag_periods: Optional[tuple[float, float]] = ...,
+    decimate: Optional[int] = ...,
+    max_order: Optional[int] = ...,
+    order_step: int = ...,
+    references: None = ...,
+    df: Optional[float] = ...,
+    dzeta: Optional[float] = ...,
+    dmac: Optional[float] = ...,
+    dreal: Optional[float] = ...,
+    refine: bool = ...,
+    joint: bool = ...,
+    channels: None = ...,
+    record: str = ...,
+    setups: Union[str, os.PathLike[str]],
+) -> Report: ...
 
 def amplitude(
     y: Union[npt.ArrayLike, Sequence[npt.ArrayLike]],

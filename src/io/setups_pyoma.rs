@@ -1,0 +1,194 @@
+//! The setups of a modal test in pyOMA's layout (the steel frame of `shared/data`): one folder
+//! per setup, each holding its record (`.npy`), `setup_info.txt` (rate, reference, deleted,
+//! acceleration, velocity and displacement channels) and `channel_dofs.txt` (per channel:
+//! node, azimuth and elevation of its direction in degrees).
+
+use std::path::{Path, PathBuf};
+
+use super::{IoError, SetupSpec};
+use covssi::multisetup::{Quantity, SetupChannel};
+
+/// Every setup folder of `dir` (natural name order) read as a [`SetupSpec`]: the channels not
+/// deleted, their directions (cos e cos a, cos e sin a, sin e), gain 1.
+pub fn read_pyoma_setups(dir: &Path) -> Result<Vec<SetupSpec>, IoError> {
+    let entries = std::fs::read_dir(dir).map_err(|source| IoError::File {
+        path: dir.to_path_buf(),
+        source,
+    })?;
+    let mut folders: Vec<PathBuf> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.join("setup_info.txt").is_file())
+        .collect();
+    folders
+        .sort_by(|a, b| super::covariates::natural_cmp(&a.to_string_lossy(), &b.to_string_lossy()));
+    if folders.is_empty() {
+        return Err(IoError::Params {
+            path: dir.to_path_buf(),
+            what: "no setup folder (one holding setup_info.txt) in this folder".into(),
+        });
+    }
+    folders.iter().map(|f| read_one(f)).collect()
+}
+
+fn read_text(path: &Path) -> Result<String, IoError> {
+    std::fs::read_to_string(path).map_err(|source| IoError::File {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// The channel lists and rate `setup_info.txt` gives, by section.
+struct Info {
+    name: String,
+    rate: f64,
+    references: Vec<usize>,
+    deleted: Vec<usize>,
+    quantity: Vec<(usize, Quantity)>,
+}
+
+fn info(path: &Path) -> Result<Info, IoError> {
+    let text = read_text(path)?;
+    let bad = |what: String| IoError::Params {
+        path: path.to_path_buf(),
+        what,
+    };
+    let mut sections: Vec<(String, String)> = Vec::new();
+    for line in text.lines().map(str::trim) {
+        if line.starts_with("####") {
+            break;
+        }
+        if line.ends_with(':') {
+            sections.push((line.to_string(), String::new()));
+        } else if let Some(last) = sections.last_mut() {
+            last.1.push_str(line);
+            last.1.push(' ');
+        }
+    }
+    let section = |head: &str| {
+        sections
+            .iter()
+            .find(|s| s.0.starts_with(head))
+            .map(|s| s.1.trim().to_string())
+    };
+    let list = |head: &str| -> Result<Vec<usize>, IoError> {
+        section(head)
+            .unwrap_or_default()
+            .split_whitespace()
+            .map(|t| {
+                t.parse()
+                    .map_err(|_| bad(format!("`{head}`: `{t}` is not a channel number")))
+            })
+            .collect()
+    };
+    let rate_text =
+        section("Sampling Rate").ok_or_else(|| bad("no `Sampling Rate [Hz]:`".into()))?;
+    let rate: f64 = rate_text
+        .parse()
+        .ok()
+        .filter(|r: &f64| r.is_finite() && *r > 0.0)
+        .ok_or_else(|| {
+            bad(format!(
+                "sampling rate `{rate_text}` is not a positive number"
+            ))
+        })?;
+    let mut quantity = Vec::new();
+    for (head, q) in [
+        ("Accel.", Quantity::Acceleration),
+        ("Velo.", Quantity::Velocity),
+        ("Disp.", Quantity::Displacement),
+    ] {
+        quantity.extend(list(head)?.into_iter().map(|c| (c, q)));
+    }
+    Ok(Info {
+        name: section("Setup Name").unwrap_or_default(),
+        rate,
+        references: list("Reference Channels")?,
+        deleted: list("Delete Channels")?,
+        quantity,
+    })
+}
+
+fn read_one(folder: &Path) -> Result<SetupSpec, IoError> {
+    let info = info(&folder.join("setup_info.txt"))?;
+    let dofs_path = folder.join("channel_dofs.txt");
+    let text = read_text(&dofs_path)?;
+    let bad = |row: usize, what: String| IoError::Malformed {
+        path: dofs_path.clone(),
+        row,
+        what,
+    };
+    let record = std::fs::read_dir(folder)
+        .map_err(|source| IoError::File {
+            path: folder.to_path_buf(),
+            source,
+        })?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .find(|p| p.extension().is_some_and(|e| e == "npy"))
+        .ok_or_else(|| IoError::Params {
+            path: folder.to_path_buf(),
+            what: "no .npy record in this setup folder".into(),
+        })?;
+    let mut columns = Vec::new();
+    let mut channels = Vec::new();
+    for (i, line) in text.lines().enumerate().skip(1) {
+        let cells: Vec<&str> = line.split('\t').map(str::trim).collect();
+        if line.trim().is_empty() {
+            continue;
+        }
+        let row = i + 1;
+        let [c, node, az, el, ..] = cells.as_slice() else {
+            return Err(bad(
+                row,
+                "expected channel, node, azimuth, elevation".into(),
+            ));
+        };
+        let c: usize = c
+            .parse()
+            .map_err(|_| bad(row, format!("`{c}` is not a channel number")))?;
+        if info.deleted.contains(&c) {
+            continue;
+        }
+        let angle = |t: &str| {
+            t.parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| bad(row, format!("`{t}` is not an angle in degrees")))
+        };
+        let (a, e) = (angle(az)?.to_radians(), angle(el)?.to_radians());
+        let quantity = info
+            .quantity
+            .iter()
+            .find(|q| q.0 == c)
+            .map(|q| q.1)
+            .ok_or_else(|| {
+                bad(
+                    row,
+                    format!(
+                        "channel {c} is in no `Accel.`, `Velo.` or `Disp.` list of setup_info.txt"
+                    ),
+                )
+            })?;
+        columns.push(c.to_string());
+        channels.push(SetupChannel {
+            node: node.to_string(),
+            direction: [e.cos() * a.cos(), e.cos() * a.sin(), e.sin()],
+            quantity,
+            gain: 1.0,
+            reference: info.references.contains(&c),
+        });
+    }
+    let name = if info.name.is_empty() {
+        folder
+            .file_name()
+            .map_or(String::new(), |n| n.to_string_lossy().into_owned())
+    } else {
+        info.name
+    };
+    Ok(SetupSpec {
+        name,
+        file: record,
+        columns,
+        channels,
+        fs_hz: Some(info.rate),
+    })
+}

@@ -1,0 +1,209 @@
+//! A modal test of several setups, end to end: each setup's record read and identified alone
+//! ([`covssi::analyze`]), then the setups merged on their references
+//! ([`covssi::multisetup::merge`]): what `hyst ssi --setups` and `hyst.ssi(setups=...)` run.
+
+use std::fmt;
+
+use covssi::multisetup::{MergeError, MergeOptions, MergedModes, SetupModes, merge};
+use covssi::{AnalysisOptions, ModalAnalysis, SsiError};
+use rayon::prelude::*;
+
+use crate::io::{IoError, ReadOptions, SetupSpec};
+
+/// One setup's part of the report.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SetupAnalysis {
+    /// The setup's name.
+    pub name: String,
+    /// Its record.
+    pub file: String,
+    /// The record's rate (Hz).
+    pub fs_hz: f64,
+    /// Samples per channel.
+    pub samples: usize,
+    /// Its own analysis (channels named by the setup file's columns).
+    pub analysis: ModalAnalysis,
+}
+
+/// What [`analyze_setups`] finds: every setup's analysis and the merged mode set.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SetupsReport {
+    /// Each setup, in the setup file's order.
+    pub setups: Vec<SetupAnalysis>,
+    /// The merged modes.
+    pub merged: MergedModes,
+}
+
+/// Why a multi-setup analysis stopped.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum SetupsError {
+    /// A record could not be read.
+    #[error(transparent)]
+    Io(#[from] IoError),
+    /// A setup's record could not be identified.
+    #[error("setup `{setup}` ({file}): {source}")]
+    Analysis {
+        /// The setup.
+        setup: String,
+        /// Its record.
+        file: String,
+        /// covssi's error.
+        source: SsiError,
+    },
+    /// The setups could not be merged.
+    #[error(transparent)]
+    Merge(#[from] MergeError),
+}
+
+/// Read and identify every setup of `setups` (in parallel), at `fs` Hz or each file's stated
+/// rate, and merge them.
+pub fn analyze_setups(
+    setups: &[SetupSpec],
+    fs: Option<f64>,
+    read: &ReadOptions,
+    opts: &AnalysisOptions,
+    merge_opts: &MergeOptions,
+) -> Result<SetupsReport, SetupsError> {
+    let analysed: Vec<SetupAnalysis> = setups
+        .par_iter()
+        .map(|s| analyze_one(s, fs, read, opts))
+        .collect::<Result<_, _>>()?;
+    Ok(merge_analysed(setups, analysed, merge_opts)?)
+}
+
+/// The setups `setups`, already identified (`analysed`, in the same order), merged: for a
+/// second merge of the same records under other channel descriptions (a gain found) without
+/// identifying them again.
+pub fn merge_analysed(
+    setups: &[SetupSpec],
+    analysed: Vec<SetupAnalysis>,
+    merge_opts: &MergeOptions,
+) -> Result<SetupsReport, MergeError> {
+    let modes: Vec<SetupModes> = setups
+        .iter()
+        .zip(&analysed)
+        .map(|(s, a)| SetupModes {
+            name: s.name.clone(),
+            channels: s.channels.clone(),
+            modes: a.analysis.reported_modes(),
+        })
+        .collect();
+    let merged = merge(&modes, merge_opts)?;
+    Ok(SetupsReport {
+        setups: analysed,
+        merged,
+    })
+}
+
+fn analyze_one(
+    s: &SetupSpec,
+    fs: Option<f64>,
+    read: &ReadOptions,
+    opts: &AnalysisOptions,
+) -> Result<SetupAnalysis, SetupsError> {
+    let mut table = crate::io::read_record(&s.file, read)?;
+    let fs = table.rate(fs.or(s.fs_hz))?;
+    let data = s
+        .columns
+        .iter()
+        .map(|c| table.take_column(c))
+        .collect::<Result<Vec<Vec<f64>>, IoError>>()?;
+    let views: Vec<&[f64]> = data.iter().map(Vec::as_slice).collect();
+    let file = s.file.display().to_string();
+    let mut analysis =
+        covssi::analyze(&views, fs, opts).map_err(|source| SetupsError::Analysis {
+            setup: s.name.clone(),
+            file: file.clone(),
+            source,
+        })?;
+    analysis.channels = s.columns.clone();
+    Ok(SetupAnalysis {
+        name: s.name.clone(),
+        file,
+        fs_hz: fs,
+        samples: data.first().map_or(0, Vec::len),
+        analysis,
+    })
+}
+
+/// A complex entry as magnitude∠phase°.
+fn polar(v: covssi::Complex64) -> String {
+    format!("{:.3}∠{:.0}°", v.norm(), v.arg().to_degrees() + 0.0)
+}
+
+impl fmt::Display for SetupsReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let m = &self.merged;
+        writeln!(f, "{} setups, each identified alone:", self.setups.len())?;
+        for s in &self.setups {
+            writeln!(
+                f,
+                "  {:<16} {:>2} channels, {} samples at {} Hz: {} modes",
+                s.name,
+                s.analysis.channels.len(),
+                s.samples,
+                s.fs_hz,
+                s.analysis.reported_modes().len()
+            )?;
+        }
+        let refs: Vec<String> = m
+            .dofs
+            .iter()
+            .filter(|d| d.reference)
+            .map(|d| format!("node {} {:?}", d.node, d.direction.map(round3)))
+            .collect();
+        writeln!(f, "references: {}", refs.join(", "))?;
+        writeln!(
+            f,
+            "\nmerged modes (shapes as displacement, largest entry 1; ± one standard error):"
+        )?;
+        writeln!(
+            f,
+            "  mode  frequency (Hz)         damping (%)         setups  scatter"
+        )?;
+        for (i, mode) in m.modes.iter().enumerate() {
+            let se = |v: Option<f64>, k: f64, d: usize| {
+                v.map_or("—".to_string(), |e| format!("{:.*}", d, e * k))
+            };
+            writeln!(
+                f,
+                "  {:>4}  {:>9.4} ± {:<8}  {:>6.3} ± {:<8}  {:>3}/{:<3} {}",
+                i + 1,
+                mode.frequency_hz,
+                se(mode.frequency_se_hz, 1.0, 4),
+                100.0 * mode.damping_ratio,
+                se(mode.damping_se, 100.0, 3),
+                mode.seen_in.len(),
+                self.setups.len(),
+                mode.scatter_ratio.map_or("—".into(), |r| format!("{r:.2}"))
+            )?;
+        }
+        for (i, mode) in m.modes.iter().enumerate() {
+            writeln!(
+                f,
+                "\nmode {} ({:.4} Hz): node  x  y  z (magnitude∠phase ± standard error)",
+                i + 1,
+                mode.frequency_hz
+            )?;
+            for node in &mode.nodes {
+                let cells: Vec<String> = (0..3)
+                    .map(|k| match (node.motion[k], node.se[k]) {
+                        (Some(u), Some(e)) => format!("{} ± {:.3}", polar(u), e),
+                        (Some(u), None) => polar(u),
+                        _ => "—".into(),
+                    })
+                    .collect();
+                writeln!(f, "  {:>6}  {}", node.node, cells.join("  "))?;
+            }
+        }
+        for note in &m.notes {
+            writeln!(f, "note: {note}")?;
+        }
+        Ok(())
+    }
+}
+
+fn round3(v: f64) -> f64 {
+    (v * 1000.0).round() / 1000.0 + 0.0
+}

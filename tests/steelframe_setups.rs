@@ -1,0 +1,95 @@
+//! The steel frame's 15 setups (`shared/data/steelframe`, pyOMA's layout, read as is) merged
+//! by `hyst::setups`: the modes the data README lists, every one in every setup but the
+//! doubtful 13.86 Hz one; the factor between the laser velocities and the reference
+//! accelerations found from the rigid top floor (−0.5, as the README says), and, told that
+//! factor, the merged shapes keep the top floor rigid.
+//!
+//! `cargo test --release --test steelframe_setups -- --nocapture` prints the merged modes.
+
+mod common;
+
+use covssi::Complex64 as C64;
+use covssi::multisetup::{MergeOptions, MergedMode, Quantity};
+use hyst::io::{ReadOptions, SetupSpec, read_setups};
+use hyst::setups::{SetupsReport, analyze_setups, merge_analysed};
+
+/// The README's modes (pyOMA2 1.4 and by hand), Hz.
+const README_HZ: [f64; 11] = [
+    1.2287, 1.4359, 2.1000, 4.0172, 4.7706, 6.6822, 7.6156, 9.6652, 12.1668, 12.5982, 13.863,
+];
+
+/// The setups as the folder describes them, and their merged report.
+fn merged() -> Option<(Vec<SetupSpec>, SetupsReport)> {
+    let dir = common::data_file("steelframe/grid.txt")?
+        .parent()?
+        .to_path_buf();
+    let setups = read_setups(&dir).unwrap();
+    assert_eq!(setups.len(), 15);
+    let opts = covssi::AnalysisOptions::default();
+    let read = ReadOptions::default();
+    let report = analyze_setups(&setups, None, &read, &opts, &MergeOptions::default()).unwrap();
+    Some((setups, report))
+}
+
+/// Node `node`'s motion along axis `k` in `mode`.
+fn motion(mode: &MergedMode, node: &str, k: usize) -> C64 {
+    let n = mode.nodes.iter().find(|n| n.node == node).unwrap();
+    n.motion[k].unwrap()
+}
+
+/// On the rigid top floor, node 21 moves as node 24 in x (same y) and node 23 as node 24 in
+/// y (same x): the ratios of the laser-derived to the reference motion, over the modes where
+/// the reference moves at least `least` of the shape's largest entry, among the modes every
+/// setup saw (the doubtful 13.86 Hz one left out).
+fn rigid_floor_ratios(report: &SetupsReport, least: f64) -> Vec<C64> {
+    let mut ratios = Vec::new();
+    for m in report.merged.modes.iter().filter(|m| m.seen_in.len() == 15) {
+        for (node, k) in [("21", 0), ("23", 1)] {
+            let reference = motion(m, "24", k);
+            if reference.norm() >= least && m.nodes.iter().any(|n| n.node == node) {
+                ratios.push(motion(m, node, k) / reference);
+            }
+        }
+    }
+    ratios
+}
+
+#[test]
+fn the_steel_frames_setups_merge_into_its_modes_and_find_the_sensors_factor() {
+    let Some((mut setups, report)) = merged() else {
+        return;
+    };
+    println!("{report}");
+    let modes = &report.merged.modes;
+    assert_eq!(modes.len(), README_HZ.len(), "{report}");
+    for (m, f) in modes.iter().zip(README_HZ) {
+        // Each within three of its standard errors (from the 15 setups' scatter) of the
+        // README's, plus the README's rounding to four decimals.
+        let se = m.frequency_se_hz.unwrap();
+        assert!(
+            (m.frequency_hz - f).abs() < 3.0 * se + 5e-5,
+            "{} ± {se} vs {f}",
+            m.frequency_hz
+        );
+    }
+    // Every mode but the doubtful 13.86 Hz one is in all 15 setups.
+    assert!(modes[..10].iter().all(|m| m.seen_in.len() == 15));
+    // The rigid top floor: laser over reference is −0.5 in every mode where the reference
+    // moves at least half the largest entry (the README's factor, found).
+    let ratios = rigid_floor_ratios(&report, 0.5);
+    println!("laser/reference on the rigid top floor: {ratios:.3?}");
+    assert!(ratios.len() >= 8, "{ratios:?}");
+    for r in &ratios {
+        assert!((r - C64::new(-0.5, 0.0)).norm() < 0.02, "{ratios:?}");
+    }
+    // Told the factor (the laser channels read −0.5 times the motion), the floor is rigid.
+    for ch in setups.iter_mut().flat_map(|s| s.channels.iter_mut()) {
+        if ch.quantity == Quantity::Velocity {
+            ch.gain = -0.5;
+        }
+    }
+    let told = merge_analysed(&setups, report.setups.clone(), &MergeOptions::default()).unwrap();
+    for r in rigid_floor_ratios(&told, 0.5) {
+        assert!((r - C64::new(1.0, 0.0)).norm() < 0.04, "{r}");
+    }
+}
