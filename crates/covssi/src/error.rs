@@ -44,6 +44,8 @@ pub enum SsiOption {
     Tolerance,
     /// `AnalysisOptions::decimation`: a factor of 0.
     Decimation,
+    /// `FddOptions::segment`: under 16 samples or longer than the record.
+    FddSegment,
 }
 
 impl SsiOption {
@@ -70,6 +72,7 @@ impl SsiOption {
             SsiOption::MaxIterations => "max_iterations",
             SsiOption::Tolerance => "tolerance",
             SsiOption::Decimation => "decimation",
+            SsiOption::FddSegment => "segment (FDD: 16 samples to the record's length)",
         }
     }
 }

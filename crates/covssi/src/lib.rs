@@ -53,6 +53,7 @@ mod analysis;
 pub mod corr;
 pub mod decimate;
 mod error;
+pub mod fdd;
 pub mod harmonic;
 mod identify;
 mod linalg;

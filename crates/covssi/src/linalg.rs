@@ -169,6 +169,37 @@ pub(crate) fn eigen(a: &Dense) -> Result<(Vec<C64>, Vec<C64>), String> {
     Ok((vals, vecs))
 }
 
+/// Eigenvalues (non-increasing) and unit eigenvectors of the complex Hermitian `l × l`
+/// matrix `h` (column-major), through the real symmetric embedding
+/// $\begin{pmatrix}A & -B\\ B & A\end{pmatrix}$ of $H = A + \mathrm i B$, whose eigenvalues are
+/// $H$'s, each twice, with eigenvectors $(x; y) \leftrightarrow x + \mathrm i y$.
+pub(crate) fn hermitian_eigen(h: &[C64], l: usize) -> Result<(Vec<f64>, Vec<Vec<C64>>), String> {
+    let n = 2 * l;
+    let mut m = Mat::<f64>::zeros(n, n);
+    for c in 0..l {
+        for r in 0..l {
+            let v = h[c * l + r];
+            m[(r, c)] = v.re;
+            m[(r + l, c + l)] = v.re;
+            m[(r + l, c)] = v.im;
+            m[(r, c + l)] = -v.im;
+        }
+    }
+    let evd = m
+        .as_ref()
+        .self_adjoint_eigen(Side::Lower)
+        .map_err(|e| format!("Hermitian eigen-decomposition did not converge: {e:?}"))?;
+    let (s, u) = (evd.S().column_vector(), evd.U());
+    // Non-decreasing from faer: the pairs from the top, one of each.
+    let mut values = Vec::with_capacity(l);
+    let mut vectors = Vec::with_capacity(l);
+    for k in (0..n).rev().step_by(2) {
+        values.push(s[k]);
+        vectors.push((0..l).map(|r| C64::new(u[(r, k)], u[(r + l, k)])).collect());
+    }
+    Ok((values, vectors))
+}
+
 /// `out += dᵀ d` (a Gram matrix update), single-threaded.
 pub(crate) fn gram_add(d: &Dense, out: &mut Dense) {
     debug_assert_eq!((out.rows, out.cols), (d.cols, d.cols));
