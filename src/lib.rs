@@ -14,6 +14,7 @@ pub use hyst_monitor as monitor;
 pub use hyst_sim as sim;
 
 pub mod figures;
+pub mod html;
 pub mod io;
 pub mod plot;
 

@@ -305,6 +305,7 @@ pub(crate) fn output_files(c: &Command) -> Vec<(&'static str, &std::path::Path)>
             ("--json", a.json.as_deref()),
             ("--svg", a.svg.as_deref()),
             ("--shapes-uff", a.shapes_uff.as_deref()),
+            ("--html", a.html.as_deref()),
         ],
         Command::Ident(a) => vec![("--json", a.json.as_deref())],
         Command::Refine(a) => vec![("--json", a.json.as_deref())],
@@ -340,6 +341,8 @@ pub(crate) fn input_files(c: &Command) -> Vec<(&'static str, &std::path::Path)> 
         Command::Ssi(a) => {
             v.extend(one("--input", a.input.as_ref()));
             v.extend(one("--setups", a.setups.as_ref()));
+            v.extend(one("--geometry", a.geometry.as_ref()));
+            v.extend(one("--lines", a.lines.as_ref()));
         }
         Command::Amplitude(a) => v.extend(a.input.iter().map(|p| ("--input", p.as_path()))),
         Command::Ident(a) => {

@@ -70,6 +70,7 @@ const PAIRS: &[Pair] = &[
             ("json", "Python: result.to_json()"),
             ("svg", "Python: result.stabilization_svg()"),
             ("shapes-uff", "Python: result.write_shapes_uff(path)"),
+            ("html", "Python: result.html() (report.html() for setups)"),
         ],
         python_only: &[
             (

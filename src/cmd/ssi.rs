@@ -56,6 +56,21 @@ pub(crate) struct SsiArgs {
     /// File at their nodes and directions, others as nodes 1, 2, … along Z).
     #[arg(help_heading = "Output files", long, value_name = "FILE")]
     pub(crate) shapes_uff: Option<PathBuf>,
+    /// Write a report a browser opens here: one self-contained page (no network needed) with
+    /// the stabilization diagram over the FDD singular values (each pole's numbers on hover),
+    /// the modes with their errors and EFDD's, each mode shape animated on the structure, and
+    /// the MAC matrix.
+    #[arg(help_heading = "Output files", long, value_name = "FILE")]
+    pub(crate) html: Option<PathBuf>,
+    /// With --setups: the structure's nodes to draw the shapes on (a header line, then
+    /// `name x y z` per line; the steel frame's grid.txt). A pyOMA setup folder's own
+    /// grid.txt is read without it.
+    #[arg(long, value_name = "FILE", requires = "setups")]
+    pub(crate) geometry: Option<PathBuf>,
+    /// With --geometry: the lines between its nodes (a header line, then two node names per
+    /// line; the steel frame's lines.txt).
+    #[arg(long, value_name = "FILE", requires = "geometry")]
+    pub(crate) lines: Option<PathBuf>,
 }
 
 /// SSI's and the refinement's flags, shared by `hyst ssi` and `hyst track`.
@@ -323,7 +338,17 @@ pub(crate) fn run(a: &SsiArgs) -> Result<(), Error> {
     if let Some(path) = &a.shapes_uff {
         write_shapes(path, &report.report, points.as_deref(), input)?;
     }
+    if let Some(path) = &a.html {
+        let title = format!("hyst ssi: {}", input.display());
+        let fdd = hyst::html::fdd_of(&report.report, &views, fs);
+        let page = hyst::html::ssi_page(&title, &report.report, fdd.as_ref());
+        write_text(path, &page)?;
+    }
     Ok(())
+}
+
+fn write_text(path: &Path, text: &str) -> Result<(), Error> {
+    std::fs::write(path, text).map_err(|e| fail(format!("{}: {e}", path.display())))
 }
 
 /// `hyst ssi --setups`: every setup identified, the modes merged, the report printed.
@@ -347,6 +372,15 @@ fn run_setups(a: &SsiArgs, path: &Path, opts: &hyst::covssi::AnalysisOptions) ->
     print!("{report}");
     if let Some(json) = &a.json {
         report.write_json(json)?;
+    }
+    if let Some(html) = &a.html {
+        let geometry = hyst::io::setups_geometry(path, a.geometry.as_deref(), a.lines.as_deref())?;
+        let title = format!("hyst ssi --setups {}", path.display());
+        let g = geometry.as_ref().map(|(g, p)| (g, p.as_path()));
+        write_text(
+            html,
+            &hyst::html::setups_page(&title, &report.report.merged, g)?,
+        )?;
     }
     Ok(())
 }

@@ -292,6 +292,7 @@ fn variable_message(asked: Option<&str>, available: &str) -> String {
 mod covariates;
 mod delimited;
 mod estimates;
+mod geometry;
 mod mat;
 mod npy;
 mod paths;
@@ -302,6 +303,7 @@ mod uff;
 pub use covariates::{Covariates, list_records, read_covariates};
 pub use delimited::{Delimiter, read_csv, read_csv_with, write_csv};
 pub use estimates::{EstimatesTable, read_estimates};
+pub use geometry::{Geometry, read_geometry, setups_geometry};
 pub use mat::read_mat;
 pub use npy::{read_npy, read_npz};
 pub use paths::check_outputs;

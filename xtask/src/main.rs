@@ -12,6 +12,9 @@
 //!   runs the residual loop on records with undeclared effects (see `loop_battery.rs`).
 //! - `cargo xtask test` runs every test: the workspace's, then the Python package's
 //!   (`test_all.rs`).
+//! - `cargo xtask vendor-js` remakes the HTML reports' bundled libraries from npm, and
+//!   `cargo xtask report-screenshots` the documentation's pictures of the reports
+//!   (`report_pages.rs`).
 //! - `cargo xtask unused-deps` and `cargo xtask sizes` check the workspace's manifests and the
 //!   size of its files and functions (`deps.rs`, `sizes.rs`; tests run both in CI).
 
@@ -25,6 +28,7 @@ mod growth;
 mod loop_battery;
 mod monitor;
 mod random_sweep;
+mod report_pages;
 mod sizes;
 mod sweep;
 mod test_all;
@@ -716,6 +720,11 @@ enum Task {
     MonitorDemo(monitor::DemoArgs),
     /// Every test: `cargo test --workspace`, then the Python package's pytest (`test_all.rs`).
     Test,
+    /// Remake the HTML reports' bundled uPlot and three.js from npm (`report_pages.rs`).
+    VendorJs,
+    /// The documentation's screenshots of the HTML reports, taken in headless Chromium
+    /// (`report_pages.rs`).
+    ReportScreenshots,
     /// Fail if a workspace member declares a dependency its sources do not use (`deps.rs`).
     UnusedDeps,
     /// Fail if a source file, a function or `src/main.rs` outgrows its limit, or the command
@@ -771,6 +780,8 @@ fn main() {
         Task::MonitorDemo(a) => or_exit(monitor::run(&a)),
         Task::Test => or_exit(test_all::run_all()),
         Task::UnusedDeps => or_exit(deps::run()),
+        Task::VendorJs => or_exit(report_pages::vendor_js()),
+        Task::ReportScreenshots => or_exit(report_pages::screenshots()),
         Task::Sizes => {
             let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
             let found = sizes::breaches(&root);

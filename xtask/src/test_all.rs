@@ -5,7 +5,8 @@
 //! PyPI), the package built and installed into it from `crates/hyst-py` (`pip install`,
 //! maturin's release build), the `hyst` command built for the tests that compare with it,
 //! and pytest run on `crates/hyst-py/tests` (which also runs the code of `docs/python.md`).
-//! Fails on the first failure.
+//! Before them, Debian's Chromium is installed when it is missing and the machine lets root
+//! install packages: the HTML reports' tests open the pages in it. Fails on the first failure.
 
 use std::path::Path;
 use std::process::Command;
@@ -38,8 +39,37 @@ fn pip(python: &Path) -> Command {
     cmd
 }
 
+/// Debian's `chromium`, installed with apt-get when it is missing and this is root on a
+/// machine with apt-get; otherwise left to the tests (which fail under CI without it).
+fn ensure_chromium() -> Result<(), String> {
+    if hyst::html::chromium::find().is_some() {
+        return Ok(());
+    }
+    let root = Command::new("id")
+        .arg("-u")
+        .output()
+        .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "0");
+    if !root || !Path::new("/usr/bin/apt-get").is_file() {
+        eprintln!(
+            "chromium is missing and cannot be installed here: the HTML report tests need it"
+        );
+        return Ok(());
+    }
+    run(
+        Command::new("apt-get").args(["update", "-qq"]),
+        "apt-get update",
+    )?;
+    run(
+        Command::new("apt-get")
+            .args(["install", "-y", "-qq", "chromium"])
+            .env("DEBIAN_FRONTEND", "noninteractive"),
+        "apt-get install chromium",
+    )
+}
+
 /// Every test, in order: the workspace's, then the Python package's.
 pub fn run_all() -> Result<(), String> {
+    ensure_chromium()?;
     let root = Path::new(env!("CARGO_MANIFEST_DIR"))
         .parent()
         .ok_or("no workspace root")?

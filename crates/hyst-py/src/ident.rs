@@ -22,6 +22,8 @@ use hyst::sim::{self, Decimation, InputKind, Integrator, SimOptions};
 pub(crate) struct Report {
     text: String,
     json: String,
+    /// The report's page, for reports that have one (merged setups).
+    html: Option<String>,
 }
 
 impl Report {
@@ -31,7 +33,14 @@ impl Report {
         Ok(Report {
             text: report.to_string(),
             json: serde_json::to_string(&report).map_err(value_error)?,
+            html: None,
         })
+    }
+
+    /// This report with its page.
+    pub(crate) fn with_html(mut self, page: String) -> Report {
+        self.html = Some(page);
+        self
     }
 }
 
@@ -47,6 +56,14 @@ impl Report {
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         py.import("json")?
             .call_method1("loads", (self.json.as_str(),))
+    }
+
+    /// The report a browser opens (as the command's `--html` writes it); a ValueError for a
+    /// report without one.
+    fn html(&self) -> PyResult<String> {
+        self.html.clone().ok_or_else(|| {
+            value_error("this report has no page (only hyst.ssi(setups=...) makes one)")
+        })
     }
 
     /// The text the command prints.

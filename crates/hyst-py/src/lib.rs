@@ -29,6 +29,8 @@ use pyo3::prelude::*;
 struct SsiResult {
     analysis: ModalAnalysis,
     record: String,
+    /// The record's FDD, drawn behind the stabilization diagram of `html()`.
+    fdd: Option<covssi::fdd::Fdd>,
 }
 
 impl SsiResult {
@@ -219,6 +221,15 @@ impl SsiResult {
         covssi::svg::stabilization_svg(&self.analysis.ssi.diagram, max_frequency_hz, title)
     }
 
+    /// The report a browser opens (`hyst ssi --html`): one self-contained page with the
+    /// stabilization diagram over the FDD singular values, the modes with their errors and
+    /// EFDD's, each mode shape animated, and the MAC matrix.
+    #[pyo3(signature = (title = None))]
+    fn html(&self, title: Option<&str>) -> String {
+        let title = title.map_or_else(|| format!("hyst.ssi: {}", self.record), str::to_string);
+        hyst::html::ssi_page(&title, &self.analysis, self.fdd.as_ref())
+    }
+
     /// Write the reported modes' shapes as Universal File dataset 55 at `path`: one dataset
     /// per mode (its complex eigenvalue, and per node the X, Y, Z entries). `points` places
     /// each channel, as (node, direction) pairs in the Universal File's numbering (±1 ±2 ±3
@@ -323,9 +334,11 @@ fn ssi(
     if let Some(names) = channels {
         analysis.channels = names;
     }
+    let fdd = py.detach(|| hyst::html::fdd_of(&analysis, &views, fs));
     Ok(SsiResult {
         analysis,
         record: record.to_string(),
+        fdd,
     })
 }
 
@@ -333,27 +346,35 @@ fn ssi(
 /// identified with `settings` at `fs` Hz (or each record's or setup's stated rate) and merged:
 /// `hyst ssi --setups`; see the Python wrapper `hyst.ssi`.
 #[pyfunction]
-#[pyo3(signature = (path, fs, *, settings))]
+#[pyo3(signature = (path, fs, *, settings, geometry = None, lines = None))]
 fn ssi_setups(
     py: Python<'_>,
     path: std::path::PathBuf,
     fs: Option<f64>,
     settings: &str,
+    geometry: Option<std::path::PathBuf>,
+    lines: Option<std::path::PathBuf>,
 ) -> PyResult<ident::Report> {
     let opts = analysis_options(settings)?;
-    let report = py
+    let (report, page) = py
         .detach(|| {
             let setups = hyst::io::read_setups(&path)?;
-            hyst::setups::analyze_setups(
+            let report = hyst::setups::analyze_setups(
                 &setups,
                 fs,
                 &hyst::io::ReadOptions::default(),
                 &opts,
                 &covssi::multisetup::MergeOptions::default(),
-            )
+            )?;
+            let g = hyst::io::setups_geometry(&path, geometry.as_deref(), lines.as_deref())?;
+            // The command's title: the same page as `hyst ssi --setups --html`.
+            let title = format!("hyst ssi --setups {}", path.display());
+            let g = g.as_ref().map(|(g, p)| (g, p.as_path()));
+            let page = hyst::html::setups_page(&title, &report.merged, g)?;
+            Ok::<_, hyst::setups::SetupsError>((report, page))
         })
-        .map_err(|e: hyst::setups::SetupsError| PyValueError::new_err(e.to_string()))?;
-    ident::Report::of(&path.display().to_string(), report)
+        .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    ident::Report::of(&path.display().to_string(), report).map(|r| r.with_html(page))
 }
 
 /// What `read_record` gives: the data (samples × channels), the column names, the sampling

@@ -79,3 +79,20 @@ def test_setups_refuse_a_record_beside_them(setups):
         bad.write_text(setups.read_text().replace("b,5,x,displacement,yes", "b,5,x,displacement,no")
                        .replace("two,two.csv,a,6,x,displacement,yes", "two,two.csv,a,6,x,displacement,no"))
         hyst.ssi(setups=bad, fs=FS)
+
+
+def test_the_pages_are_the_commands(hyst_bin, setups, tmp_path):
+    page = tmp_path / "merged.html"
+    subprocess.run([str(hyst_bin), "ssi", "--setups", str(setups), "--fs", str(FS), "--html", str(page)],
+                   check=True, capture_output=True)
+    assert hyst.ssi(setups=setups, fs=FS).html() == page.read_text()
+    # One record's page: the same as the command's, its FDD from the same samples.
+    one = setups.parent / "one.csv"
+    page = tmp_path / "one.html"
+    subprocess.run([str(hyst_bin), "ssi", "--input", str(one), "--fs", str(FS), "--html", str(page)],
+                   check=True, capture_output=True)
+    y = np.loadtxt(one, delimiter=",", skiprows=1)
+    result = hyst.ssi(y, FS, channels=["a", "b", "r"])
+    assert result.html(title=f"hyst ssi: {one}") == page.read_text()
+    with pytest.raises(ValueError, match="has no page"):
+        hyst.amplitude(y[:, 0], FS).html()

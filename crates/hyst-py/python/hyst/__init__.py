@@ -115,6 +115,8 @@ def ssi(
     channels=None,
     record="array",
     setups=None,
+    geometry=None,
+    lines=None,
 ):
     """Modes of a structure from its response alone: SSI-COV, then maximum likelihood.
 
@@ -172,7 +174,11 @@ def ssi(
         frequencies, damping ratios and shapes. ``fs`` is then optional (each record's or
         setup's stated rate), and ``references`` and ``channels`` are the file's. Returns a
         ``Report``: ``str(report)`` as the command prints it, ``report.to_dict()`` its JSON
-        (``setups``, ``merged``).
+        (``setups``, ``merged``), ``report.html()`` the page ``--html`` writes.
+    geometry, lines : str or os.PathLike, optional
+        With ``setups``: the structure's nodes (a header line, then ``name x y z`` per line)
+        and the lines between them (two node names per line), to draw the merged shapes on;
+        a pyOMA setup folder's own ``grid.txt`` and ``lines.txt`` are read without them.
 
     Returns
     -------
@@ -182,8 +188,8 @@ def ssi(
         refinement ran and the record follows its model (``source == "refined"``), else
         SSI's (``source == "ssi"``, standard errors NaN). ``ssi_modes``, ``real_poles``,
         ``poles`` and ``pole_status`` (the stabilization diagram), ``misfit``,
-        ``to_dict()``, ``to_json()``, ``stabilization_svg()``; ``print(result)`` prints the
-        report of ``hyst ssi``.
+        ``to_dict()``, ``to_json()``, ``stabilization_svg()``, ``html()`` (the page ``hyst ssi
+        --html`` writes); ``print(result)`` prints the report of ``hyst ssi``.
 
     Raises
     ------
@@ -208,7 +214,11 @@ def ssi(
             _os.fspath(setups),
             None if fs is None else float(fs),
             settings=settings,
+            geometry=None if geometry is None else _os.fspath(geometry),
+            lines=None if lines is None else _os.fspath(lines),
         )
+    if geometry is not None or lines is not None:
+        raise ValueError("geometry and lines go with setups")
     if y is None or fs is None:
         raise ValueError("give y and fs (or setups)")
     a = _real(y, "y")

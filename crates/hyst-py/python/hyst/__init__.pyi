@@ -37,6 +37,7 @@ class SsiResult:
     def stabilization_svg(
         self, title: str = ..., max_frequency_hz: Optional[float] = ...
     ) -> str: ...
+    def html(self, title: Optional[str] = ...) -> str: ...
     def write_shapes_uff(
         self,
         path: Union[str, os.PathLike[str]],
@@ -45,6 +46,7 @@ class SsiResult:
     ) -> None: ...
 
 class Report:
+    def html(self) -> str: ...
     def to_json(self) -> str: ...
     def to_dict(self) -> dict[str, Any]: ...
 
@@ -184,6 +186,8 @@ def ssi(
     channels: Optional[Sequence[str]] = ...,
     record: str = ...,
     setups: None = ...,
+    geometry: None = ...,
+    lines: None = ...,
 ) -> SsiResult: ...
 @overload
 def ssi(
@@ -206,6 +210,8 @@ def ssi(
     channels: None = ...,
     record: str = ...,
     setups: Union[str, os.PathLike[str]],
+    geometry: Optional[Union[str, os.PathLike[str]]] = ...,
+    lines: Optional[Union[str, os.PathLike[str]]] = ...,
 ) -> Report: ...
 
 def amplitude(
