@@ -12,6 +12,8 @@
 //!   runs the residual loop on records with undeclared effects (see `loop_battery.rs`).
 //! - `cargo xtask test` runs every test: the workspace's, then the Python package's
 //!   (`test_all.rs`).
+//! - `cargo xtask compare-setups` runs the steel frame's merge and EFDD beside pyOMA2's
+//!   (`compare_setups.rs`).
 //! - `cargo xtask vendor-js` remakes the HTML reports' bundled libraries from npm, and
 //!   `cargo xtask report-screenshots` the documentation's pictures of the reports
 //!   (`report_pages.rs`).
@@ -22,6 +24,7 @@ mod acquisition;
 mod bench_command;
 mod bench_refine;
 mod compare;
+mod compare_setups;
 mod deps;
 mod f16;
 mod growth;
@@ -720,6 +723,9 @@ enum Task {
     MonitorDemo(monitor::DemoArgs),
     /// Every test: `cargo test --workspace`, then the Python package's pytest (`test_all.rs`).
     Test,
+    /// hyst's multi-setup merge and EFDD beside pyOMA2's PoSER, PreGER, FDD and EFDD on the
+    /// same files (`compare_setups.rs`).
+    CompareSetups,
     /// Remake the HTML reports' bundled uPlot and three.js from npm (`report_pages.rs`).
     VendorJs,
     /// The documentation's screenshots of the HTML reports, taken in headless Chromium
@@ -781,6 +787,7 @@ fn main() {
         Task::Test => or_exit(test_all::run_all()),
         Task::UnusedDeps => or_exit(deps::run()),
         Task::VendorJs => or_exit(report_pages::vendor_js()),
+        Task::CompareSetups => or_exit(compare_setups::run()),
         Task::ReportScreenshots => or_exit(report_pages::screenshots()),
         Task::Sizes => {
             let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
