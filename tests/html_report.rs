@@ -209,3 +209,49 @@ fn merged_setups_open_on_the_steel_frames_geometry() {
             .contains("No channel measures node(s) 1, 2, 3, 4, 8, 12, 16, 20")
     );
 }
+
+#[test]
+fn a_campaigns_report_opens_with_each_modes_series() {
+    let Some(record) = common::data_file("oma/data_3dof.csv") else {
+        return;
+    };
+    let Some(browser) = browser() else {
+        return;
+    };
+    let dir = out_dir();
+    let (page, out) = (dir.join("track.html"), dir.join("track"));
+    let _ = std::fs::remove_dir_all(&out);
+    let r = record.to_str().unwrap();
+    hyst(&[
+        "track",
+        "--input",
+        r,
+        "--fs",
+        "20",
+        "--columns",
+        "y1,y2,y3",
+        "--window",
+        "200",
+        "--out",
+        out.to_str().unwrap(),
+        "--html",
+        page.to_str().unwrap(),
+    ]);
+    let report: hyst_monitor::TrackReport =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    let modes = report.reference.len();
+    let opened = check_page(&browser, &page, modes, 2600);
+    // A frequency and a damping chart per mode, every row's point, every alarm.
+    assert_eq!(
+        opened.attribute("track", "data-charts"),
+        Some((2 * modes).to_string())
+    );
+    assert_eq!(
+        opened.attribute("track", "data-points"),
+        Some((2 * report.rows.len()).to_string())
+    );
+    assert_eq!(
+        opened.attribute("track", "data-alarms"),
+        Some(report.alarms.len().to_string())
+    );
+}

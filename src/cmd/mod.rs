@@ -312,7 +312,7 @@ pub(crate) fn output_files(c: &Command) -> Vec<(&'static str, &std::path::Path)>
         Command::Levels(a) => vec![("--json", a.json.as_deref())],
         Command::Amplitude(a) => vec![("--json", a.json.as_deref()), ("--svg", a.svg.as_deref())],
         Command::Frf(a) => a.output_files(),
-        Command::Track(_) => vec![],
+        Command::Track(a) => vec![("--html", a.html.as_deref())],
     };
     v.into_iter().filter_map(|(f, p)| Some((f, p?))).collect()
 }

@@ -110,6 +110,7 @@ const PAIRS: &[Pair] = &[
                 "the command's store and tables; Python returns the report",
             ),
             ("svg-dir", FILES),
+            ("html", "Python: report.html()"),
         ],
         python_only: &[
             (

@@ -77,6 +77,11 @@ pub(crate) struct TrackArgs {
     /// red) and its frequency against the first covariate, as SVG into this folder.
     #[arg(help_heading = "Output files", long)]
     pub(crate) svg_dir: Option<PathBuf>,
+    /// Write a page a browser opens here: each mode's frequency and damping against time
+    /// (± one standard error, the training's end, the alarms; zoomable), the reference modes'
+    /// table, shapes and MAC.
+    #[arg(help_heading = "Output files", long, value_name = "FILE")]
+    pub(crate) html: Option<PathBuf>,
 }
 
 /// The records' names and how to load each.
@@ -490,6 +495,10 @@ fn write_outputs(
     hyst::report::write_json(report, &a.out.join("report.json"))?;
     if let Some(dir) = &a.svg_dir {
         hyst::figures::track_figures(dir, report).map_err(fail)?;
+    }
+    if let Some(path) = &a.html {
+        std::fs::write(path, hyst::html::track_page(report))
+            .map_err(|e| fail(format!("{}: {e}", path.display())))?;
     }
     Ok(())
 }

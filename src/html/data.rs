@@ -22,6 +22,8 @@ pub struct PageData {
     pub mac: Vec<Vec<f64>>,
     /// The structure and each mode's motion of it.
     pub shapes: Shapes,
+    /// A campaign's series (the page of `hyst track`).
+    pub track: Option<super::track::TrackSeries>,
 }
 
 /// The stabilization diagram: every pole, and the spectrum behind.
@@ -55,6 +57,8 @@ pub struct PolePoint {
 /// One row of the modes' table.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct ModeRow {
+    /// The mode's number as the command's text report gives it (`hyst track` counts from 0).
+    pub number: usize,
     /// Frequency (Hz) and its standard error.
     pub frequency_hz: f64,
     /// Standard error (Hz).
@@ -124,7 +128,7 @@ fn reason(status: &PoleStatus) -> (&'static str, String) {
     }
 }
 
-fn pair(v: C64) -> [f64; 2] {
+pub(super) fn pair(v: C64) -> [f64; 2] {
     [v.re, v.im]
 }
 
@@ -170,7 +174,9 @@ pub fn ssi_page_data(title: &str, a: &ModalAnalysis, fdd: Option<&Fdd>) -> PageD
     let reported = a.reported_modes();
     let modes: Vec<ModeRow> = reported
         .iter()
-        .map(|m| ModeRow {
+        .enumerate()
+        .map(|(i, m)| ModeRow {
+            number: i + 1,
             frequency_hz: m.frequency_hz,
             frequency_se_hz: m.frequency_se_hz,
             damping_ratio: m.damping_ratio,
@@ -223,10 +229,11 @@ pub fn ssi_page_data(title: &str, a: &ModalAnalysis, fdd: Option<&Fdd>) -> PageD
                 .map(|s| s.iter().map(|v| [zero, zero, pair(*v)]).collect())
                 .collect(),
         },
+        track: None,
     }
 }
 
-fn mac_matrix(shapes: &[Vec<C64>]) -> Vec<Vec<f64>> {
+pub(super) fn mac_matrix(shapes: &[Vec<C64>]) -> Vec<Vec<f64>> {
     shapes
         .iter()
         .map(|a| shapes.iter().map(|b| mac(a, b)).collect())
@@ -286,7 +293,9 @@ pub fn setups_page_data(title: &str, m: &MergedModes, geometry: Option<&Geometry
         modes: m
             .modes
             .iter()
-            .map(|mode| ModeRow {
+            .enumerate()
+            .map(|(i, mode)| ModeRow {
+                number: i + 1,
                 frequency_hz: mode.frequency_hz,
                 frequency_se_hz: mode.frequency_se_hz,
                 damping_ratio: mode.damping_ratio,
@@ -303,5 +312,6 @@ pub fn setups_page_data(title: &str, m: &MergedModes, geometry: Option<&Geometry
             lines,
             motion,
         },
+        track: None,
     }
 }

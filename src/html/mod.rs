@@ -7,8 +7,10 @@
 
 pub mod chromium;
 mod data;
+mod track;
 
 pub use data::{Diagram, ModeRow, PageData, PolePoint, Shapes, setups_page_data, ssi_page_data};
+pub use track::{ModeSeries, TrackSeries, track_page_data};
 
 /// uPlot (MIT), its stylesheet, and three.js's scene, SVG renderer and orbit controls (MIT)
 /// bundled by esbuild.
@@ -73,6 +75,14 @@ pub fn setups_page(
     Ok(page(&data))
 }
 
+/// The title of a campaign's page, from the command and from Python alike.
+pub const TRACK_TITLE: &str = "hyst track: modes against time";
+
+/// The page of a campaign's report (`hyst track --html`, `report.html()` of `hyst.track`).
+pub fn track_page(report: &hyst_monitor::TrackReport) -> String {
+    page(&track_page_data(TRACK_TITLE, report))
+}
+
 /// The page of `data`.
 pub fn page(data: &PageData) -> String {
     // serde_json never fails on these types (string keys, finite or null numbers).
@@ -90,6 +100,10 @@ pub fn page(data: &PageData) -> String {
          spectral matrix (FDD); hover over a pole for its numbers and why it was kept or \
          rejected; drag to zoom, double-click to zoom out.</p><div id=\"diagram\"></div>\
          <div id=\"tip\" class=\"tip\"></div></section>\
+         <section id=\"track-section\"><h2>Each mode against time</h2>\
+         <p class=\"help\">Frequency and damping ratio of every record ± one standard error; \
+         the training's end dashed, alarms in red; drag to zoom, double-click to zoom out.</p>\
+         <div id=\"track\"></div></section>\
          <section><h2>Modes</h2><table id=\"modes\"></table></section>\
          <section><h2>Mode shapes</h2><p class=\"help\">Drag to turn, scroll to zoom.</p>\
          <label>Mode <select id=\"mode-pick\"></select></label><div id=\"shape\"></div></section>\

@@ -73,6 +73,55 @@
     document.getElementById("diagram-section").style.display = "none";
   }
 
+  // --- a campaign: each mode against time -----------------------------------------------
+  function track(T) {
+    const host = document.getElementById("track");
+    let charts = 0, points = 0;
+    T.modes.forEach((m) => {
+      [["frequency_hz", "frequency_se_hz", "frequency (Hz)", 1], ["damping_ratio", "damping_se", "damping ratio (%)", 100]].forEach(([key, se, label, k]) => {
+        const div = document.createElement("div");
+        div.className = "series";
+        host.appendChild(div);
+        const v = m[key].map((x) => k * x);
+        const lo = m[key].map((x, i) => (m[se][i] === null ? null : k * (x - m[se][i])));
+        const hi = m[key].map((x, i) => (m[se][i] === null ? null : k * (x + m[se][i])));
+        // Alarms as points on the series at the records nearest their times.
+        const alarm = v.map(() => null);
+        m.alarm_days.forEach((t) => {
+          let best = 0;
+          m.days.forEach((d, i) => { if (Math.abs(d - t) < Math.abs(m.days[best] - t)) best = i; });
+          alarm[best] = v[best];
+        });
+        const end = T.training_end_days;
+        new uPlot({
+          title: `${m.label}: ${label}`, width: Math.min(960, host.clientWidth || 960), height: 220,
+          scales: { x: { time: false } },
+          axes: [{ label: "time (days)" }, { label: label }],
+          series: [{ label: "days", value: (u, x) => fmt(x, 3) },
+            { label: "+1 se", stroke: "#9ecae1", points: { show: false } },
+            { label: "-1 se", stroke: "#9ecae1", points: { show: false } },
+            { label: label, stroke: "#1f77b4", width: 1, points: { show: true, size: 3 } },
+            { label: "alarm", paths: () => null, points: { show: true, size: 9, fill: "#d62728", stroke: "#d62728" } }],
+          bands: [{ series: [1, 2], fill: "rgba(31,119,180,0.15)" }],
+          hooks: { draw: [(u) => {
+            if (end === null || end === undefined) return;
+            const x = u.valToPos(end, "x", true), ctx = u.ctx;
+            ctx.save(); ctx.setLineDash([6, 4]); ctx.strokeStyle = "#555";
+            ctx.beginPath(); ctx.moveTo(x, u.bbox.top); ctx.lineTo(x, u.bbox.top + u.bbox.height); ctx.stroke(); ctx.restore();
+          }] },
+        }, [m.days, hi, lo, v, alarm], div);
+        charts += 1;
+        points += v.length;
+      });
+    });
+    host.dataset.charts = String(charts);
+    host.dataset.points = String(points);
+    host.dataset.alarms = String(T.modes.reduce((n, m) => n + m.alarm_days.length, 0));
+  }
+  if (D.track) { track(D.track); } else {
+    document.getElementById("track-section").style.display = "none";
+  }
+
   // --- the modes' table ------------------------------------------------------------------
   const table = document.getElementById("modes");
   const efdd = D.modes.some((m) => m.efdd), seen = D.modes.some((m) => m.seen);
@@ -81,7 +130,7 @@
   D.modes.forEach((m, i) => {
     const tr = document.createElement("tr");
     tr.className = "mode";
-    tr.innerHTML = `<td>${i + 1}</td><td>${fmt(m.frequency_hz, 4)}</td><td>${fmt(m.frequency_se_hz, 4)}</td>` +
+    tr.innerHTML = `<td>${m.number}</td><td>${fmt(m.frequency_hz, 4)}</td><td>${fmt(m.frequency_se_hz, 4)}</td>` +
       `<td>${fmt(100 * m.damping_ratio, 3)}</td><td>${m.damping_se === null ? "—" : fmt(100 * m.damping_se, 3)}</td><td>${fmt(m.mpc, 3)}</td>` +
       (efdd ? `<td>${m.efdd ? fmt(m.efdd[0], 4) : "—"}</td><td>${m.efdd ? fmt(100 * m.efdd[1], 3) : "—"}</td>` : "") +
       (seen ? `<td>${m.seen || ""}</td>` : "");
@@ -91,8 +140,8 @@
   // --- the MAC matrix --------------------------------------------------------------------
   const mac = document.getElementById("mac");
   if (D.mac.length) {
-    mac.innerHTML = "<tr><th></th>" + D.modes.map((m, i) => `<th>${i + 1}</th>`).join("") + "</tr>" +
-      D.mac.map((row, i) => `<tr><th>${i + 1}: ${fmt(D.modes[i].frequency_hz, 3)} Hz</th>` + row.map((v) =>
+    mac.innerHTML = "<tr><th></th>" + D.modes.map((m) => `<th>${m.number}</th>`).join("") + "</tr>" +
+      D.mac.map((row, i) => `<tr><th>${D.modes[i].number}: ${fmt(D.modes[i].frequency_hz, 3)} Hz</th>` + row.map((v) =>
         `<td style="background: rgba(31,119,180,${v.toFixed(3)}); color: ${v > 0.5 ? "#fff" : "#222"}">${v.toFixed(2)}</td>`).join("") + "</tr>").join("");
   }
 
@@ -101,7 +150,7 @@
   D.modes.forEach((m, i) => {
     const o = document.createElement("option");
     o.value = String(i);
-    o.textContent = `${i + 1}: ${m.frequency_hz.toFixed(3)} Hz`;
+    o.textContent = `${m.number}: ${m.frequency_hz.toFixed(3)} Hz`;
     pick.appendChild(o);
   });
   if (!S.xyz.length || !D.modes.length) { host.textContent = "no mode to draw"; return; }

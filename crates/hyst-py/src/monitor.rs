@@ -31,7 +31,8 @@ pub(crate) fn track_estimates(
         .detach(|| hyst::monitor::track_estimates(&records, &table.modes, &opts))
         .map_err(value_error)?;
     report.name_covariates(covariates.1);
-    Report::of(&estimates.display().to_string(), report)
+    let page = hyst::html::track_page(&report);
+    Report::of(&estimates.display().to_string(), report).map(|r| r.with_html(page))
 }
 
 /// Track the modes of `records` (each samples × channels); see the Python wrapper
@@ -173,6 +174,7 @@ impl Campaign {
             .detach(|| hyst::monitor::track(records, reference, &opts))
             .map_err(value_error)?;
         report.name_covariates(self.covariate_names);
-        Report::of("records", report)
+        let page = hyst::html::track_page(&report);
+        Report::of("records", report).map(|r| r.with_html(page))
     }
 }

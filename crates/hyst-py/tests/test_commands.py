@@ -201,11 +201,14 @@ def test_track_gives_the_commands_report(data_dir, hyst_bin, tmp_path, settings)
 
     y, _ = read_record(data_dir / "oma" / "data_3dof.csv")
     out = tmp_path / "track"
+    page = tmp_path / "track.html"
     run(hyst_bin, "track", "--input", data_dir / "oma" / "data_3dof.csv", "--fs", 20,
-        "--window", 300, "--columns", "y1,y2,y3", "--out", out, *cli_flags(settings))
+        "--window", 300, "--columns", "y1,y2,y3", "--out", out, "--html", page, *cli_flags(settings))
     windows = [y[i * 6000:(i + 1) * 6000] for i in range(10)]
     report = hyst.track(windows, 20.0, times=[300.0 * i for i in range(10)], **settings)
     assert comparable(report.to_dict()) == document(out / "report.json")
+    # The page a browser opens: the command's, from the same report.
+    assert report.html() == page.read_text()
     assert [round(m["frequency_hz"], 1) for m in report.to_dict()["reference"]] == [1.0, 2.8, 4.1]
     if settings:
         return

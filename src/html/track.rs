@@ -1,0 +1,135 @@
+//! The page of a monitoring campaign (`hyst track --html`): each reference mode's frequency
+//! and damping against time with ± one standard error, the records after training marked,
+//! and the alarms; the reference modes' table, shapes and MAC.
+
+use hyst_monitor::TrackReport;
+use serde::Serialize;
+
+use super::data::{ModeRow, PageData, Shapes, mac_matrix, pair};
+use covssi::Complex64 as C64;
+
+/// One reference mode's series.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct ModeSeries {
+    /// Its label.
+    pub label: String,
+    /// Each record's time (days from the first record).
+    pub days: Vec<f64>,
+    /// Frequency (Hz).
+    pub frequency_hz: Vec<f64>,
+    /// Its standard error (Hz; null without one).
+    pub frequency_se_hz: Vec<Option<f64>>,
+    /// Damping ratio.
+    pub damping_ratio: Vec<f64>,
+    /// Its standard error.
+    pub damping_se: Vec<Option<f64>>,
+    /// The times (days) of the alarms this mode raised.
+    pub alarm_days: Vec<f64>,
+}
+
+/// A campaign's series.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct TrackSeries {
+    /// One per reference mode.
+    pub modes: Vec<ModeSeries>,
+    /// The training ends here (days), when there is a baseline.
+    pub training_end_days: Option<f64>,
+}
+
+/// The page of a campaign's report.
+pub fn track_page_data(title: &str, report: &TrackReport) -> PageData {
+    let t0 = report
+        .rows
+        .iter()
+        .map(|r| r.time)
+        .fold(f64::INFINITY, f64::min);
+    let day = |t: f64| (t - t0) / 86_400.0;
+    let modes: Vec<ModeSeries> = report
+        .reference
+        .iter()
+        .enumerate()
+        .map(|(j, m)| {
+            let rows: Vec<_> = report.rows.iter().filter(|r| r.mode == j).collect();
+            ModeSeries {
+                label: format!("mode {j} ({:.3} Hz)", m.frequency_hz),
+                days: rows.iter().map(|r| day(r.time)).collect(),
+                frequency_hz: rows.iter().map(|r| r.frequency_hz).collect(),
+                frequency_se_hz: rows.iter().map(|r| r.frequency_se_hz).collect(),
+                damping_ratio: rows.iter().map(|r| r.damping_ratio).collect(),
+                damping_se: rows.iter().map(|r| r.damping_se).collect(),
+                alarm_days: report
+                    .alarms
+                    .iter()
+                    .filter(|a| a.mode == j)
+                    .map(|a| day(a.time))
+                    .collect(),
+            }
+        })
+        .collect();
+    // The first record charted (with a z) ends the training.
+    let training_end_days = report
+        .rows
+        .iter()
+        .filter(|r| r.z.is_some())
+        .map(|r| day(r.time))
+        .fold(None, |a: Option<f64>, t| Some(a.map_or(t, |a| a.min(t))));
+    let shapes: Vec<Vec<C64>> = report
+        .reference
+        .iter()
+        .map(|m| m.shape.clone().unwrap_or_default())
+        .collect();
+    let n = shapes.iter().map(Vec::len).max().unwrap_or(0);
+    let zero = [0.0, 0.0];
+    let records = report
+        .rows
+        .iter()
+        .map(|r| r.record)
+        .max()
+        .map_or(0, |m| m + 1);
+    PageData {
+        title: title.to_string(),
+        summary: vec![format!(
+            "{records} records, {} reference modes, {} alarms, {} records skipped.",
+            report.reference.len(),
+            report.alarms.len(),
+            report.skipped.len()
+        )],
+        diagram: None,
+        modes: report
+            .reference
+            .iter()
+            .enumerate()
+            .map(|(j, m)| ModeRow {
+                number: j,
+                frequency_hz: m.frequency_hz,
+                frequency_se_hz: m.frequency_se_hz,
+                damping_ratio: m.damping_ratio,
+                damping_se: m.damping_se,
+                mpc: m.shape.as_deref().map(covssi::mpc),
+                efdd: None,
+                seen: Some(format!(
+                    "tracked in {:.1} % of records",
+                    100.0 * report.tracked.get(j).copied().unwrap_or(0.0)
+                )),
+            })
+            .collect(),
+        mac: mac_matrix(&shapes),
+        shapes: Shapes {
+            names: (0..n).map(|c| c.to_string()).collect(),
+            xyz: (0..n).map(|i| [i as f64, 0.0, 0.0]).collect(),
+            lines: (1..n).map(|i| [i - 1, i]).collect(),
+            motion: shapes
+                .iter()
+                .map(|s| {
+                    (0..n)
+                        .map(|c| [zero, zero, s.get(c).map_or(zero, |v| pair(*v))])
+                        .collect()
+                })
+                .collect(),
+        },
+        track: Some(TrackSeries {
+            modes,
+            training_end_days,
+        }),
+    }
+}
