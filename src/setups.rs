@@ -4,7 +4,9 @@
 
 use std::fmt;
 
-use covssi::multisetup::{MergeError, MergeOptions, MergedModes, SetupModes, merge};
+use covssi::multisetup::{
+    MergeError, MergeOptions, MergedModes, SetupModes, SetupRecord, merge, merge_global,
+};
 use covssi::{AnalysisOptions, ModalAnalysis, SsiError};
 use rayon::prelude::*;
 
@@ -32,6 +34,14 @@ pub struct SetupsReport {
     pub setups: Vec<SetupAnalysis>,
     /// The merged modes.
     pub merged: MergedModes,
+    /// The global estimation beside it: SSI once on all setups' correlations
+    /// ([`covssi::multisetup::merge_global`]), with the first setup's decimation and the
+    /// setups' largest block rows; `None` when it was not run (`global_error` says why).
+    #[serde(default)]
+    pub global: Option<MergedModes>,
+    /// Why there is no global estimation.
+    #[serde(default)]
+    pub global_error: Option<String>,
 }
 
 /// Why a multi-setup analysis stopped.
@@ -65,11 +75,68 @@ pub fn analyze_setups(
     opts: &AnalysisOptions,
     merge_opts: &MergeOptions,
 ) -> Result<SetupsReport, SetupsError> {
-    let analysed: Vec<SetupAnalysis> = setups
+    let (analysed, records): (Vec<SetupAnalysis>, Vec<Vec<Vec<f64>>>) = setups
         .par_iter()
         .map(|s| analyze_one(s, fs, read, opts))
-        .collect::<Result<_, _>>()?;
-    Ok(merge_analysed(setups, analysed, merge_opts)?)
+        .collect::<Result<Vec<_>, _>>()?
+        .into_iter()
+        .unzip();
+    let global = global(setups, &analysed, &records, opts);
+    drop(records);
+    let mut report = merge_analysed(setups, analysed, merge_opts)?;
+    match global {
+        Ok(g) => report.global = Some(g),
+        Err(e) => report.global_error = Some(e),
+    }
+    Ok(report)
+}
+
+/// The global estimation of `setups` from their `records`, at the first setup's decimation
+/// and the setups' largest block rows.
+fn global(
+    setups: &[SetupSpec],
+    analysed: &[SetupAnalysis],
+    records: &[Vec<Vec<f64>>],
+    opts: &AnalysisOptions,
+) -> Result<MergedModes, String> {
+    let first = analysed.first().ok_or("no setup")?;
+    if let Some(other) = analysed.iter().find(|a| a.fs_hz != first.fs_hz) {
+        return Err(format!(
+            "setups `{}` and `{}` have different rates ({} and {} Hz)",
+            first.name, other.name, first.fs_hz, other.fs_hz
+        ));
+    }
+    let factor = first.analysis.decimation.factor.max(1);
+    let decimated: Vec<Vec<Vec<f64>>> = records
+        .par_iter()
+        .map(|r| {
+            r.iter()
+                .map(|c| {
+                    if factor > 1 {
+                        covssi::decimate::decimate(c, factor)
+                    } else {
+                        c.clone()
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    let block_rows = analysed
+        .iter()
+        .map(|a| a.analysis.ssi.block_rows)
+        .max()
+        .unwrap_or(2);
+    let input: Vec<SetupRecord<'_>> = setups
+        .iter()
+        .zip(&decimated)
+        .map(|(s, y)| SetupRecord {
+            name: s.name.clone(),
+            channels: s.channels.clone(),
+            y: y.iter().map(Vec::as_slice).collect(),
+        })
+        .collect();
+    merge_global(&input, first.fs_hz / factor as f64, block_rows, &opts.ssi)
+        .map_err(|e| e.to_string())
 }
 
 /// The setups `setups`, already identified (`analysed`, in the same order), merged: for a
@@ -93,15 +160,18 @@ pub fn merge_analysed(
     Ok(SetupsReport {
         setups: analysed,
         merged,
+        global: None,
+        global_error: None,
     })
 }
 
+/// One setup's analysis, and its channels as read (for the global estimation).
 fn analyze_one(
     s: &SetupSpec,
     fs: Option<f64>,
     read: &ReadOptions,
     opts: &AnalysisOptions,
-) -> Result<SetupAnalysis, SetupsError> {
+) -> Result<(SetupAnalysis, Vec<Vec<f64>>), SetupsError> {
     let mut table = crate::io::read_record(&s.file, read)?;
     let fs = table.rate(fs.or(s.fs_hz))?;
     let data = s
@@ -118,13 +188,14 @@ fn analyze_one(
             source,
         })?;
     analysis.channels = s.columns.clone();
-    Ok(SetupAnalysis {
+    let setup = SetupAnalysis {
         name: s.name.clone(),
         file,
         fs_hz: fs,
         samples: data.first().map_or(0, Vec::len),
         analysis,
-    })
+    };
+    Ok((setup, data))
 }
 
 /// A complex entry as magnitude∠phase°.
@@ -200,8 +271,54 @@ impl fmt::Display for SetupsReport {
         for note in &m.notes {
             writeln!(f, "note: {note}")?;
         }
+        self.fmt_global(f)
+    }
+}
+
+impl SetupsReport {
+    /// The global estimation's modes, each beside the merged mode nearest it (within 1 %)
+    /// and the MAC of their shapes.
+    fn fmt_global(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let Some(g) = &self.global else {
+            if let Some(e) = &self.global_error {
+                writeln!(f, "\nglobal estimation not run: {e}")?;
+            }
+            return Ok(());
+        };
+        writeln!(
+            f,
+            "\nglobal estimation (SSI once on all setups' correlations; no standard errors), beside the merge:"
+        )?;
+        writeln!(f, "  frequency (Hz)  damping (%)  merged mode  MAC with it")?;
+        for mode in &g.modes {
+            let near =
+                self.merged.modes.iter().enumerate().find(|(_, m)| {
+                    (m.frequency_hz - mode.frequency_hz).abs() <= 0.01 * m.frequency_hz
+                });
+            let (which, mac) = match near {
+                Some((i, m)) => (format!("{}", i + 1), format!("{:.3}", shape_mac(mode, m))),
+                None => ("—".into(), "—".into()),
+            };
+            writeln!(
+                f,
+                "  {:>14.4}  {:>11.3}  {which:>11}  {mac:>11}",
+                mode.frequency_hz,
+                100.0 * mode.damping_ratio
+            )?;
+        }
         Ok(())
     }
+}
+
+/// MAC of two merged shapes over the DOFs both have (the DOFs are the same list).
+fn shape_mac(a: &covssi::multisetup::MergedMode, b: &covssi::multisetup::MergedMode) -> f64 {
+    let (x, y): (Vec<_>, Vec<_>) = a
+        .shape
+        .iter()
+        .zip(&b.shape)
+        .filter_map(|(p, q)| Some(((*p)?, (*q)?)))
+        .unzip();
+    covssi::mac(&x, &y)
 }
 
 fn round3(v: f64) -> f64 {

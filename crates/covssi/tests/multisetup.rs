@@ -5,7 +5,9 @@
 //! `HYST_MULTISETUP_SEEDS` (default 1) seeds from `HYST_MULTISETUP_SEED` (default 4_700_001),
 //! 1000 apart: `cargo test --release -p covssi --test multisetup -- --nocapture`.
 
-use covssi::multisetup::{MergeOptions, MergedModes, Quantity, SetupChannel, SetupModes, merge};
+use covssi::multisetup::{
+    MergeOptions, MergedModes, Quantity, SetupChannel, SetupModes, SetupRecord, merge, merge_global,
+};
 use covssi::synth::{ModalRecord, pole};
 use covssi::{AnalysisOptions, Complex64 as C64, analyze, mac};
 
@@ -68,32 +70,58 @@ fn record(chans: &[(usize, Quantity, bool)], level: f64, seed: u64) -> Vec<Vec<f
         .generate(SAMPLES, seed)
 }
 
-fn merged_for(seed: u64) -> MergedModes {
-    let setups: Vec<SetupModes> = layout()
+/// The setups of `seed` merged after identification (PoSER) and by SSI once on all their
+/// correlations (global), with the first setup's lag.
+fn merged_for(seed: u64) -> (MergedModes, MergedModes) {
+    let records: Vec<Vec<Vec<f64>>> = layout()
         .iter()
         .enumerate()
-        .map(|(s, chans)| {
-            let level = 1.0 + 0.5 * s as f64;
-            let y = record(chans, level, seed + s as u64);
+        .map(|(s, chans)| record(chans, 1.0 + 0.5 * s as f64, seed + s as u64))
+        .collect();
+    let channels = |chans: &[(usize, Quantity, bool)]| -> Vec<SetupChannel> {
+        chans
+            .iter()
+            .map(|&(k, quantity, reference)| SetupChannel {
+                node: k.to_string(),
+                direction: [1.0, 0.0, 0.0],
+                quantity,
+                gain: 1.0,
+                reference,
+            })
+            .collect()
+    };
+    let mut block_rows = 0;
+    let setups: Vec<SetupModes> = layout()
+        .iter()
+        .zip(&records)
+        .enumerate()
+        .map(|(s, (chans, y))| {
             let views: Vec<&[f64]> = y.iter().map(|c| c.as_slice()).collect();
             let analysis = analyze(&views, FS, &AnalysisOptions::default()).unwrap();
+            assert_eq!(analysis.decimation.factor, 1);
+            block_rows = block_rows.max(analysis.ssi.block_rows);
             SetupModes {
                 name: format!("setup {}", s + 1),
-                channels: chans
-                    .iter()
-                    .map(|&(k, quantity, reference)| SetupChannel {
-                        node: k.to_string(),
-                        direction: [1.0, 0.0, 0.0],
-                        quantity,
-                        gain: 1.0,
-                        reference,
-                    })
-                    .collect(),
+                channels: channels(chans),
                 modes: analysis.reported_modes(),
             }
         })
         .collect();
-    merge(&setups, &MergeOptions::default()).unwrap()
+    let global: Vec<SetupRecord<'_>> = layout()
+        .iter()
+        .zip(&records)
+        .enumerate()
+        .map(|(s, (chans, y))| SetupRecord {
+            name: format!("setup {}", s + 1),
+            channels: channels(chans),
+            y: y.iter().map(|c| c.as_slice()).collect(),
+        })
+        .collect();
+    let opts = covssi::SsiOptions::default();
+    (
+        merge(&setups, &MergeOptions::default()).unwrap(),
+        merge_global(&global, FS, block_rows, &opts).unwrap(),
+    )
 }
 
 /// Squared z of every shape entry of mode `j` (the merged shape against the truth scaled to
@@ -122,13 +150,37 @@ fn shape_z2(merged: &MergedModes, m: usize, j: usize) -> (Vec<f64>, f64) {
     (z2, mac(&shape, &t))
 }
 
+/// The MAC of the global estimate's mode `m` with the truth's mode `j` over every DOF.
+fn global_mac(global: &MergedModes, m: usize, j: usize) -> f64 {
+    let (shape, t): (Vec<C64>, Vec<C64>) = global
+        .dofs
+        .iter()
+        .zip(&global.modes[m].shape)
+        .filter_map(|(d, v)| Some(((*v)?, C64::new(truth(j, d.node.parse().ok()?), 0.0))))
+        .unzip();
+    mac(&shape, &t)
+}
+
 #[test]
 fn merged_roving_setups_find_the_true_shapes_with_calibrated_errors() {
     let seeds: u64 = std::env::var("HYST_MULTISETUP_SEEDS").map_or(1, |v| v.parse().unwrap());
     let base: u64 = std::env::var("HYST_MULTISETUP_SEED").map_or(4_700_001, |v| v.parse().unwrap());
     let (mut shape_z2s, mut freq_z2, mut damp_z2, mut macs) = (vec![], vec![], vec![], vec![]);
+    let mut global_macs = vec![];
     for seed in (0..seeds).map(|i| base + 1000 * i) {
-        let merged = merged_for(seed);
+        let (merged, global) = merged_for(seed);
+        for (j, &(f, _)) in MODES.iter().enumerate() {
+            // The nearest mode in frequency: stacking setups' correlations adds spurious
+            // stable poles (their noises differ), some within 2 % of a true mode.
+            let m = (0..global.modes.len())
+                .min_by(|&a, &b| {
+                    let d = |m: usize| (global.modes[m].frequency_hz - f).abs();
+                    d(a).total_cmp(&d(b))
+                })
+                .filter(|&m| (global.modes[m].frequency_hz - f).abs() < 0.02 * f)
+                .unwrap_or_else(|| panic!("seed {seed}: no global mode near {f} Hz"));
+            global_macs.push(global_mac(&global, m, j));
+        }
         assert_eq!(
             merged.modes.len(),
             MODES.len(),
@@ -157,6 +209,15 @@ fn merged_roving_setups_find_the_true_shapes_with_calibrated_errors() {
     }
     let rms = |v: &[f64]| (v.iter().sum::<f64>() / v.len() as f64).sqrt();
     let least_mac = macs.iter().cloned().fold(1.0, f64::min);
+    let least_global = global_macs.iter().cloned().fold(1.0, f64::min);
+    let mean_global = global_macs.iter().sum::<f64>() / global_macs.len() as f64;
+    println!(
+        "global estimation (SSI once on all setups' correlations): MAC to the truth mean {mean_global:.5}, least {least_global:.5}"
+    );
+    // The global estimate is SSI's alone (no refinement, no errors). Over 30 seeds
+    // (4710001 + 1000 k) its MAC to the truth averaged 0.987, least 0.939, against the merge
+    // after identification's least 0.997: bounds of 0.97 and 0.9 hold that with margin.
+    assert!(mean_global > 0.97 && least_global > 0.9, "{global_macs:?}");
     println!(
         "{seeds} seed(s): shape z RMS {:.2} over {} entries, frequency z RMS {:.2}, damping z RMS {:.2} over {} modes, least MAC {least_mac:.5}",
         rms(&shape_z2s),

@@ -58,9 +58,12 @@
 //! assert!((m.shape[2].unwrap().re - 0.8).abs() < 1e-9);
 //! ```
 
+mod global;
 mod matching;
 mod nodes;
 mod scale;
+
+pub use global::{GlobalError, SetupRecord, merge_global};
 
 use crate::{Complex64 as C64, ReportedMode};
 
@@ -189,7 +192,8 @@ pub struct MergedMode {
     /// `None` for a mode seen in one setup or without errors. Above 1 it has widened both
     /// standard errors.
     pub scatter_ratio: Option<f64>,
-    /// The setups that saw it.
+    /// The setups that saw it (empty from [`merge_global`], where every setup's
+    /// correlations made each mode).
     pub seen_in: Vec<SeenIn>,
     /// Its shape at every [`MergedDof`] as a displacement, the largest entry 1; `None` where
     /// the setups measuring that DOF did not see the mode.
@@ -273,7 +277,11 @@ const SAME_DIRECTION: f64 = 0.9999;
 pub fn merge(setups: &[SetupModes], opts: &MergeOptions) -> Result<MergedModes, MergeError> {
     check(setups, opts)?;
     let mut notes = Vec::new();
-    let dofs = dofs_of(setups, &mut notes)?;
+    let described: Vec<(String, Vec<SetupChannel>)> = setups
+        .iter()
+        .map(|s| (s.name.clone(), s.channels.clone()))
+        .collect();
+    let dofs = dofs_of(&described, &mut notes)?;
     let converted: Vec<Vec<scale::Shape>> = setups
         .iter()
         .map(|setup| {
@@ -378,10 +386,13 @@ fn same_dof(node: &str, direction: [f64; 3], dof: &MergedDof) -> bool {
 
 /// The merged DOFs: the references every setup shares first, then every other node and
 /// direction in the order met. A reference some setups lack is said and kept as a roving DOF.
-fn dofs_of(setups: &[SetupModes], notes: &mut Vec<String>) -> Result<Vec<MergedDof>, MergeError> {
+fn dofs_of(
+    setups: &[(String, Vec<SetupChannel>)],
+    notes: &mut Vec<String>,
+) -> Result<Vec<MergedDof>, MergeError> {
     let mut dofs: Vec<MergedDof> = Vec::new();
-    for (s, setup) in setups.iter().enumerate() {
-        for ch in &setup.channels {
+    for (s, (_, channels)) in setups.iter().enumerate() {
+        for ch in channels {
             match dofs
                 .iter_mut()
                 .find(|d| same_dof(&ch.node, ch.direction, d))
@@ -406,7 +417,7 @@ fn dofs_of(setups: &[SetupModes], notes: &mut Vec<String>) -> Result<Vec<MergedD
             d.reference = false;
             let missing: Vec<&str> = (0..setups.len())
                 .filter(|s| !d.setups.contains(s))
-                .map(|s| setups[s].name.as_str())
+                .map(|s| setups[s].0.as_str())
                 .collect();
             notes.push(format!(
                 "the reference at node {} along {:?} is not in setup(s) {}: it moved, and is merged as a roving channel",
@@ -419,14 +430,13 @@ fn dofs_of(setups: &[SetupModes], notes: &mut Vec<String>) -> Result<Vec<MergedD
     if !dofs.iter().any(|d| d.reference) {
         let detail = setups
             .iter()
-            .map(|s| {
-                let refs: Vec<String> = s
-                    .channels
+            .map(|(name, channels)| {
+                let refs: Vec<String> = channels
                     .iter()
                     .filter(|c| c.reference)
                     .map(|c| format!("{} {:?}", c.node, unit(c.direction)))
                     .collect();
-                format!("`{}`: [{}]", s.name, refs.join(", "))
+                format!("`{name}`: [{}]", refs.join(", "))
             })
             .collect::<Vec<_>>()
             .join("; ");
