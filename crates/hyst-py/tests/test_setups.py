@@ -96,3 +96,29 @@ def test_the_pages_are_the_commands(hyst_bin, setups, tmp_path):
     assert result.html(title=f"hyst ssi: {one}") == page.read_text()
     with pytest.raises(ValueError, match="has no page"):
         hyst.amplitude(y[:, 0], FS).html()
+
+
+def test_setups_of_universal_files_take_node_and_direction_from_the_file(tmp_path):
+    """Two setups written by pyuff as datasets 58 (each channel at its node, along +Z): the
+    setup file names only the columns (`6+Z`), the file gives each channel's node and
+    direction, and the merge is the one the same setups give as CSV with them written out."""
+    pyuff = need("pyuff")
+    from test_uff import set58, write_uff
+
+    rows = ["setup,file,column,node,direction,quantity,reference"]
+    csv_rows = list(rows)
+    for name, roving, seed in (("one", 3, 4711), ("two", 4, 4712)):
+        y = record([6, 5, roving], seed)
+        write_uff(tmp_path / f"{name}.uff", [set58(y[:, c], n, dx=1 / FS) for c, n in enumerate([6, 5, roving])])
+        back = np.column_stack([s["data"] for s in pyuff.UFF(str(tmp_path / f"{name}.uff")).read_sets()])
+        np.savetxt(tmp_path / f"{name}.csv", back, delimiter=",", header="a,b,r", comments="")
+        for col, node, ref in (("6+Z", 6, "yes"), ("5+Z", 5, "yes"), (f"{roving}+Z", roving, "no")):
+            rows.append(f"{name},{name}.uff,{col},,,displacement,{ref}")
+            csv_rows.append(f"{name},{name}.csv,{'abr'[[6, 5, roving].index(node)]},{node},z,displacement,{ref}")
+    (tmp_path / "uff_setups.csv").write_text("\n".join(rows) + "\n")
+    (tmp_path / "csv_setups.csv").write_text("\n".join(csv_rows) + "\n")
+    from_uff = hyst.ssi(setups=tmp_path / "uff_setups.csv").to_dict()["merged"]
+    from_csv = hyst.ssi(setups=tmp_path / "csv_setups.csv", fs=FS).to_dict()["merged"]
+    assert [(d["node"], d["direction"]) for d in from_uff["dofs"]] == [
+        ("6", [0.0, 0.0, 1.0]), ("5", [0.0, 0.0, 1.0]), ("3", [0.0, 0.0, 1.0]), ("4", [0.0, 0.0, 1.0])]
+    assert from_uff["modes"] == from_csv["modes"]
