@@ -274,9 +274,34 @@ pub enum MergeError {
 const SAME_DIRECTION: f64 = 0.9999;
 
 /// Merge the modes of `setups` into one mode set (see the [module](self) for the method).
+/// A mode without a shape (the refinement gave it none) cannot be scaled: it is left out,
+/// and said.
 pub fn merge(setups: &[SetupModes], opts: &MergeOptions) -> Result<MergedModes, MergeError> {
     check(setups, opts)?;
     let mut notes = Vec::new();
+    // The modes with shapes, and each one's index among its setup's modes as given.
+    let mut given_index: Vec<Vec<usize>> = Vec::with_capacity(setups.len());
+    let with_shapes: Vec<SetupModes> = setups
+        .iter()
+        .map(|s| {
+            let mut index = Vec::new();
+            let mut modes = Vec::new();
+            for (i, m) in s.modes.iter().enumerate() {
+                if m.shape.is_some() {
+                    index.push(i);
+                    modes.push(m.clone());
+                } else {
+                    notes.push(format!(
+                        "setup `{}`: the mode at {:.4} Hz has no shape and is left out",
+                        s.name, m.frequency_hz
+                    ));
+                }
+            }
+            given_index.push(index);
+            SetupModes { modes, ..s.clone() }
+        })
+        .collect();
+    let setups = with_shapes.as_slice();
     let described: Vec<(String, Vec<SetupChannel>)> = setups
         .iter()
         .map(|s| (s.name.clone(), s.channels.clone()))
@@ -312,6 +337,9 @@ pub fn merge(setups: &[SetupModes], opts: &MergeOptions) -> Result<MergedModes, 
         })
         .collect();
     modes.sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
+    for seen in modes.iter_mut().flat_map(|m| m.seen_in.iter_mut()) {
+        seen.mode = given_index[seen.setup][seen.mode];
+    }
     Ok(MergedModes {
         setups: setups.iter().map(|s| s.name.clone()).collect(),
         dofs,
@@ -360,7 +388,9 @@ fn check(setups: &[SetupModes], opts: &MergeOptions) -> Result<(), MergeError> {
             }
         }
         for (i, m) in setup.modes.iter().enumerate() {
-            let entries = m.shape.as_ref().map_or(0, |s| s.len());
+            let Some(entries) = m.shape.as_ref().map(|s| s.len()) else {
+                continue;
+            };
             if entries != setup.channels.len() {
                 return Err(MergeError::ShapeLength {
                     setup: setup.name.clone(),

@@ -271,3 +271,29 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn a_mode_without_a_shape_is_left_out_and_said() {
+    let mut setups = roving_setups();
+    let mut shapeless = observed(&setups[0].channels, &along, 7.0, c(1.0, 0.0));
+    shapeless.shape = None;
+    shapeless.shape_se = None;
+    setups[0].modes.insert(0, shapeless);
+    let merged = merge(&setups, &MergeOptions::default()).unwrap();
+    assert_eq!(merged.modes.len(), 1);
+    assert!(
+        merged
+            .notes
+            .iter()
+            .any(|n| n.contains("7.0000 Hz has no shape")),
+        "{:?}",
+        merged.notes
+    );
+    // The merged mode names setup 1's mode by its place among the modes given.
+    let seen = merged.modes[0]
+        .seen_in
+        .iter()
+        .find(|s| s.setup == 0)
+        .unwrap();
+    assert_eq!(seen.mode, 1);
+}
