@@ -107,18 +107,12 @@ fn global(
         ));
     }
     let factor = first.analysis.decimation.factor.max(1);
+    // Decimated when the first setup was; else the records as read, not copied.
     let decimated: Vec<Vec<Vec<f64>>> = records
-        .par_iter()
+        .iter()
         .map(|r| {
-            r.iter()
-                .map(|c| {
-                    if factor > 1 {
-                        covssi::decimate::decimate(c, factor)
-                    } else {
-                        c.clone()
-                    }
-                })
-                .collect()
+            let views: Vec<&[f64]> = r.iter().map(Vec::as_slice).collect();
+            covssi::decimate::decimate_channels(&views, factor)
         })
         .collect();
     let block_rows = analysed
@@ -128,11 +122,14 @@ fn global(
         .unwrap_or(2);
     let input: Vec<SetupRecord<'_>> = setups
         .iter()
-        .zip(&decimated)
-        .map(|(s, y)| SetupRecord {
+        .zip(records.iter().zip(&decimated))
+        .map(|(s, (read, decimated))| SetupRecord {
             name: s.name.clone(),
             channels: s.channels.clone(),
-            y: y.iter().map(Vec::as_slice).collect(),
+            y: if factor > 1 { decimated } else { read }
+                .iter()
+                .map(Vec::as_slice)
+                .collect(),
         })
         .collect();
     merge_global(&input, first.fs_hz / factor as f64, block_rows, &opts.ssi)

@@ -24,13 +24,7 @@ const PAGE_CSS: &str = include_str!("page.css");
 /// page of that analysis draws behind its diagram; `None` when the record is too short for it.
 pub fn fdd_of(analysis: &covssi::ModalAnalysis, y: &[&[f64]], fs: f64) -> Option<covssi::fdd::Fdd> {
     let factor = analysis.decimation.factor.max(1);
-    let decimated: Vec<Vec<f64>> = if factor > 1 {
-        y.iter()
-            .map(|c| covssi::decimate::decimate(c, factor))
-            .collect()
-    } else {
-        Vec::new()
-    };
+    let decimated = covssi::decimate::decimate_channels(y, factor);
     let views: Vec<&[f64]> = if factor > 1 {
         decimated.iter().map(Vec::as_slice).collect()
     } else {

@@ -4,8 +4,6 @@
 
 use std::fmt;
 
-use rayon::prelude::*;
-
 use crate::plausibility::{NotReported, not_physical};
 use crate::progress::Progress;
 use crate::refine::{MISFIT_LIMIT, SAME_MODE_DISTANCE};
@@ -73,17 +71,6 @@ fn decimation_of(
     }
 }
 
-/// Every channel of `y` decimated by `factor` ([`crate::decimate`], in parallel); none when
-/// `factor` is 1 (the channels are used as they are).
-fn decimate_all(y: &[&[f64]], factor: usize) -> Vec<Vec<f64>> {
-    if factor <= 1 {
-        return Vec::new();
-    }
-    y.par_iter()
-        .map(|c| crate::decimate::decimate(c, factor))
-        .collect()
-}
-
 /// How the record was decimated before the analysis.
 #[derive(Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -118,7 +105,7 @@ impl AnalysisOptions {
         let mut opts = self.clone();
         opts.decimation = Decimation::Factor(factor);
         if self.ssi.block_rows == crate::BlockRows::Auto {
-            let decimated = decimate_all(y, factor);
+            let decimated = crate::decimate::decimate_channels(y, factor);
             let choice = if factor > 1 {
                 let views: Vec<&[f64]> = decimated.iter().map(|c| c.as_slice()).collect();
                 let (n, means) = crate::identify::check_channels(&views)?;
@@ -195,7 +182,7 @@ pub fn analyze_with_progress(
     crate::identify::check_fs(fs)?;
     let checked = crate::identify::check_channels(y)?;
     let (factor, survey) = decimation_of(y, fs, &checked, opts.decimation)?;
-    let decimated = decimate_all(y, factor);
+    let decimated = crate::decimate::decimate_channels(y, factor);
     let views: Vec<&[f64]> = if factor > 1 {
         decimated.iter().map(|c| c.as_slice()).collect()
     } else {

@@ -57,6 +57,16 @@ pub fn decimate(x: &[f64], r: usize) -> Vec<f64> {
     buf[..n].iter().step_by(r).map(|v| v * scale).collect()
 }
 
+/// Every channel of `y` decimated by `factor` ([`decimate`], channels in parallel); none when
+/// `factor` is at most 1 (the caller uses the channels as they are).
+pub fn decimate_channels(y: &[&[f64]], factor: usize) -> Vec<Vec<f64>> {
+    use rayon::prelude::*;
+    if factor <= 1 {
+        return Vec::new();
+    }
+    y.par_iter().map(|c| decimate(c, factor)).collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
