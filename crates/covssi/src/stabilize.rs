@@ -371,7 +371,8 @@ pub struct Mode {
     pub damping_ratio: f64,
     /// Standard deviation of the members' damping ratios.
     pub damping_std: f64,
-    /// Mean of the members' shapes, each scaled so that its largest entry is 1.
+    /// Mean of the members' shapes, each scaled alike (one common entry 1), then the mean
+    /// scaled so that its largest entry is 1.
     pub shape: Vec<C64>,
     /// Standard deviation of the scaled shapes' entries (magnitude of the complex spread).
     pub shape_std: Vec<f64>,
@@ -412,6 +413,33 @@ pub(crate) fn largest_entry(shape: &[C64]) -> usize {
     (0..shape.len())
         .max_by(|&a, &b| shape[a].norm().total_cmp(&shape[b].norm()))
         .unwrap_or(0)
+}
+
+/// The shapes `members` of one mode each scaled so that one common entry is 1: the entry
+/// largest over them all (by the sum of each member's share of its own energy there). Scaled
+/// each by its own largest entry, members whose two largest entries are about equal (a mode
+/// shape antisymmetric about a node) would flip sign between orders and average to nothing.
+fn scaled_alike(members: &[&[C64]]) -> Vec<Vec<C64>> {
+    let l = members.first().map_or(0, |s| s.len());
+    let weight = |a: usize| -> f64 {
+        members
+            .iter()
+            .map(|s| {
+                let e: f64 = s.iter().map(|v| v.norm_sqr()).sum();
+                if e > 0.0 { s[a].norm_sqr() / e } else { 0.0 }
+            })
+            .sum()
+    };
+    let common = (0..l)
+        .max_by(|&a, &b| weight(a).total_cmp(&weight(b)))
+        .unwrap_or(0);
+    members
+        .iter()
+        .map(|s| match s.get(common) {
+            Some(v) if v.norm() > 0.0 => s.iter().map(|x| x / v).collect(),
+            _ => normalise(s),
+        })
+        .collect()
 }
 
 fn normalise(shape: &[C64]) -> Vec<C64> {
@@ -549,6 +577,47 @@ fn pole_clusters(
 /// (the Silverbox record's multisine lines: 0.12 % damping, ± 1.5 Hz, 9.4 bandwidths).
 const MAX_SPREAD_BANDWIDTHS: f64 = 2.0;
 
+/// The mean of a mode's member poles' shapes (scaled alike, then the mean's largest entry 1)
+/// and each entry's standard deviation over them (magnitude of the complex spread).
+fn mean_shape(poles: &[&Pole]) -> (Vec<C64>, Vec<f64>) {
+    let member_shapes: Vec<&[C64]> = poles.iter().map(|p| p.shape.as_slice()).collect();
+    let shapes = scaled_alike(&member_shapes);
+    let l = shapes.first().map_or(0, Vec::len);
+    let k = shapes.len() as f64;
+    let mean: Vec<C64> = (0..l)
+        .map(|a| shapes.iter().map(|s| s[a]).sum::<C64>() / k)
+        .collect();
+    // The mean's own largest entry 1, the members with it.
+    let big = mean
+        .get(largest_entry(&mean))
+        .copied()
+        .unwrap_or(C64::new(1.0, 0.0));
+    let big = if big.norm() > 0.0 {
+        big
+    } else {
+        C64::new(1.0, 0.0)
+    };
+    let mean: Vec<C64> = mean.iter().map(|v| v / big).collect();
+    let shapes: Vec<Vec<C64>> = shapes
+        .iter()
+        .map(|s| s.iter().map(|v| v / big).collect())
+        .collect();
+    let spread: Vec<f64> = (0..l)
+        .map(|a| {
+            let v = shapes
+                .iter()
+                .map(|s| (s[a] - mean[a]).norm_sqr())
+                .sum::<f64>();
+            if shapes.len() > 1 {
+                (v / (k - 1.0)).sqrt()
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    (mean, spread)
+}
+
 pub(crate) fn cluster(
     d: &StabilizationDiagram,
     opts: &SsiOptions,
@@ -579,25 +648,8 @@ pub(crate) fn cluster(
                 let z: Vec<f64> = poles.iter().map(|p| p.damping_ratio).collect();
                 let (fm, fs) = mean_std(&f);
                 let (zm, zs) = mean_std(&z);
-                let shapes: Vec<Vec<C64>> = poles.iter().map(|p| normalise(&p.shape)).collect();
-                let l = shapes[0].len();
-                let k = shapes.len() as f64;
-                let mean: Vec<C64> = (0..l)
-                    .map(|a| shapes.iter().map(|s| s[a]).sum::<C64>() / k)
-                    .collect();
-                let spread: Vec<f64> = (0..l)
-                    .map(|a| {
-                        let v = shapes
-                            .iter()
-                            .map(|s| (s[a] - mean[a]).norm_sqr())
-                            .sum::<f64>();
-                        if shapes.len() > 1 {
-                            (v / (k - 1.0)).sqrt()
-                        } else {
-                            0.0
-                        }
-                    })
-                    .collect();
+                let (mean, spread) = mean_shape(&poles);
+                let k = poles.len() as f64;
                 let lambda = poles.iter().map(|p| p.lambda).sum::<C64>() / k;
                 Mode {
                     mpc: mpc(&mean),
@@ -661,6 +713,25 @@ pub(crate) fn cluster(
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn members_whose_largest_entry_flips_average_to_their_shape() {
+        // An antisymmetric shape [1, 0, −1] whose members' largest entry alternates between
+        // the ends (noise): scaled alike they average to it, not to nothing.
+        let a = [
+            C64::new(1.0, 0.0),
+            C64::new(0.01, 0.0),
+            C64::new(-0.98, 0.0),
+        ];
+        let b = [C64::new(-0.97, 0.0), C64::new(0.0, 0.0), C64::new(1.0, 0.0)];
+        let b: Vec<C64> = b.iter().map(|v| -v * 2.0).collect();
+        let scaled = scaled_alike(&[&a, &b]);
+        for s in &scaled {
+            assert!((s[0] - 1.0).norm() < 1e-12 || (s[2] - 1.0).norm() < 1e-12);
+            // Each member scaled by one common entry: its ends −1 apart within 3 %.
+            assert!((s[0] / s[2] + 1.0).norm() < 0.04, "{s:?}");
+        }
+    }
+
     use super::*;
     use crate::{OrderPoles, SsiOptions, StabilizationDiagram};
 
