@@ -38,6 +38,10 @@ pub struct AnalysisOptions {
     pub ssi: SsiOptions,
     /// The refinement's options; `None` skips it. Default: on, with its defaults.
     pub refine: Option<RefineOptions>,
+    /// Standard errors for SSI's modes when they are the ones reported (no refinement, or
+    /// one the record does not follow): the jackknife over at most this many blocks of the
+    /// record ([`crate::jackknife`]); `None` (the default) leaves SSI's modes without errors.
+    pub ssi_errors: Option<usize>,
 }
 
 impl Default for AnalysisOptions {
@@ -46,6 +50,7 @@ impl Default for AnalysisOptions {
             decimation: Decimation::Auto,
             ssi: SsiOptions::default(),
             refine: Some(RefineOptions::default()),
+            ssi_errors: None,
         }
     }
 }
@@ -132,6 +137,13 @@ impl AnalysisOptions {
         self.refine = refine;
         self
     }
+
+    /// These options with SSI's modes given jackknife errors over at most `blocks` blocks
+    /// when they are reported (`None`: no errors).
+    pub fn with_ssi_errors(mut self, blocks: Option<usize>) -> Self {
+        self.ssi_errors = blocks;
+        self
+    }
 }
 
 /// What [`analyze`] finds: SSI's result (its fields at the top level in JSON), the MAC
@@ -161,6 +173,10 @@ pub struct ModalAnalysis {
     /// Nyquist or 0 Hz, a real pole outside the band, a standard error above the value):
     /// kept in the fit, not reported ([`crate::plausibility`]).
     pub not_reported: Vec<NotReported>,
+    /// Jackknife errors of SSI's modes ([`AnalysisOptions::ssi_errors`]): made only when
+    /// SSI's modes are the ones reported; `None` otherwise, or when the record is too short
+    /// for the blocks.
+    pub ssi_errors: Option<crate::jackknife::SsiErrors>,
 }
 
 /// The channels `y` sampled at `fs` Hz decimated as `opts.decimation` says, SSI on them,
@@ -231,7 +247,7 @@ pub fn analyze_with_progress(
     let not_reported = refined.as_ref().map_or_else(Vec::new, |r| {
         not_physical(r, fs, samples, opts.ssi.max_damping)
     });
-    Ok(ModalAnalysis {
+    let mut analysis = ModalAnalysis {
         channels: (0..y.len()).map(|c| c.to_string()).collect(),
         fs_hz: fs,
         decimation: DecimationReport {
@@ -244,7 +260,17 @@ pub fn analyze_with_progress(
         refined,
         not_refined,
         not_reported,
-    })
+        ssi_errors: None,
+    };
+    if let Some(blocks) = opts.ssi_errors
+        && analysis.reported_refinement().is_none()
+    {
+        let refs = crate::identify::references(&opts.ssi, y.len())?;
+        let (_, means) = crate::identify::check_channels(y)?;
+        analysis.ssi_errors =
+            crate::jackknife::ssi_errors(y, fs, (&refs, &means), &analysis.ssi, &opts.ssi, blocks)?;
+    }
+    Ok(analysis)
 }
 
 impl ModalAnalysis {
@@ -293,14 +319,18 @@ impl ModalAnalysis {
                 .ssi
                 .modes
                 .iter()
-                .map(|m| ReportedMode {
-                    frequency_hz: m.frequency_hz,
-                    frequency_se_hz: None,
-                    damping_ratio: m.damping_ratio,
-                    damping_se: None,
-                    shape: Some(m.shape.clone()),
-                    shape_se: None,
-                    shape_from_ssi: true,
+                .enumerate()
+                .map(|(i, m)| {
+                    let e = self.ssi_errors.as_ref().and_then(|e| e.modes[i].as_ref());
+                    ReportedMode {
+                        frequency_hz: m.frequency_hz,
+                        frequency_se_hz: e.map(|e| e.frequency_se_hz),
+                        damping_ratio: m.damping_ratio,
+                        damping_se: e.map(|e| e.damping_se),
+                        shape: Some(m.shape.clone()),
+                        shape_se: e.map(|e| e.shape_se.clone()),
+                        shape_from_ssi: true,
+                    }
                 })
                 .collect(),
         }
@@ -312,11 +342,12 @@ impl ModalAnalysis {
 pub struct ReportedMode {
     /// Natural frequency (Hz).
     pub frequency_hz: f64,
-    /// Its standard error (Hz): the refinement's; `None` for SSI's modes.
+    /// Its standard error (Hz): the refinement's, or for SSI's modes the jackknife's
+    /// ([`AnalysisOptions::ssi_errors`]); `None` when neither was made.
     pub frequency_se_hz: Option<f64>,
     /// Damping ratio.
     pub damping_ratio: f64,
-    /// Its standard error: the refinement's; `None` for SSI's modes.
+    /// Its standard error: as `frequency_se_hz`'s.
     pub damping_se: Option<f64>,
     /// The shape, one entry per channel, its largest entry 1; `None` for a refined mode
     /// the refinement gave no shape and SSI no mode near it.
@@ -324,7 +355,7 @@ pub struct ReportedMode {
     /// Whether `shape` is SSI's (the mode's SSI mode's, where the refinement gave none).
     pub shape_from_ssi: bool,
     /// Standard error of each entry of `shape` (√E|δ|², 0 for the entry scaled to 1): the
-    /// refinement's; `None` for SSI's shapes.
+    /// refinement's, or the jackknife's for SSI's shapes; `None` when neither was made.
     pub shape_se: Option<Vec<f64>>,
 }
 
@@ -422,6 +453,7 @@ impl ModalAnalysis {
                 m.members.len()
             )?;
         }
+        self.fmt_ssi_errors(f)?;
         // Shapes say something with several channels only (a one-channel shape is a number).
         if self.channels.len() > 1 && !res.modes.is_empty() {
             writeln!(
@@ -458,6 +490,38 @@ impl ModalAnalysis {
         }
         for n in &res.notes {
             writeln!(f, "note: {n}")?;
+        }
+        Ok(())
+    }
+
+    /// SSI's modes with the jackknife's standard errors, when made.
+    fn fmt_ssi_errors(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let Some(e) = &self.ssi_errors else {
+            return Ok(());
+        };
+        writeln!(
+            f,
+            "SSI's modes with standard errors (jackknife over {} blocks of the record):",
+            e.blocks
+        )?;
+        for (m, err) in self.ssi.modes.iter().zip(&e.modes) {
+            match err {
+                Some(err) => writeln!(
+                    f,
+                    "mode {:>9.4} ± {:.4} Hz  damping ratio {:.4} ± {:.4}  ({} of {} replicates)",
+                    m.frequency_hz,
+                    err.frequency_se_hz,
+                    m.damping_ratio,
+                    err.damping_se,
+                    err.replicates,
+                    e.blocks
+                )?,
+                None => writeln!(
+                    f,
+                    "mode {:>9.4} Hz: found in too few replicates for an error",
+                    m.frequency_hz
+                )?,
+            }
         }
         Ok(())
     }

@@ -144,7 +144,7 @@ pub(crate) fn check_fs(fs: f64) -> Result<(), SsiError> {
     }
 }
 
-fn references(opts: &SsiOptions, l: usize) -> Result<Vec<usize>, SsiError> {
+pub(crate) fn references(opts: &SsiOptions, l: usize) -> Result<Vec<usize>, SsiError> {
     match &opts.references {
         None => Ok((0..l).collect()),
         Some(r) => {
@@ -329,7 +329,7 @@ pub(crate) const SSI_STEPS_BEFORE_ORDERS: usize = 2;
 
 /// [`identify_from_correlations`], the largest order at most `order_cap` when the options
 /// leave it open, telling `progress` of the SVD and of each order done.
-fn identify_with_order_cap(
+pub(crate) fn identify_with_order_cap(
     corr: &Correlations,
     fs: f64,
     block_rows: usize,

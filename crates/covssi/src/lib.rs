@@ -56,6 +56,7 @@ mod error;
 pub mod fdd;
 pub mod harmonic;
 mod identify;
+pub mod jackknife;
 mod linalg;
 pub mod multisetup;
 mod options;

@@ -1,0 +1,298 @@
+//! Standard errors of SSI's modes by the delete-one-block jackknife.
+//!
+//! SSI's modes ([`crate::Mode`]) carry the spread of their poles over model orders, which is
+//! not their error: the orders all read the same record. The refinement's errors
+//! ([`crate::refine()`]) hold only where the record follows its model. This module gives SSI's
+//! modes errors of their own, from the record's variability alone:
+//!
+//! 1. The record is cut into $B$ blocks; each block's correlation sums
+//!    $S_{b,k} = \sum_{n\in b} y(n+k)\,y_{\text{ref}}(n)^\top$ (about the record's means) and
+//!    counts $N_{b,k}$ are formed once.
+//! 2. Replicate $b$ leaves block $b$ out: $\hat R^{(-b)}_k = \sum_{c\ne b} S_{c,k} /
+//!    \sum_{c\ne b} N_{c,k}$, and SSI is run on it with the record's block rows and largest
+//!    order, so that each replicate is the estimator the record's modes came from.
+//! 3. Each of the record's modes is matched to the replicate's mode nearest its pole (within
+//!    [`FREQUENCY_TOLERANCE`] in frequency and a MAC of at least [`MIN_MAC`]); the
+//!    replicate's shape is scaled so that the entry the mode's shape has as 1 is 1.
+//! 4. For each quantity $\theta$ (frequency, damping ratio, each shape entry) over the $B'$
+//!    replicates that found the mode, the jackknife variance
+//!    $\widehat{\operatorname{var}}\,\theta = \frac{B'-1}{B'}\sum_b |\theta_{(b)}-\bar\theta|^2$.
+//!
+//! Blocks much longer than the correlations' lags keep each replicate's estimate close to the
+//! record's; a block shorter than a mode's decay makes blocks' estimates depend on each other
+//! and the jackknife read low, so blocks are as long as [`MIN_BLOCK_LAGS`] times the lags at
+//! least (fewer blocks on a short record, none below [`MIN_BLOCKS`]). A mode found by fewer
+//! than [`MIN_FOUND`] of the replicates gets no error.
+
+use crate::corr::Correlations;
+use crate::identify::{SsiResult, identify_with_order_cap};
+use crate::linalg::C64;
+use crate::{SsiError, SsiOptions, mac};
+
+/// Relative frequency difference within which a replicate's mode may be the record's.
+pub const FREQUENCY_TOLERANCE: f64 = 0.02;
+/// The least MAC between a replicate's mode and the record's.
+pub const MIN_MAC: f64 = 0.8;
+/// Each block holds at least this many times the correlations' largest lag.
+pub const MIN_BLOCK_LAGS: usize = 4;
+/// The fewest blocks a jackknife is made of.
+pub const MIN_BLOCKS: usize = 5;
+/// The least share of replicates that must find a mode for it to get an error.
+pub const MIN_FOUND: f64 = 0.8;
+
+/// One mode's jackknife standard errors.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct ModeErrors {
+    /// Natural frequency's (Hz).
+    pub frequency_se_hz: f64,
+    /// Damping ratio's.
+    pub damping_se: f64,
+    /// Each shape entry's, √E|δ|² (0 for the entry scaled to 1).
+    pub shape_se: Vec<f64>,
+    /// How many replicates found the mode.
+    pub replicates: usize,
+}
+
+/// The jackknife's result: one entry per mode of the record's [`SsiResult`].
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct SsiErrors {
+    /// Blocks the record was cut into.
+    pub blocks: usize,
+    /// Each mode's errors, `None` where too few replicates found it.
+    pub modes: Vec<Option<ModeErrors>>,
+}
+
+/// Jackknife errors of `ssi`'s modes, SSI having been run on `y` (centred about `means`) at
+/// `fs` Hz with `opts` and reference channels `refs`; at most `blocks` blocks. `None` when the
+/// record is too short for [`MIN_BLOCKS`] blocks of [`MIN_BLOCK_LAGS`] lags.
+pub(crate) fn ssi_errors(
+    y: &[&[f64]],
+    fs: f64,
+    (refs, means): (&[usize], &[f64]),
+    ssi: &SsiResult,
+    opts: &SsiOptions,
+    blocks: usize,
+) -> Result<Option<SsiErrors>, SsiError> {
+    let n = y.first().map_or(0, |c| c.len());
+    let lags = 2 * ssi.block_rows;
+    let blocks = blocks.min(n / (MIN_BLOCK_LAGS * lags).max(1));
+    if blocks < MIN_BLOCKS || ssi.modes.is_empty() {
+        return Ok(None);
+    }
+    let sums = block_sums(y, (refs, means), lags, blocks);
+    let max_order = ssi.diagram.orders.last().map_or(0, |o| o.order);
+    let opts = SsiOptions {
+        max_order: Some(max_order),
+        ..opts.clone()
+    };
+    use rayon::prelude::*;
+    let replicates: Vec<SsiResult> = (0..blocks)
+        .into_par_iter()
+        .map(|b| {
+            let corr = leave_out(&sums, b);
+            identify_with_order_cap(&corr, fs, ssi.block_rows, &opts, max_order, &|_| {})
+        })
+        .collect::<Result<_, _>>()?;
+    let modes = ssi
+        .modes
+        .iter()
+        .map(|m| mode_errors(m, &replicates, blocks))
+        .collect();
+    Ok(Some(SsiErrors { blocks, modes }))
+}
+
+/// Each block's correlation sums and pair counts per lag.
+struct BlockSums {
+    /// `sums[b]`: block b's $S_{b,k}$ as [`Correlations`] (sums, not means).
+    sums: Vec<Correlations>,
+    /// `counts[b][k]`: pairs block b adds at lag k.
+    counts: Vec<Vec<f64>>,
+}
+
+/// The correlation sums of each of `blocks` equal stretches of `y` (the last takes the rest).
+/// A block's pairs $(n+k, n)$ are those whose earlier sample $n$ lies in it, so the blocks'
+/// sums add up to the record's.
+fn block_sums(
+    y: &[&[f64]],
+    (refs, means): (&[usize], &[f64]),
+    lags: usize,
+    blocks: usize,
+) -> BlockSums {
+    let n = y.first().map_or(0, |c| c.len());
+    let per = n / blocks;
+    let (sums, counts) = (0..blocks)
+        .map(|b| {
+            let start = b * per;
+            let end = if b + 1 == blocks { n } else { (b + 1) * per };
+            // The block and the samples its pairs reach past it.
+            let reach = (end + lags - 1).min(n);
+            let views: Vec<&[f64]> = y.iter().map(|c| &c[start..reach]).collect();
+            let mut corr = crate::corr::estimate_centred(&views, refs, lags, means);
+            let len = reach - start;
+            // The estimator's mean over len − k pairs back to a sum; then the pairs whose
+            // earlier sample is at or past `end` (the next block's) taken off.
+            for (k, rk) in corr.r.iter_mut().enumerate() {
+                let pairs = len.saturating_sub(k) as f64;
+                rk.iter_mut().for_each(|v| *v *= pairs);
+                for t in end..reach.saturating_sub(k) {
+                    for (bi, &rf) in refs.iter().enumerate() {
+                        let yr = y[rf][t] - means[rf];
+                        for (a, ch) in y.iter().enumerate() {
+                            rk[a + bi * y.len()] -= (ch[t + k] - means[a]) * yr;
+                        }
+                    }
+                }
+            }
+            let count: Vec<f64> = (0..lags)
+                .map(|k| (end - start).min(n.saturating_sub(k).saturating_sub(start)) as f64)
+                .collect();
+            (corr, count)
+        })
+        .unzip();
+    BlockSums { sums, counts }
+}
+
+/// The record's correlations without block `b`'s pairs.
+fn leave_out(s: &BlockSums, b: usize) -> Correlations {
+    let first = &s.sums[0];
+    let lags = first.r.len();
+    let r = (0..lags)
+        .map(|k| {
+            let count: f64 = (0..s.sums.len())
+                .filter(|&c| c != b)
+                .map(|c| s.counts[c][k])
+                .sum();
+            let mut rk = vec![0.0; first.r[k].len()];
+            for (_, block) in s.sums.iter().enumerate().filter(|(c, _)| *c != b) {
+                for (acc, v) in rk.iter_mut().zip(&block.r[k]) {
+                    *acc += v;
+                }
+            }
+            rk.iter_mut().for_each(|v| *v /= count);
+            rk
+        })
+        .collect();
+    Correlations {
+        channels: first.channels,
+        references: first.references,
+        r,
+    }
+}
+
+/// Mode `m`'s jackknife errors over the replicates that found it.
+fn mode_errors(m: &crate::Mode, replicates: &[SsiResult], blocks: usize) -> Option<ModeErrors> {
+    let one = m
+        .shape
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1.norm_sqr().total_cmp(&b.1.norm_sqr()))
+        .map(|(j, _)| j)?;
+    let found: Vec<(f64, f64, Vec<C64>)> = replicates
+        .iter()
+        .filter_map(|rep| {
+            let near = rep
+                .modes
+                .iter()
+                .filter(|r| {
+                    (r.frequency_hz - m.frequency_hz).abs() <= FREQUENCY_TOLERANCE * m.frequency_hz
+                        && mac(&r.shape, &m.shape) >= MIN_MAC
+                })
+                .min_by(|a, b| {
+                    (a.lambda - m.lambda)
+                        .norm()
+                        .total_cmp(&(b.lambda - m.lambda).norm())
+                })?;
+            let scale = near.shape[one];
+            (scale.norm() > 0.0).then(|| {
+                (
+                    near.frequency_hz,
+                    near.damping_ratio,
+                    near.shape.iter().map(|v| v / scale).collect(),
+                )
+            })
+        })
+        .collect();
+    let count = found.len();
+    if (count as f64) < MIN_FOUND * blocks as f64 || count < 2 {
+        return None;
+    }
+    let spread = |values: &[C64]| -> f64 {
+        let mean: C64 = values.iter().sum::<C64>() / count as f64;
+        let ss: f64 = values.iter().map(|v| (v - mean).norm_sqr()).sum();
+        ((count - 1) as f64 / count as f64 * ss).sqrt()
+    };
+    let real =
+        |values: Vec<f64>| -> Vec<C64> { values.into_iter().map(|v| C64::new(v, 0.0)).collect() };
+    Some(ModeErrors {
+        frequency_se_hz: spread(&real(found.iter().map(|r| r.0).collect())),
+        damping_se: spread(&real(found.iter().map(|r| r.1).collect())),
+        shape_se: (0..m.shape.len())
+            .map(|j| spread(&found.iter().map(|r| r.2[j]).collect::<Vec<_>>()))
+            .collect(),
+        replicates: count,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A deterministic, irregular record of `l` channels.
+    fn record(l: usize, n: usize) -> Vec<Vec<f64>> {
+        (0..l)
+            .map(|c| {
+                (0..n)
+                    .map(|t| ((t * (c + 3)) as f64 * 0.37).sin() + ((t * t + c) % 17) as f64 * 0.1)
+                    .collect()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_blocks_sums_add_up_to_the_records_correlations() {
+        let y = record(3, 1013);
+        let views: Vec<&[f64]> = y.iter().map(|c| c.as_slice()).collect();
+        let means: Vec<f64> = y
+            .iter()
+            .map(|c| c.iter().sum::<f64>() / c.len() as f64)
+            .collect();
+        let refs = [0, 2];
+        let lags = 24;
+        let whole = crate::corr::estimate_centred(&views, &refs, lags, &means);
+        for blocks in [1, 5, 7] {
+            let s = block_sums(&views, (&refs, &means), lags, blocks);
+            for k in 0..lags {
+                let count: f64 = s.counts.iter().map(|c| c[k]).sum();
+                // Every pair once: N − k of them.
+                assert_eq!(count, (1013 - k) as f64);
+                for (j, w) in whole.r[k].iter().enumerate() {
+                    let pooled: f64 = s.sums.iter().map(|b| b.r[k][j]).sum::<f64>() / count;
+                    // Sums of ~1000 products of order 1, in another order: 1e-10 relative.
+                    assert!(
+                        (pooled - w).abs() < 1e-10 * (1.0 + w.abs()),
+                        "{blocks} {k} {j}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn leaving_a_block_out_is_the_correlation_of_the_rest() {
+        // With the record's own pairs removed, leaving the last block out is the correlation
+        // of the samples before it (pairs whose earlier sample lies there).
+        let y = record(2, 900);
+        let views: Vec<&[f64]> = y.iter().map(|c| c.as_slice()).collect();
+        let means = vec![0.0, 0.0];
+        let s = block_sums(&views, (&[0], &means), 10, 6);
+        let rest = leave_out(&s, 5);
+        for k in 0..10 {
+            for a in 0..2 {
+                let direct: f64 = (0..750).map(|t| y[a][t + k] * y[0][t]).sum::<f64>() / 750.0;
+                assert!((rest.at(k, a, 0) - direct).abs() < 1e-12 * (1.0 + direct.abs()));
+            }
+        }
+    }
+}
