@@ -71,7 +71,15 @@ pub struct SsiSettings {
     pub refine: bool,
     /// Refine on the channels' joint likelihood (their cross-spectra), not each alone.
     pub joint: bool,
+    /// Standard errors for SSI's modes when they are the ones reported (no refinement, or
+    /// one the record does not follow): the jackknife over at most this many blocks of the
+    /// record ([`covssi::jackknife`]); 0: none. Default: [`SETUPS_JACKKNIFE_BLOCKS`] for
+    /// merged setups (whose shapes need errors to be merged with theirs), none for one record.
+    pub ssi_errors: Option<usize>,
 }
+
+/// The jackknife's blocks for SSI's modes of merged setups when the settings leave them open.
+pub const SETUPS_JACKKNIFE_BLOCKS: usize = 10;
 
 impl Default for SsiSettings {
     fn default() -> Self {
@@ -90,6 +98,7 @@ impl Default for SsiSettings {
             dreal: c.real,
             refine: true,
             joint: true,
+            ssi_errors: None,
         }
     }
 }
@@ -150,7 +159,16 @@ impl SsiSettings {
         Ok(AnalysisOptions::default()
             .with_decimation(decimation)
             .with_ssi(ssi)
-            .with_refine(refine))
+            .with_refine(refine)
+            .with_ssi_errors(self.ssi_errors.filter(|&b| b > 0)))
+    }
+
+    /// [`SsiSettings::analysis`] for each of several setups to be merged: SSI's modes get
+    /// errors over [`SETUPS_JACKKNIFE_BLOCKS`] blocks unless the settings say otherwise.
+    pub fn setups_analysis(&self) -> Result<AnalysisOptions, SettingsError> {
+        let mut s = self.clone();
+        s.ssi_errors = Some(s.ssi_errors.unwrap_or(SETUPS_JACKKNIFE_BLOCKS));
+        s.analysis()
     }
 
     /// The settings' names, in order: the flags and keywords both sides must have.

@@ -133,6 +133,12 @@ pub(crate) struct SsiFlags {
     /// does not support).
     #[arg(long)]
     pub(crate) no_refine: bool,
+    /// Standard errors for SSI's modes where they are reported (no refinement, or one the
+    /// record does not follow): the jackknife over at most BLOCKS blocks of the record;
+    /// 0: none. Default: 10 for --setups (their shapes are merged by their errors), none for
+    /// one record.
+    #[arg(long, value_name = "BLOCKS")]
+    pub(crate) ssi_errors: Option<usize>,
     /// Refine with each channel's likelihood alone, not the joint likelihood of all channels
     /// (which uses their cross-spectra; on by default for 2 to 4 channels, and above 4 through 4
     /// combinations of them, band by band when there are more than 4 modes).
@@ -161,19 +167,33 @@ impl SsiFlags {
         s.dreal = self.dreal;
         s.refine = !self.no_refine;
         s.joint = !self.no_joint;
+        s.ssi_errors = self.ssi_errors;
         s
     }
 
     /// The analysis these flags ask for, a setting out of range named by its flag.
     pub(crate) fn analysis(&self) -> Result<hyst::covssi::AnalysisOptions, Error> {
-        self.settings().analysis().map_err(|e| match e {
-            SettingsError::TooSmall { name, least, value } => fail(format!(
-                "--{} must be at least {least}, got {value}",
-                name.replace('_', "-")
-            )),
-            e => fail(e.to_string()),
-        })
+        setting_error(self.settings().analysis())
     }
+
+    /// [`SsiFlags::analysis`] for each of several setups to be merged
+    /// ([`SsiSettings::setups_analysis`]).
+    pub(crate) fn setups_analysis(&self) -> Result<hyst::covssi::AnalysisOptions, Error> {
+        setting_error(self.settings().setups_analysis())
+    }
+}
+
+/// A setting out of range named by its flag.
+fn setting_error(
+    analysis: Result<hyst::covssi::AnalysisOptions, SettingsError>,
+) -> Result<hyst::covssi::AnalysisOptions, Error> {
+    analysis.map_err(|e| match e {
+        SettingsError::TooSmall { name, least, value } => fail(format!(
+            "--{} must be at least {least}, got {value}",
+            name.replace('_', "-")
+        )),
+        e => fail(e.to_string()),
+    })
 }
 
 /// The channels to analyse, after `--skip`.
@@ -305,7 +325,7 @@ pub(crate) fn run(a: &SsiArgs) -> Result<(), Error> {
     // Settings that are wrong whatever the record, before it is read.
     let opts = a.ssi.analysis()?;
     let input = match (&a.input, &a.setups) {
-        (_, Some(setups)) => return run_setups(a, setups, &opts),
+        (_, Some(setups)) => return run_setups(a, setups, &a.ssi.setups_analysis()?),
         (Some(input), None) => input,
         (None, None) => return Err(fail("give --input or --setups".to_string())),
     };

@@ -355,7 +355,9 @@ fn ssi_setups(
     geometry: Option<std::path::PathBuf>,
     lines: Option<std::path::PathBuf>,
 ) -> PyResult<ident::Report> {
-    let opts = analysis_options(settings)?;
+    let opts = SsiSettings::from_json(settings)
+        .and_then(|s| s.setups_analysis())
+        .map_err(|e| PyValueError::new_err(e.to_string()))?;
     let (report, page) = py
         .detach(|| {
             let setups = hyst::io::read_setups(&path)?;

@@ -112,6 +112,7 @@ def ssi(
     dreal=None,
     refine=True,
     joint=True,
+    ssi_errors=None,
     channels=None,
     record="array",
     setups=None,
@@ -161,6 +162,11 @@ def ssi(
     joint : bool
         Fit the channels jointly, cross-spectra included (default True); False fits each
         channel's spectrum alone.
+    ssi_errors : int, optional
+        Standard errors for SSI's modes where they are the ones reported (``refine=False``,
+        or a record that does not follow the refinement's model): the jackknife over at
+        most this many blocks of the record; 0: none. Default: 10 with ``setups`` (their
+        shapes are merged by their errors), none for one record.
     channels : list of str, optional
         Names of the channels (they head the shapes in ``str(result)`` and the JSON).
     record : str
@@ -186,7 +192,7 @@ def ssi(
         ``frequency_hz``, ``damping_ratio``, ``frequency_se_hz``, ``damping_se``,
         ``shape`` (modes x channels, complex), ``shape_se``: the refined modes when the
         refinement ran and the record follows its model (``source == "refined"``), else
-        SSI's (``source == "ssi"``, standard errors NaN). ``ssi_modes``, ``real_poles``,
+        SSI's (``source == "ssi"``, standard errors NaN unless ``ssi_errors``). ``ssi_modes``, ``real_poles``,
         ``poles`` and ``pole_status`` (the stabilization diagram), ``misfit``,
         ``to_dict()``, ``to_json()``, ``stabilization_svg()``, ``html()`` (the page ``hyst ssi
         --html`` writes); ``print(result)`` prints the report of ``hyst ssi``.
@@ -207,6 +213,7 @@ def ssi(
             block_rows=block_rows, lag_seconds=lag_seconds, lag_periods=lag_periods,
             decimate=decimate, max_order=max_order, order_step=order_step, references=None,
             df=df, dzeta=dzeta, dmac=dmac, dreal=dreal, refine=refine, joint=joint,
+            ssi_errors=ssi_errors,
         )
         if fs is not None:
             _check_rate(fs)
@@ -230,6 +237,7 @@ def ssi(
         block_rows=block_rows, lag_seconds=lag_seconds, lag_periods=lag_periods,
         decimate=decimate, max_order=max_order, order_step=order_step, references=references,
         df=df, dzeta=dzeta, dmac=dmac, dreal=dreal, refine=refine, joint=joint,
+        ssi_errors=ssi_errors,
     )
     return _hyst.ssi(
         a,
@@ -244,7 +252,7 @@ def amplitude(y, fs, *, modes=None, measured="displacement", amplitude_of=None, 
               cycles=3.0, groups=20, min_triggers=50, band=None, method="envelope",
               period=None, block_rows=None, lag_seconds=None, lag_periods=None, decimate=None,
               max_order=None, order_step=1, references=None, df=None, dzeta=None, dmac=None,
-              dreal=None, refine=True, joint=True, record="array"):
+              dreal=None, refine=True, joint=True, ssi_errors=None, record="array"):
     """Each mode's natural frequency and damping ratio against its amplitude (``hyst
     amplitude``): the modes as :func:`ssi` finds them, each mode's response filtered out
     (a modal filter, then a band-pass), random decrement conditioned on its envelope in
@@ -281,7 +289,7 @@ def amplitude(y, fs, *, modes=None, measured="displacement", amplitude_of=None, 
         Samples per period of a periodic excitation: the periods are averaged into one,
         read as circular.
     block_rows, lag_seconds, lag_periods, decimate, max_order, order_step, references,
-    df, dzeta, dmac, dreal, refine, joint
+    df, dzeta, dmac, dreal, refine, joint, ssi_errors
         The modal analysis, as for :func:`ssi`.
     record : str
         What the data is, for the report (several records are named ``record[i]``).
@@ -328,6 +336,7 @@ def amplitude(y, fs, *, modes=None, measured="displacement", amplitude_of=None, 
         block_rows=block_rows, lag_seconds=lag_seconds, lag_periods=lag_periods,
         decimate=decimate, max_order=max_order, order_step=order_step, references=references,
         df=df, dzeta=dzeta, dmac=dmac, dreal=dreal, refine=refine, joint=joint,
+        ssi_errors=ssi_errors,
     )
     names = [f"{record}[{i}]" for i in range(len(arrays))] if many else [str(record)]
     return _hyst.amplitude(
@@ -337,7 +346,7 @@ def amplitude(y, fs, *, modes=None, measured="displacement", amplitude_of=None, 
 
 
 def _settings(*, block_rows, lag_seconds, lag_periods, decimate, max_order, order_step,
-              references, df, dzeta, dmac, dreal, refine, joint):
+              references, df, dzeta, dmac, dreal, refine, joint, ssi_errors=None):
     """The analysis settings :func:`ssi` and :func:`track` share, checked and written as
     the JSON object the library reads (``hyst::settings::SsiSettings``, whose fields are the
     command line's flags too); a keyword left None keeps the library's default."""
@@ -370,6 +379,7 @@ def _settings(*, block_rows, lag_seconds, lag_periods, decimate, max_order, orde
         "dreal": real(dreal, "dreal"),
         "refine": bool(refine),
         "joint": bool(joint),
+        "ssi_errors": _count(ssi_errors, "ssi_errors", 0),
     }
     # NaN and infinities are not JSON: the library's own checks name them.
     for k, v in values.items():
@@ -644,7 +654,8 @@ def levels(records, fs, mass, *, by_simulation=False, data_periodic=False, fit_e
 def track(records, fs, *, times=None, covariates=None, training=None, whiten=True,
           environment_model=True, reference=None, block_rows=None, lag_seconds=None, lag_periods=None, decimate=None,
           max_order=None, order_step=1, references=None, df=None, dzeta=None, dmac=None,
-          dreal=None, refine=True, joint=True, client=None, level_covariate=False):
+          dreal=None, refine=True, joint=True, ssi_errors=None, client=None,
+          level_covariate=False):
     """Track the modes of many records of one structure (``hyst track``).
 
     Each record is identified as :func:`ssi` does (in parallel), its modes matched to a
@@ -668,7 +679,7 @@ def track(records, fs, *, times=None, covariates=None, training=None, whiten=Tru
     training : int, optional
         The first this many records train the baselines (default 336, at most half).
     block_rows, lag_seconds, lag_periods, decimate, max_order, order_step, references,
-    df, dzeta, dmac, dreal, joint
+    df, dzeta, dmac, dreal, joint, ssi_errors
         The analysis of each record, as for :func:`ssi` (and ``hyst track``'s flags of the
         same names); what is left to the record (the lag, the decimation) is read from the
         first record and kept for every record, as ``hyst track`` does.
@@ -717,7 +728,7 @@ def track(records, fs, *, times=None, covariates=None, training=None, whiten=Tru
                 block_rows=block_rows, lag_seconds=lag_seconds, lag_periods=lag_periods,
                 decimate=decimate, max_order=max_order, order_step=order_step,
                 references=references, df=df, dzeta=dzeta, dmac=dmac, dreal=dreal,
-                refine=refine, joint=joint,
+                refine=refine, joint=joint, ssi_errors=ssi_errors,
             ),
         )
     arrays = []
@@ -753,7 +764,7 @@ def track(records, fs, *, times=None, covariates=None, training=None, whiten=Tru
             block_rows=block_rows, lag_seconds=lag_seconds, lag_periods=lag_periods,
             decimate=decimate, max_order=max_order, order_step=order_step,
             references=references, df=df, dzeta=dzeta, dmac=dmac, dreal=dreal, refine=refine,
-            joint=joint,
+            joint=joint, ssi_errors=ssi_errors,
         ),
         whiten=bool(whiten),
         environment_model=bool(environment_model),

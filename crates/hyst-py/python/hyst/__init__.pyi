@@ -136,6 +136,7 @@ def track(
     dreal: Optional[float] = ...,
     refine: bool = ...,
     joint: bool = ...,
+    ssi_errors: Optional[int] = ...,
     client: Optional[Any] = ...,
     level_covariate: bool = ...,
 ) -> Report: ...
@@ -183,6 +184,7 @@ def ssi(
     dreal: Optional[float] = ...,
     refine: bool = ...,
     joint: bool = ...,
+    ssi_errors: Optional[int] = ...,
     channels: Optional[Sequence[str]] = ...,
     record: str = ...,
     setups: None = ...,
@@ -207,6 +209,7 @@ def ssi(
     dreal: Optional[float] = ...,
     refine: bool = ...,
     joint: bool = ...,
+    ssi_errors: Optional[int] = ...,
     channels: None = ...,
     record: str = ...,
     setups: Union[str, os.PathLike[str]],
@@ -241,5 +244,6 @@ def amplitude(
     dreal: Optional[float] = ...,
     refine: bool = ...,
     joint: bool = ...,
+    ssi_errors: Optional[int] = ...,
     record: str = ...,
 ) -> Report: ...
