@@ -134,6 +134,123 @@ impl ModalRecord {
     }
 }
 
+/// A roving modal test with truth: a cantilever of `nodes` nodes, its first bending modes'
+/// shapes approximated by sines, sin((2j+1)πk/2N) at node k (1-based, the tip last), read in
+/// setups that share reference accelerometers while velocity sensors rove over the other
+/// nodes, each setup at its own excitation level (1 + 0.5 × its index) and seed (the test's
+/// seed plus its index). The records the multi-setup merge is judged on
+/// (`tests/multisetup.rs`) and compared with pyOMA2's (`cargo xtask compare-setups`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RovingTest {
+    /// Nodes along the cantilever.
+    pub nodes: usize,
+    /// Each mode's natural frequency (Hz) and damping ratio, by increasing frequency.
+    pub modes: Vec<(f64, f64)>,
+    /// Sampling rate (Hz).
+    pub fs: f64,
+    /// Samples per setup.
+    pub samples: usize,
+    /// The reference nodes (accelerations), in every setup.
+    pub references: Vec<usize>,
+    /// Roving nodes (velocities) per setup.
+    pub roving_per_setup: usize,
+    /// Measurement noise, a fraction of each channel's standard deviation.
+    pub noise: f64,
+}
+
+/// One channel of a [`RovingTest`]'s setup.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RovingChannel {
+    /// Its node (1-based).
+    pub node: usize,
+    /// What it measures.
+    pub quantity: crate::multisetup::Quantity,
+    /// Whether it is a reference (in every setup).
+    pub reference: bool,
+}
+
+impl RovingChannel {
+    /// The channel as the merge describes it: its node by number, along x, gain 1.
+    pub fn setup_channel(&self) -> crate::multisetup::SetupChannel {
+        crate::multisetup::SetupChannel {
+            node: self.node.to_string(),
+            direction: [1.0, 0.0, 0.0],
+            quantity: self.quantity,
+            gain: 1.0,
+            reference: self.reference,
+        }
+    }
+}
+
+impl RovingTest {
+    /// The 12-node cantilever's three modes (1.3, 3.9, 6.6 Hz; 1.5–2.5 % damping) at 25 Hz,
+    /// 320 s per setup, references at the tip and node 8, 5 % noise, `roving_per_setup` roving
+    /// nodes per setup (2: five setups; 4: three).
+    pub fn cantilever(roving_per_setup: usize) -> Self {
+        RovingTest {
+            nodes: 12,
+            modes: vec![(1.3, 0.015), (3.9, 0.02), (6.6, 0.025)],
+            fs: 25.0,
+            samples: 8000,
+            references: vec![12, 8],
+            roving_per_setup,
+            noise: 0.05,
+        }
+    }
+
+    /// Mode `j`'s displacement at node `k` (1-based).
+    pub fn truth(&self, j: usize, k: usize) -> f64 {
+        ((2 * j + 1) as f64 * std::f64::consts::PI * k as f64 / (2 * self.nodes) as f64).sin()
+    }
+
+    /// The setups: each its roving nodes, then the references.
+    pub fn layout(&self) -> Vec<Vec<RovingChannel>> {
+        use crate::multisetup::Quantity;
+        let roving: Vec<usize> = (1..=self.nodes)
+            .filter(|k| !self.references.contains(k))
+            .collect();
+        roving
+            .chunks(self.roving_per_setup.max(1))
+            .map(|nodes| {
+                let rove = nodes.iter().map(|&node| RovingChannel {
+                    node,
+                    quantity: Quantity::Velocity,
+                    reference: false,
+                });
+                let refs = self.references.iter().map(|&node| RovingChannel {
+                    node,
+                    quantity: Quantity::Acceleration,
+                    reference: true,
+                });
+                rove.chain(refs).collect()
+            })
+            .collect()
+    }
+
+    /// Setup `setup`'s record for the test's `seed`: each channel reads Re(φ λᵖ z) of every
+    /// mode's complex state z, times the setup's level.
+    pub fn record(&self, setup: usize, seed: u64) -> Vec<Vec<f64>> {
+        let level = 1.0 + 0.5 * setup as f64;
+        let gains = self.layout()[setup]
+            .iter()
+            .map(|c| {
+                self.modes
+                    .iter()
+                    .enumerate()
+                    .flat_map(|(j, &(f, z))| {
+                        let g = level * self.truth(j, c.node) * pole(f, z).powi(c.quantity.power());
+                        [g.re, -g.im]
+                    })
+                    .collect()
+            })
+            .collect();
+        ModalRecord::new(self.fs, &self.modes)
+            .with_gains(gains)
+            .with_noise(self.noise)
+            .generate(self.samples, seed + setup as u64)
+    }
+}
+
 /// The continuous pole of a mode of `f` Hz and damping ratio `zeta` (Im λ > 0).
 pub fn pole(f: f64, zeta: f64) -> Complex64 {
     2.0 * std::f64::consts::PI * f * Complex64::new(-zeta, (1.0 - zeta * zeta).sqrt())

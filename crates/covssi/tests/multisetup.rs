@@ -6,68 +6,17 @@
 //! 1000 apart: `cargo test --release -p covssi --test multisetup -- --nocapture`.
 
 use covssi::multisetup::{
-    MergeOptions, MergedModes, Quantity, SetupChannel, SetupModes, SetupRecord, merge, merge_global,
+    MergeOptions, MergedModes, SetupChannel, SetupModes, SetupRecord, merge, merge_global,
 };
-use covssi::synth::{ModalRecord, pole};
+use covssi::synth::{RovingChannel, RovingTest};
 use covssi::{AnalysisOptions, Complex64 as C64, analyze, mac};
 
-/// Nodes along the cantilever, the tip last.
-const NODES: usize = 12;
-/// Frequency (Hz) and damping ratio of its first three bending modes.
-const MODES: [(f64, f64); 3] = [(1.3, 0.015), (3.9, 0.02), (6.6, 0.025)];
-const FS: f64 = 25.0;
-const SAMPLES: usize = 8000;
-/// The references: the tip and node 8, as accelerations.
-const REFERENCES: [usize; 2] = [12, 8];
-
-/// Mode j's displacement at node k (1-based), a clamped beam's shape approximated by a sine.
-fn truth(j: usize, k: usize) -> f64 {
-    ((2 * j + 1) as f64 * std::f64::consts::PI * k as f64 / (2 * NODES) as f64).sin()
-}
-
-/// The setups: the references and `HYST_MULTISETUP_ROVING` (default 2: five setups; 4 gives
-/// three) roving nodes (velocities) each.
-fn layout() -> Vec<Vec<(usize, Quantity, bool)>> {
+/// The test: `HYST_MULTISETUP_ROVING` (default 2: five setups; 4 gives three) roving nodes
+/// per setup.
+fn test() -> RovingTest {
     let per_setup: usize =
         std::env::var("HYST_MULTISETUP_ROVING").map_or(2, |v| v.parse().unwrap());
-    let roving: Vec<usize> = (1..=NODES).filter(|k| !REFERENCES.contains(k)).collect();
-    roving
-        .chunks(per_setup)
-        .map(|pair| {
-            let mut chans: Vec<(usize, Quantity, bool)> = pair
-                .iter()
-                .map(|&k| (k, Quantity::Velocity, false))
-                .collect();
-            chans.extend(
-                REFERENCES
-                    .iter()
-                    .map(|&k| (k, Quantity::Acceleration, true)),
-            );
-            chans
-        })
-        .collect()
-}
-
-/// One setup's record: each channel reads Re(φ λ^p z) of every mode's complex state z, times
-/// the setup's excitation level.
-fn record(chans: &[(usize, Quantity, bool)], level: f64, seed: u64) -> Vec<Vec<f64>> {
-    let gains = chans
-        .iter()
-        .map(|&(k, q, _)| {
-            MODES
-                .iter()
-                .enumerate()
-                .flat_map(|(j, &(f, z))| {
-                    let g = level * truth(j, k) * pole(f, z).powi(q.power());
-                    [g.re, -g.im]
-                })
-                .collect()
-        })
-        .collect();
-    ModalRecord::new(FS, &MODES)
-        .with_gains(gains)
-        .with_noise(0.05)
-        .generate(SAMPLES, seed)
+    RovingTest::cantilever(per_setup)
 }
 
 /// Each setup's analysis: refined (the default), or with `HYST_MULTISETUP_ERRORS=jackknife`
@@ -94,31 +43,20 @@ fn jackknife() -> bool {
 /// The setups of `seed` merged after identification (PoSER) and by SSI once on all their
 /// correlations (global), with the first setup's lag.
 fn merged_for(seed: u64) -> (MergedModes, MergedModes) {
-    let records: Vec<Vec<Vec<f64>>> = layout()
-        .iter()
-        .enumerate()
-        .map(|(s, chans)| record(chans, 1.0 + 0.5 * s as f64, seed + s as u64))
-        .collect();
-    let channels = |chans: &[(usize, Quantity, bool)]| -> Vec<SetupChannel> {
-        chans
-            .iter()
-            .map(|&(k, quantity, reference)| SetupChannel {
-                node: k.to_string(),
-                direction: [1.0, 0.0, 0.0],
-                quantity,
-                gain: 1.0,
-                reference,
-            })
-            .collect()
+    let t = test();
+    let layout = t.layout();
+    let records: Vec<Vec<Vec<f64>>> = (0..layout.len()).map(|s| t.record(s, seed)).collect();
+    let channels = |chans: &[RovingChannel]| -> Vec<SetupChannel> {
+        chans.iter().map(RovingChannel::setup_channel).collect()
     };
     let mut block_rows = 0;
-    let setups: Vec<SetupModes> = layout()
+    let setups: Vec<SetupModes> = layout
         .iter()
         .zip(&records)
         .enumerate()
         .map(|(s, (chans, y))| {
             let views: Vec<&[f64]> = y.iter().map(|c| c.as_slice()).collect();
-            let analysis = analyze(&views, FS, &analysis_options()).unwrap();
+            let analysis = analyze(&views, t.fs, &analysis_options()).unwrap();
             assert_eq!(analysis.decimation.factor, 1);
             block_rows = block_rows.max(analysis.ssi.block_rows);
             SetupModes {
@@ -128,7 +66,7 @@ fn merged_for(seed: u64) -> (MergedModes, MergedModes) {
             }
         })
         .collect();
-    let global: Vec<SetupRecord<'_>> = layout()
+    let global: Vec<SetupRecord<'_>> = layout
         .iter()
         .zip(&records)
         .enumerate()
@@ -141,7 +79,7 @@ fn merged_for(seed: u64) -> (MergedModes, MergedModes) {
     let opts = covssi::SsiOptions::default();
     (
         merge(&setups, &MergeOptions::default()).unwrap(),
-        merge_global(&global, FS, block_rows, &opts).unwrap(),
+        merge_global(&global, t.fs, block_rows, &opts).unwrap(),
     )
 }
 
@@ -155,7 +93,7 @@ fn shape_z2(merged: &MergedModes, m: usize, j: usize) -> (Vec<f64>, f64) {
         .zip(mode.shape.iter().zip(&mode.shape_se))
         .filter_map(|(d, (v, e))| {
             let k: usize = d.node.parse().unwrap();
-            Some(((*v)?, (*e)?, truth(j, k)))
+            Some(((*v)?, (*e)?, test().truth(j, k)))
         })
         .collect();
     // The entry the shape was scaled to 1 by has no error of its own: left out.
@@ -177,7 +115,7 @@ fn global_mac(global: &MergedModes, m: usize, j: usize) -> f64 {
         .dofs
         .iter()
         .zip(&global.modes[m].shape)
-        .filter_map(|(d, v)| Some(((*v)?, C64::new(truth(j, d.node.parse().ok()?), 0.0))))
+        .filter_map(|(d, v)| Some(((*v)?, C64::new(test().truth(j, d.node.parse().ok()?), 0.0))))
         .unzip();
     mac(&shape, &t)
 }
@@ -190,7 +128,7 @@ fn merged_roving_setups_find_the_true_shapes_with_calibrated_errors() {
     let mut global_macs = vec![];
     for seed in (0..seeds).map(|i| base + 1000 * i) {
         let (merged, global) = merged_for(seed);
-        for (j, &(f, _)) in MODES.iter().enumerate() {
+        for (j, &(f, _)) in test().modes.iter().enumerate() {
             // The nearest mode in frequency: stacking setups' correlations adds spurious
             // stable poles (their noises differ), some within 2 % of a true mode.
             let m = (0..global.modes.len())
@@ -213,12 +151,12 @@ fn merged_roving_setups_find_the_true_shapes_with_calibrated_errors() {
         if !jackknife() {
             assert_eq!(
                 merged.modes.len(),
-                MODES.len(),
+                test().modes.len(),
                 "seed {seed}: {:?}",
                 merged.notes
             );
         }
-        for (j, &(f, z)) in MODES.iter().enumerate() {
+        for (j, &(f, z)) in test().modes.iter().enumerate() {
             let near = (0..merged.modes.len())
                 .min_by(|&a, &b| {
                     let d = |m: usize| (merged.modes[m].frequency_hz - f).abs();
@@ -228,7 +166,11 @@ fn merged_roving_setups_find_the_true_shapes_with_calibrated_errors() {
             let m = &merged.modes[near];
             assert!((m.frequency_hz - f).abs() < 0.02 * f, "seed {seed}: {m:?}");
             if !jackknife() {
-                assert_eq!(m.seen_in.len(), layout().len(), "seed {seed}: mode {j}");
+                assert_eq!(
+                    m.seen_in.len(),
+                    test().layout().len(),
+                    "seed {seed}: mode {j}"
+                );
             }
             let (z2, mac) = shape_z2(&merged, near, j);
             println!(
