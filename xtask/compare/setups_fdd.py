@@ -1,14 +1,18 @@
 """pyOMA2 on the files hyst's multi-setup merge and FDD/EFDD are compared on
 (`cargo xtask compare-setups` runs this and prints both side by side).
 
-Argument: the shared data folder. Prints one JSON document:
+Arguments: the shared data folder; the folder of synthetic roving setups xtask wrote
+(`roving.json` lists each seed's setup files and references). Prints one JSON document:
 - `efdd`: per OMA record, pyOMA2's FDD and EFDD at the true frequencies (nxseg 4096, Welch
   with 50 % overlap) and the time of each (run + mpe, median of 5);
 - `poser`, `preger`: the steel frame's 15 setups merged by pyOMA2's PoSER and PreGER
   (channel 5 deleted, references 3 and 4, decimated by 4 to 64 Hz, SSI-cov with 100 block
   rows and order 60, modes picked at the data README's frequencies; PreGER's at order 60, where
   "find_min" finds none): Fn, Xi and Phi (rows:
-  the references, then each setup's three laser channels), and the time.
+  the references, then each setup's three laser channels), and the time;
+- `roving`: per seed of the synthetic roving test, PoSER's Fn, Xi and Phi (rows: the
+  references, then each setup's roving channels) from SSI-cov per setup (the block rows and
+  order xtask gives, modes picked at the true frequencies), and the time.
 """
 
 import json
@@ -105,12 +109,40 @@ def steelframe(folder):
     return poser_out, preger_out
 
 
+def roving(folder):
+    manifest = json.loads((folder / "roving.json").read_text())
+    out = []
+    for test in manifest["seeds"]:
+        t0 = time.perf_counter()
+        singles = []
+        for path in test["files"]:
+            d = np.loadtxt(folder / path, delimiter=",", ndmin=2)
+            s = SingleSetup(d, fs=manifest["fs"])
+            alg = SSI(name="SSIcov", method="cov", br=manifest["block_rows"],
+                      ordmax=manifest["max_order"])
+            s.add_algorithms(alg)
+            s.run_all()
+            alg.mpe(sel_freq=manifest["truth_hz"], order_in="find_min")
+            singles.append(s)
+        poser = MultiSetup_PoSER(ref_ind=test["references"], single_setups=singles,
+                                 names=["SSIcov"])
+        r = poser.merge_results()["SSIcov"]
+        out.append({
+            "seed": test["seed"],
+            "fn": [float(v) for v in r.Fn], "xi": [float(v) for v in r.Xi],
+            "phi": shapes(r.Phi),
+            "seconds": time.perf_counter() - t0,
+        })
+    return out
+
+
 def main():
     data = Path(sys.argv[1])
     efdd = {name: efdd_on(data / "oma" / f"data_{name}.csv", data / "oma" / f"truth_{name}.json")
             for name in ("sdof", "3dof")}
     poser, preger = steelframe(data / "steelframe")
-    print(json.dumps({"efdd": efdd, "poser": poser, "preger": preger}))
+    rov = roving(Path(sys.argv[2]))
+    print(json.dumps({"efdd": efdd, "poser": poser, "preger": preger, "roving": rov}))
 
 
 if __name__ == "__main__":

@@ -1,7 +1,8 @@
 //! `cargo xtask compare-setups`: hyst's multi-setup merge and EFDD beside pyOMA2's on the same
 //! files, in one run — the steel frame's 15 setups merged by hyst and by pyOMA2's PoSER and
 //! PreGER (frequencies, damping, and the MAC of each merged shape with hyst's in the channels'
-//! own units), and FDD/EFDD on the OMA records with truth (values and time).
+//! own units), FDD/EFDD on the OMA records with truth (values and time), and both merges on
+//! synthetic roving setups with truth ([`crate::compare_roving`]).
 //!
 //! pyOMA2 runs in `target/compare-venv` (made by `cargo xtask compare-tools`), driven by
 //! `xtask/compare/setups_fdd.py`.
@@ -19,7 +20,7 @@ const README_HZ: [f64; 11] = [
     1.2287, 1.4359, 2.1000, 4.0172, 4.7706, 6.6822, 7.6156, 9.6652, 12.1668, 12.5982, 13.863,
 ];
 
-fn complex(v: &serde_json::Value) -> Vec<C64> {
+pub(crate) fn complex(v: &serde_json::Value) -> Vec<C64> {
     v.as_array()
         .map(|a| {
             a.iter()
@@ -34,7 +35,7 @@ fn complex(v: &serde_json::Value) -> Vec<C64> {
         .unwrap_or_default()
 }
 
-fn numbers(v: &serde_json::Value) -> Vec<f64> {
+pub(crate) fn numbers(v: &serde_json::Value) -> Vec<f64> {
     v.as_array()
         .map(|a| a.iter().map(|x| x.as_f64().unwrap_or(f64::NAN)).collect())
         .unwrap_or_default()
@@ -53,10 +54,13 @@ pub fn run() -> Result<(), String> {
         );
     }
     let data = hyst::io::data_dir().ok_or("no shared data folder: set HYST_DATA_DIR")?;
+    let roving = root.join("target/compare-setups");
+    crate::compare_roving::write(&roving)?;
     eprintln!("pyOMA2 (PoSER, PreGER, FDD, EFDD) ...");
     let out = Command::new(&python)
         .arg(root.join("xtask/compare/setups_fdd.py"))
         .arg(&data)
+        .arg(&roving)
         .output()
         .map_err(|e| format!("python: {e}"))?;
     if !out.status.success() {
@@ -68,7 +72,8 @@ pub fn run() -> Result<(), String> {
     let py: serde_json::Value =
         serde_json::from_slice(&out.stdout).map_err(|e| format!("setups_fdd.py's output: {e}"))?;
     steelframe(&data, &py)?;
-    oma_efdd(&data, &py)
+    oma_efdd(&data, &py)?;
+    crate::compare_roving::compare(&py)
 }
 
 fn steelframe(data: &Path, py: &serde_json::Value) -> Result<(), String> {

@@ -24,6 +24,7 @@ mod acquisition;
 mod bench_command;
 mod bench_refine;
 mod compare;
+mod compare_roving;
 mod compare_setups;
 mod deps;
 mod f16;
