@@ -112,6 +112,10 @@ struct BlockSums {
     sums: Vec<Correlations>,
     /// `counts[b][k]`: pairs block b adds at lag k.
     counts: Vec<Vec<f64>>,
+    /// The record's sums, all blocks' together (each replicate takes one block off them).
+    total: Correlations,
+    /// The record's pair counts per lag.
+    total_counts: Vec<f64>,
 }
 
 /// The correlation sums of each of `blocks` equal stretches of `y` (the last takes the rest).
@@ -125,7 +129,7 @@ fn block_sums(
 ) -> BlockSums {
     let n = y.first().map_or(0, |c| c.len());
     let per = n / blocks;
-    let (sums, counts) = (0..blocks)
+    let (sums, counts): (Vec<Correlations>, Vec<Vec<f64>>) = (0..blocks)
         .map(|b| {
             let start = b * per;
             let end = if b + 1 == blocks { n } else { (b + 1) * per };
@@ -154,32 +158,39 @@ fn block_sums(
             (corr, count)
         })
         .unzip();
-    BlockSums { sums, counts }
+    let mut total = sums[0].clone();
+    for block in &sums[1..] {
+        for (tk, bk) in total.r.iter_mut().zip(&block.r) {
+            tk.iter_mut().zip(bk).for_each(|(t, v)| *t += v);
+        }
+    }
+    let total_counts = (0..lags)
+        .map(|k| counts.iter().map(|c| c[k]).sum())
+        .collect();
+    BlockSums {
+        sums,
+        counts,
+        total,
+        total_counts,
+    }
 }
 
 /// The record's correlations without block `b`'s pairs.
 fn leave_out(s: &BlockSums, b: usize) -> Correlations {
-    let first = &s.sums[0];
-    let lags = first.r.len();
-    let r = (0..lags)
-        .map(|k| {
-            let count: f64 = (0..s.sums.len())
-                .filter(|&c| c != b)
-                .map(|c| s.counts[c][k])
-                .sum();
-            let mut rk = vec![0.0; first.r[k].len()];
-            for (_, block) in s.sums.iter().enumerate().filter(|(c, _)| *c != b) {
-                for (acc, v) in rk.iter_mut().zip(&block.r[k]) {
-                    *acc += v;
-                }
-            }
-            rk.iter_mut().for_each(|v| *v /= count);
-            rk
+    let r = s
+        .total
+        .r
+        .iter()
+        .zip(&s.sums[b].r)
+        .enumerate()
+        .map(|(k, (tk, bk))| {
+            let count = s.total_counts[k] - s.counts[b][k];
+            tk.iter().zip(bk).map(|(t, v)| (t - v) / count).collect()
         })
         .collect();
     Correlations {
-        channels: first.channels,
-        references: first.references,
+        channels: s.total.channels,
+        references: s.total.references,
         r,
     }
 }
