@@ -6,7 +6,8 @@
 //! [`AnalysisOptions`], the one place that does.
 
 use covssi::{
-    AnalysisOptions, BlockRows, Decimation, RefineOptions, SsiOptions, StabilityCriteria,
+    AnalysisOptions, BlockRows, Decimation, ModeCriteria, RefineOptions, SsiOptions,
+    StabilityCriteria,
 };
 use serde::{Deserialize, Serialize};
 
@@ -71,15 +72,15 @@ pub struct SsiSettings {
     pub refine: bool,
     /// Refine on the channels' joint likelihood (their cross-spectra), not each alone.
     pub joint: bool,
-    /// Standard errors for SSI's modes when they are the ones reported (no refinement, or
-    /// one the record does not follow): the jackknife over at most this many blocks of the
-    /// record ([`covssi::jackknife`]); 0: none. Default: [`SETUPS_JACKKNIFE_BLOCKS`] for
-    /// merged setups (whose shapes need errors to be merged with theirs), none for one record.
+    /// Standard errors for SSI's modes: the jackknife over at most this many blocks of the
+    /// record ([`covssi::jackknife`]); 0: none. Default (`None`):
+    /// [`covssi::JACKKNIFE_BLOCKS`]. The decision of what is a mode reads them
+    /// ([`covssi::decision`]).
     pub ssi_errors: Option<usize>,
+    /// The largest damping ratio of a mode ([`covssi::ModeCriteria::max_damping_ratio`]);
+    /// default (`None`) 0.2.
+    pub max_damping: Option<f64>,
 }
-
-/// The jackknife's blocks for SSI's modes of merged setups when the settings leave them open.
-pub const SETUPS_JACKKNIFE_BLOCKS: usize = 10;
 
 impl Default for SsiSettings {
     fn default() -> Self {
@@ -99,6 +100,7 @@ impl Default for SsiSettings {
             refine: true,
             joint: true,
             ssi_errors: None,
+            max_damping: None,
         }
     }
 }
@@ -156,19 +158,18 @@ impl SsiSettings {
             joint: self.joint,
             ..RefineOptions::default()
         });
-        Ok(AnalysisOptions::default()
+        let mut modes = ModeCriteria::default();
+        if let Some(limit) = self.max_damping {
+            modes.max_damping_ratio = limit;
+        }
+        let blocks = self.ssi_errors.unwrap_or(covssi::JACKKNIFE_BLOCKS);
+        let mut opts = AnalysisOptions::default()
             .with_decimation(decimation)
             .with_ssi(ssi)
             .with_refine(refine)
-            .with_ssi_errors(self.ssi_errors.filter(|&b| b > 0)))
-    }
-
-    /// [`SsiSettings::analysis`] for each of several setups to be merged: SSI's modes get
-    /// errors over [`SETUPS_JACKKNIFE_BLOCKS`] blocks unless the settings say otherwise.
-    pub fn setups_analysis(&self) -> Result<AnalysisOptions, SettingsError> {
-        let mut s = self.clone();
-        s.ssi_errors = Some(s.ssi_errors.unwrap_or(SETUPS_JACKKNIFE_BLOCKS));
-        s.analysis()
+            .with_ssi_errors((blocks > 0).then_some(blocks));
+        opts.modes = modes;
+        Ok(opts)
     }
 
     /// The settings' names, in order: the flags and keywords both sides must have.

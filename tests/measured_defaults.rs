@@ -30,8 +30,8 @@ const STEEL_FRAME_HZ: [f64; 11] = [
 const MATCH: f64 = 0.006;
 
 /// Checks that hold for every record: each reported mode physical (damping below the
-/// diagram's limit, inside (0, Nyquist) by more than its half-power band, a standard error,
-/// when given, smaller than its value) and with a shape of one entry per channel.
+/// diagram's limit, inside (0, Nyquist) by more than its half-power band, a frequency's
+/// standard error, when given, smaller than it) and with a shape of one entry per channel.
 fn assert_sane(name: &str, a: &ModalAnalysis) -> Vec<f64> {
     let modes = a.reported_modes();
     let nyquist = a.fs_hz / 2.0;
@@ -49,15 +49,19 @@ fn assert_sane(name: &str, a: &ModalAnalysis) -> Vec<f64> {
             m.frequency_hz * (1.0 + m.damping_ratio) < 0.99 * nyquist,
             "{what}: at Nyquist {nyquist}\n{a}"
         );
-        for (v, se) in [
-            (m.frequency_hz, m.frequency_se_hz),
-            (m.damping_ratio, m.damping_se),
+        // A frequency's error is below the frequency (covssi::decision sets apart one
+        // known to worse than 5 %). A damping's error may exceed an SSI mode's damping: the
+        // jackknife reads a lightly damped mode's damping poorly (F-16 level 5, 78.24 Hz:
+        // 1.08 ± 1.11 %), which says the damping is undetermined, not that the mode is not
+        // one; the refined modes reported keep the likelihood's rule (error below value).
+        let refined = a.decision.source == covssi::ModeSource::Refined;
+        for (v, se, check) in [
+            (m.frequency_hz, m.frequency_se_hz, true),
+            (m.damping_ratio, m.damping_se, refined),
         ] {
             if let Some(se) = se {
-                assert!(
-                    se.is_finite() && se <= v,
-                    "{what}: standard error {se} > {v}\n{a}"
-                );
+                assert!(se.is_finite(), "{what}: standard error {se}\n{a}");
+                assert!(!check || se <= v, "{what}: standard error {se} > {v}\n{a}");
             }
         }
         let shape = m

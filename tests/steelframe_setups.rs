@@ -26,9 +26,7 @@ fn merged() -> Option<(Vec<SetupSpec>, SetupsReport)> {
     let setups = read_setups(&dir).unwrap();
     assert_eq!(setups.len(), 15);
     // As `hyst ssi --setups` analyses them: SSI's modes with the jackknife's errors.
-    let opts = hyst::settings::SsiSettings::default()
-        .setups_analysis()
-        .unwrap();
+    let opts = hyst::settings::SsiSettings::default().analysis().unwrap();
     let read = ReadOptions::default();
     let report = analyze_setups(&setups, None, &read, &opts, &MergeOptions::default()).unwrap();
     Some((setups, report))

@@ -133,12 +133,16 @@ pub(crate) struct SsiFlags {
     /// does not support).
     #[arg(long)]
     pub(crate) no_refine: bool,
-    /// Standard errors for SSI's modes where they are reported (no refinement, or one the
-    /// record does not follow): the jackknife over at most BLOCKS blocks of the record;
-    /// 0: none. Default: 10 for --setups (their shapes are merged by their errors), none for
-    /// one record.
+    /// Standard errors for SSI's modes: the jackknife over at most BLOCKS blocks of the
+    /// record (default 10; 0: none). They are the errors reported where SSI's modes are the
+    /// answer, and the decision of what is a mode reads them: a mode must be found again in
+    /// the record's parts, its frequency determined.
     #[arg(long, value_name = "BLOCKS")]
     pub(crate) ssi_errors: Option<usize>,
+    /// The largest damping ratio of a mode (default 0.2): a candidate damped more is set
+    /// apart with its reason, not reported.
+    #[arg(long, value_name = "RATIO")]
+    pub(crate) max_damping: Option<f64>,
     /// Refine with each channel's likelihood alone, not the joint likelihood of all channels
     /// (which uses their cross-spectra; on by default for 2 to 4 channels, and above 4 through 4
     /// combinations of them, band by band when there are more than 4 modes).
@@ -168,18 +172,13 @@ impl SsiFlags {
         s.refine = !self.no_refine;
         s.joint = !self.no_joint;
         s.ssi_errors = self.ssi_errors;
+        s.max_damping = self.max_damping;
         s
     }
 
     /// The analysis these flags ask for, a setting out of range named by its flag.
     pub(crate) fn analysis(&self) -> Result<hyst::covssi::AnalysisOptions, Error> {
         setting_error(self.settings().analysis())
-    }
-
-    /// [`SsiFlags::analysis`] for each of several setups to be merged
-    /// ([`SsiSettings::setups_analysis`]).
-    pub(crate) fn setups_analysis(&self) -> Result<hyst::covssi::AnalysisOptions, Error> {
-        setting_error(self.settings().setups_analysis())
     }
 }
 
@@ -298,6 +297,7 @@ pub(crate) fn flag_error(
                 return fail(format!("--references names channel {value} twice"));
             }
             SsiOption::MaxOrder => Some(("--max-order", "at least 1")),
+            SsiOption::ModeMaxDamping => Some(("--max-damping", "between 0 and 1")),
             SsiOption::OrderStep => Some(("--order-step", "at least 1")),
             SsiOption::CriteriaFrequency => Some(("--df", "positive and finite")),
             SsiOption::CriteriaDamping => Some(("--dzeta", "positive and finite")),
@@ -325,7 +325,7 @@ pub(crate) fn run(a: &SsiArgs) -> Result<(), Error> {
     // Settings that are wrong whatever the record, before it is read.
     let opts = a.ssi.analysis()?;
     let input = match (&a.input, &a.setups) {
-        (_, Some(setups)) => return run_setups(a, setups, &a.ssi.setups_analysis()?),
+        (_, Some(setups)) => return run_setups(a, setups, &a.ssi.analysis()?),
         (Some(input), None) => input,
         (None, None) => return Err(fail("give --input or --setups".to_string())),
     };

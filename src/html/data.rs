@@ -202,17 +202,14 @@ pub fn ssi_page_data(title: &str, a: &ModalAnalysis, fdd: Option<&Fdd>) -> PageD
     let zero = [0.0, 0.0];
     PageData {
         title: title.to_string(),
-        summary: vec![format!(
-            "{} channels at {} Hz; {} modes reported ({}).",
+        summary: std::iter::once(format!(
+            "{} channels at {} Hz; {}.",
             n,
             a.fs_hz,
-            modes.len(),
-            if a.reported_refinement().is_some() {
-                "refined by maximum likelihood, ± one standard error"
-            } else {
-                "SSI's, without standard errors"
-            }
-        )],
+            a.decision.headline()
+        ))
+        .chain(a.decision.set_apart_lines())
+        .collect(),
         diagram: Some(Diagram {
             poles,
             spectrum_hz,

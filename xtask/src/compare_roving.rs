@@ -57,7 +57,7 @@ pub fn write(dir: &Path) -> Result<(), String> {
 /// mode's frequency and MAC to the truth over every node.
 fn hyst_merge(t: &RovingTest, seed: u64) -> Result<Vec<(f64, f64)>, String> {
     let opts = hyst::settings::SsiSettings::default()
-        .setups_analysis()
+        .analysis()
         .map_err(|e| e.to_string())?;
     let mut setups = Vec::new();
     for (s, chans) in t.layout().iter().enumerate() {

@@ -80,7 +80,7 @@ fn steelframe(data: &Path, py: &serde_json::Value) -> Result<(), String> {
     let setups = read_setups(&data.join("steelframe")).map_err(|e| e.to_string())?;
     // As `hyst ssi --setups` analyses them: SSI's modes with the jackknife's errors.
     let opts = hyst::settings::SsiSettings::default()
-        .setups_analysis()
+        .analysis()
         .map_err(|e| e.to_string())?;
     let t0 = Instant::now();
     let report = hyst::setups::analyze_setups(

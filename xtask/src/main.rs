@@ -26,6 +26,7 @@ mod bench_refine;
 mod compare;
 mod compare_roving;
 mod compare_setups;
+mod corpus;
 mod deps;
 mod f16;
 mod growth;
@@ -722,6 +723,9 @@ enum Task {
     LoopBattery(loop_battery::BatteryArgs),
     /// Issue 33's synthetic monitoring campaign, identified and tracked (`monitor.rs`).
     MonitorDemo(monitor::DemoArgs),
+    /// The modal analysis's defaults over the corpus of realistic building records
+    /// (`corpus.rs`): true modes found, modes reported that are not structural, z-scores.
+    Corpus(corpus::CorpusArgs),
     /// Every test: `cargo test --workspace`, then the Python package's pytest (`test_all.rs`).
     Test,
     /// hyst's multi-setup merge and EFDD beside pyOMA2's PoSER, PreGER, FDD and EFDD on the
@@ -786,6 +790,7 @@ fn main() {
         Task::LoopBattery(a) => or_exit(loop_battery::run(&a)),
         Task::MonitorDemo(a) => or_exit(monitor::run(&a)),
         Task::Test => or_exit(test_all::run_all()),
+        Task::Corpus(a) => or_exit(corpus::run(&a)),
         Task::UnusedDeps => or_exit(deps::run()),
         Task::VendorJs => or_exit(report_pages::vendor_js()),
         Task::CompareSetups => or_exit(compare_setups::run()),

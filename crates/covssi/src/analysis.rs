@@ -4,6 +4,7 @@
 
 use std::fmt;
 
+use crate::decision::{Evidence, ModeCriteria, ModeDecision, ModeSource};
 use crate::plausibility::{NotReported, not_physical};
 use crate::progress::Progress;
 use crate::refine::{MISFIT_LIMIT, SAME_MODE_DISTANCE};
@@ -38,11 +39,18 @@ pub struct AnalysisOptions {
     pub ssi: SsiOptions,
     /// The refinement's options; `None` skips it. Default: on, with its defaults.
     pub refine: Option<RefineOptions>,
-    /// Standard errors for SSI's modes when they are the ones reported (no refinement, or
-    /// one the record does not follow): the jackknife over at most this many blocks of the
-    /// record ([`crate::jackknife`]); `None` (the default) leaves SSI's modes without errors.
+    /// Standard errors for SSI's modes: the jackknife over at most this many blocks of the
+    /// record ([`crate::jackknife`]). They are the reported errors where SSI's modes are the
+    /// answer, and the decision of what is a mode reads them ([`crate::decision`]). Default
+    /// [`JACKKNIFE_BLOCKS`]; `None` leaves SSI's modes without errors and the decision
+    /// without its rules 2 and 3.
     pub ssi_errors: Option<usize>,
+    /// The rules that set candidates apart as not modes ([`crate::decision`]).
+    pub modes: ModeCriteria,
 }
+
+/// The jackknife's blocks by default ([`AnalysisOptions::ssi_errors`]).
+pub const JACKKNIFE_BLOCKS: usize = 10;
 
 impl Default for AnalysisOptions {
     fn default() -> Self {
@@ -50,7 +58,8 @@ impl Default for AnalysisOptions {
             decimation: Decimation::Auto,
             ssi: SsiOptions::default(),
             refine: Some(RefineOptions::default()),
-            ssi_errors: None,
+            ssi_errors: Some(JACKKNIFE_BLOCKS),
+            modes: ModeCriteria::default(),
         }
     }
 }
@@ -173,10 +182,12 @@ pub struct ModalAnalysis {
     /// Nyquist or 0 Hz, a real pole outside the band, a standard error above the value):
     /// kept in the fit, not reported ([`crate::plausibility`]).
     pub not_reported: Vec<NotReported>,
-    /// Jackknife errors of SSI's modes ([`AnalysisOptions::ssi_errors`]): made only when
-    /// SSI's modes are the ones reported; `None` otherwise, or when the record is too short
-    /// for the blocks.
+    /// Jackknife errors of SSI's modes ([`AnalysisOptions::ssi_errors`]); `None` when not
+    /// asked for, or when the record is too short for the blocks.
     pub ssi_errors: Option<crate::jackknife::SsiErrors>,
+    /// What is a mode: the answer, which list it is, and what was set apart and why
+    /// ([`crate::decision`]).
+    pub decision: ModeDecision,
 }
 
 /// The channels `y` sampled at `fs` Hz decimated as `opts.decimation` says, SSI on them,
@@ -196,6 +207,13 @@ pub fn analyze_with_progress(
     progress: &(dyn Fn(Progress) + Sync),
 ) -> Result<ModalAnalysis, SsiError> {
     crate::identify::check_fs(fs)?;
+    let limit = opts.modes.max_damping_ratio;
+    if !(limit > 0.0 && limit < 1.0) {
+        return Err(SsiError::InvalidOption {
+            option: SsiOption::ModeMaxDamping,
+            value: limit,
+        });
+    }
     let checked = crate::identify::check_channels(y)?;
     let (factor, survey) = decimation_of(y, fs, &checked, opts.decimation)?;
     let decimated = crate::decimate::decimate_channels(y, factor);
@@ -247,7 +265,30 @@ pub fn analyze_with_progress(
     let not_reported = refined.as_ref().map_or_else(Vec::new, |r| {
         not_physical(r, fs, samples, opts.ssi.max_damping)
     });
-    let mut analysis = ModalAnalysis {
+    let ssi_errors = match opts.ssi_errors {
+        Some(blocks) => {
+            let refs = crate::identify::references(&opts.ssi, y.len())?;
+            let (_, means) = crate::identify::check_channels(y)?;
+            crate::jackknife::ssi_errors(y, fs, (&refs, &means), &ssi, &opts.ssi, blocks)?
+        }
+        None => None,
+    };
+    let evidence = Evidence {
+        y,
+        fs,
+        ssi: &ssi,
+        errors: ssi_errors.as_ref(),
+    };
+    let reasons = crate::decision::ssi_reasons(&evidence, &opts.modes);
+    let decision = crate::decision::decide(
+        &ssi,
+        ssi_errors.as_ref(),
+        reasons,
+        refined.as_ref(),
+        &not_reported,
+        &opts.modes,
+    );
+    Ok(ModalAnalysis {
         channels: (0..y.len()).map(|c| c.to_string()).collect(),
         fs_hz: fs,
         decimation: DecimationReport {
@@ -260,31 +301,22 @@ pub fn analyze_with_progress(
         refined,
         not_refined,
         not_reported,
-        ssi_errors: None,
-    };
-    if let Some(blocks) = opts.ssi_errors
-        && analysis.reported_refinement().is_none()
-    {
-        let refs = crate::identify::references(&opts.ssi, y.len())?;
-        let (_, means) = crate::identify::check_channels(y)?;
-        analysis.ssi_errors =
-            crate::jackknife::ssi_errors(y, fs, (&refs, &means), &analysis.ssi, &opts.ssi, blocks)?;
-    }
-    Ok(analysis)
+        ssi_errors,
+        decision,
+    })
 }
 
 impl ModalAnalysis {
-    /// The refinement when its modes are the ones to report: it ran, kept modes, and the
-    /// record follows its model (misfit at most [`MISFIT_LIMIT`]); `None` when SSI's modes
-    /// are the ones to report.
+    /// The refinement when its modes are the answer ([`ModalAnalysis::decision`]); `None`
+    /// when SSI's modes are.
     pub fn reported_refinement(&self) -> Option<&Refinement> {
-        self.refined.as_ref().filter(|r| {
-            r.misfit <= MISFIT_LIMIT && (0..r.modes.len()).any(|i| self.is_reported(i, false))
-        })
+        self.refined
+            .as_ref()
+            .filter(|_| self.decision.source == ModeSource::Refined)
     }
 
-    /// Whether the refined mode (`real_pole` false) or real pole `index` is physical, and so
-    /// reported (see [`ModalAnalysis::not_reported`]).
+    /// Whether the refined mode (`real_pole` false) or real pole `index` is physical
+    /// (see [`ModalAnalysis::not_reported`]).
     pub fn is_reported(&self, index: usize, real_pole: bool) -> bool {
         !self
             .not_reported
@@ -292,53 +324,15 @@ impl ModalAnalysis {
             .any(|n| n.index == index && n.real_pole == real_pole)
     }
 
-    /// The modes to report, as [`ModalAnalysis::reported_refinement`] chooses: the refined
-    /// modes that are physical, each with its refined shape, or its SSI mode's where the
-    /// refinement gave none; else SSI's.
+    /// The modes to report: the decision's answer ([`crate::decision`]), by frequency.
     pub fn reported_modes(&self) -> Vec<ReportedMode> {
-        match self.reported_refinement() {
-            Some(r) => r
-                .modes
-                .iter()
-                .enumerate()
-                .filter(|(i, _)| self.is_reported(*i, false))
-                .map(|(_, m)| {
-                    let ssi_shape = m.source.map(|s| self.ssi.modes[s].shape.clone());
-                    ReportedMode {
-                        frequency_hz: m.frequency_hz,
-                        frequency_se_hz: m.frequency_se_hz,
-                        damping_ratio: m.damping_ratio,
-                        damping_se: m.damping_se,
-                        shape_from_ssi: m.shape.is_none() && ssi_shape.is_some(),
-                        shape_se: m.shape.as_ref().and(m.shape_se.clone()),
-                        shape: m.shape.clone().or(ssi_shape),
-                    }
-                })
-                .collect(),
-            None => self
-                .ssi
-                .modes
-                .iter()
-                .enumerate()
-                .map(|(i, m)| {
-                    let e = self.ssi_errors.as_ref().and_then(|e| e.modes[i].as_ref());
-                    ReportedMode {
-                        frequency_hz: m.frequency_hz,
-                        frequency_se_hz: e.map(|e| e.frequency_se_hz),
-                        damping_ratio: m.damping_ratio,
-                        damping_se: e.map(|e| e.damping_se),
-                        shape: Some(m.shape.clone()),
-                        shape_se: e.map(|e| e.shape_se.clone()),
-                        shape_from_ssi: true,
-                    }
-                })
-                .collect(),
-        }
+        self.decision.modes.clone()
     }
 }
 
 /// A mode as reported: the refinement's, or SSI's when the refinement does not hold.
 #[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct ReportedMode {
     /// Natural frequency (Hz).
     pub frequency_hz: f64,
@@ -357,6 +351,9 @@ pub struct ReportedMode {
     /// Standard error of each entry of `shape` (√E|δ|², 0 for the entry scaled to 1): the
     /// refinement's, or the jackknife's for SSI's shapes; `None` when neither was made.
     pub shape_se: Option<Vec<f64>>,
+    /// The SSI mode it is (SSI's answer) or comes from (the refinement's), by its index
+    /// among SSI's modes.
+    pub ssi_mode: Option<usize>,
 }
 
 /// A mode shape as "magnitude∠phase°" per entry (phase rounded to a degree), entries joined
@@ -582,19 +579,13 @@ impl ModalAnalysis {
                 f,
                 "warning: the record does not follow the refinement's model (misfit {:.3} > {}): \
                  the excitation may not be broadband random (e.g. a multisine), or the record \
-                 holds what the model lacks; trust the SSI modes above instead",
+                 holds what the model lacks",
                 r.misfit, MISFIT_LIMIT
             )
         } else if !self.not_reported.is_empty() {
-            // Which modes stand: the refined ones that are physical, or SSI's when none is.
-            let reported = if self.reported_refinement().is_some() {
-                "the refined modes reported are the others"
-            } else {
-                "no refined mode is physical, so the SSI modes above are the ones reported"
-            };
             writeln!(
                 f,
-                "misfit {:.3}, within {MISFIT_LIMIT}, but only with the {} estimate(s) above that are not physical: the model spends poles on what it lacks; {reported}",
+                "misfit {:.3}, within {MISFIT_LIMIT}, but only with the {} estimate(s) above that are not physical: the model spends poles on what it lacks",
                 r.misfit,
                 self.not_reported.len()
             )
@@ -711,10 +702,10 @@ impl fmt::Display for ModalAnalysis {
         if let Some(why) = &self.not_refined {
             writeln!(f, "not refined: {why}")?;
         }
-        match &self.refined {
-            Some(r) => self.fmt_refined(f, r),
-            None => Ok(()),
+        if let Some(r) = &self.refined {
+            self.fmt_refined(f, r)?;
         }
+        self.decision.fmt_with(f)
     }
 }
 

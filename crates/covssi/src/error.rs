@@ -46,6 +46,8 @@ pub enum SsiOption {
     Decimation,
     /// `FddOptions::segment`: under 16 samples or longer than the record.
     FddSegment,
+    /// `ModeCriteria::max_damping_ratio`: not between 0 and 1.
+    ModeMaxDamping,
 }
 
 impl SsiOption {
@@ -73,6 +75,7 @@ impl SsiOption {
             SsiOption::Tolerance => "tolerance",
             SsiOption::Decimation => "decimation",
             SsiOption::FddSegment => "segment (FDD: 16 samples to the record's length)",
+            SsiOption::ModeMaxDamping => "modes.max_damping_ratio",
         }
     }
 }

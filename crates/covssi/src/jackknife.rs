@@ -62,6 +62,11 @@ pub struct SsiErrors {
     pub blocks: usize,
     /// Each mode's errors, `None` where too few replicates found it.
     pub modes: Vec<Option<ModeErrors>>,
+    /// How many replicates found each mode (of those SSI could be run on, at most
+    /// `blocks`): a structural mode is found in nearly every replicate, each of which holds
+    /// all but one block of the record.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub found: Vec<usize>,
 }
 
 /// Jackknife errors of `ssi`'s modes, SSI having been run on `y` (centred about `means`) at
@@ -98,12 +103,16 @@ pub(crate) fn ssi_errors(
             identify_with_order_cap(&corr, fs, ssi.block_rows, &opts, max_order, &|_| {}).ok()
         })
         .collect();
-    let modes = ssi
+    let (found, modes) = ssi
         .modes
         .iter()
         .map(|m| mode_errors(m, &replicates, blocks))
-        .collect();
-    Ok(Some(SsiErrors { blocks, modes }))
+        .unzip();
+    Ok(Some(SsiErrors {
+        blocks,
+        modes,
+        found,
+    }))
 }
 
 /// Each block's correlation sums and pair counts per lag.
@@ -195,14 +204,22 @@ fn leave_out(s: &BlockSums, b: usize) -> Correlations {
     }
 }
 
-/// Mode `m`'s jackknife errors over the replicates that found it.
-fn mode_errors(m: &crate::Mode, replicates: &[SsiResult], blocks: usize) -> Option<ModeErrors> {
-    let one = m
+/// How many replicates found mode `m`, and its jackknife errors over them (`None` when
+/// fewer than [`MIN_FOUND`] of the `blocks` did).
+fn mode_errors(
+    m: &crate::Mode,
+    replicates: &[SsiResult],
+    blocks: usize,
+) -> (usize, Option<ModeErrors>) {
+    let Some(one) = m
         .shape
         .iter()
         .enumerate()
         .max_by(|a, b| a.1.norm_sqr().total_cmp(&b.1.norm_sqr()))
-        .map(|(j, _)| j)?;
+        .map(|(j, _)| j)
+    else {
+        return (0, None);
+    };
     let found: Vec<(f64, f64, Vec<C64>)> = replicates
         .iter()
         .filter_map(|rep| {
@@ -230,7 +247,7 @@ fn mode_errors(m: &crate::Mode, replicates: &[SsiResult], blocks: usize) -> Opti
         .collect();
     let count = found.len();
     if (count as f64) < MIN_FOUND * blocks as f64 || count < 2 {
-        return None;
+        return (count, None);
     }
     let spread = |values: &[C64]| -> f64 {
         let mean: C64 = values.iter().sum::<C64>() / count as f64;
@@ -239,14 +256,15 @@ fn mode_errors(m: &crate::Mode, replicates: &[SsiResult], blocks: usize) -> Opti
     };
     let real =
         |values: Vec<f64>| -> Vec<C64> { values.into_iter().map(|v| C64::new(v, 0.0)).collect() };
-    Some(ModeErrors {
+    let errors = ModeErrors {
         frequency_se_hz: spread(&real(found.iter().map(|r| r.0).collect())),
         damping_se: spread(&real(found.iter().map(|r| r.1).collect())),
         shape_se: (0..m.shape.len())
             .map(|j| spread(&found.iter().map(|r| r.2[j]).collect::<Vec<_>>()))
             .collect(),
         replicates: count,
-    })
+    };
+    (count, Some(errors))
 }
 
 #[cfg(test)]

@@ -52,6 +52,7 @@ struct ReadmeDoctests;
 mod analysis;
 pub mod corr;
 pub mod decimate;
+pub mod decision;
 mod error;
 pub mod fdd;
 pub mod harmonic;
@@ -71,10 +72,11 @@ pub mod svg;
 pub mod synth;
 
 pub use analysis::{
-    AnalysisOptions, Decimation, DecimationReport, ModalAnalysis, ReportedMode, analyze,
-    analyze_with_progress, shape_text,
+    AnalysisOptions, Decimation, DecimationReport, JACKKNIFE_BLOCKS, ModalAnalysis, ReportedMode,
+    analyze, analyze_with_progress, shape_text,
 };
 pub use corr::Correlations;
+pub use decision::{ModeCriteria, ModeDecision, ModeSource, NotAMode};
 pub use error::{SsiError, SsiOption};
 pub use identify::{
     MIN_CORRELATION, OrderPoles, Spectrum, SsiResult, StabilizationDiagram, identify,

@@ -63,7 +63,8 @@ pub struct Harmonic {
 /// The modes of one record, identified by SSI-COV and refined as `hyst ssi` does, once the
 /// record has passed [`screen`](crate::screen::screen) (no value that is not a number, no
 /// stuck or clipped channel); a machine's steady spectral lines subtracted first and the
-/// poles [`covssi::harmonic`] takes for harmonics set apart, both named in `harmonics`.
+/// poles the analysis's decision takes for harmonics ([`covssi::decision`]), both named in
+/// `harmonics`.
 pub fn identify(
     channels: &[&[f64]],
     fs: f64,
@@ -91,28 +92,17 @@ pub fn identify(
         None => channels.to_vec(),
     };
     let analysis = covssi::analyze(&views, fs, opts)?;
-    let mut modes = reported_modes(&analysis);
-    if modes
-        .iter()
-        .any(|m| m.damping_ratio < covssi::harmonic::MAX_HARMONIC_DAMPING)
-    {
-        // The record's spectra, or the cleaned record's when lines were taken out.
-        let test = match cleaned {
-            Some(_) => covssi::harmonic::HarmonicTest::new(&views, fs),
-            None => raw,
-        };
-        modes.retain(
-            |m| match test.is_harmonic(m.frequency_hz, m.damping_ratio) {
-                Some(kurtosis) => {
-                    harmonics.push(Harmonic {
-                        frequency_hz: m.frequency_hz,
-                        kurtosis,
-                    });
-                    false
-                }
-                None => true,
-            },
-        );
+    let modes = reported_modes(&analysis);
+    // The poles the analysis's decision set apart as harmonics (covssi::decision), named.
+    for s in &analysis.decision.set_apart {
+        for r in &s.reasons {
+            if let covssi::NotAMode::Harmonic { kurtosis } = r {
+                harmonics.push(Harmonic {
+                    frequency_hz: s.frequency_hz,
+                    kurtosis: *kurtosis,
+                });
+            }
+        }
     }
     Ok(Identified {
         modes,

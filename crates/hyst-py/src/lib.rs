@@ -40,94 +40,85 @@ impl SsiResult {
         self.analysis.reported_refinement()
     }
 
-    /// One value per reported mode: `refined` of each refined mode, or `ssi` of each SSI mode.
+    /// One value per reported mode ([`covssi::ModeDecision::modes`]).
     fn per_mode<'py>(
         &self,
         py: Python<'py>,
-        refined: impl Fn(&covssi::RefinedMode) -> f64,
-        ssi: impl Fn(&covssi::Mode) -> f64,
+        value: impl Fn(&covssi::ReportedMode) -> f64,
     ) -> Bound<'py, PyArray1<f64>> {
-        let v: Vec<f64> = match self.refined() {
-            Some(r) => r.modes.iter().map(refined).collect(),
-            None => self.analysis.ssi.modes.iter().map(ssi).collect(),
-        };
+        let v: Vec<f64> = self.analysis.decision.modes.iter().map(value).collect();
         Array1::from(v).into_pyarray(py)
     }
 
-    /// The reported modes' shapes (modes × channels), from `refined` or `ssi`; NaN where a
-    /// refined mode has none.
+    /// The reported modes' shapes or their errors (modes × channels); `missing` where a
+    /// mode has none.
     fn per_entry<T: Copy + numpy::Element>(
         &self,
-        refined: impl Fn(&covssi::RefinedMode) -> Option<Vec<T>>,
-        ssi: impl Fn(&covssi::Mode) -> Vec<T>,
+        entries: impl Fn(&covssi::ReportedMode) -> Option<Vec<T>>,
         missing: T,
     ) -> Array2<T> {
         let l = self.analysis.ssi.diagram.channels;
-        let rows: Vec<Vec<T>> = match self.refined() {
-            Some(r) => r
-                .modes
-                .iter()
-                .map(|m| refined(m).unwrap_or_else(|| vec![missing; l]))
-                .collect(),
-            None => self.analysis.ssi.modes.iter().map(ssi).collect(),
-        };
+        let rows: Vec<Vec<T>> = self
+            .analysis
+            .decision
+            .modes
+            .iter()
+            .map(|m| entries(m).unwrap_or_else(|| vec![missing; l]))
+            .collect();
         Array2::from_shape_fn((rows.len(), l), |(i, c)| rows[i][c])
     }
 }
 
 #[pymethods]
 impl SsiResult {
-    /// "refined" when the modes reported are the maximum-likelihood refinement's (it ran and
-    /// the record follows its model), "ssi" when they are SSI's.
+    /// "refined" when the modes reported are the maximum-likelihood refinement's (it holds:
+    /// every SSI mode kept has its agreeing refined counterpart), "ssi" when they are SSI's
+    /// (see `decision` in `to_dict()` for why, and what was set apart).
     #[getter]
     fn source(&self) -> &'static str {
-        match self.refined() {
-            Some(_) => "refined",
-            None => "ssi",
+        match self.analysis.decision.source {
+            covssi::ModeSource::Refined => "refined",
+            _ => "ssi",
         }
     }
 
     /// Natural frequency of each reported mode (Hz), increasing.
     #[getter]
     fn frequency_hz<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        self.per_mode(py, |m| m.frequency_hz, |m| m.frequency_hz)
+        self.per_mode(py, |m| m.frequency_hz)
     }
 
     /// Damping ratio of each reported mode.
     #[getter]
     fn damping_ratio<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        self.per_mode(py, |m| m.damping_ratio, |m| m.damping_ratio)
+        self.per_mode(py, |m| m.damping_ratio)
     }
 
-    /// Standard error of each frequency (Hz); NaN for SSI's modes, which have none.
+    /// Standard error of each frequency (Hz): the refinement's, or the jackknife's for
+    /// SSI's modes; NaN where none was made (`ssi_errors=0`).
     #[getter]
     fn frequency_se_hz<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        self.per_mode(py, |m| m.frequency_se_hz.unwrap_or(f64::NAN), |_| f64::NAN)
+        self.per_mode(py, |m| m.frequency_se_hz.unwrap_or(f64::NAN))
     }
 
-    /// Standard error of each damping ratio; NaN for SSI's modes, which have none.
+    /// Standard error of each damping ratio, as `frequency_se_hz`'s.
     #[getter]
     fn damping_se<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        self.per_mode(py, |m| m.damping_se.unwrap_or(f64::NAN), |_| f64::NAN)
+        self.per_mode(py, |m| m.damping_se.unwrap_or(f64::NAN))
     }
 
     /// Each reported mode's shape (modes × channels, complex, its largest entry 1).
     #[getter]
     fn shape<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<covssi::Complex64>> {
         let nan = covssi::Complex64::new(f64::NAN, f64::NAN);
-        self.per_entry(|m| m.shape.clone(), |m| m.shape.clone(), nan)
-            .into_pyarray(py)
+        self.per_entry(|m| m.shape.clone(), nan).into_pyarray(py)
     }
 
-    /// Standard error of each shape entry (modes × channels); NaN for SSI's modes.
+    /// Standard error of each shape entry (modes × channels); NaN where none was made.
     #[getter]
     fn shape_se<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        self.per_entry(
-            |m| m.shape_se.clone(),
-            |m| vec![f64::NAN; m.shape.len()],
-            f64::NAN,
-        )
-        .into_pyarray(py)
+        self.per_entry(|m| m.shape_se.clone(), f64::NAN)
+            .into_pyarray(py)
     }
 
     /// SSI's modes: frequency (Hz) and damping ratio, columns of a (modes × 2) array.
@@ -273,10 +264,7 @@ impl SsiResult {
     }
 
     fn __repr__(&self) -> String {
-        let modes = match self.refined() {
-            Some(r) => r.modes.len(),
-            None => self.analysis.ssi.modes.len(),
-        };
+        let modes = self.analysis.decision.modes.len();
         format!(
             "<SsiResult: {modes} mode(s), {}, {} channel(s) at {} Hz>",
             self.source(),
@@ -356,7 +344,7 @@ fn ssi_setups(
     lines: Option<std::path::PathBuf>,
 ) -> PyResult<ident::Report> {
     let opts = SsiSettings::from_json(settings)
-        .and_then(|s| s.setups_analysis())
+        .and_then(|s| s.analysis())
         .map_err(|e| PyValueError::new_err(e.to_string()))?;
     let (report, page) = py
         .detach(|| {

@@ -20,7 +20,9 @@
 use hyst_model::{ModelError, Oscillator, State};
 
 pub mod batch;
+pub mod building;
 mod chain;
+pub mod corpus;
 mod drift;
 pub mod excitation;
 mod kernel;

@@ -44,7 +44,7 @@
 //! let mode = |shape: [f64; 2]| ReportedMode {
 //!     frequency_hz: 2.0, frequency_se_hz: Some(0.01), damping_ratio: 0.01, damping_se: Some(0.001),
 //!     shape: Some(shape.iter().map(|&v| C::new(v, 0.0)).collect()), shape_from_ssi: false,
-//!     shape_se: Some(vec![0.0, 0.01]),
+//!     shape_se: Some(vec![0.0, 0.01]), ssi_mode: None,
 //! };
 //! // the reference (node "top") and a roving node, seen in two setups at different scales
 //! let a = SetupModes { name: "a".into(), channels: vec![channel("top", 1.0, true), channel("1", 1.0, false)],

@@ -48,6 +48,7 @@ fn observed(
                 .map(|v| if *v == top { 0.0 } else { 0.01 })
                 .collect(),
         ),
+        ssi_mode: None,
     }
 }
 

@@ -113,6 +113,7 @@ def ssi(
     refine=True,
     joint=True,
     ssi_errors=None,
+    max_damping=None,
     channels=None,
     record="array",
     setups=None,
@@ -163,10 +164,13 @@ def ssi(
         Fit the channels jointly, cross-spectra included (default True); False fits each
         channel's spectrum alone.
     ssi_errors : int, optional
-        Standard errors for SSI's modes where they are the ones reported (``refine=False``,
-        or a record that does not follow the refinement's model): the jackknife over at
-        most this many blocks of the record; 0: none. Default: 10 with ``setups`` (their
-        shapes are merged by their errors), none for one record.
+        Standard errors for SSI's modes: the jackknife over at most this many blocks of the
+        record (default 10; 0: none). They are the errors reported where SSI's modes are the
+        answer, and the decision of what is a mode reads them (a mode must be found again in
+        the record's parts, its frequency determined).
+    max_damping : float, optional
+        The largest damping ratio of a mode (default 0.2): a candidate damped more is set
+        apart with its reason, not reported.
     channels : list of str, optional
         Names of the channels (they head the shapes in ``str(result)`` and the JSON).
     record : str
@@ -190,9 +194,11 @@ def ssi(
     -------
     SsiResult
         ``frequency_hz``, ``damping_ratio``, ``frequency_se_hz``, ``damping_se``,
-        ``shape`` (modes x channels, complex), ``shape_se``: the refined modes when the
-        refinement ran and the record follows its model (``source == "refined"``), else
-        SSI's (``source == "ssi"``, standard errors NaN unless ``ssi_errors``). ``ssi_modes``, ``real_poles``,
+        ``shape`` (modes x channels, complex), ``shape_se``: the modes the analysis decides
+        are structural — the refined ones where the refinement agrees with SSI on every
+        mode (``source == "refined"``), else SSI's with the jackknife's errors
+        (``source == "ssi"``; NaN with ``ssi_errors=0``); ``to_dict()["decision"]`` says why,
+        and lists each candidate set apart with its reasons. ``ssi_modes``, ``real_poles``,
         ``poles`` and ``pole_status`` (the stabilization diagram), ``misfit``,
         ``to_dict()``, ``to_json()``, ``stabilization_svg()``, ``html()`` (the page ``hyst ssi
         --html`` writes); ``print(result)`` prints the report of ``hyst ssi``.
@@ -213,7 +219,7 @@ def ssi(
             block_rows=block_rows, lag_seconds=lag_seconds, lag_periods=lag_periods,
             decimate=decimate, max_order=max_order, order_step=order_step, references=None,
             df=df, dzeta=dzeta, dmac=dmac, dreal=dreal, refine=refine, joint=joint,
-            ssi_errors=ssi_errors,
+            ssi_errors=ssi_errors, max_damping=max_damping,
         )
         if fs is not None:
             _check_rate(fs)
@@ -237,7 +243,7 @@ def ssi(
         block_rows=block_rows, lag_seconds=lag_seconds, lag_periods=lag_periods,
         decimate=decimate, max_order=max_order, order_step=order_step, references=references,
         df=df, dzeta=dzeta, dmac=dmac, dreal=dreal, refine=refine, joint=joint,
-        ssi_errors=ssi_errors,
+        ssi_errors=ssi_errors, max_damping=max_damping,
     )
     return _hyst.ssi(
         a,
@@ -252,7 +258,8 @@ def amplitude(y, fs, *, modes=None, measured="displacement", amplitude_of=None, 
               cycles=3.0, groups=20, min_triggers=50, band=None, method="envelope",
               period=None, block_rows=None, lag_seconds=None, lag_periods=None, decimate=None,
               max_order=None, order_step=1, references=None, df=None, dzeta=None, dmac=None,
-              dreal=None, refine=True, joint=True, ssi_errors=None, record="array"):
+              dreal=None, refine=True, joint=True, ssi_errors=None, max_damping=None,
+              record="array"):
     """Each mode's natural frequency and damping ratio against its amplitude (``hyst
     amplitude``): the modes as :func:`ssi` finds them, each mode's response filtered out
     (a modal filter, then a band-pass), random decrement conditioned on its envelope in
@@ -289,7 +296,7 @@ def amplitude(y, fs, *, modes=None, measured="displacement", amplitude_of=None, 
         Samples per period of a periodic excitation: the periods are averaged into one,
         read as circular.
     block_rows, lag_seconds, lag_periods, decimate, max_order, order_step, references,
-    df, dzeta, dmac, dreal, refine, joint, ssi_errors
+    df, dzeta, dmac, dreal, refine, joint, ssi_errors, max_damping
         The modal analysis, as for :func:`ssi`.
     record : str
         What the data is, for the report (several records are named ``record[i]``).
@@ -336,7 +343,7 @@ def amplitude(y, fs, *, modes=None, measured="displacement", amplitude_of=None, 
         block_rows=block_rows, lag_seconds=lag_seconds, lag_periods=lag_periods,
         decimate=decimate, max_order=max_order, order_step=order_step, references=references,
         df=df, dzeta=dzeta, dmac=dmac, dreal=dreal, refine=refine, joint=joint,
-        ssi_errors=ssi_errors,
+        ssi_errors=ssi_errors, max_damping=max_damping,
     )
     names = [f"{record}[{i}]" for i in range(len(arrays))] if many else [str(record)]
     return _hyst.amplitude(
@@ -346,7 +353,8 @@ def amplitude(y, fs, *, modes=None, measured="displacement", amplitude_of=None, 
 
 
 def _settings(*, block_rows, lag_seconds, lag_periods, decimate, max_order, order_step,
-              references, df, dzeta, dmac, dreal, refine, joint, ssi_errors=None):
+              references, df, dzeta, dmac, dreal, refine, joint, ssi_errors=None,
+              max_damping=None):
     """The analysis settings :func:`ssi` and :func:`track` share, checked and written as
     the JSON object the library reads (``hyst::settings::SsiSettings``, whose fields are the
     command line's flags too); a keyword left None keeps the library's default."""
@@ -380,6 +388,7 @@ def _settings(*, block_rows, lag_seconds, lag_periods, decimate, max_order, orde
         "refine": bool(refine),
         "joint": bool(joint),
         "ssi_errors": _count(ssi_errors, "ssi_errors", 0),
+        "max_damping": real(max_damping, "max_damping"),
     }
     # NaN and infinities are not JSON: the library's own checks name them.
     for k, v in values.items():
@@ -654,7 +663,7 @@ def levels(records, fs, mass, *, by_simulation=False, data_periodic=False, fit_e
 def track(records, fs, *, times=None, covariates=None, training=None, whiten=True,
           environment_model=True, reference=None, block_rows=None, lag_seconds=None, lag_periods=None, decimate=None,
           max_order=None, order_step=1, references=None, df=None, dzeta=None, dmac=None,
-          dreal=None, refine=True, joint=True, ssi_errors=None, client=None,
+          dreal=None, refine=True, joint=True, ssi_errors=None, max_damping=None, client=None,
           level_covariate=False):
     """Track the modes of many records of one structure (``hyst track``).
 
@@ -679,7 +688,7 @@ def track(records, fs, *, times=None, covariates=None, training=None, whiten=Tru
     training : int, optional
         The first this many records train the baselines (default 336, at most half).
     block_rows, lag_seconds, lag_periods, decimate, max_order, order_step, references,
-    df, dzeta, dmac, dreal, joint, ssi_errors
+    df, dzeta, dmac, dreal, joint, ssi_errors, max_damping
         The analysis of each record, as for :func:`ssi` (and ``hyst track``'s flags of the
         same names); what is left to the record (the lag, the decimation) is read from the
         first record and kept for every record, as ``hyst track`` does.
@@ -728,7 +737,7 @@ def track(records, fs, *, times=None, covariates=None, training=None, whiten=Tru
                 block_rows=block_rows, lag_seconds=lag_seconds, lag_periods=lag_periods,
                 decimate=decimate, max_order=max_order, order_step=order_step,
                 references=references, df=df, dzeta=dzeta, dmac=dmac, dreal=dreal,
-                refine=refine, joint=joint, ssi_errors=ssi_errors,
+                refine=refine, joint=joint, ssi_errors=ssi_errors, max_damping=max_damping,
             ),
         )
     arrays = []
@@ -764,7 +773,7 @@ def track(records, fs, *, times=None, covariates=None, training=None, whiten=Tru
             block_rows=block_rows, lag_seconds=lag_seconds, lag_periods=lag_periods,
             decimate=decimate, max_order=max_order, order_step=order_step,
             references=references, df=df, dzeta=dzeta, dmac=dmac, dreal=dreal, refine=refine,
-            joint=joint, ssi_errors=ssi_errors,
+            joint=joint, ssi_errors=ssi_errors, max_damping=max_damping,
         ),
         whiten=bool(whiten),
         environment_model=bool(environment_model),

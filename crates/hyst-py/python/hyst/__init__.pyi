@@ -137,6 +137,7 @@ def track(
     refine: bool = ...,
     joint: bool = ...,
     ssi_errors: Optional[int] = ...,
+    max_damping: Optional[float] = ...,
     client: Optional[Any] = ...,
     level_covariate: bool = ...,
 ) -> Report: ...
@@ -185,6 +186,7 @@ def ssi(
     refine: bool = ...,
     joint: bool = ...,
     ssi_errors: Optional[int] = ...,
+    max_damping: Optional[float] = ...,
     channels: Optional[Sequence[str]] = ...,
     record: str = ...,
     setups: None = ...,
@@ -210,6 +212,7 @@ def ssi(
     refine: bool = ...,
     joint: bool = ...,
     ssi_errors: Optional[int] = ...,
+    max_damping: Optional[float] = ...,
     channels: None = ...,
     record: str = ...,
     setups: Union[str, os.PathLike[str]],
@@ -245,5 +248,6 @@ def amplitude(
     refine: bool = ...,
     joint: bool = ...,
     ssi_errors: Optional[int] = ...,
+    max_damping: Optional[float] = ...,
     record: str = ...,
 ) -> Report: ...

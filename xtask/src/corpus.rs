@@ -1,0 +1,133 @@
+//! `cargo xtask corpus`: the modal analysis with its defaults over the corpus of realistic
+//! building records (`hyst_sim::corpus`), scored against their truth: true modes found,
+//! reported modes that are not structural, and the z-scores of the reported errors.
+
+use rayon::prelude::*;
+
+/// Arguments of `cargo xtask corpus`.
+#[derive(clap::Args)]
+pub struct CorpusArgs {
+    /// Records (one per seed).
+    #[arg(long, default_value_t = 40)]
+    seeds: u64,
+    /// The first seed.
+    #[arg(long, default_value_t = 1)]
+    first_seed: u64,
+    /// The step between seeds.
+    #[arg(long, default_value_t = 1)]
+    seed_step: u64,
+    /// Each record's length in periods of its first mode (at least 5 minutes).
+    #[arg(long, default_value_t = 1000.0)]
+    periods: f64,
+    /// Print each record's report too.
+    #[arg(long)]
+    verbose: bool,
+    /// Score the answer as hyst reported it before the decision (the refined modes the
+    /// likelihood calls physical when its misfit is within the limit, else every SSI
+    /// cluster, without errors), on the same analyses.
+    #[arg(long)]
+    before: bool,
+}
+
+/// The modes `hyst ssi` reported before `covssi::decision` (commit a064d96's
+/// `ModalAnalysis::reported_modes`), from the same analysis.
+fn reported_before(a: &covssi::ModalAnalysis) -> Vec<hyst_sim::corpus::Estimate> {
+    let physical = |i: usize| !a.not_reported.iter().any(|n| n.index == i && !n.real_pole);
+    match a
+        .refined
+        .as_ref()
+        .filter(|r| r.misfit <= covssi::MISFIT_LIMIT && (0..r.modes.len()).any(physical))
+    {
+        Some(r) => r
+            .modes
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| physical(*i))
+            .map(|(_, m)| {
+                (
+                    m.frequency_hz,
+                    m.frequency_se_hz,
+                    m.damping_ratio,
+                    m.damping_se,
+                )
+            })
+            .collect(),
+        None => a
+            .ssi
+            .modes
+            .iter()
+            .map(|m| (m.frequency_hz, None, m.damping_ratio, None))
+            .collect(),
+    }
+}
+
+/// The corpus analysed and scored, one line per record, then the summary.
+pub fn run(a: &CorpusArgs) -> Result<(), String> {
+    let seeds: Vec<u64> = (0..a.seeds)
+        .map(|k| a.first_seed + k * a.seed_step)
+        .collect();
+    let rows: Vec<Result<(bool, String, hyst_sim::corpus::Score), String>> = seeds
+        .par_iter()
+        .map(|&seed| {
+            let case = hyst_sim::corpus::realistic(seed, a.periods).map_err(|e| e.to_string())?;
+            let y = case.generate().map_err(|e| format!("seed {seed}: {e}"))?;
+            let views: Vec<&[f64]> = y.iter().map(|c| c.as_slice()).collect();
+            let analysis = covssi::analyze(&views, case.building.fs, &covssi::AnalysisOptions::default())
+                .map_err(|e| format!("seed {seed}: {e}"))?;
+            let reported: Vec<hyst_sim::corpus::Estimate> = if a.before {
+                reported_before(&analysis)
+            } else {
+                analysis
+                    .reported_modes()
+                    .iter()
+                    .map(|m| (m.frequency_hz, m.frequency_se_hz, m.damping_ratio, m.damping_se))
+                    .collect()
+            };
+            let score = case.score(&reported);
+            let truth: Vec<String> = case
+                .in_band
+                .iter()
+                .map(|&j| format!("{:.3}", case.truth[j].frequency_hz))
+                .collect();
+            let mut line = format!(
+                "seed {seed}: {}\n  truth in band {} Hz; found {}/{}, reported {}, spurious {:?}, missed {:?}\n  z frequency {:.2?}, z damping {:.2?}",
+                case.description,
+                truth.join(", "),
+                score.found,
+                score.in_band,
+                score.reported,
+                score.spurious,
+                score.missed,
+                score.z_frequency,
+                score.z_damping
+            );
+            if a.verbose {
+                line.push_str(&format!("\n{analysis}"));
+            }
+            let refined = analysis.decision.source == covssi::ModeSource::Refined;
+            Ok((refined, line, score))
+        })
+        .collect();
+    let mut scores = Vec::new();
+    let (mut by_refined, mut by_ssi) = (Vec::new(), Vec::new());
+    for r in rows {
+        let (refined, line, score) = r?;
+        println!("{line}");
+        if refined {
+            by_refined.push(score.clone());
+        } else {
+            by_ssi.push(score.clone());
+        }
+        scores.push(score);
+    }
+    println!("{}", hyst_sim::corpus::Summary::of(&scores));
+    println!(
+        "answer the refinement's: {}",
+        hyst_sim::corpus::Summary::of(&by_refined)
+    );
+    println!(
+        "answer SSI's (jackknife errors): {}",
+        hyst_sim::corpus::Summary::of(&by_ssi)
+    );
+    Ok(())
+}
