@@ -445,24 +445,7 @@ pub(crate) fn decide(
     let kept: Vec<usize> = (0..ssi.modes.len())
         .filter(|&i| reasons[i].is_empty())
         .collect();
-    let ssi_modes = || -> Vec<ReportedMode> {
-        kept.iter()
-            .map(|&i| {
-                let m = &ssi.modes[i];
-                let e = errors.and_then(|e| e.modes.get(i)).and_then(|e| e.as_ref());
-                ReportedMode {
-                    frequency_hz: m.frequency_hz,
-                    frequency_se_hz: e.map(|e| e.frequency_se_hz),
-                    damping_ratio: m.damping_ratio,
-                    damping_se: e.map(|e| e.damping_se),
-                    shape: Some(m.shape.clone()),
-                    shape_se: e.map(|e| e.shape_se.clone()),
-                    shape_from_ssi: true,
-                    ssi_mode: Some(i),
-                }
-            })
-            .collect()
-    };
+    let ssi_modes = || ssi_reported(ssi, errors, &kept);
     let Some(r) = refined else {
         return ModeDecision {
             source: ModeSource::Ssi,
@@ -482,34 +465,7 @@ pub(crate) fn decide(
             set_apart,
         };
     }
-    // Each refined mode's reasons: the likelihood's physical check, the damping limit, and
-    // SSI's support.
-    let refined_reasons: Vec<Vec<NotAMode>> = r
-        .modes
-        .iter()
-        .enumerate()
-        .map(|(i, m)| {
-            let mut why: Vec<NotAMode> = not_reported
-                .iter()
-                .filter(|n| n.index == i && !n.real_pole)
-                .flat_map(|n| n.reasons.iter().cloned().map(NotAMode::NotPhysical))
-                .collect();
-            if m.damping_ratio > c.max_damping_ratio {
-                why.push(NotAMode::Overdamped {
-                    damping_ratio: m.damping_ratio,
-                    limit: c.max_damping_ratio,
-                });
-            }
-            match m.source {
-                Some(s) if reasons.get(s).is_some_and(|r| r.is_empty()) => {}
-                Some(s) => why.push(NotAMode::NoSsiSupport {
-                    ssi_hz: Some(ssi.modes[s].frequency_hz),
-                }),
-                None => why.push(NotAMode::NoSsiSupport { ssi_hz: None }),
-            }
-            why
-        })
-        .collect();
+    let refined_reasons = refined_reasons(r, ssi, &reasons, not_reported, c);
     // Each of SSI's modes kept must have an agreeing, acceptable refined counterpart.
     let mut chosen = Vec::new();
     let mut lost = Vec::new();
@@ -562,7 +518,75 @@ pub(crate) fn decide(
             reasons: why,
         });
     }
-    let mut modes: Vec<ReportedMode> = chosen
+    let mut modes = refined_reported(r, ssi, &chosen);
+    modes.sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
+    ModeDecision {
+        source: ModeSource::Refined,
+        modes,
+        refinement: RefinementVerdict::Holds,
+        set_apart,
+    }
+}
+
+/// SSI's modes `kept`, as reported (with their jackknife errors when made).
+fn ssi_reported(ssi: &SsiResult, errors: Option<&SsiErrors>, kept: &[usize]) -> Vec<ReportedMode> {
+    kept.iter()
+        .map(|&i| {
+            let m = &ssi.modes[i];
+            let e = errors.and_then(|e| e.modes.get(i)).and_then(|e| e.as_ref());
+            ReportedMode {
+                frequency_hz: m.frequency_hz,
+                frequency_se_hz: e.map(|e| e.frequency_se_hz),
+                damping_ratio: m.damping_ratio,
+                damping_se: e.map(|e| e.damping_se),
+                shape: Some(m.shape.clone()),
+                shape_se: e.map(|e| e.shape_se.clone()),
+                shape_from_ssi: true,
+                ssi_mode: Some(i),
+            }
+        })
+        .collect()
+}
+
+/// Each refined mode's reasons: the likelihood's physical check, the damping limit, and
+/// SSI's support (`reasons`: SSI's modes').
+fn refined_reasons(
+    r: &Refinement,
+    ssi: &SsiResult,
+    reasons: &[Vec<NotAMode>],
+    not_reported: &[NotReported],
+    c: &ModeCriteria,
+) -> Vec<Vec<NotAMode>> {
+    r.modes
+        .iter()
+        .enumerate()
+        .map(|(i, m)| {
+            let mut why: Vec<NotAMode> = not_reported
+                .iter()
+                .filter(|n| n.index == i && !n.real_pole)
+                .flat_map(|n| n.reasons.iter().cloned().map(NotAMode::NotPhysical))
+                .collect();
+            if m.damping_ratio > c.max_damping_ratio {
+                why.push(NotAMode::Overdamped {
+                    damping_ratio: m.damping_ratio,
+                    limit: c.max_damping_ratio,
+                });
+            }
+            match m.source {
+                Some(s) if reasons.get(s).is_some_and(|r| r.is_empty()) => {}
+                Some(s) => why.push(NotAMode::NoSsiSupport {
+                    ssi_hz: Some(ssi.modes[s].frequency_hz),
+                }),
+                None => why.push(NotAMode::NoSsiSupport { ssi_hz: None }),
+            }
+            why
+        })
+        .collect()
+}
+
+/// The refined modes `chosen`, as reported (SSI's shape where the refinement gave none).
+fn refined_reported(r: &Refinement, ssi: &SsiResult, chosen: &[usize]) -> Vec<ReportedMode> {
+    chosen
         .iter()
         .map(|&i| {
             let m = &r.modes[i];
@@ -578,14 +602,7 @@ pub(crate) fn decide(
                 ssi_mode: m.source,
             }
         })
-        .collect();
-    modes.sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
-    ModeDecision {
-        source: ModeSource::Refined,
-        modes,
-        refinement: RefinementVerdict::Holds,
-        set_apart,
-    }
+        .collect()
 }
 
 /// Channels of a mode's shape.

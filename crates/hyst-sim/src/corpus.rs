@@ -101,7 +101,64 @@ pub fn realistic(seed: u64, periods: f64) -> Result<CorpusCase, SimError> {
         .find(|&fs| fs >= 2.5 * top)
         .unwrap_or(5.0 * top);
     let nyquist = building.fs / 2.0;
-    // Sensors: the roof and some others.
+    draw_sensors(&mut rng, &mut building);
+    // The band the load covers: the corner of its low-pass.
+    let in_band_top = all
+        .iter()
+        .map(|m| m.frequency_hz)
+        .filter(|&f| f < 0.8 * nyquist)
+        .fold(f1, f64::max);
+    let corner =
+        in_band_top * 1.1 + rng.random::<f64>() * (0.8 * nyquist - in_band_top * 1.1).max(0.0);
+    let corner = corner.min(0.85 * nyquist);
+    let order = rng.random_range(2..=6usize);
+    let colour = rng.random_range(0..3);
+    let (colours, what) = draw_colours(&mut rng, colour, (f1, in_band_top, corner, order));
+    building.load.colours = colours;
+    if rng.random::<f64>() < 1.0 / 3.0 {
+        building.load.modulation = Some((
+            0.3 + 0.3 * rng.random::<f64>(),
+            60.0 + 240.0 * rng.random::<f64>(),
+        ));
+    }
+    let harmonic_hz = draw_machine(&mut rng, &mut building, (f1, in_band_top, &all))?;
+    let hysteretic = rng.random::<f64>() < 0.2;
+    let samples = (periods / f1 * building.fs).max(300.0 * building.fs) as usize;
+    if hysteretic {
+        add_hysteresis(&mut rng, &mut building, samples, seed)?;
+    }
+    let in_band = must_find(&building, &all, corner)?;
+    let description = format!(
+        "{n} storeys, f1 {f1:.2} Hz, {} sensors ({:?}), noise {:.0} %{}, load on {} floor(s): {what}{}{}{}",
+        building.sensors.len(),
+        building.reading,
+        100.0 * building.noise,
+        if building.drift > 0.0 { ", drift" } else { "" },
+        building.load.floors.len(),
+        if building.load.modulation.is_some() {
+            ", modulated"
+        } else {
+            ""
+        },
+        harmonic_hz.map_or(String::new(), |f| format!(", machine {f:.2} Hz")),
+        if hysteretic { ", Bouc-Wen storey" } else { "" },
+    );
+    Ok(CorpusCase {
+        description,
+        building,
+        samples,
+        seed,
+        truth: all,
+        in_band,
+        hysteretic,
+        harmonic_hz,
+    })
+}
+
+/// The sensors (the roof and some others), what they read, their noise and drift, and
+/// the floors loaded.
+fn draw_sensors(rng: &mut Xoshiro256PlusPlus, building: &mut ShearBuilding) {
+    let n = building.masses.len();
     let count = rng.random_range(3.min(n)..=n);
     let mut sensors = vec![n - 1];
     while sensors.len() < count {
@@ -127,18 +184,15 @@ pub fn realistic(seed: u64, periods: f64) -> Result<CorpusCase, SimError> {
         building.load.floors.sort_unstable();
         building.load.floors.dedup();
     }
-    // The band the load covers: the corner of its low-pass.
-    let in_band_top = all
-        .iter()
-        .map(|m| m.frequency_hz)
-        .filter(|&f| f < 0.8 * nyquist)
-        .fold(f1, f64::max);
-    let corner =
-        in_band_top * 1.1 + rng.random::<f64>() * (0.8 * nyquist - in_band_top * 1.1).max(0.0);
-    let corner = corner.min(0.85 * nyquist);
-    let order = rng.random_range(2..=6usize);
-    let colour = rng.random_range(0..3);
-    let (colours, what) = match colour {
+}
+
+/// The load's filters of kind `colour` (0 low-pass, 1 red, 2 resonance) and their words.
+fn draw_colours(
+    rng: &mut Xoshiro256PlusPlus,
+    colour: u32,
+    (f1, in_band_top, corner, order): (f64, f64, f64, usize),
+) -> (Vec<Colour>, String) {
+    match colour {
         0 => (
             vec![Colour::LowPass {
                 corner_hz: corner,
@@ -176,14 +230,18 @@ pub fn realistic(seed: u64, periods: f64) -> Result<CorpusCase, SimError> {
                 format!("resonance {peak:.2} Hz ζ {z:.2}, low-pass {corner:.1} Hz"),
             )
         }
-    };
-    building.load.colours = colours;
-    if rng.random::<f64>() < 1.0 / 3.0 {
-        building.load.modulation = Some((
-            0.3 + 0.3 * rng.random::<f64>(),
-            60.0 + 240.0 * rng.random::<f64>(),
-        ));
     }
+}
+
+/// A machine between the modes (a third of the cases), at least 5 % from each: its
+/// frequency.
+fn draw_machine(
+    rng: &mut Xoshiro256PlusPlus,
+    building: &mut ShearBuilding,
+    (f1, in_band_top, all): (f64, f64, &[TrueMode]),
+) -> Result<Option<f64>, SimError> {
+    let n = building.masses.len();
+    let nyquist = building.fs / 2.0;
     let mut harmonic_hz = None;
     if rng.random::<f64>() < 1.0 / 3.0 {
         // A machine between the modes, at least 5 % from each.
@@ -206,36 +264,54 @@ pub fn realistic(seed: u64, periods: f64) -> Result<CorpusCase, SimError> {
             building.load.harmonic = Some((floor, f, (0.5 + 2.5 * rng.random::<f64>()) * band_rms));
         }
     }
-    let hysteretic = rng.random::<f64>() < 0.2;
-    let samples = (periods / f1 * building.fs).max(300.0 * building.fs) as usize;
-    if hysteretic {
-        // Yielding at about twice the storey drift's deviation, from a linear run.
-        let storey = rng.random_range(0..n);
-        let mut probe = building.clone();
-        probe.sensors = (0..n).collect();
-        probe.reading = Reading::Displacement;
-        probe.noise = 0.0;
-        probe.drift = 0.0;
-        let y = probe.generate(samples.min(20_000), seed)?;
-        let d: Vec<f64> = (0..y[0].len())
-            .map(|t| y[storey][t] - if storey > 0 { y[storey - 1][t] } else { 0.0 })
-            .collect();
-        let sd = (d.iter().map(|v| v * v).sum::<f64>() / d.len() as f64).sqrt();
-        let zy = 2.0 * sd;
-        // ν = 2: the element's force saturates near z_y when β + γ = 1/z_y².
-        building.hysteresis = Some(StoreyHysteresis {
-            storey,
-            linear_share: 0.5,
-            beta: 0.5 / (zy * zy),
-            gamma: 0.5 / (zy * zy),
-            nu: 2.0,
-        });
-    }
+    Ok(harmonic_hz)
+}
+
+/// A Bouc-Wen element in a random storey, yielding at about twice its drift's deviation
+/// (from a linear run of `samples` at most 20 000 samples).
+fn add_hysteresis(
+    rng: &mut Xoshiro256PlusPlus,
+    building: &mut ShearBuilding,
+    samples: usize,
+    seed: u64,
+) -> Result<(), SimError> {
+    let n = building.masses.len();
+    // Yielding at about twice the storey drift's deviation, from a linear run.
+    let storey = rng.random_range(0..n);
+    let mut probe = building.clone();
+    probe.sensors = (0..n).collect();
+    probe.reading = Reading::Displacement;
+    probe.noise = 0.0;
+    probe.drift = 0.0;
+    let y = probe.generate(samples.min(20_000), seed)?;
+    let d: Vec<f64> = (0..y[0].len())
+        .map(|t| y[storey][t] - if storey > 0 { y[storey - 1][t] } else { 0.0 })
+        .collect();
+    let sd = (d.iter().map(|v| v * v).sum::<f64>() / d.len() as f64).sqrt();
+    let zy = 2.0 * sd;
+    // ν = 2: the element's force saturates near z_y when β + γ = 1/z_y².
+    building.hysteresis = Some(StoreyHysteresis {
+        storey,
+        linear_share: 0.5,
+        beta: 0.5 / (zy * zy),
+        gamma: 0.5 / (zy * zy),
+        nu: 2.0,
+    });
+    Ok(())
+}
+
+/// The modes an analysis must find.
+fn must_find(
+    building: &ShearBuilding,
+    all: &[TrueMode],
+    corner: f64,
+) -> Result<Vec<usize>, SimError> {
     // The modes an analysis must find: in the load's band (below its low-pass corner and
     // 80 % of Nyquist), and standing out of the sensor noise at some sensor (the response's
     // density at the mode at least the noise's; white noise of deviation σ at rate fs has
     // the two-sided density σ²/(2π fs) per rad/s).
     let sd = building.response_deviation()?;
+    let nyquist = building.fs / 2.0;
     let mut in_band = Vec::new();
     for (j, m) in all.iter().enumerate() {
         if m.frequency_hz > corner || m.frequency_hz >= 0.8 * nyquist {
@@ -250,31 +326,7 @@ pub fn realistic(seed: u64, periods: f64) -> Result<CorpusCase, SimError> {
             in_band.push(j);
         }
     }
-    let description = format!(
-        "{n} storeys, f1 {f1:.2} Hz, {} sensors ({:?}), noise {:.0} %{}, load on {} floor(s): {what}{}{}{}",
-        building.sensors.len(),
-        building.reading,
-        100.0 * building.noise,
-        if building.drift > 0.0 { ", drift" } else { "" },
-        building.load.floors.len(),
-        if building.load.modulation.is_some() {
-            ", modulated"
-        } else {
-            ""
-        },
-        harmonic_hz.map_or(String::new(), |f| format!(", machine {f:.2} Hz")),
-        if hysteretic { ", Bouc-Wen storey" } else { "" },
-    );
-    Ok(CorpusCase {
-        description,
-        building,
-        samples,
-        seed,
-        truth: all,
-        in_band,
-        hysteretic,
-        harmonic_hz,
-    })
+    Ok(in_band)
 }
 
 /// How an analysis's reported modes of one case compare with its truth.
