@@ -475,9 +475,10 @@ pub(crate) fn decide(
         let candidates: Vec<usize> = (0..r.modes.len())
             .filter(|&i| r.modes[i].source == Some(s))
             .collect();
-        let ok = candidates.iter().copied().find(|&i| {
-            refined_reasons[i].is_empty() && agrees(&r.modes[i], sm, se, ssi_channels(sm))
-        });
+        let ok = candidates
+            .iter()
+            .copied()
+            .find(|&i| refined_reasons[i].is_empty() && agrees(&r.modes[i], sm, se));
         match ok {
             Some(i) => chosen.push(i),
             None => lost.push(LostMode {
@@ -605,13 +606,8 @@ fn refined_reported(r: &Refinement, ssi: &SsiResult, chosen: &[usize]) -> Vec<Re
         .collect()
 }
 
-/// Channels of a mode's shape.
-fn ssi_channels(m: &crate::Mode) -> usize {
-    m.shape.len()
-}
-
 /// Whether refined mode `r` and SSI mode `s` (its jackknife errors `se`) are one mode's
-/// estimates: frequency, damping and (with several channels) shape.
+/// estimates: frequency, damping and (when its shape has several channels) shape.
 ///
 /// With SSI's errors, by Hausman's test: where the refinement's model holds, its estimate
 /// is the efficient one and SSI's differs from it by a deviation of variance
@@ -626,7 +622,6 @@ fn agrees(
     r: &crate::RefinedMode,
     s: &crate::Mode,
     se: Option<&crate::jackknife::ModeErrors>,
-    channels: usize,
 ) -> bool {
     let df = (r.frequency_hz - s.frequency_hz).abs();
     let dd = (r.damping_ratio - s.damping_ratio).abs();
@@ -657,8 +652,9 @@ fn agrees(
             )
         }
     };
-    let shape = match (&r.shape, channels) {
-        (Some(shape), l) if l >= 2 => mac(shape, &s.shape) >= crate::jackknife::MIN_MAC,
+    // A one-channel shape is a number: MAC says nothing there.
+    let shape = match &r.shape {
+        Some(shape) if s.shape.len() >= 2 => mac(shape, &s.shape) >= crate::jackknife::MIN_MAC,
         _ => true,
     };
     frequency && damping && shape
@@ -795,13 +791,13 @@ mod tests {
     fn estimates_of_one_mode_agree_and_a_fit_gone_elsewhere_does_not() {
         let s = ssi_mode(4.19, 0.0115);
         // Within the 1 % floor and the damping factor: one mode.
-        assert!(agrees(&refined_mode(4.20, 0.012), &s, None, 1));
+        assert!(agrees(&refined_mode(4.20, 0.012), &s, None));
         // Building test 1 of issue 57: refined to 4.02 Hz at 46.9 % against SSI's 4.19 Hz
         // at 1.15 % — 4 % away with a 1 % refined error (4 σ is 0.16 Hz, 0.17 Hz apart)
         // and a damping 40 times SSI's.
-        assert!(!agrees(&refined_mode(4.02, 0.469), &s, None, 1));
+        assert!(!agrees(&refined_mode(4.02, 0.469), &s, None));
         // A damping 3.9 times SSI's and 7 refined errors away is something else's.
-        assert!(!agrees(&refined_mode(4.19, 0.045), &s, None, 1));
+        assert!(!agrees(&refined_mode(4.19, 0.045), &s, None));
     }
 
     #[test]
@@ -825,8 +821,7 @@ mod tests {
         assert!(!agrees(
             &refined(1.2549, 0.0013, 0.0135, 0.0011),
             &s,
-            Some(&e),
-            1
+            Some(&e)
         ));
         // 0.0017 Hz apart against 0.0025: one mode.
         // Errors nearly equal (SSI's 0.000701, the refinement's 0.000700): 0.0003 apart is
@@ -836,30 +831,26 @@ mod tests {
         assert!(agrees(
             &refined(1.0017, 0.000700, 0.0095, 0.000700),
             &s1,
-            Some(&tight),
-            1
+            Some(&tight)
         ));
         let s = ssi_mode(0.5006, 0.0279);
         let e = jack(0.0027, 0.0076);
         assert!(agrees(
             &refined(0.5023, 0.0011, 0.0229, 0.0022),
             &s,
-            Some(&e),
-            1
+            Some(&e)
         ));
         // A refined error as large as SSI's or larger: the difference is judged against
         // √0.47 of SSI's own (the precision of a 10-replicate jackknife's variance).
         assert!(agrees(
             &refined(0.5050, 0.0040, 0.0279, 0.0100),
             &s,
-            Some(&e),
-            1
+            Some(&e)
         ));
         assert!(!agrees(
             &refined(0.5100, 0.0040, 0.0279, 0.0100),
             &s,
-            Some(&e),
-            1
+            Some(&e)
         ));
     }
 
