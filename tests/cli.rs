@@ -924,6 +924,70 @@ fn ssi_record_too_short_for_the_lags() {
     );
 }
 
+/// A real record as a new user has it: a headerless `.dat` of time and two channels read
+/// (its columns named 0, 1, 2 and said), its time column left out of the channels and
+/// giving the rate; `--fs` ten times too large refused naming the column; `--names` names
+/// the columns.
+#[test]
+fn ssi_reads_a_headerless_dat_with_its_time_column() {
+    let text: String = (0..3000)
+        .map(|k| {
+            let t = k as f64 * 0.05;
+            format!(
+                "{t:.2}  {:.6e}  {:.6e}\n",
+                (0.7 * k as f64).sin() + 0.3 * (1.9 * k as f64).cos(),
+                (0.7 * k as f64).cos() - 0.2 * (1.9 * k as f64).sin()
+            )
+        })
+        .collect();
+    let p = write("headerless.dat", &text);
+    let json = tmp("headerless.json");
+    let channels_and_rate = || {
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        (v["channels"].clone(), v["fs_hz"].as_f64())
+    };
+    let (ok, _, err) = hyst(&["ssi", "--input", s(&p), "--no-refine", "--json", s(&json)]);
+    assert!(ok, "{err}");
+    assert!(
+        err.contains("no header line (the first line is numbers): the columns are named 0 to 2"),
+        "{err}"
+    );
+    // Two channels at the time column's 20 Hz (the step 0.05 s).
+    assert_eq!(
+        channels_and_rate(),
+        (serde_json::json!(["1", "2"]), Some(20.0))
+    );
+    let (ok, _, err) = hyst(&["ssi", "--input", s(&p), "--fs", "200", "--no-refine"]);
+    assert!(!ok);
+    assert!(
+        err.contains("--fs 200 Hz disagrees with the time column `0`"),
+        "{err}"
+    );
+    let (ok, _, err) = hyst(&[
+        "ssi",
+        "--input",
+        s(&p),
+        "--names",
+        "Time (s),north,east",
+        "--no-refine",
+        "--json",
+        s(&json),
+    ]);
+    assert!(ok, "{err}");
+    assert!(!err.contains("no header line"), "{err}");
+    assert_eq!(
+        channels_and_rate(),
+        (serde_json::json!(["north", "east"]), Some(20.0))
+    );
+    let (ok, _, err) = hyst(&["ssi", "--input", s(&p), "--names", "a,b"]);
+    assert!(!ok);
+    assert!(
+        err.contains("--names gives 2 name(s) for the file's 3 column(s)"),
+        "{err}"
+    );
+}
+
 /// Run `hyst ssi --input FILE --fs 10` with these further arguments, expecting failure;
 /// return stderr.
 fn ssi_fails(input: &Path, args: &[&str]) -> String {

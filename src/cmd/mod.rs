@@ -30,6 +30,7 @@ pub(crate) fn set_read_options(cli: &Cli) {
             .with_format(cli.format)
             .with_delimiter(cli.delimiter)
             .with_variable(cli.variable.clone())
+            .with_names(cli.names.clone())
     });
 }
 
@@ -60,6 +61,16 @@ pub(crate) struct Cli {
         value_name = "NAME"
     )]
     pub(crate) variable: Option<String>,
+    /// The columns' names, in file order, replacing the file's (a headerless file's are
+    /// `0`, `1`, …): one for each column.
+    #[arg(
+        long,
+        global = true,
+        help_heading = "Reading records (every command)",
+        value_name = "A,B,...",
+        value_delimiter = ','
+    )]
+    pub(crate) names: Option<Vec<String>>,
 }
 
 /// A `--format` or `--delimiter` value: one of the library's names, each with its description
@@ -86,8 +97,13 @@ where
 static READ_OPTIONS: std::sync::OnceLock<hyst::io::ReadOptions> = std::sync::OnceLock::new();
 
 /// Read a record as `--format`, `--delimiter` and `--variable` say.
+/// What the reader assumed (a headerless file's names) is said on stderr.
 pub(crate) fn read_record(path: &std::path::Path) -> Result<hyst::io::Table, hyst::io::IoError> {
-    hyst::io::read_record(path, READ_OPTIONS.get().unwrap_or(&Default::default()))
+    let t = hyst::io::read_record(path, READ_OPTIONS.get().unwrap_or(&Default::default()))?;
+    for note in &t.notes {
+        eprintln!("note: {note}");
+    }
+    Ok(t)
 }
 
 #[derive(Subcommand)]
@@ -172,8 +188,8 @@ pub(crate) fn fail(msg: impl Into<String>) -> Error {
     anyhow::anyhow!(msg.into())
 }
 
-/// The channels to analyse: those given, else every column but a time column (`t`, `time`)
-/// and those in `besides`.
+/// The channels to analyse: those given, else every column but the time column
+/// ([`hyst::io::Table::time_column`]) and those in `besides`.
 pub(crate) fn channel_names(
     t: &hyst::io::Table,
     given: Option<&[String]>,
@@ -181,15 +197,15 @@ pub(crate) fn channel_names(
 ) -> Vec<String> {
     match given {
         Some(c) => c.to_vec(),
-        None => t
-            .names
-            .iter()
-            .filter(|n| {
-                !besides.contains(&n.as_str())
-                    && !matches!(n.to_ascii_lowercase().as_str(), "t" | "time")
-            })
-            .cloned()
-            .collect(),
+        None => {
+            let time = t.time_column();
+            t.names
+                .iter()
+                .enumerate()
+                .filter(|&(i, n)| !besides.contains(&n.as_str()) && Some(i) != time)
+                .map(|(_, n)| n.clone())
+                .collect()
+        }
     }
 }
 

@@ -208,6 +208,7 @@ pub fn ssi_page_data(title: &str, a: &ModalAnalysis, fdd: Option<&Fdd>) -> PageD
             a.fs_hz,
             a.decision.headline()
         ))
+        .chain(a.decision.confirmed_lines())
         .chain(a.decision.set_apart_lines())
         .collect(),
         diagram: Some(Diagram {

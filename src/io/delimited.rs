@@ -120,9 +120,12 @@ pub fn read_csv(path: &Path) -> Result<Table, IoError> {
 /// `delimiter`, any of them quoted, CRLF or LF line ends, a byte-order mark, spaces around the
 /// cells; empty lines are skipped. Every row must have one cell per column of the header, and
 /// every cell must be a finite number.
+///
+/// A file whose first line is numbers only has no header line: its columns are named `0`,
+/// `1`, … (as an array's are), the first line is the first row, and the table's notes say so.
 pub fn read_csv_with(path: &Path, delimiter: Delimiter) -> Result<Table, IoError> {
-    let rows = DelimitedRows::open(path, delimiter)?;
-    let (names, sep) = (rows.names.clone(), rows.sep);
+    let rows = DelimitedRows::open_record(path, delimiter)?;
+    let (names, sep, headerless) = (rows.names.clone(), rows.sep, rows.pending.is_some());
     let mut columns: Vec<Vec<f64>> = vec![Vec::new(); names.len()];
     for r in rows {
         let (row, r) = r?;
@@ -149,7 +152,15 @@ pub fn read_csv_with(path: &Path, delimiter: Delimiter) -> Result<Table, IoError
             path: path.to_path_buf(),
         });
     }
-    Ok(Table::new(path, names, columns))
+    let mut table = Table::new(path, names, columns);
+    if headerless {
+        table.notes.push(format!(
+            "{}: no header line (the first line is numbers): the columns are named 0 to {} as an array's are; --names names them",
+            path.display(),
+            table.names.len() - 1
+        ));
+    }
+    Ok(table)
 }
 
 /// A delimited file opened for reading (see [`read_csv_with`] for what is read): its header's
@@ -163,12 +174,24 @@ pub(super) struct DelimitedRows {
     pub(super) sep: u8,
     path: std::path::PathBuf,
     records: csv::StringRecordsIntoIter<std::io::BufReader<std::fs::File>>,
+    /// A headerless record's first line, the first row.
+    pending: Option<csv::StringRecord>,
 }
 
 impl DelimitedRows {
     /// Open `path`, its delimiter `delimiter` or detected from its header line, and read the
-    /// header.
+    /// header; a first line of numbers only is an error (a table of named columns).
     pub(super) fn open(path: &Path, delimiter: Delimiter) -> Result<Self, IoError> {
+        Self::opened(path, delimiter, false)
+    }
+
+    /// [`open`](Self::open) for a record: a first line of numbers only is its first row,
+    /// its columns named `0`, `1`, ….
+    fn open_record(path: &Path, delimiter: Delimiter) -> Result<Self, IoError> {
+        Self::opened(path, delimiter, true)
+    }
+
+    fn opened(path: &Path, delimiter: Delimiter, headerless: bool) -> Result<Self, IoError> {
         let file_error = |source| IoError::File {
             path: path.to_path_buf(),
             source,
@@ -202,6 +225,7 @@ impl DelimitedRows {
                 .trim(csv::Trim::All)
                 .from_reader(file)
                 .into_records(),
+            pending: None,
         };
         let header = rows.next_cells().ok_or_else(|| IoError::NoHeader {
             path: path.to_path_buf(),
@@ -217,6 +241,11 @@ impl DelimitedRows {
                 .all(|(k, v)| *v == Some(k + first))
         };
         if header.iter().all(|t| number(t, sep).is_some()) && !by_index(0) && !by_index(1) {
+            if headerless {
+                rows.names = (0..header.len()).map(|k| k.to_string()).collect();
+                rows.pending = Some(header);
+                return Ok(rows);
+            }
             return Err(IoError::HeaderOfNumbers {
                 path: path.to_path_buf(),
                 line: header
@@ -270,7 +299,11 @@ impl Iterator for DelimitedRows {
     type Item = Result<(usize, csv::StringRecord), IoError>;
 
     fn next(&mut self) -> Option<Self::Item> {
-        Some(self.next_cells()?.and_then(|r| {
+        let next = match self.pending.take() {
+            Some(first) => Ok(first),
+            None => self.next_cells()?,
+        };
+        Some(next.and_then(|r| {
             let row = r.position().map_or(0, |p| p.line() as usize);
             if r.len() != self.names.len() {
                 return Err(IoError::CellCount {
@@ -453,18 +486,29 @@ mod tests {
         assert_eq!(t.names, ["0", "1", "2"]);
         let t = read_csv(&file("indexed1.csv", "1;2\n0,5;2\n")).unwrap();
         assert_eq!(t.names, ["1", "2"]);
-        // A headerless file: its first row was taken as the names (a row lost, the channels
-        // named `0.12` and `3.4e-2`), silently.
-        for (name, text) in [
-            ("headerless.csv", "0.12,3.4e-2\n0.2,0.1\n"),
-            ("headerless.tsv", "0.12\t3.4e-2\n0.2\t0.1\n"),
-            ("headerless_semicolon.csv", "0,12;3;4\n1;2;3\n"),
-            ("headerless.dat", "  0.12   3.4e-2\n 0.2  0.1\n"),
+        // A headerless file: its first line is its first row (not names, which would lose a
+        // row and name the channels `0.12` and `3.4e-2`), its columns named as an array's,
+        // and said.
+        for (name, text, first) in [
+            ("headerless.csv", "0.12,3.4e-2\n0.2,0.1\n", [0.12, 3.4e-2]),
+            ("headerless.tsv", "0.12\t3.4e-2\n0.2\t0.1\n", [0.12, 3.4e-2]),
+            ("headerless_semicolon.csv", "0,12;3;4\n1;2;3\n", [0.12, 3.0]),
+            (
+                "headerless.dat",
+                "  0.12   3.4e-2\n 0.2  0.1\n",
+                [0.12, 3.4e-2],
+            ),
         ] {
-            let e = read_csv(&file(name, text)).unwrap_err();
-            assert!(matches!(e, IoError::HeaderOfNumbers { .. }), "{name}: {e}");
-            assert!(e.to_string().contains("no header line; add one"), "{e}");
+            let t = read_csv(&file(name, text)).unwrap();
+            let generated: Vec<String> = (0..t.names.len()).map(|k| k.to_string()).collect();
+            assert_eq!(t.names, generated, "{name}");
+            assert_eq!(t.len(), 2, "{name}");
+            assert_eq!([t.columns[0][0], t.columns[1][0]], first, "{name}");
+            assert!(t.notes[0].contains("no header line"), "{:?}", t.notes);
         }
+        // A headerless file with a bad cell names its row: the first line is row 1.
+        let e = read_csv(&file("headerless_bad.dat", "1.5 2\n3 x\n")).unwrap_err();
+        assert!(e.to_string().contains("row 2, column `1`"), "{e}");
     }
 
     /// Columns of different lengths are refused, not cut to the shortest.

@@ -90,6 +90,32 @@ pub enum IoError {
         /// The first line, as read.
         line: String,
     },
+    /// `--names` (`ReadOptions::names`) does not name every column once.
+    #[error(
+        "{path}: --names gives {given} name(s) for the file's {columns} column(s): one for each"
+    )]
+    NamesCount {
+        /// The file.
+        path: PathBuf,
+        /// Names given.
+        given: usize,
+        /// Columns in the file.
+        columns: usize,
+    },
+    /// `--fs` disagrees with the record's time column.
+    #[error(
+        "{path}: --fs {given} Hz disagrees with the time column `{column}`, whose step is {rate:.6} Hz's: give --fs {rate:.6}, or leave it out"
+    )]
+    RateVsTime {
+        /// The file.
+        path: PathBuf,
+        /// The time column's name.
+        column: String,
+        /// The rate given (Hz).
+        given: f64,
+        /// The rate of the time column's mean step (Hz).
+        rate: f64,
+    },
     /// The file has no header line.
     #[error("{path}: the file is empty (no header line)")]
     NoHeader {
@@ -401,9 +427,17 @@ pub struct ReadOptions {
     /// The variable of a `.mat` file or the array of a `.npz` archive; needed when the file
     /// holds more than one that could be the record.
     pub variable: Option<String>,
+    /// The columns' names, replacing the file's (a headerless file's `0`, `1`, …): as many
+    /// as the file has columns, none twice.
+    pub names: Option<Vec<String>>,
 }
 
 impl ReadOptions {
+    /// These options with the columns' `names`.
+    pub fn with_names(mut self, names: Option<Vec<String>>) -> Self {
+        self.names = names;
+        self
+    }
     /// These options with `format`.
     pub fn with_format(mut self, format: Format) -> Self {
         self.format = format;
@@ -429,13 +463,32 @@ pub fn read_record(path: &Path, options: &ReadOptions) -> Result<Table, IoError>
     };
     let variable = options.variable.as_deref();
     check_fits_in_memory(path, format)?;
-    match format {
+    let mut table = match format {
         Format::Npy => read_npy(path),
         Format::Npz => read_npz(path, variable),
         Format::Mat => read_mat(path, variable),
         Format::Uff => read_uff(path),
         Format::Csv | Format::Auto => read_csv_with(path, options.delimiter),
+    }?;
+    if let Some(names) = &options.names {
+        if names.len() != table.names.len() {
+            return Err(IoError::NamesCount {
+                path: path.to_path_buf(),
+                given: names.len(),
+                columns: table.names.len(),
+            });
+        }
+        if let Some(column) = repeated(names) {
+            return Err(IoError::DuplicateColumn {
+                path: path.to_path_buf(),
+                column: column.to_string(),
+            });
+        }
+        table.names = names.clone();
+        // The names are the user's now: a note that they were generated no longer holds.
+        table.notes.retain(|n| !n.contains("no header line"));
     }
+    Ok(table)
 }
 
 /// Bytes of memory a record read from a file of `bytes` bytes of `format` takes at its peak,
@@ -509,6 +562,10 @@ impl std::fmt::Display for MeasurementPoint {
     }
 }
 
+/// Fewest samples over which a column's constant step makes it a time column (a short
+/// test record of 1, 2, 3 is a response).
+pub const TIME_MIN_SAMPLES: usize = 16;
+
 /// A table of named numeric columns of equal length.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Table {
@@ -522,6 +579,8 @@ pub struct Table {
     pub rate_hz: Option<f64>,
     /// Where each column was measured, if the file says (a Universal File does).
     pub points: Option<Vec<MeasurementPoint>>,
+    /// What the reader assumed and a user should hear (a headerless file's generated names).
+    pub notes: Vec<String>,
 }
 
 impl Table {
@@ -553,6 +612,7 @@ impl Table {
             path: path.to_path_buf(),
             rate_hz: None,
             points: None,
+            notes: Vec::new(),
         }
     }
 
@@ -576,10 +636,70 @@ impl Table {
         Ok(std::mem::take(&mut self.columns[i]))
     }
 
+    /// The column that holds time, if one does: named so (`t`, `time`, `Time (s)`,
+    /// `time_s`, `timestamp`, `zeit`, …, by its name before any unit), or, beside other
+    /// columns, increasing by a constant step over at least [`TIME_MIN_SAMPLES`] samples
+    /// (every step within 1 % of the mean: no response does that over a record).
+    pub fn time_column(&self) -> Option<usize> {
+        let named = |n: &str| {
+            let n = n.trim().to_ascii_lowercase();
+            let base = n
+                .split(|c: char| c == '(' || c == '[' || c == '_' || c.is_whitespace())
+                .next()
+                .unwrap_or("");
+            matches!(
+                base,
+                "t" | "time" | "times" | "timestamp" | "zeit" | "temps" | "tiempo" | "tempo"
+            )
+        };
+        let uniform = |c: &[f64]| {
+            let n = c.len();
+            if n < TIME_MIN_SAMPLES {
+                return false;
+            }
+            let step = (c[n - 1] - c[0]) / (n - 1) as f64;
+            step > 0.0
+                && c.windows(2)
+                    .all(|w| ((w[1] - w[0]) - step).abs() <= 0.01 * step)
+        };
+        (0..self.names.len())
+            .find(|&i| named(&self.names[i]))
+            .or_else(|| {
+                (self.columns.len() > 1)
+                    .then(|| (0..self.columns.len()).find(|&i| uniform(&self.columns[i])))
+                    .flatten()
+            })
+    }
+
+    /// The sampling rate the time column's mean step gives, with the column's name: when it
+    /// increases throughout.
+    pub fn time_rate(&self) -> Option<(&str, f64)> {
+        let i = self.time_column()?;
+        let c = &self.columns[i];
+        let n = c.len();
+        (n >= 2 && c.windows(2).all(|w| w[1] > w[0]))
+            .then(|| (self.names[i].as_str(), (n - 1) as f64 / (c[n - 1] - c[0])))
+    }
+
     /// The sampling rate: the one `given`, which must agree with the file's if the file
-    /// states one (within the six significant digits a Universal File writes it with), else
-    /// the file's.
+    /// states one (within the six significant digits a Universal File writes it with) and
+    /// with its time column's mean step if it has one (within 1 %), else the file's, else
+    /// the time column's.
     pub fn rate(&self, given: Option<f64>) -> Result<f64, IoError> {
+        if self.rate_hz.is_none()
+            && let Some((column, rate)) = self.time_rate()
+        {
+            return match given {
+                Some(g) if (g - rate).abs() > 0.01 * rate => Err(IoError::RateVsTime {
+                    path: self.path.clone(),
+                    column: column.to_string(),
+                    given: g,
+                    rate,
+                }),
+                Some(g) => Ok(g),
+                None => Ok(rate),
+            };
+        }
         match (given, self.rate_hz) {
             (Some(g), Some(s)) if (g - s).abs() > 1e-5 * s => Err(IoError::Rate {
                 path: self.path.clone(),
@@ -705,6 +825,79 @@ pub(crate) mod test_files {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn table(names: &[&str], columns: Vec<Vec<f64>>) -> Table {
+        Table::new(
+            Path::new("r.csv"),
+            names.iter().map(|n| n.to_string()).collect(),
+            columns,
+        )
+    }
+
+    /// A time column is found by its name (before any unit) or by a constant step, and its
+    /// step checks `--fs` (a rate ten times too large is refused) or gives the rate.
+    #[test]
+    fn a_time_column_is_recognised_and_checks_the_rate() {
+        let t: Vec<f64> = (0..100).map(|k| k as f64 * 0.01).collect();
+        let y: Vec<f64> = (0..100).map(|k| (0.3 * k as f64).sin()).collect();
+        for name in ["t", "Time (s)", "time_s", "TIME[s]", "Zeit", "timestamp"] {
+            let tb = table(&["y", name], vec![y.clone(), t.clone()]);
+            assert_eq!(tb.time_column(), Some(1), "{name}");
+        }
+        // Unnamed, found by its constant step (written with rounding: within 1 %).
+        let rounded: Vec<f64> = t.iter().map(|v| (v * 1e4).round() / 1e4 + 1.0).collect();
+        let tb = table(&["y", "x"], vec![y.clone(), rounded]);
+        assert_eq!(tb.time_column(), Some(1));
+        // A response is not a time column; nor is a ramp with a varying step.
+        let ramp: Vec<f64> = (0..100).map(|k| (k * k) as f64).collect();
+        let tb = table(&["y", "ramp"], vec![y.clone(), ramp]);
+        assert_eq!(tb.time_column(), None);
+        // A record's only column, or a short one, is a response whatever its values.
+        let steps: Vec<f64> = (0..100).map(|k| k as f64).collect();
+        assert_eq!(table(&["y"], vec![steps.clone()]).time_column(), None);
+        let short = table(&["y", "x"], vec![y[..3].to_vec(), steps[..3].to_vec()]);
+        assert_eq!(short.time_column(), None);
+        assert!(tb.rate(None).is_err());
+        let tb = table(&["Time (s)", "y"], vec![t.clone(), y.clone()]);
+        // 99 steps of 0.01 s: 100 Hz.
+        assert!((tb.rate(None).unwrap() - 100.0).abs() < 1e-9);
+        assert_eq!(tb.rate(Some(100.5)).unwrap(), 100.5);
+        let e = tb.rate(Some(1000.0)).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("--fs 1000 Hz disagrees with the time column `Time (s)`, whose step is 100.000000 Hz's"),
+            "{e}"
+        );
+    }
+
+    /// `--names` names every column once, or is refused naming the counts.
+    #[test]
+    fn names_given_replace_the_files_or_are_refused() {
+        let p = test_files::file_path("names.dat");
+        std::fs::write(&p, "0.5 1\n0.25 2\n0.125 3\n").unwrap();
+        let t = read_record(&p, &ReadOptions::default()).unwrap();
+        assert_eq!(t.names, ["0", "1"]);
+        assert_eq!(t.notes.len(), 1);
+        let named = ReadOptions::default().with_names(Some(vec!["a".into(), "b".into()]));
+        let t = read_record(&p, &named).unwrap();
+        assert_eq!(
+            (t.names.as_slice(), t.notes.len()),
+            (&["a".to_string(), "b".to_string()][..], 0)
+        );
+        assert_eq!(t.columns[0], [0.5, 0.25, 0.125]);
+        let three = ReadOptions::default().with_names(Some(vec!["a".into(); 3]));
+        let e = read_record(&p, &three).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("--names gives 3 name(s) for the file's 2 column(s)"),
+            "{e}"
+        );
+        let twice = ReadOptions::default().with_names(Some(vec!["a".into(); 2]));
+        assert!(matches!(
+            read_record(&p, &twice),
+            Err(IoError::DuplicateColumn { .. })
+        ));
+    }
 
     /// A record larger than the free memory is refused naming both sizes; one that fits,
     /// and this machine's real check on a small file, pass.

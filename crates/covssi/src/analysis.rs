@@ -85,6 +85,36 @@ fn decimation_of(
     }
 }
 
+/// What a decimation by `r` the options gave filters out: the spectral peaks of the record
+/// (`y` at `fs` Hz) above the new Nyquist less the low-pass's taper, said with the largest
+/// factor that keeps them. A note, not an error: decimating to study a band below other
+/// modes is an analyst's choice (the F-16's torsion mode, below a peak at 50 Hz), but it
+/// must not pass silently.
+fn peaks_filtered_out(
+    y: &[&[f64]],
+    fs: f64,
+    (n, means): &(usize, Vec<f64>),
+    r: usize,
+) -> Option<String> {
+    let s = crate::survey::surveyed(y, fs, means, *n);
+    let kept = |r: usize| (1.0 - crate::decimate::TAPER) * fs / (2.0 * r as f64);
+    let lost: Vec<String> = s
+        .peaks_hz
+        .iter()
+        .filter(|&&p| p > kept(r))
+        .map(|p| format!("{p:.4}"))
+        .collect();
+    let top = *s.peaks_hz.last()?;
+    let largest = (1..r).rev().find(|&k| top <= kept(k)).unwrap_or(1);
+    (!lost.is_empty()).then(|| {
+        format!(
+            "decimating by {r} puts Nyquist at {:.4} Hz: the record's spectral peak(s) at {} Hz are filtered out, and any mode there is not analysed (decimating by {largest} at most keeps them)",
+            fs / (2.0 * r as f64),
+            lost.join(", ")
+        )
+    })
+}
+
 /// How the record was decimated before the analysis.
 #[derive(Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -185,6 +215,10 @@ pub struct ModalAnalysis {
     /// Jackknife errors of SSI's modes ([`AnalysisOptions::ssi_errors`]); `None` when not
     /// asked for, or when the record is too short for the blocks.
     pub ssi_errors: Option<crate::jackknife::SsiErrors>,
+    /// Why the errors asked for were not made: the record is too short for the jackknife's
+    /// blocks (its modes then go unconfirmed, and the report says so).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub no_errors: Option<String>,
     /// What is a mode: the answer, which list it is, and what was set apart and why
     /// ([`crate::decision`]).
     pub decision: ModeDecision,
@@ -222,13 +256,20 @@ pub fn analyze_with_progress(
     } else {
         y.to_vec()
     };
+    let y_recorded = y;
     let y = views.as_slice();
     let recorded_fs = fs;
     let fs = fs / factor as f64;
     // The survey that chose the factor is the one SSI's lag is read from, restated at the
     // new rate: not made twice, and not at a coarser resolution.
     let known = survey.as_ref().map(|s| s.decimated(factor));
-    let ssi = crate::identify::identify_surveyed(y, fs, &opts.ssi, known, progress)?;
+    let mut ssi = crate::identify::identify_surveyed(y, fs, &opts.ssi, known, progress)?;
+    if let Decimation::Factor(r) = opts.decimation
+        && r > 1
+    {
+        ssi.notes
+            .extend(peaks_filtered_out(y_recorded, recorded_fs, &checked, r));
+    }
     // The refinement's steps follow SSI's on one count.
     let before = crate::identify::SSI_STEPS_BEFORE_ORDERS + ssi.diagram.orders.len();
     let after_ssi = |p: Progress| {
@@ -273,6 +314,9 @@ pub fn analyze_with_progress(
         }
         None => None,
     };
+    let no_errors = opts
+        .ssi_errors
+        .and_then(|_| too_short_for_errors(samples, ssi.block_rows, fs));
     let evidence = Evidence {
         y,
         fs,
@@ -302,8 +346,23 @@ pub fn analyze_with_progress(
         not_refined,
         not_reported,
         ssi_errors,
+        no_errors,
         decision,
     })
+}
+
+/// Why a record of `samples` at `fs` Hz, SSI's lag `block_rows`, is too short for the
+/// jackknife's errors, with the shortest record they need; `None` when it is long enough.
+fn too_short_for_errors(samples: usize, block_rows: usize, fs: f64) -> Option<String> {
+    use crate::jackknife::{MIN_BLOCK_LAGS, MIN_BLOCKS};
+    let lags = 2 * block_rows;
+    let needed = MIN_BLOCKS * MIN_BLOCK_LAGS * lags;
+    (samples < needed).then(|| format!(
+        "the record is too short to confirm modes: {samples} samples ({:.1} s) hold {} of SSI's lags ({lags} samples), and the jackknife's errors need {MIN_BLOCKS} blocks of {MIN_BLOCK_LAGS} lags, {needed} samples ({:.1} s) at least; any mode reported is unconfirmed, without errors",
+        samples as f64 / fs,
+        samples / lags.max(1),
+        needed as f64 / fs
+    ))
 }
 
 impl ModalAnalysis {
@@ -705,6 +764,9 @@ impl fmt::Display for ModalAnalysis {
         if let Some(r) = &self.refined {
             self.fmt_refined(f, r)?;
         }
+        if let Some(why) = &self.no_errors {
+            writeln!(f, "no standard errors: {why}")?;
+        }
         self.decision.fmt_with(f)
     }
 }
@@ -730,6 +792,57 @@ mod tests {
             ..SsiOptions::default()
         });
         (fs, y, opts)
+    }
+
+    /// A decimation that filters out a mode the spectrum shows is said, with the largest
+    /// factor that keeps it: by 5, Nyquist is 5 Hz, below the 6 Hz mode; by 4 it is
+    /// 6.25 Hz, the low-pass flat to 6.125 Hz, and nothing is said.
+    #[test]
+    fn a_decimation_below_a_peak_is_said() {
+        let y = crate::synth::two_modes(20_000, 5_800_001);
+        let views: Vec<&[f64]> = y.iter().map(|c| c.as_slice()).collect();
+        let opts = AnalysisOptions::default().with_decimation(Decimation::Factor(5));
+        let a = analyze(&views, 50.0, &opts).unwrap();
+        let said = |a: &ModalAnalysis| {
+            a.ssi
+                .notes
+                .iter()
+                .find(|n| n.starts_with("decimating by"))
+                .cloned()
+        };
+        let note = said(&a).unwrap_or_default();
+        assert!(
+            note.contains("Nyquist at 5.0000 Hz") && note.contains("decimating by 4 at most"),
+            "{a}"
+        );
+        // The peak named within the survey's resolution (50/1024 Hz) of the mode.
+        assert!(note.contains("at 5.9") || note.contains("at 6.0"), "{note}");
+        let opts = AnalysisOptions::default().with_decimation(Decimation::Factor(4));
+        let a = analyze(&views, 50.0, &opts).unwrap();
+        assert_eq!(said(&a), None, "{a}");
+    }
+
+    /// A record too short for the jackknife's blocks says so: the errors asked for are not
+    /// made, and why (not "give more block rows").
+    #[test]
+    fn a_record_too_short_for_errors_says_so() {
+        let y = crate::synth::two_modes(300, 5_800_002);
+        let views: Vec<&[f64]> = y.iter().map(|c| c.as_slice()).collect();
+        let a = analyze(&views, 50.0, &AnalysisOptions::default()).unwrap();
+        assert!(a.ssi_errors.is_none());
+        let why = a.no_errors.as_deref().unwrap_or_default();
+        assert!(
+            why.contains("too short to confirm modes: 300 samples"),
+            "{a}"
+        );
+        assert!(
+            a.to_string()
+                .contains("no standard errors: the record is too short")
+        );
+        let long = crate::synth::two_modes(30_000, 5_800_003);
+        let views: Vec<&[f64]> = long.iter().map(|c| c.as_slice()).collect();
+        let a = analyze(&views, 50.0, &AnalysisOptions::default()).unwrap();
+        assert!(a.no_errors.is_none() && a.ssi_errors.is_some());
     }
 
     /// The analysis is SSI then the refinement, nothing more: the same modes as the two

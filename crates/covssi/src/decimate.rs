@@ -15,7 +15,7 @@ use realfft::RealFftPlanner;
 use realfft::num_complex::Complex;
 
 /// Share of the kept band, below the new Nyquist, over which the low-pass falls from 1 to 0.
-const TAPER: f64 = 0.02;
+pub(crate) const TAPER: f64 = 0.02;
 
 /// `x` low-passed below `fs/(2r)` (ideal, zero-phase) and decimated by `r`: samples
 /// `0, r, 2r, …` of the filtered record, `⌈len/r⌉` of them. `r ≤ 1` returns `x` as it is.

@@ -275,6 +275,12 @@ pub struct ModeDecision {
     /// Candidates set apart, each with its reasons (SSI's always; the refinement's when
     /// its modes are the answer).
     pub set_apart: Vec<SetApart>,
+    /// SSI's modes the jackknife alone could not confirm (found in too few replicates, or
+    /// its frequency undetermined) that an agreeing, physical refined mode confirms: a
+    /// second, independent estimator finds them in the record. Only when the refinement
+    /// holds; each with the jackknife's reasons.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub confirmed: Vec<SetApart>,
 }
 
 /// What the SSI-side rules need besides SSI's result: the record (decimated as analysed).
@@ -419,6 +425,19 @@ fn shadows(e: &Evidence<'_>, c: &ModeCriteria, reasons: &mut [Vec<NotAMode>]) {
     }
 }
 
+/// Whether SSI's mode with these reasons is set apart only by the jackknife's rules (found
+/// in too few replicates, frequency undetermined): rules an independent estimate of the
+/// same mode can answer.
+fn only_unconfirmed(reasons: &[NotAMode]) -> bool {
+    !reasons.is_empty()
+        && reasons.iter().all(|r| {
+            matches!(
+                r,
+                NotAMode::NotFoundAgain { .. } | NotAMode::FrequencyUndetermined { .. }
+            )
+        })
+}
+
 /// The decision, given SSI's reasons, the refinement and its physical check.
 pub(crate) fn decide(
     ssi: &SsiResult,
@@ -452,6 +471,7 @@ pub(crate) fn decide(
             modes: ssi_modes(),
             refinement: RefinementVerdict::NotRun,
             set_apart,
+            confirmed: Vec::new(),
         };
     };
     if r.misfit > MISFIT_LIMIT {
@@ -463,6 +483,7 @@ pub(crate) fn decide(
                 limit: MISFIT_LIMIT,
             },
             set_apart,
+            confirmed: Vec::new(),
         };
     }
     let refined_reasons = refined_reasons(r, ssi, &reasons, not_reported, c);
@@ -496,15 +517,89 @@ pub(crate) fn decide(
             modes: ssi_modes(),
             refinement: RefinementVerdict::LostModes { lost },
             set_apart,
+            confirmed: Vec::new(),
         };
     }
-    for (i, m) in r.modes.iter().enumerate() {
+    let confirmed = confirm(
+        ssi,
+        r,
+        &reasons,
+        &refined_reasons,
+        &mut chosen,
+        &mut set_apart,
+    );
+    set_apart_refined(ssi, r, refined_reasons, &chosen, &mut set_apart);
+    let mut modes = refined_reported(r, ssi, &chosen);
+    modes.sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
+    ModeDecision {
+        source: ModeSource::Refined,
+        modes,
+        refinement: RefinementVerdict::Holds,
+        set_apart,
+        confirmed,
+    }
+}
+
+/// SSI's modes only the jackknife set apart (rules 2–3), confirmed by an agreeing,
+/// acceptable refined mode not yet `chosen` (judged as without SSI's errors: the jackknife
+/// gave none it can stand by): each confirmed is taken out of `set_apart` and returned, its
+/// refined mode added to `chosen`.
+fn confirm(
+    ssi: &SsiResult,
+    r: &Refinement,
+    reasons: &[Vec<NotAMode>],
+    refined_reasons: &[Vec<NotAMode>],
+    chosen: &mut Vec<usize>,
+    set_apart: &mut Vec<SetApart>,
+) -> Vec<SetApart> {
+    let mut confirmed = Vec::new();
+    for s in (0..ssi.modes.len()).filter(|&s| only_unconfirmed(&reasons[s])) {
+        let found = (0..r.modes.len()).find(|&i| {
+            r.modes[i].source == Some(s)
+                && !chosen.contains(&i)
+                && refined_reasons[i].is_empty()
+                && agrees(&r.modes[i], &ssi.modes[s], None)
+        });
+        if let Some(i) = found {
+            chosen.push(i);
+            if let Some(k) = set_apart
+                .iter()
+                .position(|a| a.source == ModeSource::Ssi && a.index == s)
+            {
+                confirmed.push(set_apart.remove(k));
+            }
+        }
+    }
+    confirmed
+}
+
+/// Every refined mode not `chosen`, set apart with its reasons: its own, else that its SSI
+/// mode is set apart (and it did not confirm it), else that another refined mode took its
+/// SSI mode.
+fn set_apart_refined(
+    ssi: &SsiResult,
+    r: &Refinement,
+    refined_reasons: Vec<Vec<NotAMode>>,
+    chosen: &[usize],
+    set_apart: &mut Vec<SetApart>,
+) {
+    for (i, (m, mut why)) in r.modes.iter().zip(refined_reasons).enumerate() {
         if chosen.contains(&i) {
             continue;
         }
-        let mut why = refined_reasons[i].clone();
+        let unconfirmed = m.source.filter(|&s| {
+            set_apart
+                .iter()
+                .any(|a| a.source == ModeSource::Ssi && a.index == s)
+        });
+        if why.is_empty()
+            && let Some(s) = unconfirmed
+        {
+            why.push(NotAMode::NoSsiSupport {
+                ssi_hz: Some(ssi.modes[s].frequency_hz),
+            });
+        }
         if why.is_empty() {
-            // Acceptable, but another refined mode took its SSI mode.
             why.push(NotAMode::Duplicate {
                 of_hz: m
                     .source
@@ -518,14 +613,6 @@ pub(crate) fn decide(
             damping_ratio: m.damping_ratio,
             reasons: why,
         });
-    }
-    let mut modes = refined_reported(r, ssi, &chosen);
-    modes.sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
-    ModeDecision {
-        source: ModeSource::Refined,
-        modes,
-        refinement: RefinementVerdict::Holds,
-        set_apart,
     }
 }
 
@@ -574,7 +661,10 @@ fn refined_reasons(
                 });
             }
             match m.source {
-                Some(s) if reasons.get(s).is_some_and(|r| r.is_empty()) => {}
+                Some(s)
+                    if reasons
+                        .get(s)
+                        .is_some_and(|r| r.is_empty() || only_unconfirmed(r)) => {}
                 Some(s) => why.push(NotAMode::NoSsiSupport {
                     ssi_hz: Some(ssi.modes[s].frequency_hz),
                 }),
@@ -711,6 +801,23 @@ impl ModeDecision {
             .collect()
     }
 
+    /// Each SSI mode the refinement confirmed as one line, with the jackknife's reasons it
+    /// answers.
+    pub fn confirmed_lines(&self) -> Vec<String> {
+        self.confirmed
+            .iter()
+            .map(|s| {
+                let why: Vec<String> = s.reasons.iter().map(|r| r.to_string()).collect();
+                format!(
+                    "confirmed by the refinement (SSI) {:.4} Hz, damping ratio {:.4}: {}; its refined estimate agrees",
+                    s.frequency_hz,
+                    s.damping_ratio,
+                    why.join("; ")
+                )
+            })
+            .collect()
+    }
+
     /// The decision as the report prints it: which list is the answer and why, the modes
     /// numbered from 1, and every candidate set apart with its reasons.
     pub(crate) fn fmt_with(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -730,10 +837,14 @@ impl ModeDecision {
         if self.modes.iter().any(|m| m.frequency_se_hz.is_none()) {
             writeln!(
                 f,
-                "  (? : no standard error; --ssi-errors gives SSI's modes the jackknife's)"
+                "  (? : no standard error: the jackknife's need a long enough record and --ssi-errors above 0)"
             )?;
         }
-        for line in self.set_apart_lines() {
+        for line in self
+            .confirmed_lines()
+            .into_iter()
+            .chain(self.set_apart_lines())
+        {
             writeln!(f, "{line}")?;
         }
         Ok(())
@@ -743,20 +854,9 @@ impl ModeDecision {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::synth::ModalRecord;
     use crate::{AnalysisOptions, analyze};
 
-    /// Three accelerometer-like channels of two modes (2 and 6 Hz at 2 %), 5 % noise.
-    fn record(n: usize, seed: u64) -> Vec<Vec<f64>> {
-        ModalRecord::new(50.0, &[(2.0, 0.02), (6.0, 0.02)])
-            .with_gains(vec![
-                vec![1.0, 0.0, 1.0, 0.0],
-                vec![0.8, 0.0, -0.5, 0.0],
-                vec![0.4, 0.0, -1.0, 0.0],
-            ])
-            .with_noise(0.05)
-            .generate(n, seed)
-    }
+    use crate::synth::two_modes as record;
 
     fn refined_mode(frequency_hz: f64, damping_ratio: f64) -> crate::RefinedMode {
         crate::RefinedMode {
@@ -852,6 +952,90 @@ mod tests {
             &s,
             Some(&e)
         ));
+    }
+
+    /// SSI's modes at 1 and 4 Hz; the jackknife found the 4 Hz one in 4 of 7 replicates.
+    fn unconfirmed_case(refined_4hz: crate::RefinedMode) -> ModeDecision {
+        let ssi = SsiResult {
+            block_rows: 0,
+            singular_values: vec![],
+            diagram: Default::default(),
+            modes: vec![ssi_mode(1.0044, 0.0107), ssi_mode(4.0398, 0.0462)],
+            real_poles: vec![],
+            notes: vec![],
+            auto_lag: None,
+            survey: None,
+        };
+        let errors = SsiErrors {
+            blocks: 7,
+            modes: vec![
+                Some(crate::jackknife::ModeErrors {
+                    frequency_se_hz: 0.003,
+                    damping_se: 0.003,
+                    shape_se: vec![0.0],
+                    replicates: 7,
+                }),
+                None,
+            ],
+            found: vec![7, 4],
+        };
+        let refinement = Refinement {
+            modes: vec![refined_mode(1.0017, 0.0113), refined_4hz],
+            dropped: vec![],
+            penalty: 16.0,
+            real_poles: vec![],
+            dropped_real_poles: vec![],
+            real_pole_penalty: 8.0,
+            neg_log_likelihood: 0.0,
+            misfit: 0.007,
+            frequencies: 2999,
+            iterations: 1,
+            joint: true,
+            combinations: None,
+            bands: 1,
+        };
+        let reasons = vec![
+            vec![],
+            vec![NotAMode::NotFoundAgain {
+                found: 4,
+                replicates: 7,
+            }],
+        ];
+        let c = ModeCriteria::default();
+        decide(&ssi, Some(&errors), reasons, Some(&refinement), &[], &c)
+    }
+
+    #[test]
+    fn a_mode_the_jackknife_missed_is_confirmed_only_by_an_agreeing_refined_estimate() {
+        // The 3-DOF record's window at 2400–2700 s: 4.0398 Hz found in 4 of 7 replicates,
+        // refined to 4.0695 ± 0.0138 Hz at 4.74 % (2.2 refined errors away, the damping
+        // within 3 %): a second estimator finds it, and it is reported.
+        let agreeing = crate::RefinedMode {
+            source: Some(1),
+            frequency_se_hz: Some(0.0138),
+            ..refined_mode(4.0695, 0.0474)
+        };
+        let d = unconfirmed_case(agreeing);
+        assert_eq!(d.refinement, RefinementVerdict::Holds);
+        let f: Vec<f64> = d.modes.iter().map(|m| m.frequency_hz).collect();
+        assert_eq!(f, [1.0017, 4.0695]);
+        assert_eq!(d.confirmed.len(), 1);
+        assert_eq!(d.confirmed[0].index, 1);
+        assert!(d.set_apart.is_empty(), "{:?}", d.set_apart);
+        // Refined 10 % away (the fit gone to another feature): not confirmed, and the
+        // refined estimate is set apart for want of SSI's support.
+        let elsewhere = crate::RefinedMode {
+            source: Some(1),
+            ..refined_mode(4.45, 0.0474)
+        };
+        let d = unconfirmed_case(elsewhere);
+        assert_eq!(d.modes.len(), 1);
+        assert!(d.confirmed.is_empty());
+        assert!(d.set_apart.iter().any(|a| a.source == ModeSource::Ssi
+            && a.index == 1
+            && matches!(a.reasons[..], [NotAMode::NotFoundAgain { found: 4, .. }])));
+        assert!(d.set_apart.iter().any(|a| a.source == ModeSource::Refined
+            && matches!(a.reasons[..], [NotAMode::NoSsiSupport { .. }])));
     }
 
     #[test]

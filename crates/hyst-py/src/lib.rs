@@ -368,7 +368,7 @@ fn ssi_setups(
 }
 
 /// What `read_record` gives: the data (samples × channels), the column names, the sampling
-/// rate the file states, and each channel's (node, direction) if the file gives them.
+/// rate the file states or its time column gives, and each channel's (node, direction) if the file gives them.
 type RecordParts<'py> = (
     Bound<'py, PyArray2<f64>>,
     Vec<String>,
@@ -407,10 +407,12 @@ fn read_record<'py>(
     let data = Array2::from_shape_vec((n, l).f(), flat)
         .map_err(|e| PyValueError::new_err(e.to_string()))?
         .into_pyarray(py);
+    // The file's rate: stated (a Universal File), else its time column's step.
+    let fs = table.rate(None).ok();
     let points = table
         .points
         .map(|p| p.iter().map(|q| (q.node, q.direction)).collect());
-    Ok((data, table.names, table.rate_hz, points))
+    Ok((data, table.names, fs, points))
 }
 
 /// The extension module: `hyst._hyst`.

@@ -126,7 +126,7 @@ pub struct AmplitudeOptions {
     /// Fewest triggers a point needs (default 50); a band with fewer is left out, and said.
     pub min_triggers: usize,
     /// Band-pass half-width relative to the mode's frequency; default
-    /// $\min(0.3, \tfrac12$ the relative distance to the nearest other mode$)$.
+    /// $\min(0.3, \max(\tfrac12$ the relative distance to the nearest other mode$, 2ζ))$.
     pub band: Option<f64>,
     /// What the record measures (default displacement).
     pub measured: Quantity,
@@ -454,7 +454,12 @@ pub fn amplitude_curves(
                 .filter(|(k, _)| *k != j)
                 .map(|(_, o)| (o.frequency_hz - m.frequency_hz).abs() / m.frequency_hz)
                 .fold(f64::INFINITY, f64::min);
-            let h = opts.band.unwrap_or((0.5 * nearest).min(0.3));
+            // Half the way to the nearest other mode, at least twice the mode's half-power
+            // half-width (a band narrower than the mode holds none of it: a mode listed
+            // twice made it empty), at most 30 %.
+            let h = opts
+                .band
+                .unwrap_or((0.5 * nearest).max(2.0 * m.damping_ratio).min(0.3));
             let band = (
                 m.frequency_hz * (1.0 - h),
                 (m.frequency_hz * (1.0 + h)).min(0.5 * fs),
@@ -691,7 +696,7 @@ fn mode_curve(
         .map(|g| (bands.estimate)(Some(g)))
         .collect();
     // A point needs its triggers, and a fit with every group and with each left out.
-    let mut rows: Vec<(decay::Decay, Vec<decay::Decay>, usize)> = Vec::new();
+    let mut rows: Vec<(decay::Decay, Vec<decay::Decay>, usize, usize)> = Vec::new();
     for (k, d) in full.iter().enumerate() {
         let n = bands.totals[k];
         let (lo, hi) = (bands.edges[k], bands.edges[k + 1]);
@@ -704,7 +709,7 @@ fn mode_curve(
         }
         let reps: Option<Vec<decay::Decay>> = replicates.iter().map(|r| r[k]).collect();
         match (d, reps) {
-            (Some(d), Some(reps)) => rows.push((*d, reps, n)),
+            (Some(d), Some(reps)) => rows.push((*d, reps, n, k)),
             _ => notes.push(format!(
                 "amplitudes {lo:.4e}–{hi:.4e} (record's unit): no decaying oscillation over {} cycles to fit: left out",
                 opts.cycles
@@ -713,7 +718,34 @@ fn mode_curve(
     }
     let omega = |d: &decay::Decay| 2.0 * std::f64::consts::PI * d.frequency_hz;
     let amp = |d: &decay::Decay| opts.measured.convert(d.amplitude, omega(d), report_as);
-    for (d, reps, n) in &rows {
+    // A point is a mode's estimate at its level only as covssi's decision would take one:
+    // its frequency known (error within ModeCriteria's share of it) and damped within the
+    // limit; else it is said and left out, not printed as a result.
+    let criteria = covssi::decision::ModeCriteria::default();
+    rows.retain(|(d, reps, _, k)| {
+        let f: Vec<f64> = reps.iter().map(|r| r.frequency_hz).collect();
+        let se = jackknife_se(&f);
+        let (lo, hi) = (bands.edges[*k], bands.edges[*k + 1]);
+        let why = if se.is_nan() || se > criteria.max_frequency_cv * d.frequency_hz {
+            format!(
+                "frequency {:.4} ± {se:.4} Hz, its error above {:.0} % of it",
+                d.frequency_hz,
+                100.0 * criteria.max_frequency_cv
+            )
+        } else if d.damping_ratio > criteria.max_damping_ratio {
+            format!(
+                "damping ratio {:.3}, above {}",
+                d.damping_ratio, criteria.max_damping_ratio
+            )
+        } else {
+            return true;
+        };
+        notes.push(format!(
+            "amplitudes {lo:.4e}–{hi:.4e} (record's unit): {why}: not a mode's estimate, left out"
+        ));
+        false
+    });
+    for (d, reps, n, _) in &rows {
         let f: Vec<f64> = reps.iter().map(|r| r.frequency_hz).collect();
         let z: Vec<f64> = reps.iter().map(|r| r.damping_ratio).collect();
         curve.points.push(AmplitudePoint {

@@ -77,7 +77,8 @@ def read(path, *, format=None, variable=None, delimiter=None):
     Returns
     -------
     Record
-        ``data`` (samples x channels), ``names``, ``fs`` (the file's rate, or None),
+        ``data`` (samples x channels), ``names`` (a headerless file's ``"0"``, ``"1"``,
+        ...), ``fs`` (the rate the file states, else its time column's step, else None),
         ``points``, ``path``.
 
     Raises
