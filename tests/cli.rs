@@ -988,6 +988,66 @@ fn ssi_reads_a_headerless_dat_with_its_time_column() {
     );
 }
 
+/// `--gains`: each channel divided by its reading's factor, as a setup file's `gain`: the
+/// 3-DOF record with its first channel's gain −1 (a sensor mounted the other way) gives
+/// SSI's shapes with that entry negated (a sign flip is orthogonal: the correlations' SVD
+/// and the poles are the same to rounding); a count that differs is refused naming the
+/// channels. (The division itself: `io::tests::gains_divide_their_channels_or_are_refused`.)
+#[test]
+fn ssi_gains_divide_their_channels() {
+    let Some(path) = common::data_file("oma/data_3dof.csv") else {
+        return;
+    };
+    let ratios = |gains: &[&str]| {
+        let v = ssi_3dof_json(
+            &path,
+            "gains.json",
+            &[&["--no-refine", "--ssi-errors", "0"], gains].concat(),
+        );
+        v["modes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|m| {
+                let re = |k: usize| m["shape"][k][0].as_f64().unwrap();
+                re(0) / re(1)
+            })
+            .collect::<Vec<f64>>()
+    };
+    let plain = ratios(&[]);
+    let flipped = ratios(&["--gains", "-1,1,1"]);
+    assert!(plain.len() >= 3, "{plain:?}");
+    assert_eq!(plain.len(), flipped.len());
+    for (p, g) in plain.iter().zip(&flipped) {
+        // The real parts' ratio (real modes, MPC 1.000), to the rounding of SSI's SVD.
+        assert!((g + p).abs() < 1e-8 * p.abs().max(1.0), "{p} {g}");
+    }
+    let (ok, _, err) = hyst(&[ssi_3dof_args(&path), vec!["--gains", "1,2"]].concat());
+    assert!(!ok);
+    assert!(
+        err.contains("--gains: 2 gain(s) for 3 channel(s) (y1,y2,y3)"),
+        "{err}"
+    );
+}
+
+/// `hyst ssi`'s arguments for the 3-DOF record at 20 Hz, channels y1,y2,y3.
+fn ssi_3dof_args(path: &Path) -> Vec<&str> {
+    let record = ["--input", s(path), "--fs", "20", "--columns", "y1,y2,y3"];
+    std::iter::once("ssi").chain(record).collect()
+}
+
+/// `hyst ssi` on the 3-DOF record ([`ssi_3dof_args`]) with `extra` arguments: its JSON
+/// report (written to `name` under the tests' scratch folder).
+fn ssi_3dof_json(path: &Path, name: &str, extra: &[&str]) -> serde_json::Value {
+    let json = tmp(name);
+    let mut args = ssi_3dof_args(path);
+    args.extend_from_slice(&["--json", s(&json)]);
+    args.extend_from_slice(extra);
+    let (ok, _, err) = hyst(&args);
+    assert!(ok, "{err}");
+    serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap()
+}
+
 /// Run `hyst ssi --input FILE --fs 10` with these further arguments, expecting failure;
 /// return stderr.
 fn ssi_fails(input: &Path, args: &[&str]) -> String {

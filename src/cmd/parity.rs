@@ -30,6 +30,10 @@ const EVERY_COMMAND: &[(&str, &str)] = &[
         "how files are read: hyst.read(path, delimiter=)",
     ),
     ("variable", "how files are read: hyst.read(path, variable=)"),
+    (
+        "names",
+        "how files are read: hyst.read(path).names is a list Python sets",
+    ),
 ];
 
 const FILES: &str = "Python returns the result: report.to_dict(), str(report)";
@@ -46,6 +50,7 @@ const PAIRS: &[Pair] = &[
                 "Python selects the array's columns: y[:, [0, 2]]",
             ),
             ("skip", "Python slices the array: y[skip:]"),
+            ("gains", "Python divides the array's columns: y / gains"),
             ("json", FILES),
             ("svg", FILES),
         ],
@@ -67,6 +72,7 @@ const PAIRS: &[Pair] = &[
                 "Python selects the array's columns: y[:, [0, 2]]",
             ),
             ("skip", "Python slices the array: y[skip:]"),
+            ("gains", "Python divides the array's columns: y / gains"),
             ("json", "Python: result.to_json()"),
             ("svg", "Python: result.stabilization_svg()"),
             ("shapes-uff", "Python: result.write_shapes_uff(path)"),

@@ -11,13 +11,25 @@ use hyst::settings::{SettingsError, SsiSettings};
 /// its own `--input`: one record, or several).
 #[derive(Args, Debug)]
 pub(crate) struct ChannelArgs {
-    /// Sampling rate of the file (Hz); a Universal File states its own.
+    /// Sampling rate of the file (Hz); a Universal File states its own, and a time column
+    /// gives it (a rate given must agree with the column's step within 1 %).
     #[arg(long)]
     pub(crate) fs: Option<f64>,
-    /// Channels to analyse, comma-separated; default: every column except `t` and `time` (with
-    /// a warning for columns named like a force: `u`, `force`, `input`, `excitation`, `load`).
+    /// Channels to analyse, comma-separated; default: every column except the time column
+    /// (`t`, `time`, `Time (s)`, … or one increasing by a constant step), with a warning for
+    /// columns named like a force: `u`, `force`, `input`, `excitation`, `load`.
     #[arg(long, value_delimiter = ',')]
     pub(crate) columns: Option<Vec<String>>,
+    /// The factor each channel's reading carries, one per channel analysed, in their order
+    /// (as a setup file's `gain`): each channel is divided by it, so that a sensor mounted
+    /// the other way (-1) or in other units reads the structure's motion. Default: 1 each.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        allow_hyphen_values = true,
+        value_name = "G1,G2,..."
+    )]
+    pub(crate) gains: Option<Vec<f64>>,
     /// Skip this many leading rows (e.g. a start-up transient).
     #[arg(long, default_value_t = 0)]
     pub(crate) skip: usize,
@@ -25,7 +37,7 @@ pub(crate) struct ChannelArgs {
 
 #[derive(Args, Debug)]
 pub(crate) struct SsiArgs {
-    /// The record: CSV with a header line; a NumPy `.npy` array or `.npz` archive, or a
+    /// The record: CSV with a header line (or none: columns 0, 1, …); a NumPy `.npy` array or `.npz` archive, or a
     /// MATLAB `.mat` variable (samples × channels, columns named 0, 1, …); a Universal File
     /// of dataset 58 functions (columns named by their point, `12+Z`).
     #[arg(long, required_unless_present = "setups")]
@@ -37,7 +49,7 @@ pub(crate) struct SsiArgs {
     #[arg(
         long,
         value_name = "FILE",
-        conflicts_with_all = ["input", "columns", "skip", "references", "svg", "shapes_uff"]
+        conflicts_with_all = ["input", "columns", "skip", "gains", "references", "svg", "shapes_uff"]
     )]
     pub(crate) setups: Option<PathBuf>,
     #[command(flatten)]
@@ -236,6 +248,9 @@ pub(crate) fn channels(input: &Path, a: &ChannelArgs) -> Result<Channels, Error>
         let mut c = t.take_column(n)?;
         c.drain(..a.skip);
         channels.push(c);
+    }
+    if let Some(gains) = &a.gains {
+        hyst::io::divide_by_gains(&names, &mut channels, gains)?;
     }
     // Every name is the table's now: each channel's point, if the file gives them.
     let points = t.points.as_ref().and_then(|p| {

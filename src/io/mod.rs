@@ -102,6 +102,12 @@ pub enum IoError {
         /// Columns in the file.
         columns: usize,
     },
+    /// `--gains` does not give one finite nonzero factor per channel.
+    #[error("--gains: {what}")]
+    Gains {
+        /// What is wrong, naming the channel.
+        what: String,
+    },
     /// `--fs` disagrees with the record's time column.
     #[error(
         "{path}: --fs {given} Hz disagrees with the time column `{column}`, whose step is {rate:.6} Hz's: give --fs {rate:.6}, or leave it out"
@@ -727,6 +733,35 @@ impl Table {
     }
 }
 
+/// Each channel divided by the factor its reading carries (`gains`, one per channel, in the
+/// order of `names`): a sensor mounted the other way (−1) or reading in other units then
+/// reads the structure's motion, as a setup file's `gain` does for a setup's channels.
+pub fn divide_by_gains(
+    names: &[String],
+    channels: &mut [Vec<f64>],
+    gains: &[f64],
+) -> Result<(), IoError> {
+    if gains.len() != channels.len() {
+        return Err(IoError::Gains {
+            what: format!(
+                "{} gain(s) for {} channel(s) ({}): one for each",
+                gains.len(),
+                channels.len(),
+                names.join(",")
+            ),
+        });
+    }
+    for ((name, c), &g) in names.iter().zip(channels.iter_mut()).zip(gains) {
+        if !(g.is_finite() && g != 0.0) {
+            return Err(IoError::Gains {
+                what: format!("channel `{name}`: gain {g} is not a finite nonzero number"),
+            });
+        }
+        c.iter_mut().for_each(|v| *v /= g);
+    }
+    Ok(())
+}
+
 /// The first name that appears twice in `names`, if any.
 pub fn repeated(names: &[String]) -> Option<&str> {
     names
@@ -868,6 +903,22 @@ mod tests {
                 .contains("--fs 1000 Hz disagrees with the time column `Time (s)`, whose step is 100.000000 Hz's"),
             "{e}"
         );
+    }
+
+    /// Gains divide their channels; a count that differs or a zero gain is refused, named.
+    #[test]
+    fn gains_divide_their_channels_or_are_refused() {
+        let names = vec!["a".to_string(), "b".to_string()];
+        let mut c = vec![vec![2.0, -4.0], vec![1.0, 3.0]];
+        divide_by_gains(&names, &mut c, &[-1.0, 0.5]).unwrap();
+        assert_eq!(c, [vec![-2.0, 4.0], vec![2.0, 6.0]]);
+        let e = divide_by_gains(&names, &mut c, &[1.0]).unwrap_err();
+        assert!(
+            e.to_string().contains("1 gain(s) for 2 channel(s) (a,b)"),
+            "{e}"
+        );
+        let e = divide_by_gains(&names, &mut c, &[1.0, 0.0]).unwrap_err();
+        assert!(e.to_string().contains("channel `b`: gain 0 is not"), "{e}");
     }
 
     /// `--names` names every column once, or is refused naming the counts.

@@ -83,3 +83,31 @@ def test_an_npz_written_by_numpy_gives_the_modes_of_the_csv(data_dir, hyst_bin, 
     getattr(np, save)(npz, y=y, fs=np.float64(FS))
     csv = csv_of(y, ["0", "1", "2"], tmp_path / "rec.csv")
     assert hyst_ssi(hyst_bin, npz, tmp_path, "--fs", str(FS)) == hyst_ssi(hyst_bin, csv, tmp_path, "--fs", str(FS))
+
+
+def test_a_headerless_dat_with_a_time_column_reads_as_its_csv(data_dir, hyst_bin, tmp_path):
+    """The 3-DOF record with its time column written by numpy's savetxt without a header
+    (space-separated, 19 significant digits): read with columns "0".."3" and the rate of its time
+    column, and `hyst ssi` without --fs decides the same modes as on the CSV with a header
+    and --fs."""
+    import hyst
+
+    y, _ = read_record(data_dir / "oma" / "data_3dof.csv")
+    t = np.arange(len(y)) / FS
+    dat = tmp_path / "rec.dat"
+    np.savetxt(dat, np.column_stack([t, y]))
+    rec = hyst.read(dat)
+    assert rec.names == ["0", "1", "2", "3"]
+    assert rec.fs == pytest.approx(FS, rel=1e-12)
+    csv = csv_of(np.column_stack([t, y]), ["t", "a", "b", "c"], tmp_path / "rec.csv")
+    from_dat = hyst_ssi(hyst_bin, dat, tmp_path)
+    from_csv = hyst_ssi(hyst_bin, csv, tmp_path, "--fs", str(FS))
+    # The rate from 17-digit times is 20 Hz to rounding, and the answer the same to it.
+    assert from_dat["fs_hz"] == pytest.approx(FS, rel=1e-12)
+    modes = lambda d: [(m["frequency_hz"], m["damping_ratio"]) for m in d["decision"]["modes"]]
+    assert len(modes(from_dat)) == len(modes(from_csv)) >= 3
+    for a, b in zip(modes(from_dat), modes(from_csv)):
+        assert a == pytest.approx(b, rel=1e-6)
+    # A rate ten times too large is refused, naming the time column.
+    p = hyst_ssi(hyst_bin, dat, tmp_path, "--fs", str(10 * FS), check=False)
+    assert p.returncode != 0 and "disagrees with the time column `0`" in p.stderr

@@ -40,10 +40,12 @@ class Record:
     data : numpy.ndarray, shape (samples, channels)
         The channels, float64, Fortran-ordered (``hyst.ssi`` reads its columns in place).
     names : list of str
-        The channels' names: a CSV's header, ``"0", "1", ...`` for arrays, the point
-        (``"12+Z"``) for a Universal File.
+        The channels' names: a CSV's header, ``"0", "1", ...`` for arrays and headerless
+        text, the point (``"12+Z"``) for a Universal File.
     fs : float or None
-        The sampling rate the file states (a Universal File's), else None.
+        The sampling rate the file states (a Universal File's), else its time column's
+        mean step (a column named ``t``, ``time``, ``Time (s)``, ... or increasing by a
+        constant step), else None.
     points : list of (int, int) or None
         Each channel's (node, direction) where the file gives them (a Universal File),
         for ``SsiResult.write_shapes_uff``.
