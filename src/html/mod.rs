@@ -81,8 +81,13 @@ pub fn track_page(report: &hyst_monitor::TrackReport) -> String {
 pub fn page(data: &PageData) -> String {
     // serde_json never fails on these types (string keys, finite or null numbers).
     let json = serde_json::to_string(data).unwrap_or_else(|_| "{}".into());
-    // Inside a <script> element, "</" would end it.
-    let json = json.replace("</", "<\\/");
+    // Inside a <script> element, "</" would end it and "<!--<script>" would make the
+    // parser swallow the rest of the page (it went blank): no "<", ">" or "&" is left in
+    // the text, each written as its JSON escape (they occur only inside JSON strings).
+    let json = json
+        .replace('<', "\\u003c")
+        .replace('>', "\\u003e")
+        .replace('&', "\\u0026");
     let title = escape(&data.title);
     format!(
         "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\
@@ -133,5 +138,23 @@ mod tests {
             "the four scripts' own ends only"
         );
         assert!(html.contains("<title>a &lt;/script&gt;"));
+    }
+
+    /// A name holding `<!--<script>` left the page blank: the embedded JSON holds no `<`,
+    /// `>` or `&`, and reads back to the names given.
+    #[test]
+    fn the_data_holds_no_markup_and_reads_back() {
+        let title = "test <!--<script> & </script> 1 > 0";
+        let data = PageData {
+            title: title.into(),
+            ..PageData::default()
+        };
+        let html = page(&data);
+        let start = "<script type=\"application/json\" id=\"report-data\">";
+        let from = html.find(start).unwrap() + start.len();
+        let json = &html[from..from + html[from..].find("</script>").unwrap()];
+        assert!(!json.contains(['<', '>', '&']), "{json}");
+        let back: serde_json::Value = serde_json::from_str(json).unwrap();
+        assert_eq!(back["title"], title);
     }
 }
