@@ -354,9 +354,9 @@ pub fn analyze_with_progress(
 /// Why a record of `samples` at `fs` Hz, SSI's lag `block_rows`, is too short for the
 /// jackknife's errors, with the shortest record they need; `None` when it is long enough.
 fn too_short_for_errors(samples: usize, block_rows: usize, fs: f64) -> Option<String> {
-    use crate::jackknife::{MIN_BLOCK_LAGS, MIN_BLOCKS};
+    use crate::jackknife::{MIN_BLOCK_LAGS, MIN_BLOCKS, samples_needed};
     let lags = 2 * block_rows;
-    let needed = MIN_BLOCKS * MIN_BLOCK_LAGS * lags;
+    let needed = samples_needed(block_rows);
     (samples < needed).then(|| format!(
         "the record is too short to confirm modes: {samples} samples ({:.1} s) hold {} of SSI's lags ({lags} samples), and the jackknife's errors need {MIN_BLOCKS} blocks of {MIN_BLOCK_LAGS} lags, {needed} samples ({:.1} s) at least; any mode reported is unconfirmed, without errors",
         samples as f64 / fs,

@@ -37,6 +37,12 @@ pub const MIN_MAC: f64 = 0.8;
 pub const MIN_BLOCK_LAGS: usize = 4;
 /// The fewest blocks a jackknife is made of.
 pub const MIN_BLOCKS: usize = 5;
+/// The fewest samples the jackknife is made on with SSI's lag of `block_rows` block rows:
+/// [`MIN_BLOCKS`] blocks of [`MIN_BLOCK_LAGS`] times the largest lag.
+pub(crate) fn samples_needed(block_rows: usize) -> usize {
+    MIN_BLOCKS * MIN_BLOCK_LAGS * 2 * block_rows
+}
+
 /// The least share of replicates that must find a mode for it to get an error.
 pub const MIN_FOUND: f64 = 0.8;
 
@@ -83,7 +89,7 @@ pub(crate) fn ssi_errors(
     let n = y.first().map_or(0, |c| c.len());
     let lags = 2 * ssi.block_rows;
     let blocks = blocks.min(n / (MIN_BLOCK_LAGS * lags).max(1));
-    if blocks < MIN_BLOCKS || ssi.modes.is_empty() {
+    if n < samples_needed(ssi.block_rows) || blocks < MIN_BLOCKS || ssi.modes.is_empty() {
         return Ok(None);
     }
     let sums = block_sums(y, (refs, means), lags, blocks);

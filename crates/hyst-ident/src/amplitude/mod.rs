@@ -695,8 +695,14 @@ fn mode_curve(
     let replicates: Vec<Vec<Option<decay::Decay>>> = (0..opts.groups)
         .map(|g| (bands.estimate)(Some(g)))
         .collect();
-    // A point needs its triggers, and a fit with every group and with each left out.
-    let mut rows: Vec<(decay::Decay, Vec<decay::Decay>, usize, usize)> = Vec::new();
+    let omega = |d: &decay::Decay| 2.0 * std::f64::consts::PI * d.frequency_hz;
+    let amp = |d: &decay::Decay| opts.measured.convert(d.amplitude, omega(d), report_as);
+    // A point needs its triggers, and a fit with every group and with each left out; and
+    // it is a mode's estimate at its level only as covssi's decision would take one: its
+    // frequency known (error within ModeCriteria's share of it) and damped within the limit.
+    // Else it is said and left out, not printed as a result.
+    let criteria = covssi::decision::ModeCriteria::default();
+    let mut rows: Vec<Vec<decay::Decay>> = Vec::new();
     for (k, d) in full.iter().enumerate() {
         let n = bands.totals[k];
         let (lo, hi) = (bands.edges[k], bands.edges[k + 1]);
@@ -708,24 +714,24 @@ fn mode_curve(
             continue;
         }
         let reps: Option<Vec<decay::Decay>> = replicates.iter().map(|r| r[k]).collect();
-        match (d, reps) {
-            (Some(d), Some(reps)) => rows.push((*d, reps, n, k)),
-            _ => notes.push(format!(
+        let (Some(d), Some(reps)) = (d, reps) else {
+            notes.push(format!(
                 "amplitudes {lo:.4e}–{hi:.4e} (record's unit): no decaying oscillation over {} cycles to fit: left out",
                 opts.cycles
-            )),
-        }
-    }
-    let omega = |d: &decay::Decay| 2.0 * std::f64::consts::PI * d.frequency_hz;
-    let amp = |d: &decay::Decay| opts.measured.convert(d.amplitude, omega(d), report_as);
-    // A point is a mode's estimate at its level only as covssi's decision would take one:
-    // its frequency known (error within ModeCriteria's share of it) and damped within the
-    // limit; else it is said and left out, not printed as a result.
-    let criteria = covssi::decision::ModeCriteria::default();
-    rows.retain(|(d, reps, _, k)| {
+            ));
+            continue;
+        };
         let f: Vec<f64> = reps.iter().map(|r| r.frequency_hz).collect();
-        let se = jackknife_se(&f);
-        let (lo, hi) = (bands.edges[*k], bands.edges[*k + 1]);
+        let z: Vec<f64> = reps.iter().map(|r| r.damping_ratio).collect();
+        let point = AmplitudePoint {
+            amplitude: amp(d),
+            triggers: n,
+            frequency_hz: d.frequency_hz,
+            frequency_se_hz: jackknife_se(&f),
+            damping_ratio: d.damping_ratio,
+            damping_se: jackknife_se(&z),
+        };
+        let se = point.frequency_se_hz;
         let why = if se.is_nan() || se > criteria.max_frequency_cv * d.frequency_hz {
             format!(
                 "frequency {:.4} ± {se:.4} Hz, its error above {:.0} % of it",
@@ -738,28 +744,16 @@ fn mode_curve(
                 d.damping_ratio, criteria.max_damping_ratio
             )
         } else {
-            return true;
+            curve.points.push(point);
+            rows.push(reps);
+            continue;
         };
         notes.push(format!(
             "amplitudes {lo:.4e}–{hi:.4e} (record's unit): {why}: not a mode's estimate, left out"
         ));
-        false
-    });
-    for (d, reps, n, _) in &rows {
-        let f: Vec<f64> = reps.iter().map(|r| r.frequency_hz).collect();
-        let z: Vec<f64> = reps.iter().map(|r| r.damping_ratio).collect();
-        curve.points.push(AmplitudePoint {
-            amplitude: amp(d),
-            triggers: *n,
-            frequency_hz: d.frequency_hz,
-            frequency_se_hz: jackknife_se(&f),
-            damping_ratio: d.damping_ratio,
-            damping_se: jackknife_se(&z),
-        });
     }
     if rows.len() >= 3 {
-        let replicates: Vec<Vec<decay::Decay>> = rows.into_iter().map(|r| r.1).collect();
-        curve.linearity = Some(linearity(&curve.points, &replicates, opts.groups, &amp));
+        curve.linearity = Some(linearity(&curve.points, &rows, opts.groups, &amp));
     }
     curve.notes = notes;
     curve
