@@ -121,6 +121,28 @@ pub fn run(a: &CorpusArgs) -> Result<(), String> {
         scores.push(score);
     }
     println!("{}", hyst_sim::corpus::Summary::of(&scores));
+    // Found by how far each mode's peak stands out of the sensor noise (density ratio).
+    let classes = [
+        (1.0, 3.0),
+        (3.0, 10.0),
+        (10.0, 100.0),
+        (100.0, f64::INFINITY),
+    ];
+    let by_class: Vec<String> = classes
+        .iter()
+        .map(|&(lo, hi)| {
+            let (found, all) = scores
+                .iter()
+                .flat_map(|s| &s.visibility_found)
+                .filter(|(v, _)| *v >= lo && *v < hi)
+                .fold((0, 0), |(f, n), (_, ok)| (f + usize::from(*ok), n + 1));
+            format!("{lo}–{hi}: {found}/{all}")
+        })
+        .collect();
+    println!(
+        "found by the peak's density over the sensor noise's: {}",
+        by_class.join(", ")
+    );
     println!(
         "answer the refinement's: {}",
         hyst_sim::corpus::Summary::of(&by_refined)

@@ -44,6 +44,10 @@ pub struct CorpusCase {
     /// The modes an analysis must find: within the load's band (below its low-pass corner
     /// and 80 % of Nyquist), their response at some sensor at least the sensor noise there.
     pub in_band: Vec<usize>,
+    /// Each true mode's peak over the sensor noise: the largest, over the sensors, of the
+    /// response's density at the mode over the noise's density (1: level with the noise;
+    /// a mode of `in_band` has at least 1).
+    pub visibility: Vec<f64>,
     /// Whether a storey holds a Bouc-Wen element (the truth is then the small-amplitude
     /// structure's, and the modes read somewhat softer).
     pub hysteretic: bool,
@@ -127,7 +131,7 @@ pub fn realistic(seed: u64, periods: f64) -> Result<CorpusCase, SimError> {
     if hysteretic {
         add_hysteresis(&mut rng, &mut building, samples, seed)?;
     }
-    let in_band = must_find(&building, &all, corner)?;
+    let (in_band, visibility) = must_find(&building, &all, corner)?;
     let description = format!(
         "{n} storeys, f1 {f1:.2} Hz, {} sensors ({:?}), noise {:.0} %{}, load on {} floor(s): {what}{}{}{}",
         building.sensors.len(),
@@ -150,6 +154,7 @@ pub fn realistic(seed: u64, periods: f64) -> Result<CorpusCase, SimError> {
         seed,
         truth: all,
         in_band,
+        visibility,
         hysteretic,
         harmonic_hz,
     })
@@ -300,12 +305,13 @@ fn add_hysteresis(
     Ok(())
 }
 
-/// The modes an analysis must find.
+/// The modes an analysis must find, and each true mode's visibility (its peak over the
+/// sensor noise).
 fn must_find(
     building: &ShearBuilding,
     all: &[TrueMode],
     corner: f64,
-) -> Result<Vec<usize>, SimError> {
+) -> Result<(Vec<usize>, Vec<f64>), SimError> {
     // The modes an analysis must find: in the load's band (below its low-pass corner and
     // 80 % of Nyquist), and standing out of the sensor noise at some sensor (the response's
     // density at the mode at least the noise's; white noise of deviation σ at rate fs has
@@ -313,20 +319,27 @@ fn must_find(
     let sd = building.response_deviation()?;
     let nyquist = building.fs / 2.0;
     let mut in_band = Vec::new();
+    let mut visibility = Vec::with_capacity(all.len());
     for (j, m) in all.iter().enumerate() {
+        let density = building.response_density(m.frequency_hz)?;
+        let ratio = density
+            .iter()
+            .zip(&sd)
+            .map(|(d, s)| {
+                let noise =
+                    (building.noise * s).powi(2) / (2.0 * std::f64::consts::PI * building.fs);
+                d / noise
+            })
+            .fold(0.0, f64::max);
+        visibility.push(ratio);
         if m.frequency_hz > corner || m.frequency_hz >= 0.8 * nyquist {
             continue;
         }
-        let density = building.response_density(m.frequency_hz)?;
-        let visible = density.iter().zip(&sd).any(|(d, s)| {
-            let noise = (building.noise * s).powi(2) / (2.0 * std::f64::consts::PI * building.fs);
-            *d >= noise
-        });
-        if visible {
+        if ratio >= 1.0 {
             in_band.push(j);
         }
     }
-    Ok(in_band)
+    Ok((in_band, visibility))
 }
 
 /// How an analysis's reported modes of one case compare with its truth.
@@ -342,6 +355,9 @@ pub struct Score {
     pub spurious: Vec<f64>,
     /// In-band true modes no reported mode matches (Hz).
     pub missed: Vec<f64>,
+    /// Each in-band true mode's visibility ([`CorpusCase::visibility`]) and whether it was
+    /// found.
+    pub visibility_found: Vec<(f64, bool)>,
     /// (estimate − truth)/standard error of each matched frequency with an error (linear
     /// structures only).
     pub z_frequency: Vec<f64>,
@@ -393,6 +409,10 @@ impl CorpusCase {
         }
         for &j in &self.in_band {
             let t = &self.truth[j];
+            s.visibility_found.push((
+                self.visibility.get(j).copied().unwrap_or(f64::NAN),
+                matched[j].is_some(),
+            ));
             match matched[j] {
                 Some(r) => {
                     let (f, sf, z, sz) = reported[r];
