@@ -2281,7 +2281,7 @@ fn track_windows_resumes_and_refuses_no_records() {
     );
     for m in 0..3 {
         assert!(
-            first.contains(&format!("mode {m}: ")) && first.contains("tracked in 100.0 %"),
+            first.contains(&format!("mode {}: ", m + 1)) && first.contains("tracked in 100.0 %"),
             "{first}"
         );
     }
@@ -2459,17 +2459,18 @@ fn track_estimates_charts_as_the_records_do() {
     // misfit_flag,z,innovation,alarm,extrapolated,temperature.
     let cell = |rec: usize, mode: usize, col: usize| -> String {
         rows.iter()
-            .find(|r| r[0] == rec.to_string() && r[2] == mode.to_string())
+            .find(|r| r[0] == rec.to_string() && r[2] == (mode + 1).to_string())
             .map_or(String::new(), |r| r[col].clone())
     };
     let pivot = |with_se: bool, step: f64| {
         let mut text = String::from("record");
-        for m in 0..3 {
-            text += &format!(",m{m}_hz");
+        // The modes named as hyst's table names its own (from 1), so the tables compare.
+        for m in 1..=3 {
+            text += &format!(",{m}_hz");
             if with_se {
-                text += &format!(",m{m}_hz_se");
+                text += &format!(",{m}_hz_se");
             }
-            text += &format!(",m{m}_damping");
+            text += &format!(",{m}_damping");
         }
         text.push('\n');
         for rec in 0..10 {
@@ -2547,7 +2548,7 @@ fn track_estimates_charts_as_the_records_do() {
         .map(|l| l.split(',').nth(2).unwrap_or(""))
         .collect();
     assert!(
-        !alarmed.is_empty() && alarmed.iter().all(|m| *m == "1"),
+        !alarmed.is_empty() && alarmed.iter().all(|m| *m == "2"),
         "alarms on modes {alarmed:?}\n{stdout}"
     );
     let (ok, _, err, _) = run("track_est_bad", "record,m0_hz,colour\n0,1.2,red\n");
@@ -2833,12 +2834,14 @@ fn ssi_merges_setups_on_their_references() {
     let [one, two] = write_two_setups();
     let head = "setup,file,column,node,direction,quantity,reference\n";
     // Setup two's references at nodes `ra` and `rb` (setup one's: 6 and 5).
+    // Records named from the setup file's folder (they lie beside it).
+    let name = |p: &Path| p.file_name().unwrap().to_str().unwrap().to_string();
     let rows = |ra: &str, rb: &str| {
         format!(
             "{head}one,{a},a,6,x,displacement,yes\none,{a},b,5,x,displacement,yes\none,{a},r,3,x,velocity,no\n\
              two,{b},a,{ra},x,displacement,yes\ntwo,{b},b,{rb},x,displacement,yes\ntwo,{b},r,4,x,velocity,no\n",
-            a = s(&one),
-            b = s(&two)
+            a = name(&one),
+            b = name(&two)
         )
     };
     let setups = write("setups.csv", &rows("6", "5"));
@@ -2853,6 +2856,32 @@ fn ssi_merges_setups_on_their_references() {
         s(&json),
     ]);
     assert!(ok, "{err}");
+    // Named by absolute paths: refused, unless allowed, and then the same merge.
+    let absolute = write(
+        "setups_absolute.csv",
+        &rows("6", "5")
+            .replace(&name(&one), s(&one))
+            .replace(&name(&two), s(&two)),
+    );
+    let (ok, _, err) = hyst(&["ssi", "--setups", s(&absolute), "--fs", "20"]);
+    assert!(
+        !ok && err.contains("is not inside the setup file's folder")
+            && err.contains("--records-anywhere"),
+        "{err}"
+    );
+    let (ok, anywhere, err) = hyst(&[
+        "ssi",
+        "--setups",
+        s(&absolute),
+        "--records-anywhere",
+        "--fs",
+        "20",
+    ]);
+    assert!(ok, "{err}");
+    assert!(
+        anywhere.contains("2 setups, each identified alone"),
+        "{anywhere}"
+    );
     assert!(out.contains("2 setups, each identified alone"), "{out}");
     let doc: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
@@ -2895,4 +2924,135 @@ fn ssi_merges_setups_on_their_references() {
         s(&setups),
     ]);
     assert!(!ok && err.contains("would overwrite the input"), "{err}");
+}
+
+/// The bytes of every file under `dir`, by path: what a refused run must leave unchanged.
+fn snapshot(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
+    let mut v = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                let bytes = std::fs::read(&p).unwrap();
+                v.push((p, bytes));
+            }
+        }
+    }
+    v.sort();
+    v
+}
+
+/// Issue 58's guard, for every command and every output flag: the output set to each of
+/// the command's input files, and to the folder holding them, is refused before anything
+/// is read or written, naming the output's flag, and every input is left byte for byte as
+/// it was (`hyst track` included: its `--out` tables against its records, `--estimates`,
+/// `--covariates` and `--reference`; a record named like a table it writes, with no store
+/// beside it, is a record, and refused rather than left out and overwritten).
+#[test]
+fn no_output_of_any_command_lands_on_an_input() {
+    let dir = tmp("guard");
+    let _ = std::fs::remove_dir_all(&dir);
+    let recs = dir.join("recs");
+    std::fs::create_dir_all(&recs).unwrap();
+    let rec = write("guard/rec.csv", "u,y\n1,2\n3,4\n");
+    let other = write("guard/rec2.csv", "u,y\n1,2\n3,4\n");
+    let cov = write("guard/cov.csv", "record,t_air\na.csv,1\n");
+    let reference = write("guard/ref.json", "{}");
+    let params = write("guard/params.json", "{}");
+    write("guard/recs/a.csv", "y\n1\n2\n");
+    let table = write("guard/recs/table.csv", "y\n1\n2\n");
+    let estimates = write("guard/table.csv", "record,f1_hz\na,1.0\n");
+    let track_out = dir.join("track_out");
+    let (d, r, o) = (s(&dir), s(&rec), s(&other));
+    // (arguments, output flags, the input files the outputs are set to)
+    let cases: Vec<(Vec<&str>, Vec<&str>, Vec<&Path>)> = vec![
+        (
+            vec!["ssi", "--input", r, "--fs", "20"],
+            vec!["--json", "--svg", "--shapes-uff", "--html"],
+            vec![&rec],
+        ),
+        (
+            vec!["amplitude", "--input", r, o, "--fs", "20"],
+            vec!["--json", "--svg"],
+            vec![&rec, &other],
+        ),
+        (
+            vec![
+                "frf", "--input", r, "--fs", "20", "--force", "u", "--period", "8", "--band", "1:5",
+            ],
+            vec!["--json", "--svg", "--write-flat"],
+            vec![&rec],
+        ),
+        (
+            vec!["ident", "--data", r, "--fs", "20", "--validate", o],
+            vec!["--json"],
+            vec![&rec, &other],
+        ),
+        (
+            vec!["refine", "--data", r, "--fs", "20"],
+            vec!["--json"],
+            vec![&rec],
+        ),
+        (
+            vec!["levels", "--data", r, o, "--fs", "20", "--mass", "1"],
+            vec!["--json"],
+            vec![&rec, &other],
+        ),
+        (
+            vec![
+                "simulate",
+                "--input",
+                r,
+                "--fs",
+                "20",
+                "--params",
+                s(&params),
+            ],
+            vec!["--out"],
+            vec![&rec, &params],
+        ),
+        (
+            vec![
+                "track",
+                "--inputs",
+                s(&recs),
+                "--covariates",
+                s(&cov),
+                "--reference",
+                s(&reference),
+                "--out",
+                s(&track_out),
+            ],
+            vec!["--html"],
+            vec![&cov, &reference, &table],
+        ),
+    ];
+    let before = snapshot(&dir);
+    for (args, outputs, inputs) in &cases {
+        for flag in outputs {
+            let targets: Vec<&Path> = inputs.iter().copied().chain([dir.as_path()]).collect();
+            for target in targets {
+                let mut v = args.clone();
+                v.extend([*flag, s(target)]);
+                let (ok, _, err) = hyst(&v);
+                assert!(!ok && err.contains(flag), "{v:?}: {err}");
+                assert!(snapshot(&dir) == before, "{v:?} changed an input");
+            }
+        }
+    }
+    // hyst track's --out: its tables on --estimates, on --covariates' folder, and on a
+    // folder of records where one is named like a table it writes.
+    let e = s(&estimates);
+    for v in [
+        vec!["track", "--estimates", e, "--out", d],
+        vec!["track", "--inputs", s(&recs), "--out", s(&recs)],
+        vec!["track", "--inputs", s(&recs), "--out", r],
+    ] {
+        let (ok, _, err) = hyst(&v);
+        assert!(!ok && err.contains("--out"), "{v:?}: {err}");
+        assert!(snapshot(&dir) == before, "{v:?} changed an input");
+    }
 }

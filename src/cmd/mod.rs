@@ -383,6 +383,12 @@ pub(crate) fn input_files(c: &Command) -> Vec<(&'static str, &std::path::Path)> 
 pub(crate) fn check_output_folders(c: &Command) -> Result<(), Error> {
     hyst::io::check_outputs(&input_files(c), &output_files(c))?;
     for (flag, path) in output_files(c) {
+        if path.is_dir() {
+            return Err(fail(format!(
+                "{flag} {}: a folder; give the file to write",
+                path.display()
+            )));
+        }
         let folder = match path.parent() {
             Some(d) if !d.as_os_str().is_empty() => d,
             _ => std::path::Path::new("."),

@@ -74,6 +74,10 @@ pub(crate) struct SsiArgs {
     /// the MAC matrix.
     #[arg(help_heading = "Output files", long, value_name = "FILE")]
     pub(crate) html: Option<PathBuf>,
+    /// With --setups: let the setup file name records outside its own folder (absolute
+    /// paths, `..`); by default each record is named by its path from that folder.
+    #[arg(long, requires = "setups")]
+    pub(crate) records_anywhere: bool,
     /// With --setups: the structure's nodes to draw the shapes on (a header line, then
     /// `name x y z` per line; the steel frame's grid.txt). A pyOMA setup folder's own
     /// grid.txt is read without it.
@@ -391,7 +395,12 @@ fn run_setups(a: &SsiArgs, path: &Path, opts: &hyst::covssi::AnalysisOptions) ->
     if let Some(fs) = a.record.fs {
         check_fs(fs)?;
     }
-    let setups = hyst::io::read_setups(path)?;
+    let paths = if a.records_anywhere {
+        hyst::io::RecordPaths::Anywhere
+    } else {
+        hyst::io::RecordPaths::InsideFolder
+    };
+    let setups = hyst::io::read_setups_with(path, paths)?;
     let read = READ_OPTIONS.get().cloned().unwrap_or_default();
     let bar = spinner();
     bar.set_message(format!("identifying {} setups", setups.len()));

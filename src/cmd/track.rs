@@ -124,15 +124,63 @@ fn sources(a: &TrackArgs) -> Result<Sources, Error> {
             count,
         });
     }
-    // The run's own outputs are not records, should --out be an input folder.
-    let mut files = hyst::io::list_records(&a.inputs)?;
-    files.retain(|f| !hyst::store::is_output(&a.out, f));
+    let files = record_files(a)?;
     if files.is_empty() {
         return Err(fail(
             "no records: --inputs names no files (or only empty folders)",
         ));
     }
     Ok(Sources::Files(files))
+}
+
+/// The record files of `--inputs`. With `--out` one of their folders, the files an earlier
+/// run wrote there (its store beside them) are its own, not records; without that store a
+/// record with one of their names is a record, and [`check_paths`] refuses to overwrite it.
+fn record_files(a: &TrackArgs) -> Result<Vec<PathBuf>, Error> {
+    let mut files = hyst::io::list_records(&a.inputs)?;
+    if a.out.join(hyst::store::STORE_FILE).is_file() {
+        files.retain(|f| !hyst::store::is_output(&a.out, f));
+    }
+    Ok(files)
+}
+
+/// Every file the run writes (the store and tables in `--out`, the `--html` page) against
+/// every file it reads (the records, `--input`, `--estimates`, `--covariates`,
+/// `--reference`), before anything is read: a clash is refused, naming both flags.
+fn check_paths(a: &TrackArgs) -> Result<(), Error> {
+    let records = if a.inputs.is_empty() {
+        Vec::new()
+    } else {
+        record_files(a)?
+    };
+    let mut inputs: Vec<(&str, &Path)> =
+        records.iter().map(|f| ("--inputs", f.as_path())).collect();
+    for (flag, p) in [
+        ("--input", &a.input),
+        ("--estimates", &a.estimates),
+        ("--covariates", &a.covariates),
+        ("--reference", &a.reference),
+    ] {
+        if let Some(p) = p {
+            inputs.push((flag, p.as_path()));
+        }
+    }
+    let written: Vec<PathBuf> = hyst::store::OUTPUT_FILES
+        .iter()
+        .map(|n| a.out.join(n))
+        .collect();
+    let mut outputs: Vec<(&str, &Path)> = written.iter().map(|p| ("--out", p.as_path())).collect();
+    if let Some(h) = &a.html {
+        outputs.push(("--html", h.as_path()));
+    }
+    hyst::io::check_outputs(&inputs, &outputs)?;
+    if a.out.exists() && !a.out.is_dir() {
+        return Err(fail(format!(
+            "--out {}: a file, not a folder; give the folder the run's store and tables go to",
+            a.out.display()
+        )));
+    }
+    Ok(())
 }
 
 /// The reported modes of a `hyst ssi --json` document.
@@ -298,6 +346,7 @@ impl Sources {
 }
 
 pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
+    check_paths(a)?;
     if let Some(path) = &a.estimates {
         return run_estimates(a, path);
     }

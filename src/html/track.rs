@@ -51,7 +51,7 @@ pub fn track_page_data(title: &str, report: &TrackReport) -> PageData {
         .map(|(j, m)| {
             let rows: Vec<_> = report.rows.iter().filter(|r| r.mode == j).collect();
             ModeSeries {
-                label: format!("mode {j} ({:.3} Hz)", m.frequency_hz),
+                label: format!("mode {} ({:.3} Hz)", report.mode_name(j), m.frequency_hz),
                 days: rows.iter().map(|r| day(r.time)).collect(),
                 frequency_hz: rows.iter().map(|r| r.frequency_hz).collect(),
                 frequency_se_hz: rows.iter().map(|r| r.frequency_se_hz).collect(),

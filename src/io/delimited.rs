@@ -173,7 +173,7 @@ pub(super) struct DelimitedRows {
     /// The delimiter, given or detected.
     pub(super) sep: u8,
     path: std::path::PathBuf,
-    records: csv::StringRecordsIntoIter<std::io::BufReader<std::fs::File>>,
+    records: csv::StringRecordsIntoIter<std::io::BufReader<LineBounded<std::fs::File>>>,
     /// A headerless record's first line, the first row.
     pending: Option<csv::StringRecord>,
 }
@@ -200,7 +200,7 @@ impl DelimitedRows {
         // its first non-blank line is read first to detect the delimiter, then it is read
         // again from its start.
         let file = std::fs::File::open(path).map_err(file_error)?;
-        let mut file = std::io::BufReader::with_capacity(1 << 16, file);
+        let mut file = std::io::BufReader::with_capacity(1 << 16, LineBounded::new(file));
         let first_line = first_line(&mut file, path)?;
         file.rewind().map_err(file_error)?;
         // A byte-order mark (spreadsheets write one) would become part of the first name.
@@ -318,6 +318,56 @@ impl Iterator for DelimitedRows {
     }
 }
 
+/// The longest line a delimited file may hold (bytes): 10 000 channels of 25-character
+/// numbers is 250 kB; a "line" past this is no record's (a binary file, or one that never
+/// ends), and reading it whole would hold it all in memory.
+pub(super) const MAX_LINE_BYTES: usize = 16 << 20;
+
+/// A reader that fails, saying so, on a line longer than [`MAX_LINE_BYTES`].
+pub(super) struct LineBounded<R> {
+    inner: R,
+    since_newline: usize,
+}
+
+impl<R> LineBounded<R> {
+    pub(super) fn new(inner: R) -> Self {
+        LineBounded {
+            inner,
+            since_newline: 0,
+        }
+    }
+}
+
+impl<R: std::io::Read> std::io::Read for LineBounded<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        for &b in &buf[..n] {
+            if b == b'\n' {
+                self.since_newline = 0;
+            } else {
+                self.since_newline += 1;
+                if self.since_newline > MAX_LINE_BYTES {
+                    return Err(std::io::Error::new(
+                        std::io::ErrorKind::InvalidData,
+                        format!(
+                            "a line longer than {} MiB: not a delimited record (a binary file, or a line that never ends)",
+                            MAX_LINE_BYTES >> 20
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(n)
+    }
+}
+
+impl<R: Seek> Seek for LineBounded<R> {
+    fn seek(&mut self, pos: std::io::SeekFrom) -> std::io::Result<u64> {
+        self.since_newline = 0;
+        self.inner.seek(pos)
+    }
+}
+
 /// The first line of `file` (read from `path`) that is not blank, or why there is none.
 fn first_line(file: &mut impl BufRead, path: &Path) -> Result<Vec<u8>, IoError> {
     let mut line = Vec::new();
@@ -382,6 +432,21 @@ mod tests {
         let p = file_path(name);
         std::fs::write(&p, text).unwrap();
         p
+    }
+
+    /// A line that never ends is refused when it passes the bound, as a header or as a
+    /// row, rather than held whole (issue 58: a 2 GB line took 4.2 GB): the error says so.
+    #[test]
+    fn a_line_past_the_bound_is_refused() {
+        let long = "1".repeat(MAX_LINE_BYTES + 10);
+        for (name, text) in [
+            ("long_header.csv", long.clone()),
+            ("long_row.csv", format!("y\n1\n{long}\n")),
+        ] {
+            let e = read_csv(&file(name, &text)).unwrap_err().to_string();
+            assert!(e.contains("a line longer than 16 MiB"), "{name}: {e}");
+            let _ = std::fs::remove_file(file_path(name));
+        }
     }
 
     /// What spreadsheets and other tools write reads as the plain file does: a byte-order

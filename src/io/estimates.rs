@@ -95,6 +95,7 @@ pub fn read_estimates(path: &Path) -> Result<EstimatesTable, IoError> {
     let (cols, modes) = columns(&header, path)?;
     let mut out: Vec<(String, Option<f64>, Vec<Option<ModeEstimate>>)> = Vec::new();
     let mut last_time: Option<(f64, usize)> = None;
+    let mut first_row: std::collections::HashMap<String, usize> = std::collections::HashMap::new();
     for r in rows {
         let (row, cells) = r?;
         let malformed = |what: String| IoError::Malformed {
@@ -134,6 +135,11 @@ pub fn read_estimates(path: &Path) -> Result<EstimatesTable, IoError> {
                 Column::Time => time = Some(v),
                 Column::Frequency(k) => f[k] = Some(positive()?),
                 Column::FrequencySe(k) => se[k] = Some(positive()?),
+                Column::Damping(_) if !(0.0..=1.0).contains(&v) => {
+                    return Err(malformed(format!(
+                        "`{column}` is {v}; a damping ratio lies between 0 and 1"
+                    )));
+                }
                 Column::Damping(k) => damping[k] = Some(v),
                 Column::Record => {}
             }
@@ -141,8 +147,10 @@ pub fn read_estimates(path: &Path) -> Result<EstimatesTable, IoError> {
         if record.trim().is_empty() {
             return Err(malformed("the record's name is empty".into()));
         }
-        if out.iter().any(|(n, ..)| *n == record) {
-            return Err(malformed(format!("record `{record}` is listed twice")));
+        if let Some(first) = first_row.insert(record.clone(), row) {
+            return Err(malformed(format!(
+                "record `{record}` is listed twice (rows {first} and {row})"
+            )));
         }
         if let (Some(t), Some((prev, prev_row))) = (time, last_time)
             && t <= prev
@@ -276,7 +284,18 @@ mod tests {
                 "record,first_hz,first_hz_se\na,4,\nb,,0.1\n",
                 "row 3: mode `first` has a standard error",
             ),
-            ("record,first_hz\na,4\na,4.1\n", "`a` is listed twice"),
+            (
+                "record,first_hz\na,4\na,4.1\n",
+                "`a` is listed twice (rows 2 and 3)",
+            ),
+            (
+                "record,first_hz,first_damping\na,4,-5\n",
+                "row 2: `first_damping` is -5; a damping ratio lies between 0 and 1",
+            ),
+            (
+                "record,first_hz,first_damping\na,4,1.5\n",
+                "`first_damping` is 1.5",
+            ),
             (
                 "record,first_hz\na,-4\n",
                 "`first_hz` is -4; it must be positive",
@@ -322,6 +341,8 @@ mod tests {
                     for (_, time, e) in &t.rows {
                         prop_assert_eq!(e.len(), t.modes.len());
                         prop_assert!(e.iter().flatten().all(|m| m.frequency_hz > 0.0));
+                        prop_assert!(e.iter().flatten().all(|m| m.damping_ratio.is_nan()
+                            || (0.0..=1.0).contains(&m.damping_ratio)));
                         if let Some(time) = time {
                             prop_assert!(*time > last);
                             last = *time;

@@ -339,7 +339,7 @@ pub use geometry::{Geometry, read_geometry, setups_geometry};
 pub use mat::read_mat;
 pub use npy::{read_npy, read_npz};
 pub use paths::check_outputs;
-pub use setups::{SetupSpec, read_setups};
+pub use setups::{RecordPaths, SetupSpec, read_setups, read_setups_with};
 pub use setups_pyoma::read_pyoma_setups;
 pub use shapes_uff::{ShapeMode, write_shapes_uff};
 pub use uff::read_uff;

@@ -58,9 +58,77 @@ const KNOWN: [&str; 13] = [
 /// direction, dx/dy/dz, azimuth/elevation, gain; see the README), or a folder of setups in pyOMA's layout
 /// ([`read_pyoma_setups`](super::read_pyoma_setups)).
 pub fn read_setups(path: &Path) -> Result<Vec<SetupSpec>, IoError> {
-    if path.is_dir() {
-        return super::read_pyoma_setups(path);
+    read_setups_with(path, RecordPaths::InsideFolder)
+}
+
+/// Where a setup file's records may be.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
+pub enum RecordPaths {
+    /// Inside the setup file's folder, named by their path from there (the default: a
+    /// setup file from elsewhere cannot make hyst read, and quote, any file on the machine).
+    #[default]
+    InsideFolder,
+    /// Anywhere: absolute paths and `..` allowed (`hyst ssi --records-anywhere`).
+    Anywhere,
+}
+
+/// [`read_setups`], the records' paths allowed as `paths` says.
+pub fn read_setups_with(path: &Path, paths: RecordPaths) -> Result<Vec<SetupSpec>, IoError> {
+    let setups = if path.is_dir() {
+        super::read_pyoma_setups(path)?
+    } else {
+        read_setup_file(path, paths)?
+    };
+    for s in &setups {
+        check_setup(s, path)?;
     }
+    Ok(setups)
+}
+
+/// What every setup must hold, whichever layout described it: a regular file as its record,
+/// and one channel per node and direction (two would make the last one's reading win
+/// silently).
+fn check_setup(s: &SetupSpec, path: &Path) -> Result<(), IoError> {
+    let bad = |what: String| IoError::Params {
+        path: path.to_path_buf(),
+        what,
+    };
+    if s.file.exists() && !s.file.is_file() {
+        return Err(bad(format!(
+            "setup `{}`: {} is not a regular file; a setup's record is a file",
+            s.name,
+            s.file.display()
+        )));
+    }
+    for (i, a) in s.channels.iter().enumerate() {
+        for (j, b) in s.channels.iter().enumerate().skip(i + 1) {
+            let cos: f64 = a
+                .direction
+                .iter()
+                .zip(&b.direction)
+                .map(|(x, y)| x * y)
+                .sum();
+            // Parallel within about 2.5°: one direction measured twice.
+            if a.node == b.node && cos.abs() > 0.999 {
+                return Err(bad(format!(
+                    "setup `{}`: columns `{}` and `{}` both measure node {} in direction ({:.3}, {:.3}, {:.3}): give each node and direction once",
+                    s.name,
+                    s.columns[i],
+                    s.columns[j],
+                    a.node,
+                    a.direction[0],
+                    a.direction[1],
+                    a.direction[2]
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The setups of a setup file (see the module doc).
+fn read_setup_file(path: &Path, paths: RecordPaths) -> Result<Vec<SetupSpec>, IoError> {
     let rows = DelimitedRows::open(path, Delimiter::Auto)?;
     let names = rows.names.clone();
     let sep = rows.sep;
@@ -108,6 +176,20 @@ pub fn read_setups(path: &Path) -> Result<Vec<SetupSpec>, IoError> {
             }
         };
         let channel = channel_of(&cell, column, sep).map_err(|what| malformed(row, what))?;
+        let inside = Path::new(file).components().all(|c| {
+            matches!(
+                c,
+                std::path::Component::Normal(_) | std::path::Component::CurDir
+            )
+        });
+        if !inside && paths == RecordPaths::InsideFolder {
+            return Err(malformed(
+                row,
+                format!(
+                    "file `{file}` is not inside the setup file's folder: name each record by its path from there (no `..`, not absolute), or allow it with --records-anywhere"
+                ),
+            ));
+        }
         let file = folder.join(file);
         match setups.iter_mut().find(|s| s.name == name) {
             Some(s) if s.file != file => {
@@ -343,6 +425,18 @@ two,b.uff,9,9,,0,3,4,,,velocity,no,
                 "row 3: setup `a` lists column `y1` twice",
             ),
             (head, "the record is empty"),
+            (
+                &format!("{head}a,r.csv,y1,3,x,velocity,no\na,r.csv,y2,3,-x,velocity,no\n"),
+                "columns `y1` and `y2` both measure node 3",
+            ),
+            (
+                &format!("{head}a,../../etc/passwd,y1,3,x,velocity,no\n"),
+                "row 2: file `../../etc/passwd` is not inside the setup file's folder",
+            ),
+            (
+                &format!("{head}a,/dev/zero,y1,3,x,velocity,no\n"),
+                "file `/dev/zero` is not inside",
+            ),
         ] {
             std::fs::write(&p, text).unwrap();
             let e = read_setups(&p).unwrap_err().to_string();
@@ -353,6 +447,51 @@ two,b.uff,9,9,,0,3,4,,,velocity,no,
         std::fs::write(&p, both).unwrap();
         let e = read_setups(&p).unwrap_err().to_string();
         assert!(e.contains("more than one form"), "{e}");
+    }
+
+    /// Issue 58's setups: a reference channel the setup does not have, an empty setup
+    /// folder, and a record that is no regular file (a link to a device) are each refused,
+    /// named, rather than dropped, skipped or read until memory runs out.
+    #[test]
+    fn setups_refuse_an_unknown_reference_an_empty_folder_and_a_device() {
+        let dir = file_path("pyoma-bad");
+        let _ = std::fs::remove_dir_all(&dir);
+        let one = dir.join("s1");
+        std::fs::create_dir_all(&one).unwrap();
+        let info = |refs: &str| {
+            format!(
+                "Setup Name:\ns1\nSampling Rate [Hz]:\n100\nReference Channels:\n{refs}\nDelete Channels:\n\nAccel. Channels:\n0 1\nVelo. Channels:\n\nDisp. Channels:\n\n"
+            )
+        };
+        std::fs::write(one.join("setup_info.txt"), info("0 99")).unwrap();
+        std::fs::write(
+            one.join("channel_dofs.txt"),
+            "Channel-Nr.\tNode\tAzimuth\tElevation\n0\t1\t0\t0\n1\t2\t0\t0\n",
+        )
+        .unwrap();
+        std::fs::write(one.join("rec.npy"), b"").unwrap();
+        let e = read_setups(&dir).unwrap_err().to_string();
+        assert!(e.contains("reference channel 99 is not among"), "{e}");
+        std::fs::write(one.join("setup_info.txt"), info("0")).unwrap();
+        assert_eq!(read_setups(&dir).unwrap().len(), 1);
+        std::fs::create_dir_all(dir.join("s2")).unwrap();
+        let e = read_setups(&dir).unwrap_err().to_string();
+        assert!(e.contains("s2") && e.contains("no setup_info.txt"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+        #[cfg(unix)]
+        {
+            let link = file_path("device-link.csv");
+            let _ = std::fs::remove_file(&link);
+            std::os::unix::fs::symlink("/dev/zero", &link).unwrap();
+            let p = file_path("device_setups.csv");
+            std::fs::write(
+                &p,
+                "setup,file,column,node,direction,quantity,reference\na,device-link.csv,y,1,x,velocity,yes\n",
+            )
+            .unwrap();
+            let e = read_setups(&p).unwrap_err().to_string();
+            assert!(e.contains("not a regular file"), "{e}");
+        }
     }
 
     /// A valid file with bytes replaced, cut or added never panics the reader; what it reads

@@ -15,10 +15,17 @@ pub fn read_pyoma_setups(dir: &Path) -> Result<Vec<SetupSpec>, IoError> {
         path: dir.to_path_buf(),
         source,
     })?;
-    let mut folders: Vec<PathBuf> = entries
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.join("setup_info.txt").is_file())
-        .collect();
+    let mut folders: Vec<PathBuf> = Vec::new();
+    for p in entries.filter_map(|e| e.ok().map(|e| e.path())) {
+        if p.join("setup_info.txt").is_file() {
+            folders.push(p);
+        } else if p.is_dir() && is_setup_like(&p) {
+            return Err(IoError::Params {
+                path: p,
+                what: "a folder among the setups with no setup_info.txt (it is empty, or holds a record or channel_dofs.txt): each setup folder needs setup_info.txt, channel_dofs.txt and its .npy record".into(),
+            });
+        }
+    }
     folders
         .sort_by(|a, b| super::covariates::natural_cmp(&a.to_string_lossy(), &b.to_string_lossy()));
     if folders.is_empty() {
@@ -28,6 +35,19 @@ pub fn read_pyoma_setups(dir: &Path) -> Result<Vec<SetupSpec>, IoError> {
         });
     }
     folders.iter().map(|f| read_one(f)).collect()
+}
+
+/// A folder that is empty or holds a setup's files: one the user meant as a setup.
+fn is_setup_like(dir: &Path) -> bool {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return false;
+    };
+    let names: Vec<PathBuf> = entries.filter_map(|e| e.ok().map(|e| e.path())).collect();
+    names.is_empty()
+        || names.iter().any(|p| {
+            p.extension().is_some_and(|e| e == "npy")
+                || p.file_name().is_some_and(|n| n == "channel_dofs.txt")
+        })
 }
 
 fn read_text(path: &Path) -> Result<String, IoError> {
@@ -176,6 +196,17 @@ fn read_one(folder: &Path) -> Result<SetupSpec, IoError> {
             gain: 1.0,
             reference: info.references.contains(&c),
         });
+    }
+    for r in &info.references {
+        if !columns.iter().any(|c| *c == r.to_string()) {
+            return Err(IoError::Params {
+                path: folder.join("setup_info.txt"),
+                what: format!(
+                    "reference channel {r} is not among the channels of channel_dofs.txt ({}) or is deleted",
+                    columns.join(" ")
+                ),
+            });
+        }
     }
     let name = if info.name.is_empty() {
         folder

@@ -70,6 +70,49 @@ pub fn is_output(out: &Path, file: &Path) -> bool {
 /// The layout of the store's tables; a store of another layout is refused.
 const LAYOUT: i64 = 1;
 
+/// SQLite's `application_id` of a hyst store: "hyst" in ASCII. A database of another
+/// application is refused rather than written into.
+pub const APPLICATION_ID: i32 = 0x6879_7374;
+
+/// Mark the open database as hyst's, or say why it is another's: its `application_id` is
+/// hyst's; or it is unset and the file is new (no tables) or a store of a hyst that did not
+/// set it (its only table `records`, with hyst's columns).
+fn claim(conn: &Connection) -> Result<(), String> {
+    let sql = |e: rusqlite::Error| e.to_string();
+    let id: i32 = conn
+        .pragma_query_value(None, "application_id", |r| r.get(0))
+        .map_err(sql)?;
+    if id == APPLICATION_ID {
+        return Ok(());
+    }
+    if id != 0 {
+        return Err(format!(
+            "it belongs to another application (SQLite application_id {id:#010x}, hyst's is {APPLICATION_ID:#010x}): give another --out"
+        ));
+    }
+    let tables: Vec<String> = {
+        let mut q = conn
+            .prepare("SELECT name FROM sqlite_master WHERE type = 'table' ORDER BY name")
+            .map_err(sql)?;
+        let rows = q.query_map([], |r| r.get::<_, String>(0)).map_err(sql)?;
+        rows.collect::<Result<_, _>>().map_err(sql)?
+    };
+    let hysts = |t: &String| {
+        t == "tracked"
+            || (t == "records"
+                && conn
+                    .prepare("SELECT name, key, ok, record FROM records LIMIT 0")
+                    .is_ok())
+    };
+    if let Some(other) = tables.iter().find(|t| !hysts(t)) {
+        return Err(format!(
+            "it is a database hyst did not make (it holds a table `{other}`): give another --out"
+        ));
+    }
+    conn.pragma_update(None, "application_id", APPLICATION_ID)
+        .map_err(sql)
+}
+
 /// The store of one `--out` folder, held (locked) by this process while it lives.
 pub struct CampaignStore {
     path: PathBuf,
@@ -111,10 +154,18 @@ impl CampaignStore {
             .map_err(&err)?;
         conn.pragma_update(None, "synchronous", "FULL")
             .map_err(&err)?;
-        // A write transaction takes the exclusive lock, kept until the connection closes.
+        // A write transaction takes the exclusive lock, kept until the connection closes;
+        // the file is hyst's (or new) before anything is written into it.
+        conn.execute_batch("BEGIN EXCLUSIVE;").map_err(&err)?;
+        if let Err(message) = claim(&conn) {
+            let _ = conn.execute_batch("ROLLBACK;");
+            return Err(IoError::Store {
+                path: path.clone(),
+                message,
+            });
+        }
         conn.execute_batch(
-            "BEGIN EXCLUSIVE;
-             CREATE TABLE IF NOT EXISTS records (
+            "CREATE TABLE IF NOT EXISTS records (
                  name TEXT PRIMARY KEY NOT NULL,
                  key TEXT NOT NULL,
                  ok INTEGER NOT NULL,
@@ -291,6 +342,54 @@ mod tests {
         drop(conn);
         let e = CampaignStore::open(&dir).err().unwrap();
         assert!(e.to_string().contains("layout is version 7"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// Another application's database is never written into (issue 58): one whose
+    /// application_id is another's, and one with tables hyst does not make, are refused,
+    /// named, and left as they were; a store of a hyst that set no id is taken and marked.
+    #[test]
+    fn another_applications_database_is_refused_untouched() {
+        let dir = std::env::temp_dir().join(format!("hyst-store-app-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join(STORE_FILE);
+        let conn = Connection::open(&file).unwrap();
+        conn.pragma_update(None, "application_id", 0x4750_4b47)
+            .unwrap();
+        drop(conn);
+        let before = std::fs::read(&file).unwrap();
+        let e = CampaignStore::open(&dir).err().unwrap();
+        assert!(e.to_string().contains("another application"), "{e}");
+        assert_eq!(std::fs::read(&file).unwrap(), before, "left as it was");
+        std::fs::remove_file(&file).unwrap();
+        let conn = Connection::open(&file).unwrap();
+        conn.execute_batch("CREATE TABLE accounts (id INTEGER);")
+            .unwrap();
+        drop(conn);
+        let e = CampaignStore::open(&dir).err().unwrap();
+        assert!(e.to_string().contains("table `accounts`"), "{e}");
+        let conn = Connection::open(&file).unwrap();
+        let tables: i64 = conn
+            .query_row("SELECT count(*) FROM sqlite_master", [], |r| r.get(0))
+            .unwrap();
+        assert_eq!(tables, 1, "no table of hyst's written into it");
+        drop(conn);
+        std::fs::remove_file(&file).unwrap();
+        // A store made before the id: its records table alone.
+        let conn = Connection::open(&file).unwrap();
+        conn.execute_batch(
+            "CREATE TABLE records (name TEXT PRIMARY KEY NOT NULL, key TEXT NOT NULL, ok INTEGER NOT NULL, record TEXT NOT NULL);",
+        )
+        .unwrap();
+        drop(conn);
+        drop(CampaignStore::open(&dir).unwrap());
+        let conn = Connection::open(&file).unwrap();
+        let id: i32 = conn
+            .pragma_query_value(None, "application_id", |r| r.get(0))
+            .unwrap();
+        assert_eq!(id, APPLICATION_ID);
+        drop(conn);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -2,7 +2,8 @@
 //! `table.csv` — in one place, and written three ways from it: CSV, Parquet (for pandas and
 //! polars: `pd.read_parquet`, `pl.read_parquet`) and the store's SQLite table `tracked`.
 //!
-//! Columns: `record`, `time_s`, `mode`, `frequency_hz`, `frequency_se_hz`, `damping_ratio`,
+//! Columns: `record`, `time_s`, `mode` (its name: an estimates table's, else its number
+//! counted from 1), `frequency_hz`, `frequency_se_hz`, `damping_ratio`,
 //! `damping_se`, `mac`, `misfit_flag`, `z`, `innovation`, `alarm` (`up`, `down` or empty),
 //! `extrapolated`, then one per covariate. An empty cell (Parquet and SQL: null) is a value
 //! the record does not have; NaN is a number that is not one (a MAC without shapes, a
@@ -120,7 +121,7 @@ impl TrackTable {
             col("time_s", Values::Seconds(floats(|r| r.time))),
             col(
                 "mode",
-                Values::Int(rows.iter().map(|r| r.mode as i64).collect()),
+                Values::Text(rows.iter().map(|r| report.mode_name(r.mode)).collect()),
             ),
             col("frequency_hz", Values::Float(floats(|r| r.frequency_hz))),
             col(

@@ -201,6 +201,7 @@ fn subspace_lines(report: &hyst::monitor::TrackReport, change_day: Option<f64>) 
 /// time (the machine's two cores) as `hyst track` does; records per minute, and the peak
 /// memory against one record's size.
 pub fn bench() {
+    bench_estimates();
     let mut campaign = Campaign::default();
     campaign.fs = 100.0;
     campaign.seconds = 3600.0;
@@ -230,6 +231,52 @@ pub fn bench() {
         "monitor_peak_mb_1h_10ch_100hz {:.0} (one record is {record_mb:.0} MB; two in flight)",
         peak_mb()
     );
+}
+
+/// `hyst track --estimates`'s reader on tables of 10⁵ and 10⁶ rows (four modes with
+/// standard errors and damping): the time to read each, and the peak memory after each
+/// (issue 58: ≤ 10 s for 10⁶ rows, memory linear in rows; it was quadratic in time).
+fn bench_estimates() {
+    let dir = std::env::temp_dir().join(format!("hyst-bench-est-{}", std::process::id()));
+    let _ = std::fs::create_dir_all(&dir);
+    for rows in [100_000usize, 1_000_000] {
+        let path = dir.join(format!("estimates_{rows}.csv"));
+        let mut text = String::from("record,time");
+        for m in 1..=4 {
+            text.push_str(&format!(",f{m}_hz,f{m}_hz_se,f{m}_damping"));
+        }
+        text.push('\n');
+        for i in 0..rows {
+            text.push_str(&format!("r{i},{}", 3600 * i));
+            for m in 1..=4 {
+                let f = m as f64 * (1.0 + 1e-3 * ((i * 7919 % 1000) as f64 / 1000.0 - 0.5));
+                text.push_str(&format!(",{f:.6},0.001,0.012"));
+            }
+            text.push('\n');
+        }
+        if let Err(e) = std::fs::write(&path, &text) {
+            println!("estimates_read_s_{rows}_rows failed: {e}");
+            return;
+        }
+        let mb = text.len() as f64 / 1e6;
+        drop(text);
+        let t0 = Instant::now();
+        let read = hyst::io::read_estimates(&path);
+        let s = t0.elapsed().as_secs_f64();
+        match read {
+            Ok(t) => println!(
+                "estimates_read_s_{rows}_rows {s:.2} ({} rows, {mb:.0} MB of text; target ≤ 10 s at 10⁶)",
+                t.rows.len()
+            ),
+            Err(e) => println!("estimates_read_s_{rows}_rows failed: {e}"),
+        }
+        println!(
+            "estimates_peak_mb_after_{rows}_rows {:.0} (the process's peak so far)",
+            peak_mb()
+        );
+        let _ = std::fs::remove_file(&path);
+    }
+    let _ = std::fs::remove_dir(&dir);
 }
 
 /// Every record of `campaign` identified, in two halves (to see whether memory grows with the

@@ -12,6 +12,7 @@
 use crate::MonitorError;
 use crate::matching::ModeEstimate;
 use crate::track::{TrackOptions, TrackReport, TrackRow, chart_modes};
+use crate::training::median;
 
 /// One record's row of an estimates table.
 #[derive(Debug, Clone, PartialEq)]
@@ -92,22 +93,8 @@ pub fn track_estimates(
         .map(|&s| s as f64 / records.len().max(1) as f64)
         .collect();
     report.noise_from_training = noise;
+    report.mode_names = mode_names.to_vec();
     Ok(report)
-}
-
-/// The median of `v` (NaN when empty).
-fn median(v: &[f64]) -> f64 {
-    let mut s: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
-    if s.is_empty() {
-        return f64::NAN;
-    }
-    s.sort_by(f64::total_cmp);
-    let n = s.len();
-    if n % 2 == 1 {
-        s[n / 2]
-    } else {
-        0.5 * (s[n / 2 - 1] + s[n / 2])
-    }
 }
 
 /// The estimation noise read from consecutive values ([module doc](self)).
@@ -143,5 +130,56 @@ mod tests {
             .collect();
         let s = consecutive_scatter(&f);
         assert!((s / 0.002 - 1.0).abs() < 0.1, "{s}");
+    }
+
+    /// Issue 58's reproduction: one training cell of 100 Hz (a typo for 1 Hz), or 1e308,
+    /// among a mode's values of 1 Hz ± 0.2 % no longer blinds the chart: the cell is set
+    /// apart by the gross rule, named by its record, and a later 2 % drop is alarmed (it was
+    /// not: the baseline was 5.95 Hz with an SD of 22 Hz), with no alarm before it.
+    #[test]
+    fn a_typed_training_cell_is_set_apart_and_a_drop_still_alarms() {
+        for typo in [100.0, 1e308] {
+            let mut x: u64 = 11;
+            let mut u = || {
+                x = x
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                ((x >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+            };
+            let records: Vec<RecordEstimates> = (0..300)
+                .map(|i| {
+                    let (a, b) = (u(), u());
+                    let e = (-2.0 * a.ln()).sqrt() * (2.0 * std::f64::consts::PI * b).cos();
+                    let level = if i >= 250 { 0.98 } else { 1.0 };
+                    let f = if i == 40 { typo } else { level + 0.002 * e };
+                    RecordEstimates {
+                        name: format!("r{i}"),
+                        time: i as f64,
+                        covariates: vec![],
+                        modes: vec![Some(ModeEstimate {
+                            frequency_hz: f,
+                            frequency_se_hz: None,
+                            damping_ratio: 0.01,
+                            damping_se: None,
+                            shape: None,
+                        })],
+                    }
+                })
+                .collect();
+            let opts = TrackOptions::for_campaign(records.len(), Some(150), true, true);
+            let r = track_estimates(&records, &["f1".into()], &opts).unwrap();
+            assert_eq!(r.training_outliers.len(), 1, "{:?}", r.training_outliers);
+            assert_eq!(r.training_outliers[0].record, 40);
+            assert!(matches!(
+                r.training_outliers[0].rule,
+                crate::OutlierRule::Gross { .. }
+            ));
+            let b = r.baselines[0].as_ref().unwrap();
+            // The baseline is the clean values' (1 Hz within a few of their 0.02 % errors).
+            assert!((b.coefficients[0] - 1.0).abs() < 1e-3, "{b:?}");
+            assert!(r.alarms.iter().all(|a| a.record >= 250), "{:?}", r.alarms);
+            assert!(!r.alarms.is_empty(), "the 2 % drop is alarmed");
+            assert!(r.to_string().contains("training record r40"), "{r}");
+        }
     }
 }

@@ -38,6 +38,7 @@ mod report;
 pub mod screen;
 pub mod subspace;
 pub mod track;
+pub mod training;
 pub mod whiten;
 
 pub use baseline::{Baseline, fit_baseline};
@@ -48,6 +49,7 @@ pub use track::{
     Harmonic, Identified, Loaded, ModeAlarm, RecordModes, TrackOptions, TrackReport, TrackRow,
     campaign_analysis, identify, identify_records, reported_modes, track,
 };
+pub use training::{OutlierRule, TrainingOutlier};
 pub use whiten::ResidualModel;
 
 /// Errors of monitoring.

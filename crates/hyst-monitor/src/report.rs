@@ -16,7 +16,8 @@ impl TrackReport {
     ) -> fmt::Result {
         write!(
             f,
-            "mode {j}: {:.4} Hz, damping ratio {:.4} ({:.2} %), tracked in {:.1} % of the records",
+            "mode {}: {:.4} Hz, damping ratio {:.4} ({:.2} %), tracked in {:.1} % of the records",
+            self.mode_name(j),
             m.frequency_hz,
             m.damping_ratio,
             100.0 * m.damping_ratio,
@@ -170,6 +171,16 @@ impl TrackReport {
     }
 }
 
+impl TrackReport {
+    /// Record `record`'s name, as its rows give it.
+    fn record_name(&self, record: usize) -> &str {
+        self.rows
+            .iter()
+            .find(|r| r.record == record)
+            .map_or("?", |r| r.name.as_str())
+    }
+}
+
 impl fmt::Display for TrackReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let records: std::collections::BTreeSet<usize> =
@@ -199,6 +210,16 @@ impl fmt::Display for TrackReport {
         for (name, why) in &self.skipped {
             writeln!(f, "skipped {name}: {why}")?;
         }
+        for o in &self.training_outliers {
+            let name = self.record_name(o.record);
+            writeln!(
+                f,
+                "mode {}: training record {name} ({} Hz) set apart from the baseline: {}",
+                self.mode_name(o.mode),
+                o.frequency_hz,
+                o.rule
+            )?;
+        }
         if !self.split.is_empty() {
             let mut per_mode = vec![0usize; self.reference.len()];
             for &(_, mode) in &self.split {
@@ -209,7 +230,8 @@ impl fmt::Display for TrackReport {
             for (mode, count) in per_mode.iter().enumerate().filter(|(_, c)| **c > 0) {
                 writeln!(
                     f,
-                    "mode {mode} held twice, with one shape, in {count} record(s): which is the mode cannot be told, so it is not tracked there"
+                    "mode {} held twice, with one shape, in {count} record(s): which is the mode cannot be told, so it is not tracked there",
+                    self.mode_name(mode)
                 )?;
             }
         }
@@ -236,11 +258,7 @@ impl fmt::Display for TrackReport {
             writeln!(f, "no alarm")?;
         }
         for a in &self.alarms {
-            let name = self
-                .rows
-                .iter()
-                .find(|r| r.record == a.record)
-                .map_or("?", |r| r.name.as_str());
+            let name = self.record_name(a.record);
             let way = match a.side {
                 Side::Up => "rose",
                 Side::Down => "fell",
@@ -248,7 +266,8 @@ impl fmt::Display for TrackReport {
             writeln!(
                 f,
                 "ALARM: mode {} {way} at record {name} (time {} s)",
-                a.mode, a.time
+                self.mode_name(a.mode),
+                a.time
             )?;
         }
         Ok(())

@@ -6,6 +6,7 @@ use crate::baseline::{Baseline, fit_baseline};
 use crate::chart::{Cusum, Side};
 use crate::environment::{Environment, Series};
 use crate::matching::{MatchOptions, ModeEstimate, match_modes};
+use crate::training::{self, OutlierRule, TrainingOutlier};
 use crate::whiten::ResidualModel;
 
 /// One record's identification, as the campaign's tracking takes it.
@@ -281,6 +282,14 @@ impl TrackOptions {
 }
 
 impl TrackReport {
+    /// What users call mode `j` (an index from 0): its name, else its number counted from 1.
+    pub fn mode_name(&self, j: usize) -> String {
+        self.mode_names
+            .get(j)
+            .cloned()
+            .unwrap_or_else(|| (j + 1).to_string())
+    }
+
     /// Name the covariates the records were given (in their order); the excitation level,
     /// when [`track`] added it, keeps its name `log_rms` after them.
     pub fn name_covariates(&mut self, names: Vec<String>) {
@@ -380,8 +389,17 @@ pub struct TrackReport {
     pub tracked: Vec<f64>,
     /// The alarms, in time order.
     pub alarms: Vec<ModeAlarm>,
+    /// Training values set apart from their mode's baseline ([`crate::training`]), by
+    /// record.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub training_outliers: Vec<TrainingOutlier>,
     /// The chart's in-control average run length (records per false alarm, per mode).
     pub in_control_run_length: f64,
+    /// The modes' names (an estimates table's columns); empty: each is called by its
+    /// number counted from 1 ([`TrackReport::mode_name`]). Rows and alarms refer to modes by
+    /// their index, from 0.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub mode_names: Vec<String>,
     /// The covariates' names, in the order of each row's `covariates` (the caller's to
     /// set: [`track`] leaves it empty, and the text then numbers them).
     #[cfg_attr(feature = "serde", serde(default))]
@@ -633,6 +651,7 @@ pub(crate) fn chart_modes(
     let mut residual_models = Vec::with_capacity(reference.len());
     let mut environments = Vec::with_capacity(reference.len());
     let mut alarms = Vec::new();
+    let mut training_outliers = Vec::new();
     // Each record's time and covariates once, for lagged values.
     let mut seen = vec![false; records];
     let mut at = Vec::new();
@@ -645,12 +664,13 @@ pub(crate) fn chart_modes(
     let series = Series::new(&at);
     for mode in 0..reference.len() {
         match chart_mode(&mut rows, mode, records, &series, opts) {
-            Ok((b, env, model, found)) => {
-                baselines.push(Some(b));
+            Ok(c) => {
+                baselines.push(Some(c.baseline));
                 baseline_errors.push(None);
-                environments.push(Some(env));
-                residual_models.push(model);
-                alarms.extend(found);
+                environments.push(Some(c.environment));
+                residual_models.push(c.residual_model);
+                alarms.extend(c.alarms);
+                training_outliers.extend(c.outliers);
             }
             Err(e) => {
                 baselines.push(None);
@@ -676,7 +696,9 @@ pub(crate) fn chart_modes(
         residual_models,
         tracked: Vec::new(),
         alarms,
+        training_outliers,
         in_control_run_length: opts.chart.in_control_run_length(),
+        mode_names: Vec::new(),
         covariate_names: Vec::new(),
         subspace: None,
         subspace_error: None,
@@ -696,7 +718,7 @@ fn chart_mode(
     records: usize,
     series: &Series,
     opts: &TrackOptions,
-) -> Result<(Baseline, Environment, Option<ResidualModel>, Vec<ModeAlarm>), MonitorError> {
+) -> Result<ModeChart, MonitorError> {
     // The mode's row of each record, if it has one with what the chart needs (a standard
     // error and every covariate).
     let mut row_of: Vec<Option<usize>> = vec![None; records];
@@ -711,30 +733,8 @@ fn chart_mode(
     }
     let training = opts.training.min(records);
     let train: Vec<usize> = row_of[..training].iter().flatten().copied().collect();
-    let f: Vec<f64> = train.iter().map(|&k| rows[k].frequency_hz).collect();
-    let se: Vec<f64> = train
-        .iter()
-        .map(|&k| rows[k].frequency_se_hz.unwrap_or(0.0))
-        .collect();
-    let q = train.first().map_or(0, |&k| rows[k].covariates.len());
-    let env = if opts.environment && train.len() >= 20 {
-        let data: Vec<(f64, Vec<f64>, f64)> = train
-            .iter()
-            .map(|&k| {
-                (
-                    rows[k].time,
-                    rows[k].covariates.clone(),
-                    rows[k].frequency_hz,
-                )
-            })
-            .collect();
-        Environment::choose(series, &data)
-    } else {
-        Environment::linear(q)
-    };
+    let (b, env, outliers) = fit_training(rows, train, mode, series, opts)?;
     let features = |row: &TrackRow| env.features(series, row.time, &row.covariates);
-    let x: Vec<Vec<f64>> = train.iter().map(|&k| features(&rows[k])).collect();
-    let b = fit_baseline(&f, &se, &x)?;
     // Each record's residual (Hz) and the variance the baseline knows of (Hz²), for the
     // slow effect's model, and its standardized residual z; NaN where it has none (not
     // charted: a record without its covariates is tracked all the same).
@@ -742,7 +742,9 @@ fn chart_mode(
     let mut n = vec![f64::NAN; records];
     let mut z = vec![f64::NAN; records];
     for (t, k) in row_of.iter().enumerate() {
-        if let Some(k) = k {
+        if let Some(k) = k
+            && !outliers.iter().any(|o| o.record == t)
+        {
             let row = &rows[*k];
             let se = row.frequency_se_hz.unwrap_or(0.0);
             let x = features(row);
@@ -783,7 +785,97 @@ fn chart_mode(
             side: a.side,
         });
     }
-    Ok((b, env, model, alarms))
+    Ok(ModeChart {
+        baseline: b,
+        environment: env,
+        residual_model: model,
+        alarms,
+        outliers,
+    })
+}
+
+/// What [`chart_mode`] finds for one mode.
+struct ModeChart {
+    baseline: Baseline,
+    environment: Environment,
+    residual_model: Option<ResidualModel>,
+    alarms: Vec<ModeAlarm>,
+    outliers: Vec<TrainingOutlier>,
+}
+
+/// The baseline of `mode` and its environmental model, fitted on the training rows `train`
+/// (indices into `rows`) less those [`crate::training`] sets apart, which it returns.
+fn fit_training(
+    rows: &[TrackRow],
+    train: Vec<usize>,
+    mode: usize,
+    series: &Series,
+    opts: &TrackOptions,
+) -> Result<(Baseline, Environment, Vec<TrainingOutlier>), MonitorError> {
+    let outlier = |k: usize, rule| TrainingOutlier {
+        mode,
+        record: rows[k].record,
+        frequency_hz: rows[k].frequency_hz,
+        rule,
+    };
+    let all: Vec<f64> = train.iter().map(|&k| rows[k].frequency_hz).collect();
+    let median_hz = training::median(&all);
+    let (gross, mut train): (Vec<usize>, Vec<usize>) = train
+        .into_iter()
+        .partition(|&k| training::is_gross(rows[k].frequency_hz, median_hz));
+    let mut outliers: Vec<TrainingOutlier> = gross
+        .into_iter()
+        .map(|k| outlier(k, OutlierRule::Gross { median_hz }))
+        .collect();
+    let q = train.first().map_or(0, |&k| rows[k].covariates.len());
+    let env = if opts.environment && train.len() >= 20 {
+        let data: Vec<(f64, Vec<f64>, f64)> = train
+            .iter()
+            .map(|&k| {
+                (
+                    rows[k].time,
+                    rows[k].covariates.clone(),
+                    rows[k].frequency_hz,
+                )
+            })
+            .collect();
+        Environment::choose(series, &data)
+    } else {
+        Environment::linear(q)
+    };
+    let fit = |train: &[usize]| {
+        let f: Vec<f64> = train.iter().map(|&k| rows[k].frequency_hz).collect();
+        let se: Vec<f64> = train
+            .iter()
+            .map(|&k| rows[k].frequency_se_hz.unwrap_or(0.0))
+            .collect();
+        let x: Vec<Vec<f64>> = train
+            .iter()
+            .map(|&k| env.features(series, rows[k].time, &rows[k].covariates))
+            .collect();
+        fit_baseline(&f, &se, &x).map(|b| (b, f, x))
+    };
+    let (mut b, f, x) = fit(&train)?;
+    let residuals: Vec<f64> = f.iter().zip(&x).map(|(f, x)| f - b.predict(x).0).collect();
+    let far = training::far_from_fit(&residuals);
+    if far.iter().any(Option::is_some) {
+        let mut kept = Vec::with_capacity(train.len());
+        for (&k, z) in train.iter().zip(&far) {
+            match z {
+                Some(robust_z) => outliers.push(outlier(
+                    k,
+                    OutlierRule::FarFromFit {
+                        robust_z: *robust_z,
+                    },
+                )),
+                None => kept.push(k),
+            }
+        }
+        train = kept;
+        b = fit(&train)?.0;
+    }
+    outliers.sort_by_key(|o| o.record);
+    Ok((b, env, outliers))
 }
 
 #[cfg(test)]

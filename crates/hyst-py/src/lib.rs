@@ -334,7 +334,7 @@ fn ssi(
 /// identified with `settings` at `fs` Hz (or each record's or setup's stated rate) and merged:
 /// `hyst ssi --setups`; see the Python wrapper `hyst.ssi`.
 #[pyfunction]
-#[pyo3(signature = (path, fs, *, settings, geometry = None, lines = None))]
+#[pyo3(signature = (path, fs, *, settings, geometry = None, lines = None, records_anywhere = false))]
 fn ssi_setups(
     py: Python<'_>,
     path: std::path::PathBuf,
@@ -342,13 +342,19 @@ fn ssi_setups(
     settings: &str,
     geometry: Option<std::path::PathBuf>,
     lines: Option<std::path::PathBuf>,
+    records_anywhere: bool,
 ) -> PyResult<ident::Report> {
     let opts = SsiSettings::from_json(settings)
         .and_then(|s| s.analysis())
         .map_err(|e| PyValueError::new_err(e.to_string()))?;
     let (report, page) = py
         .detach(|| {
-            let setups = hyst::io::read_setups(&path)?;
+            let paths = if records_anywhere {
+                hyst::io::RecordPaths::Anywhere
+            } else {
+                hyst::io::RecordPaths::InsideFolder
+            };
+            let setups = hyst::io::read_setups_with(&path, paths)?;
             let report = hyst::setups::analyze_setups(
                 &setups,
                 fs,

@@ -345,7 +345,7 @@ def assert_exports_agree(out):
             p, s = parquet[name][i], sql[i][j]
             if cell == "":
                 assert p is None and s is None, (name, i)
-            elif name in ("record", "alarm"):
+            elif name in ("record", "mode", "alarm"):
                 assert p == s == cell, (name, i)
             elif name in ("misfit_flag", "extrapolated"):
                 assert p == bool(s) == (cell == "true"), (name, i)

@@ -270,6 +270,44 @@ pub enum MergeError {
     },
 }
 
+/// A note for each setup (of several) none of whose modes matched another setup's: its
+/// record, rate or references may not be the others', and its modes stand alone in the
+/// merge. Each such setup's frequencies are said beside the others'.
+fn unmatched_setups(setups: &[SetupModes], groups: &[Vec<(usize, usize)>]) -> Vec<String> {
+    if setups.len() < 2 {
+        return Vec::new();
+    }
+    let freqs = |s: usize| -> String {
+        let f: Vec<String> = setups[s]
+            .modes
+            .iter()
+            .map(|m| format!("{:.3}", m.frequency_hz))
+            .collect();
+        f.join(", ")
+    };
+    (0..setups.len())
+        .filter(|&s| {
+            !setups[s].modes.is_empty()
+                && groups
+                    .iter()
+                    .filter(|g| g.iter().any(|&(t, _)| t == s))
+                    .all(|g| g.iter().all(|&(t, _)| t == s))
+        })
+        .map(|s| {
+            let others: Vec<String> = (0..setups.len())
+                .filter(|&t| t != s)
+                .map(|t| format!("`{}` {}", setups[t].name, freqs(t)))
+                .collect();
+            format!(
+                "setup `{}` shares no mode with the other setups (its modes at {} Hz; {} Hz): its modes are merged alone; check its rate, record and references",
+                setups[s].name,
+                freqs(s),
+                others.join("; ")
+            )
+        })
+        .collect()
+}
+
 /// Two directions are one when their cosine is at least this (about 0.8°).
 const SAME_DIRECTION: f64 = 0.9999;
 
@@ -319,6 +357,7 @@ pub fn merge(setups: &[SetupModes], opts: &MergeOptions) -> Result<MergedModes, 
         .collect();
     let references: Vec<usize> = (0..dofs.len()).filter(|&d| dofs[d].reference).collect();
     let groups = matching::group(setups, &converted, &references, opts);
+    notes.extend(unmatched_setups(setups, &groups));
     let mut modes: Vec<MergedMode> = groups
         .iter()
         .map(|group| {

@@ -151,6 +151,35 @@ fn a_mode_seen_in_one_setup_keeps_that_setups_errors() {
     assert_eq!(roving_with_entries, ["2", "2", "2"]);
 }
 
+/// A setup none of whose modes matches another's (here its mode at twice the frequency,
+/// as a record read at half its rate gives) is merged alone and said, with the frequencies
+/// each setup saw; setups that share their mode are not.
+#[test]
+fn a_setup_sharing_no_mode_is_said_with_its_frequencies() {
+    let merged = merge(&roving_setups(), &MergeOptions::default()).unwrap();
+    assert!(
+        merged.notes.iter().all(|n| !n.contains("shares no mode")),
+        "{:?}",
+        merged.notes
+    );
+    let mut setups = roving_setups();
+    setups[2].modes = vec![observed(&setups[2].channels, &along, 6.0, c(1.0, 0.0))];
+    let merged = merge(&setups, &MergeOptions::default()).unwrap();
+    let said: Vec<&String> = merged
+        .notes
+        .iter()
+        .filter(|n| n.contains("shares no mode"))
+        .collect();
+    assert_eq!(said.len(), 1, "{:?}", merged.notes);
+    assert!(
+        said[0].contains("setup `setup 3`")
+            && said[0].contains("6.000")
+            && said[0].contains("3.000"),
+        "{}",
+        said[0]
+    );
+}
+
 #[test]
 fn setups_that_disagree_beyond_their_errors_widen_the_error() {
     let mut setups = roving_setups();

@@ -277,6 +277,21 @@ pub enum AmplitudeError {
         /// The value.
         value: f64,
     },
+    /// More than the record can hold: each level needs its triggers, each signature fits
+    /// twice in the record, and each jackknife stretch holds a signature.
+    #[error("{} = {value} asks more than the record's {samples} samples hold: at most {most}{why}", option.name())]
+    BeyondRecord {
+        /// Which option.
+        option: AmplitudeOption,
+        /// Its value.
+        value: f64,
+        /// The most the record holds.
+        most: f64,
+        /// The record's samples.
+        samples: usize,
+        /// Why that is the most.
+        why: String,
+    },
     /// A mode's frequency is not inside (0, Nyquist).
     #[error("mode at {frequency_hz} Hz is not inside (0, {nyquist_hz}) Hz")]
     BadModeFrequency {
@@ -398,13 +413,32 @@ fn check_channels(y: &[&[f64]]) -> Result<(), AmplitudeError> {
 /// `samples` long, at `fs` Hz) and the modes to follow.
 ///
 /// `others`: the record's other modes (not followed): their frequencies bound each band,
-/// and their shapes join the modal filter.
+/// and their shapes join the modal filter. A point is a mode's estimate as
+/// [`covssi::ModeCriteria::default`] takes one ([`amplitude_analysis`] judges by the
+/// criteria its modes were decided by).
 pub fn amplitude_curves(
     y: &[&[f64]],
     fs: f64,
     modes: &[ModeToFollow],
     others: &[ModeToFollow],
     opts: &AmplitudeOptions,
+) -> Result<AmplitudeReport, crate::IdentError> {
+    curves_judged(
+        y,
+        fs,
+        (modes, others),
+        opts,
+        &covssi::ModeCriteria::default(),
+    )
+}
+
+/// [`amplitude_curves`], each point judged by `criteria`.
+pub(crate) fn curves_judged(
+    y: &[&[f64]],
+    fs: f64,
+    (modes, others): (&[ModeToFollow], &[ModeToFollow]),
+    opts: &AmplitudeOptions,
+    criteria: &covssi::ModeCriteria,
 ) -> Result<AmplitudeReport, crate::IdentError> {
     opts.check()?;
     if !(fs > 0.0 && fs.is_finite()) {
@@ -440,6 +474,7 @@ pub fn amplitude_curves(
             .into());
         }
     }
+    within_record(y[0].len(), fs, modes, opts)?;
     let (opts, repeats) = &with_detected_period(y, fs, modes, opts);
     let all: Vec<ModeToFollow> = modes.iter().chain(others).cloned().collect();
     let weights = filter::modal_weights(&all, channels);
@@ -469,7 +504,7 @@ pub fn amplitude_curves(
                 Some(p) => period_mean(&q, p),
                 None => q,
             };
-            let mut curve = mode_curve(&q, fs, m, band, opts, report_as);
+            let mut curve = mode_curve(&q, fs, (m, band), opts, report_as, criteria);
             curve.notes.extend(repeats.clone());
             curve
         })
@@ -480,6 +515,50 @@ pub fn amplitude_curves(
         amplitude_of: report_as,
         modes: curves,
     })
+}
+
+/// The options against what a record of `samples` holds, before anything is allocated by
+/// them, so that no option makes the analysis hold more than a few times the record: at most
+/// one level and one jackknife group per sample, and a signature (`cycles` periods of the
+/// slowest mode) no longer than the record. (A record too short for a level's triggers
+/// gets its curve's note, not this error.)
+fn within_record(
+    samples: usize,
+    fs: f64,
+    modes: &[ModeToFollow],
+    opts: &AmplitudeOptions,
+) -> Result<(), AmplitudeError> {
+    let n = samples as f64;
+    let beyond = |option, value: f64, most: f64, why: String| {
+        Err(AmplitudeError::BeyondRecord {
+            option,
+            value,
+            most,
+            samples,
+            why,
+        })
+    };
+    for (option, value) in [
+        (AmplitudeOption::Levels, opts.levels),
+        (AmplitudeOption::Groups, opts.groups),
+    ] {
+        if value > samples {
+            return beyond(option, value as f64, n, " (one per sample)".into());
+        }
+    }
+    let slowest = modes
+        .iter()
+        .map(|m| m.frequency_hz)
+        .fold(f64::INFINITY, f64::min);
+    if slowest.is_finite() && opts.cycles * fs / slowest > n {
+        return beyond(
+            AmplitudeOption::Cycles,
+            opts.cycles,
+            n * slowest / fs,
+            format!(" (a signature of the slowest mode, {slowest} Hz, within the record)"),
+        );
+    }
+    Ok(())
 }
 
 /// A lag of at least this many cycles of the slowest mode followed is a period only the
@@ -650,10 +729,10 @@ fn envelope_bands(
 fn mode_curve(
     q: &[f64],
     fs: f64,
-    m: &ModeToFollow,
-    band: (f64, f64),
+    (m, band): (&ModeToFollow, (f64, f64)),
     opts: &AmplitudeOptions,
     report_as: Quantity,
+    criteria: &covssi::ModeCriteria,
 ) -> ModeCurve {
     let mut notes = Vec::new();
     let window = (opts.cycles * fs / m.frequency_hz).round().max(8.0) as usize;
@@ -701,7 +780,6 @@ fn mode_curve(
     // it is a mode's estimate at its level only as covssi's decision would take one: its
     // frequency known (error within ModeCriteria's share of it) and damped within the limit.
     // Else it is said and left out, not printed as a result.
-    let criteria = covssi::decision::ModeCriteria::default();
     let mut rows: Vec<Vec<decay::Decay>> = Vec::new();
     for (k, d) in full.iter().enumerate() {
         let n = bands.totals[k];

@@ -3,7 +3,7 @@
 
 use std::fmt;
 
-use super::{AmplitudeOptions, AmplitudeReport, ModeCurve, ModeToFollow, amplitude_curves};
+use super::{AmplitudeOptions, AmplitudeReport, ModeCurve, ModeToFollow};
 
 /// What [`amplitude_analysis`] finds.
 #[derive(Debug, Clone, PartialEq)]
@@ -24,6 +24,9 @@ pub struct AmplitudeAnalysis {
     pub curves: AmplitudeReport,
 }
 
+/// Samples in a row at one extreme that only a held value makes.
+pub const CLIP_RUN: usize = 3;
+
 /// A channel that looks clipped.
 #[derive(Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -36,10 +39,26 @@ pub struct ClippedChannel {
     pub value: f64,
 }
 
-/// Channels of `y` with more than `max(8, n/2000)` samples at exactly their largest or
-/// smallest value (a continuous signal reaches its extreme once; a saturated sensor or
-/// converter holds it).
+/// Channels of `y` with more than `max(8, n/2000)` samples held at exactly their largest or
+/// smallest value, in runs of at least [`CLIP_RUN`] samples: a saturated sensor or converter
+/// holds its extreme, while a smooth signal passes its peak in at most two equal samples (a
+/// periodic one reaches the same peak value every period, and is not clipped).
 pub fn clipped_channels(y: &[&[f64]]) -> Vec<ClippedChannel> {
+    let held = |c: &[f64], v: f64| {
+        let mut total = 0;
+        let mut run = 0;
+        for &x in c.iter().chain(std::iter::once(&f64::NAN)) {
+            if x == v {
+                run += 1;
+            } else {
+                if run >= CLIP_RUN {
+                    total += run;
+                }
+                run = 0;
+            }
+        }
+        total
+    };
     y.iter()
         .enumerate()
         .filter_map(|(channel, c)| {
@@ -48,7 +67,7 @@ pub fn clipped_channels(y: &[&[f64]]) -> Vec<ClippedChannel> {
             let limit = 8.max(c.len() / 2000);
             [hi, lo]
                 .into_iter()
-                .map(|v| (v, c.iter().filter(|&&x| x == v).count()))
+                .map(|v| (v, held(c, v)))
                 .filter(|&(_, n)| n > limit)
                 .max_by_key(|&(_, n)| n)
                 .map(|(value, samples)| ClippedChannel {
@@ -71,6 +90,8 @@ pub fn amplitude_analysis(
 ) -> Result<AmplitudeAnalysis, crate::IdentError> {
     opts.check()?;
     super::check_channels(y)?;
+    // What the record can hold, before its modal analysis.
+    super::within_record(y[0].len(), fs, &[], opts)?;
     let modal = covssi::analyze(y, fs, analysis)?;
     let reported = modal.reported_modes();
     let modes_from = if modal.reported_refinement().is_some() {
@@ -120,7 +141,7 @@ pub fn amplitude_analysis(
                 .map(|i| identified[i].clone()),
         );
     }
-    let curves = amplitude_curves(y, fs, &followed, &others, opts)?;
+    let curves = super::curves_judged(y, fs, (&followed, &others), opts, &analysis.modes)?;
     Ok(AmplitudeAnalysis {
         modes_from: modes_from.into(),
         unidentified,
@@ -151,6 +172,12 @@ impl fmt::Display for AmplitudeAnalysis {
             writeln!(
                 f,
                 "note: no identified mode within 5 % of {u} Hz: followed there with every channel weighted alike"
+            )?;
+        }
+        if self.curves.modes.is_empty() {
+            writeln!(
+                f,
+                "no mode found: the modal analysis reported none to follow (`hyst ssi` on the record lists what it set apart and why; --modes follows given frequencies)"
             )?;
         }
         self.curves.fmt(f)

@@ -256,7 +256,12 @@ fn a_weak_mode_is_said_to_be_weak() {
 fn clipped_channels_are_named() {
     let sine: Vec<f64> = (0..20_000).map(|i| (i as f64 * 0.0123).sin()).collect();
     let clipped: Vec<f64> = sine.iter().map(|v| v.clamp(-0.9, 0.9)).collect();
-    let found = clipped_channels(&[&sine, &clipped]);
+    // A sine of a whole number of samples per period reaches the same peak value every
+    // period (issue 58: a pure sinusoid was called clipped); it is not clipped.
+    let periodic: Vec<f64> = (0..20_000)
+        .map(|i| (2.0 * std::f64::consts::PI * i as f64 / 20.0).sin())
+        .collect();
+    let found = clipped_channels(&[&sine, &clipped, &periodic]);
     assert_eq!(found.len(), 1, "{found:?}");
     assert_eq!(found[0].channel, 1);
     assert!(
@@ -484,4 +489,70 @@ fn points_are_modes_estimates_and_bands_are_never_empty() {
     // White noise through the band: fits of 3 cycles wander by more than 5 % (they were
     // printed as 36.30 ± 117.99 Hz); the rule, not luck, keeps them out.
     assert!(left_out >= 1, "{:?}", curve.notes);
+}
+
+/// The analysis judges its points by the criteria its modes were decided by (a user's
+/// `--max-damping`), not by the defaults: a linear mode of 1.1 % damping keeps its points
+/// under the default 20 % limit and loses each, said with the limit, under a 0.5 % one.
+#[test]
+fn points_are_judged_by_the_analysis_criteria() {
+    let fs = 750.0;
+    let lin = Oscillator::linear(2.0, 10.0, 1e5);
+    let y = record(&lin, 50.0, 1 << 15, fs, 5_900_002);
+    let run = |max_damping: f64| {
+        let mut analysis = covssi::AnalysisOptions::default();
+        analysis.modes.max_damping_ratio = max_damping;
+        amplitude_analysis(&[&y], fs, &analysis, &AmplitudeOptions::default(), &[35.6])
+            .expect("analysis")
+    };
+    let default = run(covssi::ModeCriteria::default().max_damping_ratio);
+    assert!(!default.curves.modes[0].points.is_empty(), "{default:?}");
+    let strict = run(0.005);
+    let curve = &strict.curves.modes[0];
+    assert!(curve.points.is_empty(), "{:?}", curve.points);
+    assert!(
+        curve.notes.iter().any(|n| n.contains("above 0.005")),
+        "{:?}",
+        curve.notes
+    );
+}
+
+/// Options beyond what the record holds are refused before anything is allocated by them
+/// (issue 58: `--levels 1000000000` aborted after 7.9 GB): levels, groups, and the cycles of
+/// a mode so slow its signature outgrows the record, each named with the most it may be.
+#[test]
+fn options_beyond_the_record_are_refused_before_work() {
+    let y = vec![0.5f64; 10_000];
+    let slow = ModeToFollow {
+        frequency_hz: 1e-6,
+        ..benchmark_mode(10.0)
+    };
+    for (opts, mode, says) in [
+        (
+            AmplitudeOptions {
+                levels: 1_000_000_000,
+                ..AmplitudeOptions::default()
+            },
+            benchmark_mode(10.0),
+            "levels = 1000000000 asks more than the record's 10000 samples hold: at most 10000",
+        ),
+        (
+            AmplitudeOptions {
+                groups: 1_000_000_000,
+                ..AmplitudeOptions::default()
+            },
+            benchmark_mode(10.0),
+            "groups = 1000000000 asks more",
+        ),
+        (
+            AmplitudeOptions::default(),
+            slow,
+            "cycles = 3 asks more than the record's 10000 samples hold",
+        ),
+    ] {
+        let e = amplitude_curves(&[&y], 100.0, std::slice::from_ref(&mode), &[], &opts)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(says), "{e}");
+    }
 }

@@ -122,6 +122,7 @@ def ssi(
     setups=None,
     geometry=None,
     lines=None,
+    records_anywhere=False,
 ):
     """Modes of a structure from its response alone: SSI-COV, then maximum likelihood.
 
@@ -192,6 +193,9 @@ def ssi(
         With ``setups``: the structure's nodes (a header line, then ``name x y z`` per line)
         and the lines between them (two node names per line), to draw the merged shapes on;
         a pyOMA setup folder's own ``grid.txt`` and ``lines.txt`` are read without them.
+    records_anywhere : bool
+        With ``setups``: let the setup file name records outside its own folder (absolute
+        paths, ``..``); by default each is named by its path from that folder.
 
     Returns
     -------
@@ -232,9 +236,10 @@ def ssi(
             settings=settings,
             geometry=None if geometry is None else _os.fspath(geometry),
             lines=None if lines is None else _os.fspath(lines),
+            records_anywhere=bool(records_anywhere),
         )
-    if geometry is not None or lines is not None:
-        raise ValueError("geometry and lines go with setups")
+    if geometry is not None or lines is not None or records_anywhere:
+        raise ValueError("geometry, lines and records_anywhere go with setups")
     if y is None or fs is None:
         raise ValueError("give y and fs (or setups)")
     a = _real(y, "y")

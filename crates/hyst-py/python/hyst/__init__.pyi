@@ -192,6 +192,7 @@ def ssi(
     setups: None = ...,
     geometry: None = ...,
     lines: None = ...,
+    records_anywhere: Literal[False] = ...,
 ) -> SsiResult: ...
 @overload
 def ssi(
@@ -218,6 +219,7 @@ def ssi(
     setups: Union[str, os.PathLike[str]],
     geometry: Optional[Union[str, os.PathLike[str]]] = ...,
     lines: Optional[Union[str, os.PathLike[str]]] = ...,
+    records_anywhere: bool = ...,
 ) -> Report: ...
 
 def amplitude(
