@@ -4,6 +4,9 @@
 
 use rayon::prelude::*;
 
+/// The amplitude checks' counts, gathered from the parallel loop.
+static AMPLITUDE: std::sync::Mutex<Vec<[usize; 5]>> = std::sync::Mutex::new(Vec::new());
+
 /// Arguments of `cargo xtask corpus`.
 #[derive(clap::Args)]
 pub struct CorpusArgs {
@@ -27,6 +30,63 @@ pub struct CorpusArgs {
     /// cluster, without errors), on the same analyses.
     #[arg(long)]
     before: bool,
+    /// Also run `hyst amplitude`'s analysis with its defaults on each record with a Bouc-Wen
+    /// storey, and judge it as issue 57 asks: every mode followed structural (within the
+    /// corpus's tolerance of a true mode), no point whose error exceeds a tenth of its
+    /// frequency, no empty band.
+    #[arg(long)]
+    amplitude: bool,
+    /// SSI's largest model order (default: the analysis's own, 40 or four per spectral peak).
+    #[arg(long)]
+    max_order: Option<usize>,
+}
+
+/// `hyst amplitude` with its defaults on a hysteretic case: a line, and the counts (modes
+/// followed, of them not structural, points, of them with an error above f/10, empty bands).
+fn amplitude_check(
+    case: &hyst_sim::corpus::CorpusCase,
+    views: &[&[f64]],
+) -> Result<(String, [usize; 5]), String> {
+    use hyst_ident::amplitude::{AmplitudeOptions, Quantity, amplitude_analysis};
+    let mut opts = AmplitudeOptions::default();
+    opts.measured = match format!("{:?}", case.building.reading).as_str() {
+        "Velocity" => Quantity::Velocity,
+        "Acceleration" => Quantity::Acceleration,
+        _ => Quantity::Displacement,
+    };
+    let r = amplitude_analysis(
+        views,
+        case.building.fs,
+        &covssi::AnalysisOptions::default(),
+        &opts,
+        &[],
+    )
+    .map_err(|e| e.to_string())?;
+    let tol = case.tolerance();
+    let mut counts = [0usize; 5];
+    let mut followed = Vec::new();
+    for c in &r.curves.modes {
+        let f = c.mode.frequency_hz;
+        let structural = case
+            .truth
+            .iter()
+            .any(|t| (t.frequency_hz - f).abs() <= tol * t.frequency_hz);
+        counts[0] += 1;
+        counts[1] += usize::from(!structural);
+        counts[2] += c.points.len();
+        counts[3] += c
+            .points
+            .iter()
+            .filter(|p| p.frequency_se_hz.is_nan() || p.frequency_se_hz > 0.1 * p.frequency_hz)
+            .count();
+        counts[4] += usize::from(c.band_hz.1.is_nan() || c.band_hz.1 <= c.band_hz.0);
+        followed.push(format!(
+            "{f:.3} Hz{} ({} points)",
+            if structural { "" } else { " NOT STRUCTURAL" },
+            c.points.len()
+        ));
+    }
+    Ok((format!("  amplitude: {}", followed.join(", ")), counts))
 }
 
 /// The modes `hyst ssi` reported before `covssi::decision` (commit a064d96's
@@ -72,7 +132,14 @@ pub fn run(a: &CorpusArgs) -> Result<(), String> {
             let case = hyst_sim::corpus::realistic(seed, a.periods).map_err(|e| e.to_string())?;
             let y = case.generate().map_err(|e| format!("seed {seed}: {e}"))?;
             let views: Vec<&[f64]> = y.iter().map(|c| c.as_slice()).collect();
-            let analysis = covssi::analyze(&views, case.building.fs, &covssi::AnalysisOptions::default())
+            let mut opts = covssi::AnalysisOptions::default();
+            if let Some(order) = a.max_order {
+                opts = opts.with_ssi(covssi::SsiOptions {
+                    max_order: Some(order),
+                    ..covssi::SsiOptions::default()
+                });
+            }
+            let analysis = covssi::analyze(&views, case.building.fs, &opts)
                 .map_err(|e| format!("seed {seed}: {e}"))?;
             let reported: Vec<hyst_sim::corpus::Estimate> = if a.before {
                 reported_before(&analysis)
@@ -104,6 +171,11 @@ pub fn run(a: &CorpusArgs) -> Result<(), String> {
             if a.verbose {
                 line.push_str(&format!("\n{analysis}"));
             }
+            if a.amplitude && case.hysteretic {
+                let (text, counts) = amplitude_check(&case, &views)?;
+                line.push_str(&format!("\n{text}"));
+                AMPLITUDE.lock().map_err(|e| e.to_string())?.push(counts);
+            }
             let refined = analysis.decision.source == covssi::ModeSource::Refined;
             Ok((refined, line, score))
         })
@@ -121,6 +193,19 @@ pub fn run(a: &CorpusArgs) -> Result<(), String> {
         scores.push(score);
     }
     println!("{}", hyst_sim::corpus::Summary::of(&scores));
+    if a.amplitude {
+        let all = AMPLITUDE.lock().map_err(|e| e.to_string())?;
+        let sum = |k: usize| all.iter().map(|c| c[k]).sum::<usize>();
+        println!(
+            "amplitude on {} hysteretic records: {} modes followed, {} not structural; {} points, {} with an error above a tenth of the frequency; {} empty bands",
+            all.len(),
+            sum(0),
+            sum(1),
+            sum(2),
+            sum(3),
+            sum(4)
+        );
+    }
     // Found by how far each mode's peak stands out of the sensor noise (density ratio).
     let classes = [
         (1.0, 3.0),
