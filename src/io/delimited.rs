@@ -341,21 +341,38 @@ impl<R> LineBounded<R> {
 impl<R: std::io::Read> std::io::Read for LineBounded<R> {
     fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
         let n = self.inner.read(buf)?;
-        for &b in &buf[..n] {
-            if b == b'\n' {
-                self.since_newline = 0;
-            } else {
-                self.since_newline += 1;
-                if self.since_newline > MAX_LINE_BYTES {
-                    return Err(std::io::Error::new(
-                        std::io::ErrorKind::InvalidData,
-                        format!(
-                            "a line longer than {} MiB: not a delimited record (a binary file, or a line that never ends)",
-                            MAX_LINE_BYTES >> 20
-                        ),
-                    ));
+        let chunk = &buf[..n];
+        let too_long = || {
+            std::io::Error::new(
+                std::io::ErrorKind::InvalidData,
+                format!(
+                    "a line longer than {} MiB: not a delimited record (a binary file, or a line that never ends)",
+                    MAX_LINE_BYTES >> 20
+                ),
+            )
+        };
+        // Only the first and last line ends of a read are looked for (each a line's length
+        // from its end of the read): a line wholly inside a read is shorter than the read,
+        // and reads are far shorter than the bound (a longer one is scanned whole).
+        match chunk.iter().position(|&b| b == b'\n') {
+            None => self.since_newline += n,
+            Some(first) => {
+                if self.since_newline + first > MAX_LINE_BYTES {
+                    return Err(too_long());
                 }
+                if n > MAX_LINE_BYTES
+                    && chunk
+                        .split(|&b| b == b'\n')
+                        .any(|l| l.len() > MAX_LINE_BYTES)
+                {
+                    return Err(too_long());
+                }
+                let last = chunk.iter().rposition(|&b| b == b'\n').unwrap_or(first);
+                self.since_newline = n - last - 1;
             }
+        }
+        if self.since_newline > MAX_LINE_BYTES {
+            return Err(too_long());
         }
         Ok(n)
     }
@@ -446,6 +463,38 @@ mod tests {
             let e = read_csv(&file(name, &text)).unwrap_err().to_string();
             assert!(e.contains("a line longer than 16 MiB"), "{name}: {e}");
             let _ = std::fs::remove_file(file_path(name));
+        }
+        // A line of exactly the bound is read (its cell then judged as a number).
+        let at = format!("y\n1\n{}\n2\n", "1".repeat(MAX_LINE_BYTES));
+        let e = read_csv(&file("at_bound.csv", &at))
+            .unwrap_err()
+            .to_string();
+        assert!(!e.contains("a line longer"), "{e}");
+        let _ = std::fs::remove_file(file_path("at_bound.csv"));
+        // Through reads of any size: lines under the bound pass, one over it fails.
+        for chunk in [1, 7, 4096] {
+            struct Chunks<'a>(&'a [u8], usize);
+            impl std::io::Read for Chunks<'_> {
+                fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+                    let n = self.1.min(buf.len()).min(self.0.len());
+                    buf[..n].copy_from_slice(&self.0[..n]);
+                    self.0 = &self.0[n..];
+                    Ok(n)
+                }
+            }
+            let read_all = |bytes: &[u8]| {
+                let mut out = Vec::new();
+                std::io::Read::read_to_end(&mut LineBounded::new(Chunks(bytes, chunk)), &mut out)
+                    .map(|_| out.len())
+            };
+            let mut ok = b"ab\n".repeat(3);
+            ok.extend(vec![b'x'; MAX_LINE_BYTES]);
+            ok.extend(b"\ncd\n");
+            assert_eq!(read_all(&ok).unwrap(), ok.len(), "chunk {chunk}");
+            let mut over = b"ab\n".to_vec();
+            over.extend(vec![b'x'; MAX_LINE_BYTES + 1]);
+            over.extend(b"\ncd\n");
+            assert!(read_all(&over).is_err(), "chunk {chunk}");
         }
     }
 
