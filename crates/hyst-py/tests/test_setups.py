@@ -81,6 +81,23 @@ def test_setups_refuse_a_record_beside_them(setups):
         hyst.ssi(setups=bad, fs=FS)
 
 
+def test_records_outside_the_setup_folder_need_leave(setups, tmp_path):
+    """A setup file naming its records by absolute paths (elsewhere than its folder) is
+    refused with the flag that allows it; allowed, it merges as the file beside them does."""
+    text = setups.read_text()
+    for name in ("one.csv", "two.csv"):
+        text = text.replace(f",{name},", f",{setups.parent / name},")
+    elsewhere = tmp_path / "setups.csv"
+    elsewhere.write_text(text)
+    with pytest.raises(ValueError, match="not inside the setup file's folder"):
+        hyst.ssi(setups=elsewhere, fs=FS)
+    with pytest.raises(ValueError, match="records_anywhere go with setups"):
+        hyst.ssi(np.zeros((10, 2)), FS, records_anywhere=True)
+    anywhere = hyst.ssi(setups=elsewhere, fs=FS, records_anywhere=True).to_dict()["merged"]
+    beside = hyst.ssi(setups=setups, fs=FS).to_dict()["merged"]
+    assert anywhere == beside
+
+
 def test_the_pages_are_the_commands(hyst_bin, setups, tmp_path):
     page = tmp_path / "merged.html"
     subprocess.run([str(hyst_bin), "ssi", "--setups", str(setups), "--fs", str(FS), "--html", str(page)],
