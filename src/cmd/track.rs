@@ -96,7 +96,9 @@ enum Sources {
     },
 }
 
-fn sources(a: &TrackArgs) -> Result<Sources, Error> {
+/// The records' sources: `--input`'s windows, or `files` (the records of `--inputs`, listed
+/// once by [`record_files`]).
+fn sources(a: &TrackArgs, files: Vec<PathBuf>) -> Result<Sources, Error> {
     if let Some(path) = &a.input {
         let table = read_record(path)?;
         let fs = check_fs(table.rate(a.fs)?)?;
@@ -124,7 +126,6 @@ fn sources(a: &TrackArgs) -> Result<Sources, Error> {
             count,
         });
     }
-    let files = record_files(a)?;
     if files.is_empty() {
         return Err(fail(
             "no records: --inputs names no files (or only empty folders)",
@@ -147,12 +148,7 @@ fn record_files(a: &TrackArgs) -> Result<Vec<PathBuf>, Error> {
 /// Every file the run writes (the store and tables in `--out`, the `--html` page) against
 /// every file it reads (the records, `--input`, `--estimates`, `--covariates`,
 /// `--reference`), before anything is read: a clash is refused, naming both flags.
-fn check_paths(a: &TrackArgs) -> Result<(), Error> {
-    let records = if a.inputs.is_empty() {
-        Vec::new()
-    } else {
-        record_files(a)?
-    };
+fn check_paths(a: &TrackArgs, records: &[PathBuf]) -> Result<(), Error> {
     let mut inputs: Vec<(&str, &Path)> =
         records.iter().map(|f| ("--inputs", f.as_path())).collect();
     for (flag, p) in [
@@ -346,11 +342,16 @@ impl Sources {
 }
 
 pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
-    check_paths(a)?;
+    let records = if a.inputs.is_empty() {
+        Vec::new()
+    } else {
+        record_files(a)?
+    };
+    check_paths(a, &records)?;
     if let Some(path) = &a.estimates {
         return run_estimates(a, path);
     }
-    let mut sources = sources(a)?;
+    let mut sources = sources(a, records)?;
     let (covs, cov_names) = match &a.covariates {
         Some(p) => hyst::io::read_covariates(p)?,
         None => Default::default(),

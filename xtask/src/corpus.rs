@@ -4,9 +4,6 @@
 
 use rayon::prelude::*;
 
-/// The amplitude checks' counts, gathered from the parallel loop.
-static AMPLITUDE: std::sync::Mutex<Vec<[usize; 5]>> = std::sync::Mutex::new(Vec::new());
-
 /// Arguments of `cargo xtask corpus`.
 #[derive(clap::Args)]
 pub struct CorpusArgs {
@@ -48,11 +45,12 @@ fn amplitude_check(
     views: &[&[f64]],
 ) -> Result<(String, [usize; 5]), String> {
     use hyst_ident::amplitude::{AmplitudeOptions, Quantity, amplitude_analysis};
+    use hyst_sim::building::Reading;
     let mut opts = AmplitudeOptions::default();
-    opts.measured = match format!("{:?}", case.building.reading).as_str() {
-        "Velocity" => Quantity::Velocity,
-        "Acceleration" => Quantity::Acceleration,
-        _ => Quantity::Displacement,
+    opts.measured = match case.building.reading {
+        Reading::Displacement => Quantity::Displacement,
+        Reading::Velocity => Quantity::Velocity,
+        Reading::Acceleration => Quantity::Acceleration,
     };
     let r = amplitude_analysis(
         views,
@@ -126,7 +124,10 @@ pub fn run(a: &CorpusArgs) -> Result<(), String> {
     let seeds: Vec<u64> = (0..a.seeds)
         .map(|k| a.first_seed + k * a.seed_step)
         .collect();
-    let rows: Vec<Result<(bool, String, hyst_sim::corpus::Score), String>> = seeds
+    // Per record: the answer was the refinement's, its lines, its score, and the amplitude
+    // check's counts when it ran.
+    type Row = (bool, String, hyst_sim::corpus::Score, Option<[usize; 5]>);
+    let rows: Vec<Result<Row, String>> = seeds
         .par_iter()
         .map(|&seed| {
             let case = hyst_sim::corpus::realistic(seed, a.periods).map_err(|e| e.to_string())?;
@@ -171,20 +172,23 @@ pub fn run(a: &CorpusArgs) -> Result<(), String> {
             if a.verbose {
                 line.push_str(&format!("\n{analysis}"));
             }
+            let mut amplitude = None;
             if a.amplitude && case.hysteretic {
                 let (text, counts) = amplitude_check(&case, &views)?;
                 line.push_str(&format!("\n{text}"));
-                AMPLITUDE.lock().map_err(|e| e.to_string())?.push(counts);
+                amplitude = Some(counts);
             }
             let refined = analysis.decision.source == covssi::ModeSource::Refined;
-            Ok((refined, line, score))
+            Ok((refined, line, score, amplitude))
         })
         .collect();
     let mut scores = Vec::new();
     let (mut by_refined, mut by_ssi) = (Vec::new(), Vec::new());
+    let mut amplitude = Vec::new();
     for r in rows {
-        let (refined, line, score) = r?;
+        let (refined, line, score, counts) = r?;
         println!("{line}");
+        amplitude.extend(counts);
         if refined {
             by_refined.push(score.clone());
         } else {
@@ -194,7 +198,7 @@ pub fn run(a: &CorpusArgs) -> Result<(), String> {
     }
     println!("{}", hyst_sim::corpus::Summary::of(&scores));
     if a.amplitude {
-        let all = AMPLITUDE.lock().map_err(|e| e.to_string())?;
+        let all = &amplitude;
         let sum = |k: usize| all.iter().map(|c| c[k]).sum::<usize>();
         println!(
             "amplitude on {} hysteretic records: {} modes followed, {} not structural; {} points, {} with an error above a tenth of the frequency; {} empty bands",

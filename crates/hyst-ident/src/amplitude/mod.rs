@@ -277,8 +277,8 @@ pub enum AmplitudeError {
         /// The value.
         value: f64,
     },
-    /// More than the record can hold: each level needs its triggers, each signature fits
-    /// twice in the record, and each jackknife stretch holds a signature.
+    /// More than the record can hold: more levels or jackknife groups than samples, or a
+    /// signature of the slowest mode longer than the record.
     #[error("{} = {value} asks more than the record's {samples} samples hold: at most {most}{why}", option.name())]
     BeyondRecord {
         /// Which option.
