@@ -38,6 +38,20 @@ pub struct CorpusArgs {
     max_order: Option<usize>,
 }
 
+/// The amplitude checks' totals over the records they ran on.
+fn print_amplitude(all: &[[usize; 5]]) {
+    let sum = |k: usize| all.iter().map(|c| c[k]).sum::<usize>();
+    println!(
+        "amplitude on {} hysteretic records: {} modes followed, {} not structural; {} points, {} with an error above a tenth of the frequency; {} empty bands",
+        all.len(),
+        sum(0),
+        sum(1),
+        sum(2),
+        sum(3),
+        sum(4)
+    );
+}
+
 /// `hyst amplitude` with its defaults on a hysteretic case: a line, and the counts (modes
 /// followed, of them not structural, points, of them with an error above f/10, empty bands).
 fn amplitude_check(
@@ -198,17 +212,7 @@ pub fn run(a: &CorpusArgs) -> Result<(), String> {
     }
     println!("{}", hyst_sim::corpus::Summary::of(&scores));
     if a.amplitude {
-        let all = &amplitude;
-        let sum = |k: usize| all.iter().map(|c| c[k]).sum::<usize>();
-        println!(
-            "amplitude on {} hysteretic records: {} modes followed, {} not structural; {} points, {} with an error above a tenth of the frequency; {} empty bands",
-            all.len(),
-            sum(0),
-            sum(1),
-            sum(2),
-            sum(3),
-            sum(4)
-        );
+        print_amplitude(&amplitude);
     }
     // Found by how far each mode's peak stands out of the sensor noise (density ratio).
     let classes = [
