@@ -210,6 +210,36 @@ fn nan_cell() {
     assert!(err.contains("row 3") && err.contains("not finite"), "{err}");
 }
 
+/// A NaN in a column no one analyses does not make the file unreadable (issue 58): the
+/// channels chosen are analysed; without --columns the NaN's column is a channel, refused by
+/// its row and column.
+#[test]
+fn a_nan_in_a_column_not_analysed_is_no_error() {
+    let text = std::fs::read_to_string(write_two_sines()).unwrap();
+    let mut lines = text.lines();
+    let mut out = format!("{},note\n", lines.next().unwrap());
+    for (k, l) in lines.enumerate() {
+        out += &format!("{l},{}\n", if k == 7 { "NaN" } else { "1" });
+    }
+    let p = write("sine_note.csv", &out);
+    let (ok, _, err) = hyst(&[
+        "ssi",
+        "--input",
+        s(&p),
+        "--fs",
+        "10",
+        "--no-refine",
+        "--columns",
+        "y",
+    ]);
+    assert!(ok, "{err}");
+    let err = ssi_fails(&p, &["--no-refine"]);
+    assert!(
+        err.contains("row 9, column `note`: value NaN is not finite"),
+        "{err}"
+    );
+}
+
 #[test]
 fn row_with_too_many_or_too_few_cells_names_its_row() {
     // An extra cell would otherwise be dropped silently, shifting nothing but hiding a
@@ -2902,6 +2932,36 @@ fn ssi_merges_setups_on_their_references() {
         out.contains("note: the reference at node 5") && out.contains("it moved"),
         "{out}"
     );
+    // A NaN in a column setup one does not use leaves the merge as it was (issue 58).
+    let mut spare = String::new();
+    for (k, l) in std::fs::read_to_string(&one).unwrap().lines().enumerate() {
+        let cell = match k {
+            0 => "spare",
+            9 => "NaN",
+            _ => "0",
+        };
+        spare += &format!("{l},{cell}\n");
+    }
+    write("setup_spare.csv", &spare);
+    let spared = write(
+        "setups_spare.csv",
+        &rows("6", "5").replace(&name(&one), "setup_spare.csv"),
+    );
+    let spared_json = tmp("setups_spare.json");
+    let (ok, _, err) = hyst(&[
+        "ssi",
+        "--setups",
+        s(&spared),
+        "--fs",
+        "20",
+        "--json",
+        s(&spared_json),
+    ]);
+    assert!(ok, "{err}");
+    let with_nan: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&spared_json).unwrap()).unwrap();
+    // The same samples in the channels analysed: the same merged modes, to the bit.
+    assert_eq!(with_nan["merged"]["modes"], doc["merged"]["modes"]);
     // No reference common to the setups: refused, naming each setup's references.
     let none = write("setups_none.csv", &rows("8", "9"));
     let (ok, _, err) = hyst(&["ssi", "--setups", s(&none), "--fs", "20"]);

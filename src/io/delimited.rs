@@ -119,7 +119,8 @@ pub fn read_csv(path: &Path) -> Result<Table, IoError> {
 /// Read a delimited file with a header line (RFC 4180, by the `csv` crate): cells separated by
 /// `delimiter`, any of them quoted, CRLF or LF line ends, a byte-order mark, spaces around the
 /// cells; empty lines are skipped. Every row must have one cell per column of the header, and
-/// every cell must be a finite number.
+/// every cell must be a number; one that is not finite (`NaN`, `inf`) is refused when its
+/// column is taken ([`Table::column`]), naming its line.
 ///
 /// A file whose first line is numbers only has no header line: its columns are named `0`,
 /// `1`, … (as an array's are), the first line is the first row, and the table's notes say so.
@@ -127,6 +128,9 @@ pub fn read_csv_with(path: &Path, delimiter: Delimiter) -> Result<Table, IoError
     let rows = DelimitedRows::open_record(path, delimiter)?;
     let (names, sep, headerless) = (rows.names.clone(), rows.sep, rows.pending.is_some());
     let mut columns: Vec<Vec<f64>> = vec![Vec::new(); names.len()];
+    // Each column's first cell that is not finite, by its line: refused only if the column
+    // is taken (a NaN in a column no one analyses does not make the file unreadable).
+    let mut non_finite: Vec<Option<super::NonFiniteCell>> = vec![None; names.len()];
     for r in rows {
         let (row, r) = r?;
         for (c, t) in r.iter().enumerate() {
@@ -136,13 +140,8 @@ pub fn read_csv_with(path: &Path, delimiter: Delimiter) -> Result<Table, IoError
                 column: names[c].clone(),
                 text: t.to_string(),
             })?;
-            if !v.is_finite() {
-                return Err(IoError::NonFinite {
-                    path: path.to_path_buf(),
-                    row,
-                    column: names[c].clone(),
-                    value: v,
-                });
+            if !v.is_finite() && non_finite[c].is_none() {
+                non_finite[c] = Some(super::NonFiniteCell { row, value: v });
             }
             columns[c].push(v);
         }
@@ -153,6 +152,7 @@ pub fn read_csv_with(path: &Path, delimiter: Delimiter) -> Result<Table, IoError
         });
     }
     let mut table = Table::new(path, names, columns);
+    table.non_finite = non_finite;
     if headerless {
         table.notes.push(format!(
             "{}: no header line (the first line is numbers): the columns are named 0 to {} as an array's are; --names names them",
@@ -464,12 +464,15 @@ mod tests {
             assert!(e.contains("a line longer than 16 MiB"), "{name}: {e}");
             let _ = std::fs::remove_file(file_path(name));
         }
-        // A line of exactly the bound is read (its cell then judged as a number).
+        // A line of exactly the bound is read (its cell then judged as a number: too large).
         let at = format!("y\n1\n{}\n2\n", "1".repeat(MAX_LINE_BYTES));
-        let e = read_csv(&file("at_bound.csv", &at))
+        let e = crate::io::test_files::taken(read_csv(&file("at_bound.csv", &at)))
             .unwrap_err()
             .to_string();
-        assert!(!e.contains("a line longer"), "{e}");
+        assert!(
+            e.contains("row 3, column `y`: value inf is not finite"),
+            "{e}"
+        );
         let _ = std::fs::remove_file(file_path("at_bound.csv"));
         // Through reads of any size: lines under the bound pass, one over it fails.
         for chunk in [1, 7, 4096] {
@@ -582,12 +585,16 @@ mod tests {
                 .contains("row 3 has 1 cells, the header has 2"),
             "{e}"
         );
-        let e = read_csv(&file("nan.csv", "t,y\n0,NaN\n")).unwrap_err();
+        // A cell that is not finite is named, by its line, when its column is taken; the
+        // file's other columns are read (a NaN in a column no one analyses is no error).
+        let t = read_csv(&file("nan.csv", "t,y,z\n0,1,2\n1,NaN,3\n2,inf,4\n")).unwrap();
+        let e = t.column("y").unwrap_err();
         assert!(
             e.to_string()
-                .contains("row 2, column `y`: value NaN is not finite"),
+                .ends_with("nan.csv: row 3, column `y`: value NaN is not finite"),
             "{e}"
         );
+        assert_eq!(t.column("z").unwrap(), [2.0, 3.0, 4.0]);
         let e = read_csv(&file("bytes.csv", "t,y\n0,1\n")).map(|_| ());
         assert!(e.is_ok());
         std::fs::write(file("latin1.csv", ""), b"t,y\n0,\xff\n").unwrap();
@@ -649,8 +656,7 @@ mod tests {
                 let p = file_path(&format!("fuzz-{}.csv", std::thread::current().name().unwrap_or("t").replace("::", "_")));
                 std::fs::write(&p, &bytes).unwrap();
                 if let Ok(t) = read_csv(&p) {
-                    prop_assert!(t.columns.iter().all(|c| c.len() == t.len()));
-                    prop_assert!(t.columns.iter().flatten().all(|v| v.is_finite()));
+                    prop_assert!(crate::io::test_files::well_formed(&t));
                 }
             }
         }

@@ -349,7 +349,7 @@ fn table(path: &Path, v: Variable, endian: Endian) -> Result<Table, IoError> {
                 .collect()
         })
         .collect();
-    Table::of_finite(path, names, columns)
+    Ok(Table::new(path, names, columns))
 }
 
 #[cfg(test)]

@@ -587,31 +587,34 @@ pub struct Table {
     pub points: Option<Vec<MeasurementPoint>>,
     /// What the reader assumed and a user should hear (a headerless file's generated names).
     pub notes: Vec<String>,
+    /// Each column's first cell that is not finite, if it has one: a file may hold NaN in a
+    /// column no one analyses, and is refused only when such a column is taken.
+    non_finite: Vec<Option<NonFiniteCell>>,
+}
+
+/// A cell that is not finite: its row as the file counts it, and its value.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct NonFiniteCell {
+    row: usize,
+    value: f64,
 }
 
 impl Table {
-    /// The table of `names` and `columns` read from `path` (stating no rate and no points),
-    /// or the first value that is not finite, named by its sample (1-based) and column.
-    pub fn of_finite(
-        path: &Path,
-        names: Vec<String>,
-        columns: Vec<Vec<f64>>,
-    ) -> Result<Table, IoError> {
-        for (name, column) in names.iter().zip(&columns) {
-            if let Some(s) = column.iter().position(|v| !v.is_finite()) {
-                return Err(IoError::NonFinite {
-                    path: path.to_path_buf(),
-                    row: s + 1,
-                    column: name.clone(),
-                    value: column[s],
-                });
-            }
-        }
-        Ok(Table::new(path, names, columns))
-    }
-
-    /// A table of `names` and `columns` read from `path`, stating no rate and no points.
+    /// A table of `names` and `columns` read from `path`, stating no rate and no points; a
+    /// cell that is not finite is kept, and named (by its sample, 1-based) when its column is
+    /// taken ([`column`](Self::column), [`take_column`](Self::take_column)).
     pub fn new(path: &Path, names: Vec<String>, columns: Vec<Vec<f64>>) -> Table {
+        let non_finite = columns
+            .iter()
+            .map(|c| {
+                c.iter()
+                    .position(|v| !v.is_finite())
+                    .map(|s| NonFiniteCell {
+                        row: s + 1,
+                        value: c[s],
+                    })
+            })
+            .collect();
         Table {
             names,
             columns,
@@ -619,13 +622,29 @@ impl Table {
             rate_hz: None,
             points: None,
             notes: Vec::new(),
+            non_finite,
         }
     }
 
-    /// The column with this name, or an error listing the available ones.
+    /// Column `i` if every cell of it is finite, else its first cell that is not, named by
+    /// the file's row and the column's name.
+    fn finite(&self, i: usize) -> Result<&[f64], IoError> {
+        match self.non_finite.get(i).copied().flatten() {
+            Some(cell) => Err(IoError::NonFinite {
+                path: self.path.clone(),
+                row: cell.row,
+                column: self.names[i].clone(),
+                value: cell.value,
+            }),
+            None => Ok(&self.columns[i]),
+        }
+    }
+
+    /// The column with this name, or an error listing the available ones, or naming the
+    /// column's first cell that is not finite.
     pub fn column(&self, name: &str) -> Result<&[f64], IoError> {
         match self.names.iter().position(|n| n == name) {
-            Some(i) => Ok(&self.columns[i]),
+            Some(i) => self.finite(i),
             None => Err(IoError::MissingColumn {
                 path: self.path.clone(),
                 column: name.to_string(),
@@ -634,8 +653,8 @@ impl Table {
         }
     }
 
-    /// The column with this name taken out of the table (its place left empty), or an error
-    /// listing the available ones: for a caller that needs the record once, not a copy.
+    /// The column with this name taken out of the table (its place left empty), or the error
+    /// [`column`](Self::column) gives: for a caller that needs the record once, not a copy.
     pub fn take_column(&mut self, name: &str) -> Result<Vec<f64>, IoError> {
         self.column(name)?;
         let i = self.names.iter().position(|n| n == name).unwrap_or(0);
@@ -692,6 +711,12 @@ impl Table {
     /// with its time column's mean step if it has one (within 1 %), else the file's, else
     /// the time column's.
     pub fn rate(&self, given: Option<f64>) -> Result<f64, IoError> {
+        // A time column that checks or gives the rate must be finite throughout.
+        if self.rate_hz.is_none()
+            && let Some(i) = self.time_column()
+        {
+            self.finite(i)?;
+        }
         if self.rate_hz.is_none()
             && let Some((column, rate)) = self.time_rate()
         {
@@ -829,6 +854,27 @@ pub fn data_dir() -> Option<PathBuf> {
 #[cfg(test)]
 pub(crate) mod test_files {
     use std::path::PathBuf;
+
+    /// A reader's answer with every column taken: the first error, the reader's or a
+    /// column's (a cell that is not finite).
+    pub(crate) fn taken(read: Result<super::Table, super::IoError>) -> Result<(), super::IoError> {
+        let t = read?;
+        t.names.iter().try_for_each(|n| t.column(n).map(|_| ()))
+    }
+
+    /// What a reader's table must hold, whatever the file: columns of one length, each
+    /// taken finite or refused naming the file, its row and the column.
+    pub(crate) fn well_formed(t: &super::Table) -> bool {
+        let path = t.path.display().to_string();
+        t.columns.iter().all(|c| c.len() == t.len())
+            && t.names.iter().all(|n| match t.column(n) {
+                Ok(c) => c.iter().all(|v| v.is_finite()),
+                Err(e) => {
+                    let e = e.to_string();
+                    e.starts_with(&path) && e.contains(&format!("column `{n}`"))
+                }
+            })
+    }
 
     /// A path for the test file `name` in this process's temporary folder (every reader's
     /// tests write theirs there).

@@ -87,8 +87,8 @@ pub fn read_setups_with(path: &Path, paths: RecordPaths) -> Result<Vec<SetupSpec
 }
 
 /// What every setup must hold, whichever layout described it: a regular file as its record,
-/// and one channel per node and direction (two would make the last one's reading win
-/// silently).
+/// and one channel per axis of a node ([`covssi::multisetup::same_axis`], the merge's own
+/// definition; two would make one reading stand for both).
 fn check_setup(s: &SetupSpec, path: &Path) -> Result<(), IoError> {
     let bad = |what: String| IoError::Params {
         path: path.to_path_buf(),
@@ -102,26 +102,21 @@ fn check_setup(s: &SetupSpec, path: &Path) -> Result<(), IoError> {
         )));
     }
     for (i, a) in s.channels.iter().enumerate() {
-        for (j, b) in s.channels.iter().enumerate().skip(i + 1) {
-            let cos: f64 = a
-                .direction
-                .iter()
-                .zip(&b.direction)
-                .map(|(x, y)| x * y)
-                .sum();
-            // Parallel within about 2.5°: one direction measured twice.
-            if a.node == b.node && cos.abs() > 0.999 {
-                return Err(bad(format!(
-                    "setup `{}`: columns `{}` and `{}` both measure node {} in direction ({:.3}, {:.3}, {:.3}): give each node and direction once",
-                    s.name,
-                    s.columns[i],
-                    s.columns[j],
-                    a.node,
-                    a.direction[0],
-                    a.direction[1],
-                    a.direction[2]
-                )));
-            }
+        // One definition of one axis of a node, the merge's.
+        if let Some(j) = s.channels[..i]
+            .iter()
+            .position(|b| covssi::multisetup::same_axis(a, b))
+        {
+            return Err(bad(format!(
+                "setup `{}`: columns `{}` and `{}` both measure node {} along ({:.3}, {:.3}, {:.3}): give each node and axis once",
+                s.name,
+                s.columns[j],
+                s.columns[i],
+                a.node,
+                a.direction[0],
+                a.direction[1],
+                a.direction[2]
+            )));
         }
     }
     Ok(())

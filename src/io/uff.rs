@@ -666,7 +666,7 @@ fn record(path: &Path, functions: Vec<Function>) -> Result<Table, IoError> {
         }
     }
     let columns = functions.into_iter().map(|f| f.values).collect();
-    let mut table = Table::of_finite(path, names, columns)?;
+    let mut table = Table::new(path, names, columns);
     table.rate_hz = Some(rate);
     table.points = Some(points);
     Ok(table)

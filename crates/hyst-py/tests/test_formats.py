@@ -111,3 +111,20 @@ def test_a_headerless_dat_with_a_time_column_reads_as_its_csv(data_dir, hyst_bin
     # A rate ten times too large is refused, naming the time column.
     p = hyst_ssi(hyst_bin, dat, tmp_path, "--fs", str(10 * FS), check=False)
     assert p.returncode != 0 and "disagrees with the time column `0`" in p.stderr
+
+
+def test_a_nan_in_a_column_not_analysed_is_read_and_refused_where_analysed(data_dir, tmp_path):
+    """``hyst.read`` keeps a cell that is not finite (a column no one analyses may hold one);
+    ``hyst.ssi`` of the channels without it answers, and of a channel with it is refused."""
+    import hyst
+
+    y, _ = read_record(data_dir / "oma" / "data_3dof.csv")
+    note = np.ones(len(y))
+    note[5] = np.nan
+    path = csv_of(np.column_stack([y, note]), ["a", "b", "c", "note"], tmp_path / "rec.csv")
+    rec = hyst.read(path)
+    assert rec.names == ["a", "b", "c", "note"]
+    assert np.isnan(rec.data[5, 3]) and np.isfinite(rec.data[:, :3]).all()
+    assert len(hyst.ssi(rec.data[:, :3], FS).frequency_hz) >= 3
+    with pytest.raises(ValueError, match="not finite"):
+        hyst.ssi(rec.data, FS)

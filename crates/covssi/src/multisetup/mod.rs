@@ -418,6 +418,15 @@ fn check(setups: &[SetupModes], opts: &MergeOptions) -> Result<(), MergeError> {
             } else {
                 None
             };
+            let twin = setup.channels[..c].iter().position(|b| same_axis(b, ch));
+            let problem = problem.or_else(|| {
+                twin.map(|b| {
+                    format!(
+                        "it measures node {} along the axis channel {b} measures: give each node and axis once",
+                        ch.node
+                    )
+                })
+            });
             if let Some(problem) = problem {
                 return Err(MergeError::Channel {
                     setup: setup.name.clone(),
@@ -448,9 +457,23 @@ fn unit(d: [f64; 3]) -> [f64; 3] {
     d.map(|v| v / n)
 }
 
+/// The cosine between two directions (any nonzero length).
+fn cosine(a: [f64; 3], b: [f64; 3]) -> f64 {
+    let (a, b) = (unit(a), unit(b));
+    (0..3).map(|k| a[k] * b[k]).sum()
+}
+
+/// Whether two channels measure one axis of one node: the same node, and directions within
+/// about 0.8° ([`SAME_DIRECTION`]) of each other or of each other's opposite. Two channels
+/// of one setup that do are one reading twice, which [`merge`] refuses.
+pub fn same_axis(a: &SetupChannel, b: &SetupChannel) -> bool {
+    a.node == b.node && cosine(a.direction, b.direction).abs() >= SAME_DIRECTION
+}
+
+/// Whether a channel at `node` along `direction` is the merged DOF `dof`: its axis, and
+/// the same sense.
 fn same_dof(node: &str, direction: [f64; 3], dof: &MergedDof) -> bool {
-    let d = unit(direction);
-    node == dof.node && (0..3).map(|k| d[k] * dof.direction[k]).sum::<f64>() >= SAME_DIRECTION
+    node == dof.node && cosine(direction, dof.direction) >= SAME_DIRECTION
 }
 
 /// The merged DOFs: the references every setup shares first, then every other node and

@@ -239,6 +239,26 @@ fn bad_channels_and_options_are_named() {
         err.to_string(),
         "setup `setup 2`, channel 0: direction [0.0, 0.0, 0.0] is not a nonzero vector"
     );
+    // One axis of one node read twice in a setup (here the other way round, 0.5° off):
+    // refused, naming both channels; 1° off is another axis.
+    let turned = |[x, y, z]: [f64; 3], deg: f64| {
+        let (c, s) = (deg.to_radians().cos(), deg.to_radians().sin());
+        [c * x - s * y, s * x + c * y, z]
+    };
+    let mut twice = roving_setups();
+    let beam = twice[2].channels[0].direction;
+    twice[2].channels[1].direction = turned(beam.map(|v| -v), 0.5);
+    let err = merge(&twice, &MergeOptions::default()).unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "setup `setup 3`, channel 1: it measures node 3 along the axis channel 0 measures: give each node and axis once"
+    );
+    let (mut a, mut b) = (twice[2].channels[0].clone(), twice[2].channels[0].clone());
+    b.direction = turned(beam, 1.0);
+    assert!(!same_axis(&a, &b), "1° apart is another axis");
+    a.node = "4".into();
+    b.direction = beam;
+    assert!(!same_axis(&a, &b), "another node");
     let opts = MergeOptions {
         frequency_tolerance: 0.0,
         ..MergeOptions::default()

@@ -81,14 +81,14 @@ def read(path, *, format=None, variable=None, delimiter=None):
     Record
         ``data`` (samples x channels), ``names`` (a headerless file's ``"0"``, ``"1"``,
         ...), ``fs`` (the rate the file states, else its time column's step, else None),
-        ``points``, ``path``.
+        ``points``, ``path``. A cell that is not finite is read as NaN or inf (a column
+        no one analyses may hold one); ``hyst.ssi`` refuses a channel that holds one.
 
     Raises
     ------
     ValueError
         With the library's message, naming the file and what is wrong (a truncated file, a
-        dataset that is not a time response, channels of different lengths or rates, a
-        value that is not finite, ...).
+        dataset that is not a time response, channels of different lengths or rates, ...).
     """
     import os
 
