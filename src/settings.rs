@@ -33,6 +33,9 @@ pub enum SettingsError {
         /// The value given.
         value: usize,
     },
+    /// A setting out of range whatever the record ([`AnalysisOptions::check`]).
+    #[error(transparent)]
+    Ssi(#[from] covssi::SsiError),
     /// Settings that did not parse (an unknown name, a value of the wrong type).
     #[error("settings: {0}")]
     Unreadable(String),
@@ -169,6 +172,7 @@ impl SsiSettings {
             .with_refine(refine)
             .with_ssi_errors((blocks > 0).then_some(blocks));
         opts.modes = modes;
+        opts.check()?;
         Ok(opts)
     }
 

@@ -1,6 +1,8 @@
 //! The `hyst` program end to end: its outputs and its errors on bad input.
 
 mod common;
+#[path = "cli/options.rs"]
+mod options;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

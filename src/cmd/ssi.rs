@@ -194,21 +194,25 @@ impl SsiFlags {
 
     /// The analysis these flags ask for, a setting out of range named by its flag.
     pub(crate) fn analysis(&self) -> Result<hyst::covssi::AnalysisOptions, Error> {
-        setting_error(self.settings().analysis())
+        self.settings()
+            .analysis()
+            .map_err(|e| self.setting_error(e))
     }
-}
 
-/// A setting out of range named by its flag.
-fn setting_error(
-    analysis: Result<hyst::covssi::AnalysisOptions, SettingsError>,
-) -> Result<hyst::covssi::AnalysisOptions, Error> {
-    analysis.map_err(|e| match e {
-        SettingsError::TooSmall { name, least, value } => fail(format!(
-            "--{} must be at least {least}, got {value}",
-            name.replace('_', "-")
-        )),
-        e => fail(e.to_string()),
-    })
+    /// A setting out of range named by its flag.
+    fn setting_error(&self, e: SettingsError) -> Error {
+        match e {
+            SettingsError::TooSmall { name, least, value } => fail(format!(
+                "--{} must be at least {least}, got {value}",
+                name.replace('_', "-")
+            )),
+            // No record read: no rate, and no reference checked (that needs its channels).
+            SettingsError::Ssi(e) => {
+                option_error(self, &e, 0, None).unwrap_or_else(|| fail(e.to_string()))
+            }
+            e => fail(e.to_string()),
+        }
+    }
 }
 
 /// The channels to analyse, after `--skip`.
@@ -271,22 +275,22 @@ pub(crate) fn channels(input: &Path, a: &ChannelArgs) -> Result<Channels, Error>
     })
 }
 
-/// covssi's error in the words of the command line: an option out of range named by the
-/// flag that set it, anything else with the file and columns it came from (and the
-/// decimation, which may be what made the record too short or constant).
-pub(crate) fn flag_error(
-    input: &Path,
+/// An option out of range (covssi's [`SsiError::InvalidOption`](hyst::covssi::SsiError))
+/// named by the flag that set it, with what it must be; `None` for any other error. `fs_used`
+/// is the rate analysed, when a record was read (a lag too short for it is said in samples).
+fn option_error(
     ssi: &SsiFlags,
-    e: hyst::covssi::SsiError,
-    names: &[String],
-    fs_used: f64,
-) -> Error {
+    e: &hyst::covssi::SsiError,
+    channels: usize,
+    fs_used: Option<f64>,
+) -> Option<Error> {
     use hyst::covssi::{SsiError, SsiOption};
-    if let SsiError::InvalidOption { option, value } = &e {
+    if let SsiError::InvalidOption { option, value } = e {
         let lag_too_short = |flag: &str| {
-            fail(format!(
-                "{flag} gives {value} block row(s) at {fs_used} Hz; SSI needs at least 2: give a longer lag"
-            ))
+            let at = fs_used.map_or_else(String::new, |fs| format!(" at {fs} Hz"));
+            Some(fail(format!(
+                "{flag} gives {value} block row(s){at}; SSI needs at least 2: give a longer lag"
+            )))
         };
         let flag = match option {
             // A lag given as a time is too short for the rate: say what it gave.
@@ -307,13 +311,12 @@ pub(crate) fn flag_error(
                 Some(("--lag-periods HZ", "positive and finite"))
             }
             SsiOption::ReferenceOutOfRange => {
-                return fail(format!(
-                    "--references {value} is out of range: {} channel(s), numbered from 0",
-                    names.len()
-                ));
+                return Some(fail(format!(
+                    "--references {value} is out of range: {channels} channel(s), numbered from 0"
+                )));
             }
             SsiOption::ReferenceRepeated => {
-                return fail(format!("--references names channel {value} twice"));
+                return Some(fail(format!("--references names channel {value} twice")));
             }
             SsiOption::MaxOrder => Some(("--max-order", "at least 1")),
             SsiOption::ModeMaxDamping => Some(("--max-damping", "between 0 and 1")),
@@ -325,8 +328,24 @@ pub(crate) fn flag_error(
             _ => None,
         };
         if let Some((flag, needed)) = flag {
-            return fail(format!("{flag} must be {needed}, got {value}"));
+            return Some(fail(format!("{flag} must be {needed}, got {value}")));
         }
+    }
+    None
+}
+
+/// covssi's error in the words of the command line: an option out of range named by the
+/// flag that set it, anything else with the file and columns it came from (and the
+/// decimation, which may be what made the record too short or constant).
+pub(crate) fn flag_error(
+    input: &Path,
+    ssi: &SsiFlags,
+    e: hyst::covssi::SsiError,
+    names: &[String],
+    fs_used: f64,
+) -> Error {
+    if let Some(e) = option_error(ssi, &e, names.len(), Some(fs_used)) {
+        return e;
     }
     let decimated = match ssi.decimate {
         Some(r) if r > 1 => format!(", decimated by {r} to {fs_used} Hz"),

@@ -27,10 +27,10 @@ pub(crate) struct TrackArgs {
     #[arg(long, conflicts_with_all = ["inputs", "input"])]
     pub(crate) estimates: Option<PathBuf>,
     /// Window length (s) of --input.
-    #[arg(long, value_name = "SECONDS")]
+    #[arg(long, value_name = "SECONDS", requires = "input", conflicts_with_all = ["inputs", "estimates"])]
     pub(crate) window: Option<f64>,
     /// Step between windows (s); default the window (no overlap).
-    #[arg(long, value_name = "SECONDS")]
+    #[arg(long, value_name = "SECONDS", requires = "input", conflicts_with_all = ["inputs", "estimates"])]
     pub(crate) step: Option<f64>,
     /// Sampling rate (Hz); a Universal File states its own.
     #[arg(long)]
@@ -351,6 +351,10 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
     if let Some(path) = &a.estimates {
         return run_estimates(a, path);
     }
+    // Settings wrong whatever the record, before any is read (else each would be skipped
+    // for the same reason).
+    a.fs.map(check_fs).transpose()?;
+    a.ssi.analysis()?;
     let mut sources = sources(a, records)?;
     let (covs, cov_names) = match &a.covariates {
         Some(p) => hyst::io::read_covariates(p)?,

@@ -165,6 +165,45 @@ impl AnalysisOptions {
         Ok(opts)
     }
 
+    /// The options that are wrong whatever the record, checked before one is read (as
+    /// [`analyze`] checks them): the counts and thresholds, a lag given as a time or as
+    /// periods, the modes' damping limit. A campaign checks them once, up front, rather than
+    /// skipping every record for the same option.
+    pub fn check(&self) -> Result<(), SsiError> {
+        crate::identify::check_options(&self.ssi)?;
+        match self.ssi.block_rows {
+            // Its values' checks (finite, positive) hold at any rate; the count is the record's.
+            crate::BlockRows::Seconds(_) | crate::BlockRows::Periods { .. } => {
+                match self.ssi.block_rows.resolve(1.0) {
+                    Err(e @ SsiError::InvalidOption { option, .. })
+                        if option != SsiOption::BlockRows =>
+                    {
+                        return Err(e);
+                    }
+                    _ => {}
+                }
+            }
+            crate::BlockRows::Count(i) => {
+                self.ssi
+                    .block_rows
+                    .resolve(1.0)
+                    .map_err(|_| SsiError::InvalidOption {
+                        option: SsiOption::BlockRows,
+                        value: i as f64,
+                    })?;
+            }
+            crate::BlockRows::Auto => {}
+        }
+        let limit = self.modes.max_damping_ratio;
+        if !(limit > 0.0 && limit < 1.0) {
+            return Err(SsiError::InvalidOption {
+                option: SsiOption::ModeMaxDamping,
+                value: limit,
+            });
+        }
+        Ok(())
+    }
+
     /// These options with SSI's set to `ssi`.
     pub fn with_ssi(mut self, ssi: SsiOptions) -> Self {
         self.ssi = ssi;
@@ -241,13 +280,7 @@ pub fn analyze_with_progress(
     progress: &(dyn Fn(Progress) + Sync),
 ) -> Result<ModalAnalysis, SsiError> {
     crate::identify::check_fs(fs)?;
-    let limit = opts.modes.max_damping_ratio;
-    if !(limit > 0.0 && limit < 1.0) {
-        return Err(SsiError::InvalidOption {
-            option: SsiOption::ModeMaxDamping,
-            value: limit,
-        });
-    }
+    opts.check()?;
     let checked = crate::identify::check_channels(y)?;
     let (factor, survey) = decimation_of(y, fs, &checked, opts.decimation)?;
     let decimated = crate::decimate::decimate_channels(y, factor);

@@ -174,7 +174,7 @@ pub(crate) fn references(opts: &SsiOptions, l: usize) -> Result<Vec<usize>, SsiE
 /// The options that are not checked where they are used: counts at least 1, thresholds
 /// positive and finite (a threshold of 0 or below would reject every pole, and the user would
 /// see "no mode found" instead of the option at fault).
-fn check_options(opts: &SsiOptions) -> Result<(), SsiError> {
+pub(crate) fn check_options(opts: &SsiOptions) -> Result<(), SsiError> {
     let counts = [
         (SsiOption::OrderStep, Some(opts.order_step)),
         (SsiOption::MaxOrder, opts.max_order),

@@ -99,12 +99,27 @@ pub enum MonitorError {
         /// Entries of the residual.
         entries: usize,
     },
+    /// The subspace test asked for order 0: no reference mode to test.
+    #[error(
+        "no reference mode (order 0): the subspace test compares each record with the reference's modes"
+    )]
+    NoSubspaceOrder,
     /// A record not fit to be identified (a NaN burst, a stuck or clipped channel).
     #[error(transparent)]
     Unfit(#[from] screen::Unfit),
     /// A record's identification failed.
     #[error(transparent)]
     Ssi(#[from] covssi::SsiError),
+    /// Every record was skipped: nothing to track (the first's reason is likely all's).
+    #[error("none of the {records} record(s) could be identified; the first, {first}: {why}")]
+    NoneIdentified {
+        /// Records given.
+        records: usize,
+        /// The first record's name.
+        first: String,
+        /// Why it was skipped.
+        why: String,
+    },
     /// A CUSUM parameter out of range.
     #[error("CUSUM {parameter} must be positive and finite, got {value}")]
     ChartParameter {

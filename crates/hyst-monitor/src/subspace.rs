@@ -161,6 +161,9 @@ impl SubspaceTest {
         };
         let (rows, cols) = first.shape();
         let order = order.min(rows.saturating_sub(1)).min(cols);
+        if order == 0 {
+            return Err(MonitorError::NoSubspaceOrder);
+        }
         let dof = (rows - order) * order;
         if m <= dof + 1 {
             return Err(MonitorError::TooFewForSubspace {
@@ -437,5 +440,8 @@ mod tests {
             ),
             "{e}"
         );
+        // No reference mode: order 0 is said, not a panic on an empty set of vectors.
+        let e = SubspaceTest::train(&h, 0, 0.01).unwrap_err();
+        assert!(matches!(e, MonitorError::NoSubspaceOrder), "{e}");
     }
 }

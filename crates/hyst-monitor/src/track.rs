@@ -619,6 +619,15 @@ pub fn track(
         new_modes.extend(a.new.iter().map(|&j| (i, id.modes[j].frequency_hz)));
         split.extend(a.split.iter().map(|&mode| (i, mode)));
     }
+    if identified == 0
+        && let Some((first, why)) = skipped.first()
+    {
+        return Err(MonitorError::NoneIdentified {
+            records: records.len(),
+            first: first.clone(),
+            why: why.clone(),
+        });
+    }
     let tracked = seen
         .iter()
         .map(|&s| s as f64 / identified.max(1) as f64)

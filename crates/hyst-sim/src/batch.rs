@@ -114,6 +114,7 @@ impl<'a> Source<'a> {
     /// The source for `input`, checked to hold `n` samples; `None` for inputs the lockstep
     /// run does not take.
     fn of(input: Input<'a>, n: usize, r: usize) -> Result<Option<Self>, SimError> {
+        crate::check_oversample(r)?;
         Ok(Some(match input {
             Input::Sampled(u) => {
                 crate::check_length(u, n)?;

@@ -24,10 +24,12 @@ pub fn simulate_drifting(
     drift: f64,
     pieces: usize,
 ) -> Result<Vec<f64>, SimError> {
-    let r: usize = stages.iter().product();
-    if r == 0 {
-        return Err(SimError::ZeroOversample { factor: 0 });
-    }
+    // A product past usize is past the bound too.
+    let r = stages
+        .iter()
+        .try_fold(1usize, |r, &s| r.checked_mul(s))
+        .unwrap_or(usize::MAX);
+    crate::check_oversample(r)?;
     if n < 2 {
         return Err(SimError::InvalidSignal {
             what: "samples",

@@ -52,6 +52,16 @@ pub enum SimError {
         /// The offending factor.
         factor: usize,
     },
+    /// More sub-steps per sample than [`MAX_OVERSAMPLE`].
+    #[error(
+        "oversampling factor {factor} is more than {max} sub-steps per sample: beyond them RK4's error is below rounding, and the run only grows"
+    )]
+    OversampleTooLarge {
+        /// The offending factor.
+        factor: usize,
+        /// [`MAX_OVERSAMPLE`].
+        max: usize,
+    },
     /// The input record is empty.
     #[error("the input record is empty")]
     EmptyInput,
@@ -174,12 +184,18 @@ pub enum Decimation {
     Fir(Vec<usize>),
 }
 
+/// The most sub-steps per sample a simulation takes. RK4's local error goes as (ωh)⁵: for
+/// the highest frequency a record resolves (Nyquist, ωh = π per sample), 4096 sub-steps give
+/// (π/4096)⁵ ≈ 3·10⁻¹⁶, below double rounding; more add rounding error and time (and a
+/// band-limited input is held at 2 points per sub-step), never accuracy.
+pub const MAX_OVERSAMPLE: usize = 4096;
+
 /// Options of a simulation.
 #[derive(Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[cfg_attr(feature = "serde", serde(default, deny_unknown_fields))]
 pub struct SimOptions {
-    /// Sub-steps per sample (≥ 1).
+    /// Sub-steps per sample (1 to [`MAX_OVERSAMPLE`]).
     pub oversample: usize,
     /// Integration scheme.
     pub integrator: Integrator,
@@ -282,16 +298,31 @@ fn check_record(u: &[f64]) -> Result<(), SimError> {
     Ok(())
 }
 
+/// Sub-steps per sample: 1 to [`MAX_OVERSAMPLE`].
+fn check_oversample(factor: usize) -> Result<(), SimError> {
+    if factor == 0 {
+        return Err(SimError::ZeroOversample { factor });
+    }
+    if factor > MAX_OVERSAMPLE {
+        return Err(SimError::OversampleTooLarge {
+            factor,
+            max: MAX_OVERSAMPLE,
+        });
+    }
+    Ok(())
+}
+
 fn check_common(model: &Oscillator, fs: f64, opts: &SimOptions) -> Result<(), SimError> {
     model.validate()?;
     if !(fs.is_finite() && fs > 0.0) {
         return Err(SimError::NonPositiveRate { fs });
     }
-    if opts.oversample == 0 {
-        return Err(SimError::ZeroOversample { factor: 0 });
-    }
+    check_oversample(opts.oversample)?;
     if let Decimation::Fir(stages) = &opts.decimation {
-        let product: usize = stages.iter().product();
+        let product = stages
+            .iter()
+            .try_fold(1usize, |p, &s| p.checked_mul(s))
+            .unwrap_or(usize::MAX);
         if product != opts.oversample || stages.contains(&0) {
             return Err(SimError::DecimationMismatch {
                 product,
@@ -878,6 +909,25 @@ mod tests {
             simulate(&o, Input::Sampled(&[0.0; 4]), 750.0, 4, &zero),
             Err(SimError::ZeroOversample { .. })
         ));
+        // A factor past the bound is refused before any sub-step is taken or held (the
+        // batch path interpolates a band-limited input first, the single path integrates).
+        let huge = SimOptions {
+            oversample: usize::MAX,
+            ..SimOptions::default()
+        };
+        let models = [o, o];
+        for r in [
+            simulate(&o, Input::BandLimited(&[0.0; 4]), 750.0, 4, &huge),
+            batch::simulate_many(&models, Input::BandLimited(&[0.0; 4]), 750.0, 4, &huge).remove(0),
+        ] {
+            assert!(matches!(
+                r,
+                Err(SimError::OversampleTooLarge {
+                    max: MAX_OVERSAMPLE,
+                    ..
+                })
+            ));
+        }
         assert!(matches!(
             simulate(&o, Input::Sampled(&[0.0; 4]), 750.0, 5, &opts),
             Err(SimError::InputTooShort { .. })

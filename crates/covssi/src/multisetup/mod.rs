@@ -464,7 +464,7 @@ fn cosine(a: [f64; 3], b: [f64; 3]) -> f64 {
 }
 
 /// Whether two channels measure one axis of one node: the same node, and directions within
-/// about 0.8° ([`SAME_DIRECTION`]) of each other or of each other's opposite. Two channels
+/// about 0.8° (a cosine of 0.9999) of each other or of each other's opposite. Two channels
 /// of one setup that do are one reading twice, which [`merge`] refuses.
 pub fn same_axis(a: &SetupChannel, b: &SetupChannel) -> bool {
     a.node == b.node && cosine(a.direction, b.direction).abs() >= SAME_DIRECTION
