@@ -1,5 +1,5 @@
 //! The synthetic roving test with truth (`covssi::synth::RovingTest`, the records
-//! `crates/covssi/tests/multisetup.rs` calibrates the merge on) for `cargo xtask
+//! `crates/covssi/tests/integration/multisetup.rs` calibrates the merge on) for `cargo xtask
 //! compare-setups`: the records written for pyOMA2 (one CSV per setup), then hyst's merge and
 //! pyOMA2's PoSER each against the truth (MAC), seed by seed.
 

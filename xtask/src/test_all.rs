@@ -1,9 +1,10 @@
 //! `cargo xtask test`: every test of the project, the README's test command.
 //!
-//! First `cargo test --workspace`; then the Python package: a virtual environment under
+//! First `cargo test --workspace --release`; then the Python package: a virtual environment under
 //! `target/py-venv` (made on first use, with maturin, numpy, pytest, pyuff and scipy from
 //! PyPI), the package built and installed into it from `crates/hyst-py` (`pip install`,
-//! maturin's release build), the `hyst` command built for the tests that compare with it,
+//! maturin's release build), the `hyst` command the Rust tests built for the tests that
+//! compare with it,
 //! and pytest run on `crates/hyst-py/tests` (which also runs the code of `docs/python.md`).
 //! Before them, Debian's Chromium is installed when it is missing and the machine lets root
 //! install packages: the HTML reports' tests open the pages in it. Fails on the first failure.
@@ -75,11 +76,14 @@ pub fn run_all() -> Result<(), String> {
         .ok_or("no workspace root")?
         .to_path_buf();
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+    // Optimized, as this command itself is built (`cargo xtask` runs it in release): the
+    // dependencies are compiled once for both, and the tests run at full speed. The hyst
+    // binary the Python tests compare with is built with the tests (theirs use it).
     run(
         Command::new(&cargo)
-            .args(["test", "--workspace"])
+            .args(["test", "--workspace", "--release"])
             .current_dir(&root),
-        "cargo test --workspace",
+        "cargo test --workspace --release",
     )?;
     // The build's target folder (CARGO_TARGET_DIR when set): the command's binary is there.
     let target = std::env::var_os("CARGO_TARGET_DIR")
@@ -115,17 +119,21 @@ pub fn run_all() -> Result<(), String> {
             .current_dir(&root),
         "pip install ./crates/hyst-py",
     )?;
-    run(
-        Command::new(&cargo)
-            .args(["build", "--release", "--quiet", "--bin", "hyst"])
-            .current_dir(&root),
-        "cargo build --release --bin hyst",
-    )?;
+    // Built by the tests above (they run it); built here only if a target folder lacks it.
+    let hyst = target.join("release").join("hyst");
+    if !hyst.is_file() {
+        run(
+            Command::new(&cargo)
+                .args(["build", "--release", "--quiet", "--bin", "hyst"])
+                .current_dir(&root),
+            "cargo build --release --bin hyst",
+        )?;
+    }
     run(
         Command::new(&python)
             .args(["-m", "pytest", "-q"])
             .arg(root.join("crates").join("hyst-py").join("tests"))
-            .env("HYST_BIN", target.join("release").join("hyst"))
+            .env("HYST_BIN", &hyst)
             .current_dir(&root),
         "pytest crates/hyst-py/tests",
     )

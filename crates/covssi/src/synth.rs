@@ -139,7 +139,7 @@ impl ModalRecord {
 /// setups that share reference accelerometers while velocity sensors rove over the other
 /// nodes, each setup at its own excitation level (1 + 0.5 × its index) and seed (the test's
 /// seed plus its index). The records the multi-setup merge is judged on
-/// (`tests/multisetup.rs`) and compared with pyOMA2's (`cargo xtask compare-setups`).
+/// (`tests/integration/multisetup.rs`) and compared with pyOMA2's (`cargo xtask compare-setups`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct RovingTest {
     /// Nodes along the cantilever.

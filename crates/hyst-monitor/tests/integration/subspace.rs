@@ -5,7 +5,7 @@
 //! after it measured over fresh campaigns (`HYST_CAMPAIGN_SEED` moves them; `--nocapture`
 //! prints each).
 
-mod common;
+use crate::common;
 
 use hyst_monitor::subspace::{hankel, subspace_chart};
 use hyst_monitor::{Cusum, RecordModes, Side, TrackOptions, identify, track};

@@ -9,7 +9,7 @@
 //! reason. `HYST_CAMPAIGN_SEED`, `HYST_CAMPAIGNS` and `HYST_CAMPAIGN_DAYS` move and widen it;
 //! `--nocapture` prints each campaign's figures.
 
-mod common;
+use crate::common;
 
 use hyst_monitor::{RecordModes, Side, TrackOptions, identify, track};
 use rayon::prelude::*;

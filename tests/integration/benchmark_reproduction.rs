@@ -2,7 +2,7 @@
 //! made as its README describes: the input brought to 15 kHz, Newmark (implicit trapezoidal)
 //! integration from rest, and MATLAB's FIR decimation back to 750 Hz.
 
-mod common;
+use crate::common;
 
 use common::{load_uy, rel_rms};
 use hyst::model::Oscillator;

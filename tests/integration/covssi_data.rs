@@ -1,7 +1,7 @@
 //! covssi on recorded data: the synthetic OMA records against the two Python tools' numbers
 //! (`../shared/data/oma/README.md`), and the measured F-16 record.
 
-mod common;
+use crate::common;
 
 use hyst::covssi::{self, BlockRows, PoleStatus, SsiOptions, StabilityCriteria};
 

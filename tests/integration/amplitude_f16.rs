@@ -2,7 +2,7 @@
 //! wing torsion mode's frequency and damping at each force level, output only, against
 //! what the benchmark's authors report and what `hyst ssi` finds on the same records.
 
-mod common;
+use crate::common;
 
 use std::process::Command;
 

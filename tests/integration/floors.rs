@@ -2,7 +2,7 @@
 //! computed by the project (output-error least squares with the input, m = 2), against the
 //! independent measurement in `../shared/notes/paper-errata.md` (3.98 % and 3.41 %).
 
-mod common;
+use crate::common;
 
 use hyst::ident::floor;
 

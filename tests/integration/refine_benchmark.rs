@@ -2,7 +2,7 @@
 //! Zener model: the effect the Zener lacks is hysteresis, the loop must say so, and the model
 //! it ends with must validate on the held-out period as well as the benchmark itself does.
 
-mod common;
+use crate::common;
 
 use hyst::ident::residual::{self, Effect, InputInterpolation, Record, Start};
 use hyst::model::{Oscillator, Restoring};

@@ -5,7 +5,7 @@
 //! F-16's, Silverbox's), the benchmark's periodic multisine force too — and each channel
 //! clipped so that 0.5 % of its samples sit at the limits is caught.
 
-mod common;
+use crate::common;
 
 use hyst::io::{ReadOptions, read_record};
 

@@ -14,7 +14,7 @@
 //!
 //! The defaults are read from each record (`covssi::survey`): the decimation and the lag.
 
-mod common;
+use crate::common;
 
 use hyst::covssi::{self, AnalysisOptions, ModalAnalysis};
 

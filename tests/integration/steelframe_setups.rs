@@ -6,7 +6,7 @@
 //!
 //! `cargo test --release --test steelframe_setups -- --nocapture` prints the merged modes.
 
-mod common;
+use crate::common;
 
 use covssi::Complex64 as C64;
 use covssi::multisetup::{MergeOptions, MergedMode, Quantity};

@@ -2,7 +2,7 @@
 //! data). Estimate on the multisine part, start linear: the loop must find the cubic spring
 //! first, then the record's offset, and end at 1 mV or less on the arrow head.
 
-mod common;
+use crate::common;
 
 use hyst::ident::residual::{self, Effect, InputInterpolation, Record, Start};
 

@@ -1,7 +1,7 @@
 //! `hyst track`'s campaign store under abuse: runs killed with SIGKILL at random moments and
 //! resumed, and two runs on one store at once.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};

@@ -4,7 +4,7 @@
 //!
 //! `cargo test --release --test fdd_oma -- --nocapture` prints the table.
 
-mod common;
+use crate::common;
 
 use covssi::fdd::{FddOptions, efdd, fdd};
 use hyst::io::{ReadOptions, read_record};

@@ -4,7 +4,7 @@
 //! its exponent; on a noise-free record where the held-out rows do not clearly support even
 //! the true effect, nothing is added.
 
-mod common;
+use crate::common;
 
 use hyst::ident::residual::{self, Effect, InputInterpolation, Record, Start};
 use hyst::model::{BoucWen, Coulomb, Oscillator, SecondMass};

@@ -1,7 +1,6 @@
 //! The `hyst` program end to end: its outputs and its errors on bad input.
 
-mod common;
-#[path = "cli/options.rs"]
+use crate::common;
 mod options;
 
 use std::path::{Path, PathBuf};

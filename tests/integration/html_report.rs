@@ -7,7 +7,7 @@
 //! Chromium is Debian's `chromium` (`.ci/run` installs it): missing, the test fails under CI
 //! and is skipped with a message elsewhere.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -1,7 +1,7 @@
 //! The identification pipeline end to end: the paper's Section 4 on the benchmark's records,
 //! a nearly linear case with known parameters, and bad input.
 
-mod common;
+use crate::common;
 
 use hyst::ident::{self, IdentError, IdentOptions, Linearization};
 use hyst::model::Oscillator;

@@ -7,7 +7,7 @@
 //! output-only methods cannot see, and flattening the force removes it.
 //! (`cargo xtask f16` prints the full table and draws the figures.)
 
-mod common;
+use crate::common;
 
 use hyst::covssi::{self, BlockRows, SsiOptions};
 use hyst::ident::frf::{self, PeriodicRecord};
