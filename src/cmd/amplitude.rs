@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use clap::{Args, ValueEnum};
 
 use super::ssi::{ChannelArgs, SsiFlags, channels, flag_error};
-use super::*;
+use super::{Error, fail, steps_bar};
 use hyst::ident::amplitude::{self, AmplitudeMethod, AmplitudeOptions, Quantity};
 
 #[derive(Clone, Copy, ValueEnum, PartialEq, Eq, Debug)]

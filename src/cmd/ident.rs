@@ -7,7 +7,7 @@ use hyst::model::Oscillator;
 use hyst::sim::excitation::Multisine;
 use hyst::sim::{self, Input, SimOptions};
 
-use super::*;
+use super::{Error, check_fs, fail, output_after_skip, read_record, spinner};
 
 #[derive(Clone, Copy, ValueEnum, PartialEq, Eq, Debug)]
 pub(crate) enum DampingArg {

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use super::*;
+use super::{Error, check_fs, fail, output_after_skip, read_record, show, steps_bar};
 
 #[derive(Args, Debug)]
 pub(crate) struct LevelsArgs {

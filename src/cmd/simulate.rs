@@ -7,7 +7,7 @@ use hyst::io::write_csv;
 use hyst::model::Oscillator;
 use hyst::sim::{self, Decimation, Integrator, SimOptions};
 
-use super::*;
+use super::{Error, InterpolationArg, check_fs, fail, read_record};
 
 #[derive(Clone, Copy, ValueEnum, PartialEq, Eq, Debug)]
 pub(crate) enum IntegratorArg {

@@ -4,7 +4,10 @@ use std::path::{Path, PathBuf};
 
 use clap::Args;
 
-use super::*;
+use super::{
+    Error, READ_OPTIONS, channel_names, check_fs, fail, read_record, show, spinner, steps_bar,
+    warn_on_force_like,
+};
 use hyst::settings::{SettingsError, SsiSettings};
 
 /// How a record's channels are taken: shared by `hyst ssi` and `hyst amplitude` (each names

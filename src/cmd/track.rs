@@ -9,7 +9,7 @@ use std::sync::Mutex;
 use clap::Args;
 use hyst::monitor::{Loaded, RecordModes, TrackOptions, TrackReport};
 
-use super::*;
+use super::{Error, channel_names, check_fs, fail, read_record, steps_bar};
 
 #[derive(Args, Debug)]
 pub(crate) struct TrackArgs {

@@ -23,7 +23,35 @@ pub struct PageData {
     /// The structure and each mode's motion of it.
     pub shapes: Shapes,
     /// A campaign's series (the page of `hyst track`).
-    pub track: Option<super::track::TrackSeries>,
+    pub track: Option<TrackSeries>,
+}
+
+/// One reference mode's series.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct ModeSeries {
+    /// Its label.
+    pub label: String,
+    /// Each record's time (days from the first record).
+    pub days: Vec<f64>,
+    /// Frequency (Hz).
+    pub frequency_hz: Vec<f64>,
+    /// Its standard error (Hz; null without one).
+    pub frequency_se_hz: Vec<Option<f64>>,
+    /// Damping ratio.
+    pub damping_ratio: Vec<f64>,
+    /// Its standard error.
+    pub damping_se: Vec<Option<f64>>,
+    /// The times (days) of the alarms this mode raised.
+    pub alarm_days: Vec<f64>,
+}
+
+/// A campaign's series.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct TrackSeries {
+    /// One per reference mode.
+    pub modes: Vec<ModeSeries>,
+    /// The training ends here (days), when there is a baseline.
+    pub training_end_days: Option<f64>,
 }
 
 /// The stabilization diagram: every pole, and the spectrum behind.

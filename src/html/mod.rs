@@ -10,7 +10,8 @@ mod data;
 mod track;
 
 pub use data::{Diagram, ModeRow, PageData, PolePoint, Shapes, setups_page_data, ssi_page_data};
-pub use track::{ModeSeries, TrackSeries, track_page_data};
+pub use data::{ModeSeries, TrackSeries};
+pub use track::track_page_data;
 
 /// uPlot (MIT), its stylesheet, and three.js's scene, SVG renderer and orbit controls (MIT)
 /// bundled by esbuild.

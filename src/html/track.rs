@@ -3,38 +3,9 @@
 //! and the alarms; the reference modes' table, shapes and MAC.
 
 use hyst_monitor::TrackReport;
-use serde::Serialize;
 
-use super::data::{ModeRow, PageData, Shapes, mac_matrix, pair};
+use super::data::{ModeRow, ModeSeries, PageData, Shapes, TrackSeries, mac_matrix, pair};
 use covssi::Complex64 as C64;
-
-/// One reference mode's series.
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
-pub struct ModeSeries {
-    /// Its label.
-    pub label: String,
-    /// Each record's time (days from the first record).
-    pub days: Vec<f64>,
-    /// Frequency (Hz).
-    pub frequency_hz: Vec<f64>,
-    /// Its standard error (Hz; null without one).
-    pub frequency_se_hz: Vec<Option<f64>>,
-    /// Damping ratio.
-    pub damping_ratio: Vec<f64>,
-    /// Its standard error.
-    pub damping_se: Vec<Option<f64>>,
-    /// The times (days) of the alarms this mode raised.
-    pub alarm_days: Vec<f64>,
-}
-
-/// A campaign's series.
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
-pub struct TrackSeries {
-    /// One per reference mode.
-    pub modes: Vec<ModeSeries>,
-    /// The training ends here (days), when there is a baseline.
-    pub training_end_days: Option<f64>,
-}
 
 /// The page of a campaign's report.
 pub fn track_page_data(title: &str, report: &TrackReport) -> PageData {

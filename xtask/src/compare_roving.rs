@@ -126,10 +126,10 @@ pub fn compare(py: &serde_json::Value) -> Result<(), String> {
     let (mut sums, mut n) = ([0.0f64; 3], 0usize);
     for (seed, run) in SEEDS.iter().zip(runs) {
         let ours = hyst_merge(&t, *seed)?;
-        let fns = crate::compare_setups::numbers(&run["fn"]);
+        let fns = crate::json_values::numbers(&run["fn"]);
         let phis: Vec<Vec<C64>> = run["phi"]
             .as_array()
-            .map(|a| a.iter().map(crate::compare_setups::complex).collect())
+            .map(|a| a.iter().map(crate::json_values::complex).collect())
             .unwrap_or_default();
         for (j, &(f, _)) in t.modes.iter().enumerate() {
             let (hf, hmac) = ours[j];

@@ -7,6 +7,7 @@
 //! pyOMA2 runs in `target/compare-venv` (made by `cargo xtask compare-tools`), driven by
 //! `xtask/compare/setups_fdd.py`.
 
+use crate::json_values::{complex, numbers};
 use std::path::Path;
 use std::process::Command;
 use std::time::Instant;
@@ -19,27 +20,6 @@ use hyst::io::{ReadOptions, read_record, read_setups};
 const README_HZ: [f64; 11] = [
     1.2287, 1.4359, 2.1000, 4.0172, 4.7706, 6.6822, 7.6156, 9.6652, 12.1668, 12.5982, 13.863,
 ];
-
-pub(crate) fn complex(v: &serde_json::Value) -> Vec<C64> {
-    v.as_array()
-        .map(|a| {
-            a.iter()
-                .map(|p| {
-                    C64::new(
-                        p[0].as_f64().unwrap_or(f64::NAN),
-                        p[1].as_f64().unwrap_or(f64::NAN),
-                    )
-                })
-                .collect()
-        })
-        .unwrap_or_default()
-}
-
-pub(crate) fn numbers(v: &serde_json::Value) -> Vec<f64> {
-    v.as_array()
-        .map(|a| a.iter().map(|x| x.as_f64().unwrap_or(f64::NAN)).collect())
-        .unwrap_or_default()
-}
 
 pub fn run() -> Result<(), String> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"))

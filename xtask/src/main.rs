@@ -30,6 +30,7 @@ mod corpus;
 mod deps;
 mod f16;
 mod growth;
+mod json_values;
 mod loop_battery;
 mod monitor;
 mod random_sweep;

@@ -143,8 +143,8 @@ impl AnalysisOptions {
     /// peak that [`BlockRows::Auto`](crate::BlockRows::Auto) allows beyond ten peaks is
     /// not carried over.)
     pub fn resolved_for(&self, y: &[&[f64]], fs: f64) -> Result<AnalysisOptions, SsiError> {
-        crate::identify::check_fs(fs)?;
-        let checked = crate::identify::check_channels(y)?;
+        crate::checks::check_fs(fs)?;
+        let checked = crate::checks::check_channels(y)?;
         let (factor, survey) = decimation_of(y, fs, &checked, self.decimation)?;
         let mut opts = self.clone();
         opts.decimation = Decimation::Factor(factor);
@@ -152,7 +152,7 @@ impl AnalysisOptions {
             let decimated = crate::decimate::decimate_channels(y, factor);
             let choice = if factor > 1 {
                 let views: Vec<&[f64]> = decimated.iter().map(|c| c.as_slice()).collect();
-                let (n, means) = crate::identify::check_channels(&views)?;
+                let (n, means) = crate::checks::check_channels(&views)?;
                 let fs = fs / factor as f64;
                 let known = survey.map(|s| s.decimated(factor));
                 crate::identify::block_rows_for(&views, fs, (n, &means), &self.ssi, known)?
@@ -170,7 +170,7 @@ impl AnalysisOptions {
     /// periods, the modes' damping limit. A campaign checks them once, up front, rather than
     /// skipping every record for the same option.
     pub fn check(&self) -> Result<(), SsiError> {
-        crate::identify::check_options(&self.ssi)?;
+        crate::checks::check_options(&self.ssi)?;
         match self.ssi.block_rows {
             // Its values' checks (finite, positive) hold at any rate; the count is the record's.
             crate::BlockRows::Seconds(_) | crate::BlockRows::Periods { .. } => {
@@ -279,9 +279,9 @@ pub fn analyze_with_progress(
     opts: &AnalysisOptions,
     progress: &(dyn Fn(Progress) + Sync),
 ) -> Result<ModalAnalysis, SsiError> {
-    crate::identify::check_fs(fs)?;
+    crate::checks::check_fs(fs)?;
     opts.check()?;
-    let checked = crate::identify::check_channels(y)?;
+    let checked = crate::checks::check_channels(y)?;
     let (factor, survey) = decimation_of(y, fs, &checked, opts.decimation)?;
     let decimated = crate::decimate::decimate_channels(y, factor);
     let views: Vec<&[f64]> = if factor > 1 {
@@ -342,7 +342,7 @@ pub fn analyze_with_progress(
     let ssi_errors = match opts.ssi_errors {
         Some(blocks) => {
             let refs = crate::identify::references(&opts.ssi, y.len())?;
-            let (_, means) = crate::identify::check_channels(y)?;
+            let (_, means) = crate::checks::check_channels(y)?;
             crate::jackknife::ssi_errors(y, fs, (&refs, &means), &ssi, &opts.ssi, blocks)?
         }
         None => None,

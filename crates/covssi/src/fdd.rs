@@ -110,8 +110,8 @@ pub struct EfddMode {
 /// The spectral matrix of `y` (channels of equal length, sampled at `fs` Hz) by Welch's
 /// method and its decomposition at every line (see the [module](self)).
 pub fn fdd(y: &[&[f64]], fs: f64, opts: &FddOptions) -> Result<Fdd, SsiError> {
-    crate::identify::check_fs(fs)?;
-    let (n, means) = crate::identify::check_channels(y)?;
+    crate::checks::check_fs(fs)?;
+    let (n, means) = crate::checks::check_channels(y)?;
     let segment = match opts.segment {
         Some(s) if s >= 16 && s <= n => s,
         Some(s) => {

@@ -50,6 +50,7 @@
 struct ReadmeDoctests;
 
 mod analysis;
+mod checks;
 pub mod corr;
 pub mod decimate;
 pub mod decision;

@@ -104,8 +104,8 @@ pub struct AutoLag {
 
 /// Survey the channels `y` (checked, equal lengths) sampled at `fs` Hz.
 pub fn survey(y: &[&[f64]], fs: f64) -> Result<RecordSurvey, SsiError> {
-    crate::identify::check_fs(fs)?;
-    let (n, means) = crate::identify::check_channels(y)?;
+    crate::checks::check_fs(fs)?;
+    let (n, means) = crate::checks::check_channels(y)?;
     Ok(surveyed(y, fs, &means, n))
 }
 

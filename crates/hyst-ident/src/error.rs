@@ -1,6 +1,8 @@
 //! The crate's error.
 
-use crate::*;
+use covssi::Complex64;
+use hyst_linearize::LinearizeError;
+use hyst_sim::SimError;
 
 /// Errors of the pipeline.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -74,14 +74,6 @@ pub mod residual;
 
 pub mod zener_spectrum;
 
-use covssi::{BlockRows, RealPoleCluster, SsiOptions, SsiResult, Stability, StabilityCriteria};
-
-use hyst_linearize::{Amplitude, LinearizeError};
-
-use hyst_model::{BoucWen, Oscillator};
-
-use hyst_sim::{Decimation, Input, SimError, SimOptions};
-
 pub use covssi::{Complex64, Progress};
 pub use error::*;
 pub use models::*;

@@ -1,6 +1,7 @@
 //! Step 4: linear, Zener and Bouc-Wen models from the poles.
 
-use crate::*;
+use crate::{IdentError, IdentOptions, Linearization, Prepared, SelectedPoles};
+use hyst_model::{BoucWen, Oscillator};
 
 /// The identified models.
 #[derive(Debug, Clone, PartialEq)]

@@ -1,7 +1,7 @@
 //! Numerics the fits share: Welch's PSD, normal equations, a Levenberg–Marquardt step, and
 //! Gaussian elimination.
 
-use crate::*;
+use crate::fft;
 
 /// One-sided power spectral density by Welch's method (Hann window, `segment` samples, 50 %
 /// overlap): (frequencies in Hz, PSD in units²/Hz).

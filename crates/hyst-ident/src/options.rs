@@ -1,6 +1,8 @@
 //! The pipeline's settings.
 
-use crate::*;
+use crate::flatness;
+use covssi::StabilityCriteria;
+use hyst_linearize::Amplitude;
 
 /// Where the viscous damping c of the Zener and Bouc-Wen models comes from.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -9,8 +11,8 @@ use crate::*;
 pub enum DampingGuess {
     /// From the record, with no guess, when it follows the stationary model (a random
     /// excitation) and SSI's pair and real pole were refined: the Zener oscillator fitted to
-    /// the record's spectrum ([`zener_spectrum`], step 3b), which assumes a force white over
-    /// the band. Otherwise, or when that fit does not hold (see [`fit_zener_spectrum`]), as
+    /// the record's spectrum ([`zener_spectrum`](crate::zener_spectrum), step 3b), which assumes a force white over
+    /// the band. Otherwise, or when that fit does not hold (see [`fit_zener_spectrum`](crate::fit_zener_spectrum)), as
     /// [`DampingGuess::LowDampingCluster`] (a note says why).
     #[default]
     ZenerSpectrum,
@@ -58,9 +60,9 @@ pub struct IdentOptions {
     /// The excitation's design, when known: then the Bouc-Wen model is fitted by flatness of
     /// its implied input ([`flatness`]), starting from the mapped one (default: unknown).
     pub excitation: Option<flatness::ExcitationBand>,
-    /// [`identify_and_validate`] also profiles what one record leaves free: the Bouc-Wen
+    /// [`identify_and_validate`](crate::identify_and_validate) also profiles what one record leaves free: the Bouc-Wen
     /// models that reproduce the record's statistics along the ratio βδ/βγ
-    /// ([`levels::beta_delta_profile`]; about a minute). Default false.
+    /// ([`levels::beta_delta_profile`](crate::levels::beta_delta_profile); about a minute). Default false.
     pub profile: bool,
 }
 

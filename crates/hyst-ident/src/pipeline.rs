@@ -1,7 +1,12 @@
 //! The whole pipeline ([`identify`]), with steps 3b (the Zener spectral fit) and 4b (the
 //! flatness fit).
 
-use crate::*;
+use crate::{
+    DampingGuess, IdentError, IdentOptions, Models, Prepared, SelectedPoles, build_models,
+    flatness, prepare, run_ssi, select_poles, zener_spectrum,
+};
+use covssi::SsiResult;
+use hyst_model::Oscillator;
 
 /// Everything the pipeline found.
 #[derive(Debug, Clone, PartialEq)]

@@ -1,6 +1,7 @@
 //! Step 3: the oscillating pair, the real pole and the damping guess chosen from SSI's poles.
 
-use crate::*;
+use crate::{DampingGuess, IdentError, IdentOptions, Prepared};
+use covssi::{Complex64, RealPoleCluster, SsiResult, Stability};
 
 /// The poles the models are built from.
 #[derive(Debug, Clone, PartialEq)]

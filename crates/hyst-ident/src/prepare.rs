@@ -1,6 +1,7 @@
 //! Step 1 and 2: the record prepared (mean removed, decimated, its moments) and SSI run on it.
 
-use crate::*;
+use crate::{IdentError, IdentOptions};
+use covssi::{BlockRows, SsiOptions, SsiResult};
 
 /// The prepared output record.
 #[derive(Debug, Clone, PartialEq)]

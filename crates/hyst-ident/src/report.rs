@@ -5,14 +5,18 @@
 
 use std::fmt;
 
-use crate::*;
+use crate::{
+    IdentError, IdentOptions, Identification, Linearization, Validation, ValidationRecord,
+    best_by_validation, build_models, identify, validate_all, zener_spectrum,
+};
+use hyst_model::Oscillator;
 
 /// Where a Bouc-Wen candidate came from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum BoucWenRoute {
-    /// Fitted by flatness of the implied input ([`fit_flatness`]).
+    /// Fitted by flatness of the implied input ([`fit_flatness`](crate::fit_flatness)).
     Flatness,
     /// Mapped from the poles by eqs. (37)–(38) ([`Linearization::Paper`]).
     Paper,

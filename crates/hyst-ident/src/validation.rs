@@ -1,6 +1,8 @@
 //! Step 5: a model simulated with a measured input and scored by ε (eq. 39).
 
-use crate::*;
+use crate::{IdentError, periodic};
+use hyst_model::Oscillator;
+use hyst_sim::{Decimation, Input, SimOptions};
 
 /// A model's error against a measured output.
 #[derive(Debug, Clone, Copy, PartialEq)]

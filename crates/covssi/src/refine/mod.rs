@@ -167,8 +167,8 @@ fn refine_up_to(
     joint_max: usize,
     progress: &dyn Fn(Progress),
 ) -> Result<Refinement, SsiError> {
-    crate::identify::check_fs(fs)?;
-    let (n, means) = crate::identify::check_channels(y)?;
+    crate::checks::check_fs(fs)?;
+    let (n, means) = crate::checks::check_channels(y)?;
     check_refine_options(opts, real_poles)?;
     let (m, l) = (modes.len(), y.len());
     check_length(n, m, l, real_poles.len())?;

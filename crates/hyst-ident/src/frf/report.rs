@@ -4,7 +4,7 @@
 
 use std::fmt;
 
-use super::*;
+use super::{BandSpread, FrfFit, IdentError, PeriodicRecord, band_spread, modes_from_frf};
 
 /// What [`frf_report`] finds.
 #[derive(Debug, Clone, PartialEq)]

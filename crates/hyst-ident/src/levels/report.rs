@@ -8,7 +8,11 @@ use std::fmt;
 
 use hyst_model::{BoucWen, Oscillator, Restoring, ZenerParams};
 
-use super::*;
+use super::{
+    IdentError, LevelsBoucWen, LinearizeError, SimulatedBoucWen, SimulationOptions,
+    ZenerSpectralFit, bouc_wen_and_exponent_from_levels, bouc_wen_by_simulation,
+    bouc_wen_from_levels, statistical,
+};
 use crate::{IdentOptions, Progress, Score, ValidationRecord, validate};
 
 /// Options of [`levels_report`] and [`fit_levels`].

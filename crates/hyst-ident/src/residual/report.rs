@@ -7,7 +7,10 @@ use std::fmt;
 use hyst_model::display::six_digits;
 
 use super::noise::NoiseMethod;
-use super::*;
+use super::{
+    Effect, Evidence, IdentError, ProgressFn, Record, Refinement, SE_BLOCK_ROWS, Start, drift,
+    refine_record_with,
+};
 
 /// What [`refine_report`] finds.
 #[derive(Debug, Clone, PartialEq)]
