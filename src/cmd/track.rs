@@ -354,7 +354,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
     // Settings wrong whatever the record, before any is read (else each would be skipped
     // for the same reason).
     a.fs.map(check_fs).transpose()?;
-    a.ssi.analysis()?;
+    let asked = a.ssi.analysis()?;
     let mut sources = sources(a, records)?;
     let (covs, cov_names) = match &a.covariates {
         Some(p) => hyst::io::read_covariates(p)?,
@@ -411,7 +411,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
     // the first record that loads, and kept for every record: each is analysed alike.
     // What makes each record's result: its source, the rate and channels asked for, and the
     // analysis options; a stored result made otherwise is identified again.
-    let analysis = resolved_analysis(&a.ssi.analysis()?, &names, &load);
+    let analysis = resolved_analysis(&asked, &names, &load);
     let settings = format!("{:?}|{:?}|{analysis:?}", a.fs, a.columns);
     let keys = sources.keys(a, &settings);
     let done: Vec<RecordModes> = names

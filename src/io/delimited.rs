@@ -151,8 +151,7 @@ pub fn read_csv_with(path: &Path, delimiter: Delimiter) -> Result<Table, IoError
             path: path.to_path_buf(),
         });
     }
-    let mut table = Table::new(path, names, columns);
-    table.non_finite = non_finite;
+    let mut table = Table::with_non_finite(path, names, columns, non_finite);
     if headerless {
         table.notes.push(format!(
             "{}: no header line (the first line is numbers): the columns are named 0 to {} as an array's are; --names names them",

@@ -615,6 +615,17 @@ impl Table {
                     })
             })
             .collect();
+        Table::with_non_finite(path, names, columns, non_finite)
+    }
+
+    /// [`new`](Self::new) for a reader that found each column's first cell that is not
+    /// finite as it read, by the row the file counts (a CSV's line).
+    fn with_non_finite(
+        path: &Path,
+        names: Vec<String>,
+        columns: Vec<Vec<f64>>,
+        non_finite: Vec<Option<NonFiniteCell>>,
+    ) -> Table {
         Table {
             names,
             columns,
@@ -699,7 +710,11 @@ impl Table {
     /// The sampling rate the time column's mean step gives, with the column's name: when it
     /// increases throughout.
     pub fn time_rate(&self) -> Option<(&str, f64)> {
-        let i = self.time_column()?;
+        self.rate_of_time_column(self.time_column()?)
+    }
+
+    /// [`time_rate`](Self::time_rate) of column `i`.
+    fn rate_of_time_column(&self, i: usize) -> Option<(&str, f64)> {
         let c = &self.columns[i];
         let n = c.len();
         (n >= 2 && c.windows(2).all(|w| w[1] > w[0]))
@@ -712,14 +727,11 @@ impl Table {
     /// the time column's.
     pub fn rate(&self, given: Option<f64>) -> Result<f64, IoError> {
         // A time column that checks or gives the rate must be finite throughout.
-        if self.rate_hz.is_none()
-            && let Some(i) = self.time_column()
-        {
+        let time = self.rate_hz.is_none().then(|| self.time_column()).flatten();
+        if let Some(i) = time {
             self.finite(i)?;
         }
-        if self.rate_hz.is_none()
-            && let Some((column, rate)) = self.time_rate()
-        {
+        if let Some((column, rate)) = time.and_then(|i| self.rate_of_time_column(i)) {
             return match given {
                 Some(g) if (g - rate).abs() > 0.01 * rate => Err(IoError::RateVsTime {
                     path: self.path.clone(),

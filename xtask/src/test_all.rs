@@ -119,16 +119,8 @@ pub fn run_all() -> Result<(), String> {
             .current_dir(&root),
         "pip install ./crates/hyst-py",
     )?;
-    // Built by the tests above (they run it); built here only if a target folder lacks it.
+    // Built by the tests above: their integration tests run it.
     let hyst = target.join("release").join("hyst");
-    if !hyst.is_file() {
-        run(
-            Command::new(&cargo)
-                .args(["build", "--release", "--quiet", "--bin", "hyst"])
-                .current_dir(&root),
-            "cargo build --release --bin hyst",
-        )?;
-    }
     run(
         Command::new(&python)
             .args(["-m", "pytest", "-q"])

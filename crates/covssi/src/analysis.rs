@@ -171,29 +171,7 @@ impl AnalysisOptions {
     /// skipping every record for the same option.
     pub fn check(&self) -> Result<(), SsiError> {
         crate::checks::check_options(&self.ssi)?;
-        match self.ssi.block_rows {
-            // Its values' checks (finite, positive) hold at any rate; the count is the record's.
-            crate::BlockRows::Seconds(_) | crate::BlockRows::Periods { .. } => {
-                match self.ssi.block_rows.resolve(1.0) {
-                    Err(e @ SsiError::InvalidOption { option, .. })
-                        if option != SsiOption::BlockRows =>
-                    {
-                        return Err(e);
-                    }
-                    _ => {}
-                }
-            }
-            crate::BlockRows::Count(i) => {
-                self.ssi
-                    .block_rows
-                    .resolve(1.0)
-                    .map_err(|_| SsiError::InvalidOption {
-                        option: SsiOption::BlockRows,
-                        value: i as f64,
-                    })?;
-            }
-            crate::BlockRows::Auto => {}
-        }
+        self.ssi.block_rows.check()?;
         let limit = self.modes.max_damping_ratio;
         if !(limit > 0.0 && limit < 1.0) {
             return Err(SsiError::InvalidOption {

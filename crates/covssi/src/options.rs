@@ -25,42 +25,44 @@ pub enum BlockRows {
 }
 
 impl BlockRows {
+    /// What holds at any rate: a count of at least 2, a time or a number of periods and a
+    /// frequency positive and finite (each checked on its own, so that the error names the
+    /// value at fault). [`resolve`](Self::resolve) checks these first.
+    pub fn check(&self) -> Result<(), SsiError> {
+        let invalid = |option, value| Err(SsiError::InvalidOption { option, value });
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        match *self {
+            BlockRows::Auto => Ok(()),
+            BlockRows::Count(i) if i < 2 => invalid(SsiOption::BlockRows, i as f64),
+            BlockRows::Count(_) => Ok(()),
+            BlockRows::Seconds(t) if !positive(t) => invalid(SsiOption::BlockRowsSeconds, t),
+            BlockRows::Seconds(_) => Ok(()),
+            BlockRows::Periods { count, .. } if !positive(count) => {
+                invalid(SsiOption::BlockRowsPeriodsCount, count)
+            }
+            BlockRows::Periods { frequency_hz, .. } if !positive(frequency_hz) => {
+                invalid(SsiOption::BlockRowsPeriodsFrequency, frequency_hz)
+            }
+            BlockRows::Periods { .. } => Ok(()),
+        }
+    }
+
     /// The number of block rows at sampling rate `fs`; `None` for [`BlockRows::Auto`], which
     /// needs the record ([`RecordSurvey::block_rows`](crate::RecordSurvey::block_rows)).
     pub fn resolve(&self, fs: f64) -> Result<Option<usize>, SsiError> {
+        self.check()?;
         let i = match *self {
             BlockRows::Auto => return Ok(None),
             BlockRows::Count(i) => i,
-            BlockRows::Seconds(t) => {
-                if !(t.is_finite() && t > 0.0) {
-                    return Err(SsiError::InvalidOption {
-                        option: SsiOption::BlockRowsSeconds,
-                        value: t,
-                    });
-                }
-                ((t * fs + 1.0) / 2.0).ceil() as usize
-            }
+            BlockRows::Seconds(t) => ((t * fs + 1.0) / 2.0).ceil() as usize,
+            // `as` saturates: a lag beyond any record becomes usize::MAX block rows, which
+            // `identify` reports as too short.
             BlockRows::Periods {
                 count,
                 frequency_hz,
-            } => {
-                // Each checked on its own, so that the error names the value at fault.
-                for (name, value) in [
-                    (SsiOption::BlockRowsPeriodsCount, count),
-                    (SsiOption::BlockRowsPeriodsFrequency, frequency_hz),
-                ] {
-                    if !(value.is_finite() && value > 0.0) {
-                        return Err(SsiError::InvalidOption {
-                            option: name,
-                            value,
-                        });
-                    }
-                }
-                // `as` saturates: a lag beyond any record becomes usize::MAX block rows, which
-                // `identify` reports as too short.
-                ((count / frequency_hz * fs + 1.0) / 2.0).ceil() as usize
-            }
+            } => ((count / frequency_hz * fs + 1.0) / 2.0).ceil() as usize,
         };
+        // A time or a number of periods too short for the rate.
         if i < 2 {
             return Err(SsiError::InvalidOption {
                 option: SsiOption::BlockRows,

@@ -24,11 +24,7 @@ pub fn simulate_drifting(
     drift: f64,
     pieces: usize,
 ) -> Result<Vec<f64>, SimError> {
-    // A product past usize is past the bound too.
-    let r = stages
-        .iter()
-        .try_fold(1usize, |r, &s| r.checked_mul(s))
-        .unwrap_or(usize::MAX);
+    let r = crate::stages_product(stages);
     crate::check_oversample(r)?;
     if n < 2 {
         return Err(SimError::InvalidSignal {

@@ -298,6 +298,15 @@ fn check_record(u: &[f64]) -> Result<(), SimError> {
     Ok(())
 }
 
+/// The sub-steps per sample decimation `stages` make: their product, or `usize::MAX` past
+/// it (past [`MAX_OVERSAMPLE`] too).
+fn stages_product(stages: &[usize]) -> usize {
+    stages
+        .iter()
+        .try_fold(1usize, |p, &s| p.checked_mul(s))
+        .unwrap_or(usize::MAX)
+}
+
 /// Sub-steps per sample: 1 to [`MAX_OVERSAMPLE`].
 fn check_oversample(factor: usize) -> Result<(), SimError> {
     if factor == 0 {
@@ -319,10 +328,7 @@ fn check_common(model: &Oscillator, fs: f64, opts: &SimOptions) -> Result<(), Si
     }
     check_oversample(opts.oversample)?;
     if let Decimation::Fir(stages) = &opts.decimation {
-        let product = stages
-            .iter()
-            .try_fold(1usize, |p, &s| p.checked_mul(s))
-            .unwrap_or(usize::MAX);
+        let product = stages_product(stages);
         if product != opts.oversample || stages.contains(&0) {
             return Err(SimError::DecimationMismatch {
                 product,

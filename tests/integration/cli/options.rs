@@ -95,11 +95,7 @@ fn run(args: &[String], dir: &Path) -> Ended {
 
 /// The commands, from `hyst --help`.
 fn commands() -> Vec<String> {
-    let out = Command::new(env!("CARGO_BIN_EXE_hyst"))
-        .arg("--help")
-        .output()
-        .unwrap();
-    let help = String::from_utf8_lossy(&out.stdout).into_owned();
+    let (_, help, _) = super::hyst(&["--help"]);
     help.lines()
         .skip_while(|l| !l.starts_with("Commands:"))
         .skip(1)
@@ -114,11 +110,7 @@ fn commands() -> Vec<String> {
 /// A command's options that take values, from `hyst help <command>`, each with how many
 /// values it takes (`--lag-periods <COUNT> <HZ>`: two).
 fn valued_options(command: &str) -> Vec<(String, usize)> {
-    let out = Command::new(env!("CARGO_BIN_EXE_hyst"))
-        .args(["help", command])
-        .output()
-        .unwrap();
-    let help = String::from_utf8_lossy(&out.stdout).into_owned();
+    let (_, help, _) = super::hyst(&["help", command]);
     help.lines()
         .filter_map(|l| {
             let line = l.trim();
@@ -141,32 +133,23 @@ fn valued_options(command: &str) -> Vec<(String, usize)> {
 /// (not as one of a list of names). The run ends at parsing: a valued flag follows without
 /// its value.
 fn is_numeric(command: &str, option: &str, values: usize) -> bool {
-    let mut args = vec![command.to_string(), option.to_string()];
-    args.extend(std::iter::repeat_n("abc".to_string(), values));
-    args.push("--format".into());
-    let out = Command::new(env!("CARGO_BIN_EXE_hyst"))
-        .args(&args)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&out.stderr);
+    let mut args = vec![command, option];
+    args.extend(std::iter::repeat_n("abc", values));
+    args.push("--format");
+    let (_, _, err) = super::hyst(&args);
     err.contains("invalid value 'abc'") && !err.contains("possible values")
 }
 
 /// `base` with `option` given `value` (each of its `values` slots), replacing the base's own.
 fn with_option(base: &[String], option: &str, values: usize, value: &str) -> Vec<String> {
-    let mut args = Vec::new();
-    let mut skip = 0;
-    for a in base {
-        if skip > 0 && !a.starts_with("--") {
-            skip -= 1;
-            continue;
-        }
-        skip = 0;
-        if a == option {
-            skip = usize::MAX;
-            continue;
-        }
-        args.push(a.clone());
+    let mut args = base.to_vec();
+    if let Some(i) = args.iter().position(|a| a == option) {
+        // The option and its values, up to the next flag.
+        let end = args[i + 1..]
+            .iter()
+            .position(|a| a.starts_with("--"))
+            .map_or(args.len(), |k| i + 1 + k);
+        args.drain(i..end);
     }
     args.push(option.to_string());
     args.extend(std::iter::repeat_n(value.to_string(), values));
