@@ -5,7 +5,6 @@
 //! GPU is needed), and the MAC matrix. The page's data is serialized from [`PageData`]; the
 //! libraries are bundled from `vendor/` (`cargo xtask vendor-js` remakes them from npm).
 
-pub mod chromium;
 mod data;
 mod track;
 

@@ -850,19 +850,6 @@ pub fn read_oscillator(spec: &Path) -> Result<hyst_model::Oscillator, IoError> {
     serde_json::from_value(value.clone()).map_err(|e| params(e.to_string()))
 }
 
-/// The folder of the shared data sets: `HYST_DATA_DIR` if set, else `../shared/data` from the
-/// current directory, else `../shared/data` beside this source tree. `None` when none exists.
-pub fn data_dir() -> Option<PathBuf> {
-    if let Some(d) = std::env::var_os("HYST_DATA_DIR") {
-        return Some(PathBuf::from(d));
-    }
-    let candidates = [
-        PathBuf::from("../shared/data"),
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data"),
-    ];
-    candidates.into_iter().find(|p| p.is_dir())
-}
-
 #[cfg(test)]
 pub(crate) mod test_files {
     use std::path::PathBuf;

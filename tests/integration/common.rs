@@ -7,7 +7,7 @@ use std::path::PathBuf;
 /// When the data folder or the file is missing: a test run under CI (`CI` set) fails, since
 /// CI must have the data; elsewhere the test is skipped with a message saying so.
 pub fn data_file(rel: &str) -> Option<PathBuf> {
-    let found = hyst::io::data_dir()
+    let found = hyst_testkit::data_dir()
         .map(|d| d.join(rel))
         .filter(|p| p.is_file());
     match found {

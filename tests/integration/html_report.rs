@@ -12,7 +12,7 @@ use crate::common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use hyst::html::chromium;
+use hyst_testkit::chromium;
 
 fn browser() -> Option<PathBuf> {
     match chromium::find() {

@@ -86,11 +86,8 @@ fn unused_in(dir: &Path) -> Result<Vec<String>, String> {
 
 /// Check every member; print what is unused and fail if anything is.
 pub fn run() -> Result<(), String> {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .ok_or("no workspace root")?
-        .to_path_buf();
-    let mut members = vec![root.clone(), root.join("xtask")];
+    let root = hyst_testkit::workspace_root();
+    let mut members = vec![root.clone(), root.join("xtask"), root.join("xtask/studies")];
     let mut crates: Vec<PathBuf> = std::fs::read_dir(root.join("crates"))
         .map_err(|e| format!("crates/: {e}"))?
         .flatten()

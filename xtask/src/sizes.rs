@@ -331,7 +331,7 @@ mod tests {
     /// The workspace keeps to the limits (CI runs this).
     #[test]
     fn the_workspace_keeps_its_sizes() {
-        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        let root = hyst_testkit::workspace_root();
         let found = breaches(&root);
         assert!(found.is_empty(), "{}", found.join("\n"));
     }

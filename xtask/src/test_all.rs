@@ -1,24 +1,30 @@
 //! `cargo xtask test`: every test of the project, the README's test command.
 //!
-//! First `cargo test --workspace --release`; then the Python package: a virtual environment under
-//! `target/py-venv` (made on first use, with maturin, numpy, pytest, pyuff and scipy from
-//! PyPI), the package built and installed into it from `crates/hyst-py` (`pip install`,
-//! maturin's release build), the `hyst` command the Rust tests built for the tests that
-//! compare with it,
-//! and pytest run on `crates/hyst-py/tests` (which also runs the code of `docs/python.md`).
-//! Before them, Debian's Chromium is installed when it is missing and the machine lets root
-//! install packages: the HTML reports' tests open the pages in it. Fails on the first failure.
+//! One optimized build of the workspace with its tests (`cargo build --workspace
+//! --all-targets --release`, which also builds `hyst-py`'s extension module), then `cargo test
+//! --workspace --release` from it; then the Python package: a virtual environment under
+//! `target/py-venv` (made on first use, with numpy, pytest, pyuff, scipy, pyarrow and
+//! distributed from PyPI), the package laid out under `target/py-package` as maturin lays it
+//! out (the Python sources and the module just built), and pytest run on
+//! `crates/hyst-py/tests` (which also runs the code of `docs/python.md`) with the `hyst`
+//! command the build made. Before them, Debian's Chromium is installed when it is missing and
+//! the machine lets root install packages: the HTML reports' tests open the pages in it.
+//! Fails on the first failure.
+//!
+//! Not `pip install ./crates/hyst-py`: maturin's build resolves `hyst-py`'s dependencies
+//! alone, with other features than the tests' graph, and so compiled faer, nalgebra and every
+//! library a second time (124 s of a clean run); `tests/test_package.py` holds the layout to
+//! `pyproject.toml`.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use crate::compare::run_ok as run;
+use hyst_testkit::run_ok as run;
 
 /// What the Python tests need besides the package (pyuff and scipy write the Universal and
 /// MATLAB files the readers are checked against; pyarrow reads `hyst track`'s Parquet table;
 /// distributed runs `hyst.track` on a local Dask cluster).
-const PYTHON_NEEDS: [&str; 7] = [
-    "maturin>=1.7,<2",
+const PYTHON_NEEDS: [&str; 6] = [
     "numpy",
     "pytest",
     "pyuff",
@@ -43,7 +49,7 @@ fn pip(python: &Path) -> Command {
 /// Debian's `chromium`, installed with apt-get when it is missing and this is root on a
 /// machine with apt-get; otherwise left to the tests (which fail under CI without it).
 fn ensure_chromium() -> Result<(), String> {
-    if hyst::html::chromium::find().is_some() {
+    if hyst_testkit::chromium::find().is_some() {
         return Ok(());
     }
     let root = Command::new("id")
@@ -71,27 +77,52 @@ fn ensure_chromium() -> Result<(), String> {
 /// Every test, in order: the workspace's, then the Python package's.
 pub fn run_all() -> Result<(), String> {
     ensure_chromium()?;
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .ok_or("no workspace root")?
-        .to_path_buf();
+    let root = hyst_testkit::workspace_root();
+    let python = python_environment(&root)?;
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
-    // Optimized, as this command itself is built (`cargo xtask` runs it in release): the
-    // dependencies are compiled once for both, and the tests run at full speed. The hyst
-    // binary the Python tests compare with is built with the tests (theirs use it).
+    // One optimized build of everything — the tests, the hyst binary the Python tests compare
+    // with, and the Python extension module (`hyst-py`'s cdylib, which `cargo test` alone
+    // would not build) — so that every dependency compiles once, with the features the
+    // workspace's tests unify; then the tests run from it at full speed. The module is built
+    // as maturin builds it: for this interpreter, not linked to libpython.
+    let cargo_for_python = |args: &[&str]| {
+        let mut cmd = Command::new(&cargo);
+        cmd.args(args)
+            .env("PYO3_PYTHON", &python)
+            .env("PYO3_BUILD_EXTENSION_MODULE", "1")
+            .current_dir(&root);
+        cmd
+    };
     run(
-        Command::new(&cargo)
-            .args(["test", "--workspace", "--release"])
-            .current_dir(&root),
+        &mut cargo_for_python(&["build", "--workspace", "--all-targets", "--release"]),
+        "cargo build --workspace --all-targets --release",
+    )?;
+    run(
+        &mut cargo_for_python(&["test", "--workspace", "--release"]),
         "cargo test --workspace --release",
     )?;
-    // The build's target folder (CARGO_TARGET_DIR when set): the command's binary is there.
-    let target = std::env::var_os("CARGO_TARGET_DIR")
+    // The build's target folder (CARGO_TARGET_DIR when set): the binaries are there.
+    let release = std::env::var_os("CARGO_TARGET_DIR")
         .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| root.join("target"));
+        .unwrap_or_else(|| root.join("target"))
+        .join("release");
+    let package = assemble_package(&root, &python, &release)?;
+    run(
+        Command::new(&python)
+            .args(["-m", "pytest", "-q"])
+            .arg(root.join("crates").join("hyst-py").join("tests"))
+            .env("PYTHONPATH", &package)
+            .env("HYST_BIN", release.join("hyst"))
+            .current_dir(&root),
+        "pytest crates/hyst-py/tests",
+    )
+}
+
+/// The virtual environment under `target/py-venv` (made on first use) with what the Python
+/// tests need: its interpreter.
+fn python_environment(root: &Path) -> Result<PathBuf, String> {
     let venv = root.join("target").join("py-venv");
-    let bin = venv.join("bin");
-    let python = bin.join("python");
+    let python = venv.join("bin").join("python");
     if !python.is_file() {
         run(
             Command::new("python3").args(["-m", "venv"]).arg(&venv),
@@ -100,33 +131,48 @@ pub fn run_all() -> Result<(), String> {
     }
     run(
         pip(&python).args(PYTHON_NEEDS),
-        "pip install maturin numpy pytest",
+        "pip install numpy pytest pyuff scipy pyarrow distributed",
     )?;
-    // maturin is found on PATH by pip's build step: the environment's own first.
-    let path = std::env::join_paths(
-        std::iter::once(bin.clone()).chain(
-            std::env::var_os("PATH")
-                .iter()
-                .flat_map(std::env::split_paths),
-        ),
-    )
-    .map_err(|e| format!("PATH: {e}"))?;
-    run(
-        pip(&python)
-            .args(["--no-build-isolation", "--force-reinstall", "--no-deps"])
-            .arg(root.join("crates").join("hyst-py"))
-            .env("PATH", &path)
-            .current_dir(&root),
-        "pip install ./crates/hyst-py",
-    )?;
-    // Built by the tests above: their integration tests run it.
-    let hyst = target.join("release").join("hyst");
-    run(
-        Command::new(&python)
-            .args(["-m", "pytest", "-q"])
-            .arg(root.join("crates").join("hyst-py").join("tests"))
-            .env("HYST_BIN", &hyst)
-            .current_dir(&root),
-        "pytest crates/hyst-py/tests",
-    )
+    Ok(python)
+}
+
+/// The package as maturin lays it out (`pyproject.toml`: `python-source = "python"`,
+/// `module-name = "hyst._hyst"`): the Python sources of `crates/hyst-py/python/hyst` and the
+/// extension module beside them under the interpreter's suffix, in `target/py-package/hyst`,
+/// made anew. Returns the folder to put on `PYTHONPATH`. (`test_the_package_is_laid_out_as_
+/// maturin_builds_it` checks the layout against `pyproject.toml`.)
+fn assemble_package(root: &Path, python: &Path, release: &Path) -> Result<PathBuf, String> {
+    let out = root.join("target").join("py-package");
+    let dest = out.join("hyst");
+    let fail = |what: &Path, e: std::io::Error| format!("{}: {e}", what.display());
+    if dest.exists() {
+        std::fs::remove_dir_all(&dest).map_err(|e| fail(&dest, e))?;
+    }
+    std::fs::create_dir_all(&dest).map_err(|e| fail(&dest, e))?;
+    let source = root
+        .join("crates")
+        .join("hyst-py")
+        .join("python")
+        .join("hyst");
+    for entry in std::fs::read_dir(&source).map_err(|e| fail(&source, e))? {
+        let from = entry.map_err(|e| fail(&source, e))?.path();
+        if from.is_file() {
+            let to = dest.join(from.file_name().unwrap_or_default());
+            std::fs::copy(&from, &to).map_err(|e| fail(&from, e))?;
+        }
+    }
+    let suffix = Command::new(python)
+        .args([
+            "-c",
+            "import sysconfig; print(sysconfig.get_config_var('EXT_SUFFIX'))",
+        ])
+        .output()
+        .map_err(|e| format!("{}: {e}", python.display()))?;
+    let suffix = String::from_utf8_lossy(&suffix.stdout).trim().to_string();
+    if !suffix.ends_with(".so") {
+        return Err(format!("the interpreter's extension suffix is `{suffix}`"));
+    }
+    let module = release.join("lib_hyst.so");
+    std::fs::copy(&module, dest.join(format!("_hyst{suffix}"))).map_err(|e| fail(&module, e))?;
+    Ok(out)
 }

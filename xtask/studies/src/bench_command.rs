@@ -89,10 +89,7 @@ fn timed(cmd: &mut Command) -> Result<(f64, f64), String> {
 
 /// The bench: `hyst ssi` refined and not, and pyOMA2 and koma when their environment exists.
 pub fn run() -> Result<(), String> {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .ok_or("no workspace root")?
-        .to_path_buf();
+    let root = hyst_testkit::workspace_root();
     let target = root.join("target");
     let csv = record_csv(&target.join("bench"))?;
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
@@ -140,7 +137,7 @@ pub fn run() -> Result<(), String> {
         return Ok(());
     }
     let out = Command::new(&python)
-        .arg(root.join("xtask/compare/ssi_timing.py"))
+        .arg(root.join("xtask/studies/compare/ssi_timing.py"))
         .arg(&csv)
         .env("OMP_NUM_THREADS", "1")
         .env("OPENBLAS_NUM_THREADS", "1")

@@ -99,7 +99,7 @@ fn report(dir: &Path, sweep: &Sweep, points: &[(f64, Point)]) -> Result<(), Stri
 
 /// The three sweeps, their lines and figures.
 pub fn run() -> Result<(), String> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/figures/covssi_growth");
+    let dir = hyst_testkit::workspace_root().join("docs/figures/covssi_growth");
     std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     let n = 1 << 17;
     // Length: 2¹⁴ to 2²⁰ samples, prefixes of one record.

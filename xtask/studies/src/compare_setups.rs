@@ -5,7 +5,7 @@
 //! synthetic roving setups with truth ([`crate::compare_roving`]).
 //!
 //! pyOMA2 runs in `target/compare-venv` (made by `cargo xtask compare-tools`), driven by
-//! `xtask/compare/setups_fdd.py`.
+//! `xtask/studies/compare/setups_fdd.py`.
 
 use crate::json_values::{complex, numbers};
 use std::path::Path;
@@ -22,10 +22,7 @@ const README_HZ: [f64; 11] = [
 ];
 
 pub fn run() -> Result<(), String> {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .ok_or("no root")?
-        .to_path_buf();
+    let root = hyst_testkit::workspace_root();
     let python = root.join("target/compare-venv/bin/python");
     if !python.is_file() {
         return Err(
@@ -33,12 +30,12 @@ pub fn run() -> Result<(), String> {
                 .into(),
         );
     }
-    let data = hyst::io::data_dir().ok_or("no shared data folder: set HYST_DATA_DIR")?;
+    let data = hyst_testkit::data_dir().ok_or("no shared data folder: set HYST_DATA_DIR")?;
     let roving = root.join("target/compare-setups");
     crate::compare_roving::write(&roving)?;
     eprintln!("pyOMA2 (PoSER, PreGER, FDD, EFDD) ...");
     let out = Command::new(&python)
-        .arg(root.join("xtask/compare/setups_fdd.py"))
+        .arg(root.join("xtask/studies/compare/setups_fdd.py"))
         .arg(&data)
         .arg(&roving)
         .output()

@@ -152,7 +152,7 @@ pub fn run(a: &DemoArgs) -> Result<(), String> {
         "monitor_peak_mb_half {half_peak:.0} monitor_peak_mb_all {:.0}",
         peak_mb()
     );
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/monitor");
+    let dir = hyst_testkit::workspace_root().join("target/monitor");
     hyst::figures::track_figures(&dir, &report)?;
     println!("figures in {}", dir.display());
     Ok(())

@@ -6,10 +6,10 @@
 //! - `cargo xtask report-screenshots`: the report of the OMA record and of the steel frame's
 //!   merged setups, opened in headless Chromium, saved as `docs/figures/report_*.png`.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::Command;
 
-use crate::compare::run_ok as run;
+use hyst_testkit::run_ok as run;
 
 /// The versions bundled.
 const PACKAGES: [&str; 3] = ["three@0.187.0", "uplot@1.6.32", "esbuild@0.25.12"];
@@ -20,9 +20,7 @@ export { SVGRenderer } from 'three/addons/renderers/SVGRenderer.js';\n\
 export { OrbitControls } from 'three/addons/controls/OrbitControls.js';\n";
 
 fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .map_or_else(|| PathBuf::from(".."), Path::to_path_buf)
+    hyst_testkit::workspace_root()
 }
 
 pub fn vendor_js() -> Result<(), String> {
@@ -73,9 +71,9 @@ pub fn vendor_js() -> Result<(), String> {
 }
 
 pub fn screenshots() -> Result<(), String> {
-    let browser = hyst::html::chromium::find()
+    let browser = hyst_testkit::chromium::find()
         .ok_or("chromium is missing (apt-get install chromium, or set HYST_CHROMIUM)")?;
-    let data = hyst::io::data_dir()
+    let data = hyst_testkit::data_dir()
         .ok_or("no shared data folder: set HYST_DATA_DIR or provide ../shared/data")?;
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
     run(
@@ -121,7 +119,8 @@ pub fn screenshots() -> Result<(), String> {
             &format!("hyst {}", args.join(" ")),
         )?;
         let png = figures.join(format!("{name}.png"));
-        let opened = hyst::html::chromium::open(&browser, &page, 2500, Some((&png, 1100, height)))?;
+        let opened =
+            hyst_testkit::chromium::open(&browser, &page, 2500, Some((&png, 1100, height)))?;
         if !opened.console.is_empty() {
             return Err(format!("{}: console: {:?}", page.display(), opened.console));
         }

@@ -9,38 +9,20 @@
 //!
 //! The tools run in a virtual environment made on first use under `target/compare-venv`
 //! (`python3 -m venv`, then pip installs the pinned versions from PyPI); the comparison itself
-//! is `xtask/compare/oma_tools.py`, which drives covssi through `hyst ssi`. Not part of
+//! is `xtask/studies/compare/oma_tools.py`, which drives covssi through `hyst ssi`. Not part of
 //! `cargo test`: it needs Python and the network on first use, and takes minutes.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::Command;
+
+use hyst_testkit::{run_ok, succeeded};
 
 /// The versions whose numbers the OMA README quotes.
 const TOOLS: [&str; 2] = ["pyOMA-2==1.4.3", "koma-python==1.3.6"];
 
-/// Run `cmd`, an error naming `what` unless it succeeds.
-pub(crate) fn run_ok(cmd: &mut Command, what: &str) -> Result<(), String> {
-    let status = cmd
-        .status()
-        .map_err(|e| format!("{what}: could not start: {e}"))?;
-    succeeded(status, what)
-}
-
-/// An error naming `what` unless `status` is success.
-fn succeeded(status: std::process::ExitStatus, what: &str) -> Result<(), String> {
-    if status.success() {
-        Ok(())
-    } else {
-        Err(format!("{what}: failed ({status})"))
-    }
-}
-
 pub fn run(args: &[String]) -> Result<(), String> {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .parent()
-        .ok_or("no workspace root")?
-        .to_path_buf();
-    let data = hyst::io::data_dir()
+    let root = hyst_testkit::workspace_root();
+    let data = hyst_testkit::data_dir()
         .ok_or("no shared data folder: set HYST_DATA_DIR or provide ../shared/data")?
         .join("oma");
     if !data.join("data_3dof.csv").is_file() {
@@ -84,7 +66,7 @@ pub fn run(args: &[String]) -> Result<(), String> {
     }
     run_with_progress(
         Command::new(&python)
-            .arg(root.join("xtask/compare/oma_tools.py"))
+            .arg(root.join("xtask/studies/compare/oma_tools.py"))
             .arg("--hyst")
             .arg(&hyst)
             .arg("--data")

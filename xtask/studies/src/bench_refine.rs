@@ -123,7 +123,7 @@ pub(crate) fn run() {
 /// (linear start, estimate on the first 75 % of the multisine part, test on the arrow head).
 fn silverbox() {
     use hyst_ident::residual::{self, Record, Start};
-    let Some(dir) = hyst::io::data_dir() else {
+    let Some(dir) = hyst_testkit::data_dir() else {
         println!("refine_silverbox_s skipped: no shared data");
         return;
     };
