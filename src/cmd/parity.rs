@@ -87,6 +87,10 @@ const PAIRS: &[Pair] = &[
                 "record",
                 "a name for the report; the command's is the file's path",
             ),
+            (
+                "fdd",
+                "the page's FDD; the command computes it when --html asks for the page",
+            ),
         ],
     },
     Pair {

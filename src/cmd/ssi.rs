@@ -377,6 +377,8 @@ pub(crate) fn run(a: &SsiArgs) -> Result<(), Error> {
         points,
     } = channels(input, &a.record)?;
     let views: Vec<&[f64]> = data.iter().map(|c| c.as_slice()).collect();
+    // The page draws the record's FDD: computed with the analysis, on its decimated record.
+    let opts = opts.with_fdd(a.html.is_some().then(covssi::fdd::FddOptions::default));
     let bar = steps_bar();
     let analysis = covssi::analyze_with_progress(&views, fs, &opts, &|p| show(&bar, p));
     bar.finish_and_clear();
@@ -401,8 +403,7 @@ pub(crate) fn run(a: &SsiArgs) -> Result<(), Error> {
     }
     if let Some(path) = &a.html {
         let title = format!("hyst ssi: {}", input.display());
-        let fdd = hyst::html::fdd_of(&report.report, &views, fs);
-        let page = hyst::html::ssi_page(&title, &report.report, fdd.as_ref());
+        let page = hyst::html::ssi_page(&title, &report.report);
         write_text(path, &page)?;
     }
     Ok(())

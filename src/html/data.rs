@@ -1,6 +1,6 @@
 //! What a report page shows, as serializable types, and how an analysis becomes one.
 
-use covssi::fdd::{Fdd, FddOptions, efdd};
+use covssi::fdd::{FddOptions, efdd};
 use covssi::multisetup::MergedModes;
 use covssi::{Complex64 as C64, ModalAnalysis, PoleStatus, Rejection, Stability, mac, mpc};
 use serde::Serialize;
@@ -160,9 +160,10 @@ pub(super) fn pair(v: C64) -> [f64; 2] {
     [v.re, v.im]
 }
 
-/// The page of one record's analysis `a` (its channels `y` at the analysed rate give the
-/// FDD behind the diagram and EFDD's opinion on each mode).
-pub fn ssi_page_data(title: &str, a: &ModalAnalysis, fdd: Option<&Fdd>) -> PageData {
+/// The page of one record's analysis `a` (its FDD, when computed, behind the diagram and
+/// EFDD's opinion on each mode).
+pub fn ssi_page_data(title: &str, a: &ModalAnalysis) -> PageData {
+    let fdd = a.fdd.as_ref();
     let poles = a
         .ssi
         .diagram
@@ -238,6 +239,12 @@ pub fn ssi_page_data(title: &str, a: &ModalAnalysis, fdd: Option<&Fdd>) -> PageD
         ))
         .chain(a.decision.confirmed_lines())
         .chain(a.decision.set_apart_lines())
+        .chain(fdd.is_none().then(|| {
+            "No EFDD: the record's FDD was not computed with this analysis, or the record is \
+             too short for its segments (the diagram shows the first singular value of SSI's \
+             survey)."
+                .to_string()
+        }))
         .collect(),
         diagram: Some(Diagram {
             poles,

@@ -20,32 +20,10 @@ const THREE_JS: &str = include_str!("vendor/three-svg.min.js");
 const PAGE_JS: &str = include_str!("page.js");
 const PAGE_CSS: &str = include_str!("page.css");
 
-/// The FDD of the channels `y` recorded at `fs` Hz, decimated as `analysis` was: what the
-/// page of that analysis draws behind its diagram; `None` when the record is too short for it.
-pub fn fdd_of(analysis: &covssi::ModalAnalysis, y: &[&[f64]], fs: f64) -> Option<covssi::fdd::Fdd> {
-    let factor = analysis.decimation.factor.max(1);
-    let decimated = covssi::decimate::decimate_channels(y, factor);
-    let views: Vec<&[f64]> = if factor > 1 {
-        decimated.iter().map(Vec::as_slice).collect()
-    } else {
-        y.to_vec()
-    };
-    covssi::fdd::fdd(
-        &views,
-        fs / factor as f64,
-        &covssi::fdd::FddOptions::default(),
-    )
-    .ok()
-}
-
-/// The page of one record's analysis, with the record's FDD ([`fdd_of`]) behind the diagram
-/// and EFDD's opinion beside each mode.
-pub fn ssi_page(
-    title: &str,
-    analysis: &covssi::ModalAnalysis,
-    fdd: Option<&covssi::fdd::Fdd>,
-) -> String {
-    page(&ssi_page_data(title, analysis, fdd))
+/// The page of one record's analysis, with the record's FDD behind the diagram and EFDD's
+/// opinion beside each mode when the analysis computed it ([`covssi::AnalysisOptions::fdd`]).
+pub fn ssi_page(title: &str, analysis: &covssi::ModalAnalysis) -> String {
+    page(&ssi_page_data(title, analysis))
 }
 
 /// The page of merged setups, drawn on `geometry` (read from `grid`) when given: a channel's

@@ -47,6 +47,11 @@ pub struct AnalysisOptions {
     pub ssi_errors: Option<usize>,
     /// The rules that set candidates apart as not modes ([`crate::decision`]).
     pub modes: ModeCriteria,
+    /// The frequency-domain decomposition of the record analysed (after the decimation, so
+    /// the record is decimated once) with these options, for a page to draw behind the
+    /// stabilization diagram and EFDD's second opinion ([`ModalAnalysis::fdd`]). Default
+    /// `None`: not computed.
+    pub fdd: Option<crate::fdd::FddOptions>,
 }
 
 /// The jackknife's blocks by default ([`AnalysisOptions::ssi_errors`]).
@@ -60,6 +65,7 @@ impl Default for AnalysisOptions {
             refine: Some(RefineOptions::default()),
             ssi_errors: Some(JACKKNIFE_BLOCKS),
             modes: ModeCriteria::default(),
+            fdd: None,
         }
     }
 }
@@ -200,6 +206,12 @@ impl AnalysisOptions {
         self.ssi_errors = blocks;
         self
     }
+
+    /// These options with the record's FDD computed with `fdd` (`None`: not computed).
+    pub fn with_fdd(mut self, fdd: Option<crate::fdd::FddOptions>) -> Self {
+        self.fdd = fdd;
+        self
+    }
 }
 
 /// What [`analyze`] finds: SSI's result (its fields at the top level in JSON), the MAC
@@ -239,6 +251,10 @@ pub struct ModalAnalysis {
     /// What is a mode: the answer, which list it is, and what was set apart and why
     /// ([`crate::decision`]).
     pub decision: ModeDecision,
+    /// The FDD of the record analysed, when asked for ([`AnalysisOptions::fdd`]) and the
+    /// record long enough for its segments. A page's, not the report's: not serialized.
+    #[cfg_attr(feature = "serde", serde(skip))]
+    pub fdd: Option<crate::fdd::Fdd>,
 }
 
 /// The channels `y` sampled at `fs` Hz decimated as `opts.decimation` says, SSI on them,
@@ -343,6 +359,11 @@ pub fn analyze_with_progress(
         &not_reported,
         &opts.modes,
     );
+    // A record too short for the FDD's segments still has its modes: the page goes without.
+    let fdd = opts
+        .fdd
+        .as_ref()
+        .and_then(|o| crate::fdd::fdd(y, fs, o).ok());
     Ok(ModalAnalysis {
         channels: (0..y.len()).map(|c| c.to_string()).collect(),
         fs_hz: fs,
@@ -359,6 +380,7 @@ pub fn analyze_with_progress(
         ssi_errors,
         no_errors,
         decision,
+        fdd,
     })
 }
 

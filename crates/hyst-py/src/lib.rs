@@ -29,8 +29,6 @@ use pyo3::prelude::*;
 struct SsiResult {
     analysis: ModalAnalysis,
     record: String,
-    /// The record's FDD, drawn behind the stabilization diagram of `html()`.
-    fdd: Option<covssi::fdd::Fdd>,
 }
 
 impl SsiResult {
@@ -218,7 +216,7 @@ impl SsiResult {
     #[pyo3(signature = (title = None))]
     fn html(&self, title: Option<&str>) -> String {
         let title = title.map_or_else(|| format!("hyst.ssi: {}", self.record), str::to_string);
-        hyst::html::ssi_page(&title, &self.analysis, self.fdd.as_ref())
+        hyst::html::ssi_page(&title, &self.analysis)
     }
 
     /// Write the reported modes' shapes as Universal File dataset 55 at `path`: one dataset
@@ -290,7 +288,7 @@ pub(crate) fn columns<'a>(y: &'a numpy::ndarray::ArrayView2<'a, f64>) -> Vec<Cow
 /// channels) sampled at `fs` Hz, with `settings` a JSON object of [`SsiSettings`] (what
 /// the Python wrapper `hyst.ssi` makes of its keywords).
 #[pyfunction]
-#[pyo3(signature = (y, fs, *, settings, channels = None, record = "array"))]
+#[pyo3(signature = (y, fs, *, settings, channels = None, record = "array", fdd = false))]
 fn ssi(
     py: Python<'_>,
     y: PyReadonlyArray2<'_, f64>,
@@ -298,6 +296,7 @@ fn ssi(
     settings: &str,
     channels: Option<Vec<String>>,
     record: &str,
+    fdd: bool,
 ) -> PyResult<SsiResult> {
     let view = y.as_array();
     let l = view.ncols();
@@ -309,7 +308,7 @@ fn ssi(
             names.len()
         )));
     }
-    let opts = analysis_options(settings)?;
+    let opts = analysis_options(settings)?.with_fdd(fdd.then(covssi::fdd::FddOptions::default));
     let cols = columns(&view);
     let views: Vec<&[f64]> = cols.iter().map(|c| c.as_ref()).collect();
     let mut analysis = py
@@ -322,11 +321,9 @@ fn ssi(
     if let Some(names) = channels {
         analysis.channels = names;
     }
-    let fdd = py.detach(|| hyst::html::fdd_of(&analysis, &views, fs));
     Ok(SsiResult {
         analysis,
         record: record.to_string(),
-        fdd,
     })
 }
 

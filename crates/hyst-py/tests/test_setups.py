@@ -109,8 +109,15 @@ def test_the_pages_are_the_commands(hyst_bin, setups, tmp_path):
     subprocess.run([str(hyst_bin), "ssi", "--input", str(one), "--fs", str(FS), "--html", str(page)],
                    check=True, capture_output=True)
     y = np.loadtxt(one, delimiter=",", skiprows=1)
-    result = hyst.ssi(y, FS, channels=["a", "b", "r"])
+    result = hyst.ssi(y, FS, channels=["a", "b", "r"], fdd=True)
     assert result.html(title=f"hyst ssi: {one}") == page.read_text()
+    # Without fdd=True the FDD is not computed: the page says so, and has no EFDD.
+    bare = hyst.ssi(y, FS, channels=["a", "b", "r"]).html(title=f"hyst ssi: {one}")
+    assert "No EFDD: the record's FDD was not computed" in bare
+    assert "No EFDD" not in page.read_text()
+    assert '"efdd":null' in bare and '"efdd":[' in page.read_text()
+    with pytest.raises(ValueError, match="fdd is one record's"):
+        hyst.ssi(setups=setups, fs=FS, fdd=True)
     with pytest.raises(ValueError, match="has no page"):
         hyst.amplitude(y[:, 0], FS).html()
 

@@ -119,6 +119,7 @@ def ssi(
     max_damping=None,
     channels=None,
     record="array",
+    fdd=False,
     setups=None,
     geometry=None,
     lines=None,
@@ -179,6 +180,11 @@ def ssi(
         Names of the channels (they head the shapes in ``str(result)`` and the JSON).
     record : str
         What the data is, for the report (the JSON's ``record``).
+    fdd : bool
+        Also compute the record's frequency-domain decomposition (on the record analysed,
+        after the decimation), which ``html()`` draws behind the stabilization diagram with
+        EFDD's opinion on each mode (default False: not computed; ``hyst ssi`` computes it
+        when ``--html`` asks for the page).
     setups : str or os.PathLike, optional
         Instead of ``y``: a setup file (``hyst ssi --setups``: CSV of setup, file, column,
         node, direction, quantity, reference, gain), or a folder of setups in pyOMA's layout.
@@ -222,6 +228,8 @@ def ssi(
         for name, value in (("references", references), ("channels", channels)):
             if value is not None:
                 raise ValueError(f"{name} is the setup file's with setups: leave it out")
+        if fdd:
+            raise ValueError("fdd is one record's: the page of merged setups draws none")
         settings = _settings(
             block_rows=block_rows, lag_seconds=lag_seconds, lag_periods=lag_periods,
             decimate=decimate, max_order=max_order, order_step=order_step, references=None,
@@ -259,6 +267,7 @@ def ssi(
         settings=settings,
         channels=None if channels is None else [str(c) for c in channels],
         record=str(record),
+        fdd=bool(fdd),
     )
 
 
