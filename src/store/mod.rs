@@ -30,6 +30,31 @@ use rusqlite::{Connection, ErrorCode, params};
 use crate::io::IoError;
 pub use table::TrackTable;
 
+/// Errors of the campaign store.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum StoreError {
+    /// Another run holds the campaign store.
+    #[error(
+        "{path}: another `hyst track` is writing this --out folder (its store is locked); wait for it, or give another --out"
+    )]
+    Locked {
+        /// The store's file.
+        path: PathBuf,
+    },
+    /// The campaign store could not be read or written.
+    #[error("{path}: the campaign store: {message}")]
+    Database {
+        /// The store's file.
+        path: PathBuf,
+        /// What went wrong.
+        message: String,
+    },
+    /// Its folder could not be made.
+    #[error(transparent)]
+    Io(#[from] IoError),
+}
+
 /// The store's file in the `--out` folder.
 pub const STORE_FILE: &str = "store.sqlite";
 
@@ -129,12 +154,12 @@ fn file_error(path: &Path) -> impl Fn(std::io::Error) -> IoError + '_ {
 }
 
 /// An SQLite failure on the store at `path`: busy (another run holds it) said as such.
-fn sql_error(path: &Path) -> impl Fn(rusqlite::Error) -> IoError + '_ {
+fn sql_error(path: &Path) -> impl Fn(rusqlite::Error) -> StoreError + '_ {
     move |e| match e.sqlite_error_code() {
-        Some(ErrorCode::DatabaseBusy | ErrorCode::DatabaseLocked) => IoError::StoreLocked {
+        Some(ErrorCode::DatabaseBusy | ErrorCode::DatabaseLocked) => StoreError::Locked {
             path: path.to_path_buf(),
         },
-        _ => IoError::Store {
+        _ => StoreError::Database {
             path: path.to_path_buf(),
             message: e.to_string(),
         },
@@ -144,7 +169,7 @@ fn sql_error(path: &Path) -> impl Fn(rusqlite::Error) -> IoError + '_ {
 impl CampaignStore {
     /// Open (or create) the store in `dir`: make the folder, take the store for this
     /// process, and read what earlier runs stored.
-    pub fn open(dir: &Path) -> Result<CampaignStore, IoError> {
+    pub fn open(dir: &Path) -> Result<CampaignStore, StoreError> {
         std::fs::create_dir_all(dir).map_err(file_error(dir))?;
         let path = dir.join(STORE_FILE);
         let err = sql_error(&path);
@@ -159,7 +184,7 @@ impl CampaignStore {
         conn.execute_batch("BEGIN EXCLUSIVE;").map_err(&err)?;
         if let Err(message) = claim(&conn) {
             let _ = conn.execute_batch("ROLLBACK;");
-            return Err(IoError::Store {
+            return Err(StoreError::Database {
                 path: path.clone(),
                 message,
             });
@@ -183,7 +208,7 @@ impl CampaignStore {
                 .map_err(&err)?,
             LAYOUT => {}
             other => {
-                return Err(IoError::Store {
+                return Err(StoreError::Database {
                     path: path.clone(),
                     message: format!(
                         "its layout is version {other}, this hyst writes version {LAYOUT}: give another --out"
@@ -224,8 +249,8 @@ impl CampaignStore {
     }
 
     /// The connection, for this thread.
-    fn connection(&self) -> Result<std::sync::MutexGuard<'_, Connection>, IoError> {
-        self.conn.lock().map_err(|_| IoError::Store {
+    fn connection(&self) -> Result<std::sync::MutexGuard<'_, Connection>, StoreError> {
+        self.conn.lock().map_err(|_| StoreError::Database {
             path: self.path.clone(),
             message: "a thread writing it failed".into(),
         })
@@ -233,7 +258,7 @@ impl CampaignStore {
 
     /// Store one record made with `key`, in a transaction of its own (a run killed later
     /// keeps it; one killed during it has not written it).
-    pub fn append(&self, key: &str, record: &RecordModes) -> Result<(), IoError> {
+    pub fn append(&self, key: &str, record: &RecordModes) -> Result<(), StoreError> {
         insert(&*self.connection()?, key, record).map_err(sql_error(&self.path))
     }
 
@@ -244,7 +269,7 @@ impl CampaignStore {
         keys: &[String],
         records: &[RecordModes],
         table: &TrackTable,
-    ) -> Result<(), IoError> {
+    ) -> Result<(), StoreError> {
         let err = sql_error(&self.path);
         let mut conn = self.connection()?;
         let tx = conn.transaction().map_err(&err)?;
@@ -322,7 +347,7 @@ mod tests {
             s.append("k1", &record("a", true)).unwrap();
             s.append("k1", &record("b", false)).unwrap();
             let e = CampaignStore::open(&dir).err().unwrap();
-            assert!(matches!(e, IoError::StoreLocked { .. }), "{e}");
+            assert!(matches!(e, StoreError::Locked { .. }), "{e}");
             assert!(e.to_string().contains("another `hyst track`"), "{e}");
         }
         let s = CampaignStore::open(&dir).unwrap();

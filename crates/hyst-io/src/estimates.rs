@@ -229,7 +229,7 @@ impl EstimatesTable {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::io::test_files::file_path;
+    use crate::test_files::file_path;
 
     /// Read `text` from a file of its own (the tests run in parallel).
     fn read(text: &str) -> Result<EstimatesTable, String> {
@@ -317,7 +317,7 @@ mod tests {
     /// reads has positive frequencies, one estimate slot per mode, and times in order.
     mod fuzz {
         use super::*;
-        use crate::io::test_files::mutated;
+        use crate::test_files::mutated;
         use proptest::prelude::*;
 
         const VALID: &[u8] = b"record,time,first_hz,first_hz_se,first_damping,second_hz\n\

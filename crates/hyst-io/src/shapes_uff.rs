@@ -162,7 +162,7 @@ pub(super) fn e13(values: &[f64]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::io::test_files::file_path;
+    use crate::test_files::file_path;
 
     #[test]
     fn fortran_e13_matches_the_printf_layout() {

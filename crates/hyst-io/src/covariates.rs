@@ -119,7 +119,7 @@ pub fn read_covariates(path: &Path) -> Result<Covariates, IoError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::io::test_files::file_path;
+    use crate::test_files::file_path;
 
     #[test]
     fn names_in_natural_order() {

@@ -3,7 +3,7 @@
 //! Python tests.
 
 use super::*;
-use crate::io::test_files::file_path;
+use crate::test_files::file_path;
 
 /// A dataset 58's text: function type `ftype` at `node`/`dir`, ordinate type `ord`, `count`
 /// values said, increment `dx`, and the data part `data` (text lines, or binary bytes after
@@ -63,7 +63,7 @@ impl Ds58<'_> {
             )
             .bytes(),
         );
-        let e = |v: f64| crate::io::shapes_uff::e13(&[v]).trim_end().to_string();
+        let e = |v: f64| crate::shapes_uff::e13(&[v]).trim_end().to_string();
         out.extend(
             format!(
                 "{:10}{:10}{:10}{:>13}{:>13}{:>13}\n",
@@ -107,7 +107,7 @@ fn double_lines(v: &[f64]) -> Vec<u8> {
 fn single_lines(v: &[f64]) -> Vec<u8> {
     let mut s = String::new();
     for row in v.chunks(6) {
-        s.push_str(crate::io::shapes_uff::e13(row).as_str());
+        s.push_str(crate::shapes_uff::e13(row).as_str());
     }
     s.into_bytes()
 }
@@ -369,7 +369,7 @@ fn assert_refused(cases: Vec<(&str, Vec<u8>, &str)>) {
     for (name, bytes, says) in cases {
         let path = write(name, &bytes);
         // Refused by the reader, or (a cell that is not finite) when its column is taken.
-        let e = crate::io::test_files::taken(read_uff(&path))
+        let e = crate::test_files::taken(read_uff(&path))
             .unwrap_err()
             .to_string();
         assert!(e.starts_with(&path.display().to_string()), "{e}");
@@ -448,10 +448,10 @@ proptest::proptest! {
         let bin: Vec<u8> = v.iter().flat_map(|x| x.to_be_bytes()).collect();
         let mut bytes = Ds58 { count: 6, data: &d, ..Ds58::default() }.bytes();
         bytes.extend(Ds58 { node: 2, count: 6, binary: Some((2, 48)), data: &bin, ..Ds58::default() }.bytes());
-        let bytes = crate::io::test_files::mutated(bytes, &flips, cut, &tail);
+        let bytes = crate::test_files::mutated(bytes, &flips, cut, &tail);
         let path = write("fuzz.uff", &bytes);
         match read_uff(&path) {
-            Ok(t) => proptest::prop_assert!(crate::io::test_files::well_formed(&t)),
+            Ok(t) => proptest::prop_assert!(crate::test_files::well_formed(&t)),
             Err(e) => proptest::prop_assert!(e.to_string().starts_with(&path.display().to_string())),
         }
     }

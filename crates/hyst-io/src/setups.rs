@@ -351,7 +351,7 @@ fn uff_point(column: &str) -> Option<(String, [f64; 3])> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::io::test_files::file_path;
+    use crate::test_files::file_path;
 
     const GOOD: &str =
         "setup,file,column,node,direction,dx,dy,dz,azimuth,elevation,quantity,reference,gain
@@ -493,7 +493,7 @@ two,b.uff,9,9,,0,3,4,,,velocity,no,
     /// has a unit direction and a nonzero gain on every channel.
     mod fuzz {
         use super::*;
-        use crate::io::test_files::mutated;
+        use crate::test_files::mutated;
         use proptest::prelude::*;
 
         proptest! {

@@ -64,22 +64,6 @@ pub enum IoError {
         /// Bytes of memory free.
         available: u64,
     },
-    /// Another run holds the campaign store.
-    #[error(
-        "{path}: another `hyst track` is writing this --out folder (its store is locked); wait for it, or give another --out"
-    )]
-    StoreLocked {
-        /// The store's file.
-        path: PathBuf,
-    },
-    /// The campaign store could not be read or written.
-    #[error("{path}: the campaign store: {message}")]
-    Store {
-        /// The store's file.
-        path: PathBuf,
-        /// What went wrong.
-        message: String,
-    },
     /// The first line holds numbers only: the file has no header line of names.
     #[error(
         "{path}: the first line `{line}` is numbers, not column names: the file has no header line; add one naming the columns (e.g. `t,y1,y2`), or save the array as .npy"

@@ -4,7 +4,7 @@
 use std::io::Write;
 
 use super::*;
-use crate::io::test_files::file_path;
+use crate::test_files::file_path;
 
 /// A tag and its data, padded to 8 bytes (the small form for 1–4 bytes when `small`).
 fn element(code: u32, data: &[u8], big: bool, small: bool) -> Vec<u8> {
@@ -273,7 +273,7 @@ fn bad_files_are_refused_naming_the_problem() {
     for (name, bytes, var, says) in cases {
         let path = write(name, &bytes);
         // Refused by the reader, or (a cell that is not finite) when its column is taken.
-        let e = crate::io::test_files::taken(read_mat(&path, var))
+        let e = crate::test_files::taken(read_mat(&path, var))
             .unwrap_err()
             .to_string();
         assert!(e.starts_with(&path.display().to_string()), "{e}");
@@ -293,11 +293,11 @@ proptest::proptest! {
     ) {
         let mut bytes = mat_file(&[Var::double("y", 4, 2, &M)], false, false);
         bytes.extend(mat_file(&[Var::double("x", 8, 1, &M)], false, true)[128..].iter());
-        let bytes = crate::io::test_files::mutated(bytes, &flips, cut, &tail);
+        let bytes = crate::test_files::mutated(bytes, &flips, cut, &tail);
         let path = write("fuzz.mat", &bytes);
         for var in [None, Some("x")] {
             match read_mat(&path, var) {
-                Ok(t) => proptest::prop_assert!(crate::io::test_files::well_formed(&t)),
+                Ok(t) => proptest::prop_assert!(crate::test_files::well_formed(&t)),
                 Err(e) => proptest::prop_assert!(e.to_string().starts_with(&path.display().to_string())),
             }
         }

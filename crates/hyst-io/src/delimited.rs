@@ -441,7 +441,7 @@ pub fn write_csv(path: &Path, names: &[&str], columns: &[&[f64]]) -> Result<(), 
 mod tests {
     use super::*;
 
-    use crate::io::test_files::file_path;
+    use crate::test_files::file_path;
     use std::path::PathBuf;
 
     fn file(name: &str, text: &str) -> PathBuf {
@@ -465,7 +465,7 @@ mod tests {
         }
         // A line of exactly the bound is read (its cell then judged as a number: too large).
         let at = format!("y\n1\n{}\n2\n", "1".repeat(MAX_LINE_BYTES));
-        let e = crate::io::test_files::taken(read_csv(&file("at_bound.csv", &at)))
+        let e = crate::test_files::taken(read_csv(&file("at_bound.csv", &at)))
             .unwrap_err()
             .to_string();
         assert!(
@@ -655,7 +655,7 @@ mod tests {
                 let p = file_path(&format!("fuzz-{}.csv", std::thread::current().name().unwrap_or("t").replace("::", "_")));
                 std::fs::write(&p, &bytes).unwrap();
                 if let Ok(t) = read_csv(&p) {
-                    prop_assert!(crate::io::test_files::well_formed(&t));
+                    prop_assert!(crate::test_files::well_formed(&t));
                 }
             }
         }

@@ -146,7 +146,7 @@ impl Geometry {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::io::test_files::file_path;
+    use crate::test_files::file_path;
 
     #[test]
     fn the_steel_frames_geometry_reads_and_bad_files_are_named() {

@@ -233,7 +233,7 @@ mod tests {
     }
 
     fn write(name: &str, bytes: &[u8]) -> std::path::PathBuf {
-        let path = crate::io::test_files::file_path(name);
+        let path = crate::test_files::file_path(name);
         std::fs::write(&path, bytes).unwrap();
         path
     }
@@ -463,7 +463,7 @@ mod tests {
                 "{'descr': '<f8', 'fortran_order': False, 'shape': (4, 2), }",
                 &le64(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0]),
             );
-            let bytes = crate::io::test_files::mutated(bytes, &flips, cut, &tail);
+            let bytes = crate::test_files::mutated(bytes, &flips, cut, &tail);
             let path = write("fuzz.npy", &bytes);
             if let Err(e) = read_npy(&path) {
                 proptest::prop_assert!(e.to_string().starts_with(&path.display().to_string()));
@@ -484,7 +484,7 @@ mod tests {
                 &le64(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0]),
             );
             let bytes = npz_bytes(&[("y.npy", y)], deflate);
-            let bytes = crate::io::test_files::mutated(bytes, &flips, cut, &tail);
+            let bytes = crate::test_files::mutated(bytes, &flips, cut, &tail);
             let path = write("fuzz.npz", &bytes);
             if let Err(e) = read_npz(&path, None) {
                 proptest::prop_assert!(e.to_string().starts_with(&path.display().to_string()));
