@@ -201,10 +201,20 @@ fn merged_setups_open_on_the_steel_frames_geometry() {
     let Some(browser) = browser() else {
         return;
     };
+    let Some((_, report)) = common::steel_frame() else {
+        return;
+    };
+    // The page `hyst ssi --setups FOLDER --html` writes, from the merge the other steel
+    // frame tests share (the command's page is the library's: pytest's
+    // test_the_pages_are_the_commands compares them).
     let dir = out_dir();
     let page = dir.join("steelframe_setups.html");
-    let folder = grid.parent().unwrap().to_str().unwrap().to_string();
-    hyst(&["ssi", "--setups", &folder, "--html", page.to_str().unwrap()]);
+    let folder = grid.parent().unwrap();
+    let geometry = hyst::io::setups_geometry(folder, None, None).unwrap();
+    let g = geometry.as_ref().map(|(g, p)| (g, p.as_path()));
+    let title = format!("hyst ssi --setups {}", folder.display());
+    let html = hyst::html::setups_page(&title, &report.merged, g).unwrap();
+    std::fs::write(&page, html).unwrap();
     let opened = check_page(&browser, &page, 11, 1500);
     // The setups' page has no diagram; the nodes no channel measures are said.
     assert!(

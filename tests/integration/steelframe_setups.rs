@@ -10,27 +10,12 @@ use crate::common;
 
 use covssi::Complex64 as C64;
 use covssi::multisetup::{MergeOptions, MergedMode, Quantity};
-use hyst::io::{ReadOptions, SetupSpec, read_setups};
-use hyst::setups::{SetupsReport, analyze_setups, merge_analysed};
+use hyst::setups::{SetupsReport, merge_analysed};
 
 /// The README's modes (pyOMA2 1.4 and by hand), Hz.
 const README_HZ: [f64; 11] = [
     1.2287, 1.4359, 2.1000, 4.0172, 4.7706, 6.6822, 7.6156, 9.6652, 12.1668, 12.5982, 13.863,
 ];
-
-/// The setups as the folder describes them, and their merged report.
-fn merged() -> Option<(Vec<SetupSpec>, SetupsReport)> {
-    let dir = common::data_file("steelframe/grid.txt")?
-        .parent()?
-        .to_path_buf();
-    let setups = read_setups(&dir).unwrap();
-    assert_eq!(setups.len(), 15);
-    // As `hyst ssi --setups` analyses them: SSI's modes with the jackknife's errors.
-    let opts = hyst::settings::SsiSettings::default().analysis().unwrap();
-    let read = ReadOptions::default();
-    let report = analyze_setups(&setups, None, &read, &opts, &MergeOptions::default()).unwrap();
-    Some((setups, report))
-}
 
 /// Node `node`'s motion along axis `k` in `mode`, and its standard error.
 fn motion(mode: &MergedMode, node: &str, k: usize) -> (C64, f64) {
@@ -69,9 +54,10 @@ fn ratio_z(ratios: &[(C64, f64)], expected: f64) -> Vec<f64> {
 
 #[test]
 fn the_steel_frames_setups_merge_into_its_modes_and_find_the_sensors_factor() {
-    let Some((mut setups, report)) = merged() else {
+    let Some((setups, report)) = common::steel_frame() else {
         return;
     };
+    let mut setups = setups.clone();
     println!("{report}");
     let modes = &report.merged.modes;
     assert_eq!(modes.len(), README_HZ.len(), "{report}");
@@ -109,7 +95,7 @@ fn the_steel_frames_setups_merge_into_its_modes_and_find_the_sensors_factor() {
     // moves at least half the largest entry (the README's factor, found).
     // Each within 3.5 of its standard errors (the setups' jackknife errors carried through
     // the merge): over 13 ratios a |z| above 3.5 has a chance of 0.6 % if the errors hold.
-    let ratios = rigid_floor_ratios(&report, 0.5);
+    let ratios = rigid_floor_ratios(report, 0.5);
     let z = ratio_z(&ratios, -0.5);
     println!("laser/reference on the rigid top floor (ratio, se, z): ");
     for ((r, se), z) in ratios.iter().zip(&z) {
