@@ -11,7 +11,9 @@ use hyst::ident::amplitude::ModeToFollow;
 use hyst::ident::{self, IdentOptions};
 use hyst::model::{BoucWen, Oscillator};
 use hyst::sim::excitation::{add_noise, white_noise};
-use hyst::sim::{Decimation, Input, Integrator, SimOptions};
+use hyst::sim::{
+    Decimation, Input, InputKind, Integrator, SensorNoise, SimOptions, WhiteForceRecord,
+};
 
 const FS: f64 = 750.0;
 const NOISE: f64 = 1e-5;
@@ -27,17 +29,18 @@ fn truth() -> Oscillator {
 
 /// A record from rest: force and noisy output.
 fn record(o: &Oscillator, level: f64, n: usize, seed: u64) -> (Vec<f64>, Vec<f64>) {
-    let warm = 0;
-    let u = white_noise(warm + n, level, seed).unwrap();
     let opts = SimOptions {
         oversample: 40,
         integrator: Integrator::Trapezoidal,
         decimation: Decimation::Fir(vec![2, 4, 5]),
         ..SimOptions::default()
     };
-    let mut y = hyst::sim::simulate(o, Input::BandLimited(&u), FS, warm + n, &opts).unwrap();
-    add_noise(&mut y, NOISE, seed + 1).unwrap();
-    (u[warm..].to_vec(), y[warm..].to_vec())
+    WhiteForceRecord::new(level, n, seed)
+        .with_input(InputKind::BandLimited)
+        .with_sim(opts)
+        .with_noise(SensorNoise::Std(NOISE))
+        .generate(o, FS)
+        .unwrap()
 }
 
 /// The validation error of `m` on (u, y) from rest, in units of the noise's standard deviation.

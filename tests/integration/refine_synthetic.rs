@@ -21,12 +21,10 @@ fn base() -> Oscillator {
 }
 
 fn record(o: &Oscillator) -> (Vec<f64>, Vec<f64>) {
-    let u = white_noise(N, 10.0, 31).unwrap();
-    let opts = SimOptions::default();
-    let mut y = sim::simulate(o, Input::Sampled(&u), FS, N, &opts).unwrap();
-    let sy = (y.iter().map(|v| v * v).sum::<f64>() / N as f64).sqrt();
-    add_noise(&mut y, 0.002 * sy, 32).unwrap();
-    (u, y)
+    sim::WhiteForceRecord::new(10.0, N, 31)
+        .with_noise(sim::SensorNoise::OfRms(0.002))
+        .generate(o, FS)
+        .unwrap()
 }
 
 /// σ of x and ẋ of the base system's response (to size the effects).

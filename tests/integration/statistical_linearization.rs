@@ -8,8 +8,8 @@
 use hyst::ident::{self, IdentOptions, Linearization};
 use hyst::linearize::statistical;
 use hyst::model::{Oscillator, Restoring};
-use hyst::sim::SimOptions;
-use hyst::sim::excitation::{add_noise, white_noise};
+use hyst::sim::InputKind;
+use hyst::sim::excitation::add_noise;
 
 const FS: f64 = 750.0;
 
@@ -21,11 +21,10 @@ fn steady(level: f64, samples: usize, seed: u64) -> (Vec<f64>, Vec<f64>) {
 
 /// [`steady`] of any oscillator.
 fn steady_of(o: &Oscillator, level: f64, samples: usize, seed: u64) -> (Vec<f64>, Vec<f64>) {
-    let u = white_noise(samples, level, seed).unwrap();
-    let y = hyst::sim::steady_state_period(o, &u, FS, &SimOptions::default(), 1e-10, 200)
+    hyst::sim::WhiteForceRecord::new(level, samples, seed)
+        .with_input(InputKind::Periodic)
+        .generate(o, FS)
         .unwrap()
-        .y;
-    (u, y)
 }
 
 #[test]

@@ -4,7 +4,7 @@
 
 use hyst::covssi::{self, BlockRows, SsiOptions};
 use hyst::model::{Oscillator, Restoring, ZenerParams};
-use hyst::sim::{self, Input, SimOptions};
+use hyst::sim::{self, SimOptions};
 
 const FS: f64 = 750.0;
 
@@ -22,16 +22,13 @@ fn zener() -> Oscillator {
 /// 2¹⁵ samples of the response to white noise (after 8192 samples of start-up), with 5 %
 /// white measurement noise.
 fn record(seed: u64) -> Vec<f64> {
-    let n = 1 << 15;
-    let warm = 8192;
-    let u = sim::excitation::white_noise(n + warm, 50.0, seed).unwrap();
-    let opts = SimOptions::default();
-    let mut y = sim::simulate(&zener(), Input::Sampled(&u), FS, n + warm, &opts)
+    sim::WhiteForceRecord::new(50.0, 1 << 15, seed)
+        .with_warm_up(8192)
+        .with_noise(sim::SensorNoise::OfRms(0.05))
+        .with_noise_seed(1000 + seed)
+        .generate(&zener(), FS)
         .unwrap()
-        .split_off(warm);
-    let sd = (y.iter().map(|v| v * v).sum::<f64>() / n as f64).sqrt();
-    sim::excitation::add_noise(&mut y, 0.05 * sd, 1000 + seed).unwrap();
-    y
+        .1
 }
 
 /// On every record the refinement keeps the one mode and the one real pole, each within four

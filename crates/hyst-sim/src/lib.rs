@@ -30,7 +30,10 @@ mod kernel;
 pub use batch::simulate_many;
 pub use drift::simulate_drifting;
 mod record;
-pub use record::{InputKind, STEADY_STATE_MAX_PERIODS, STEADY_STATE_TOLERANCE, response};
+pub use record::{
+    InputKind, STEADY_STATE_MAX_PERIODS, STEADY_STATE_TOLERANCE, SensorNoise, WhiteForceRecord,
+    response,
+};
 pub mod resample;
 
 /// Errors of simulation and signal generation.
