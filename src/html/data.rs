@@ -1,6 +1,6 @@
 //! What a report page shows, as serializable types, and how an analysis becomes one.
 
-use covssi::fdd::{FddOptions, efdd};
+use covssi::fdd::efdd;
 use covssi::multisetup::MergedModes;
 use covssi::{Complex64 as C64, ModalAnalysis, PoleStatus, Rejection, Stability, mac, mpc};
 use serde::Serialize;
@@ -163,7 +163,7 @@ pub(super) fn pair(v: C64) -> [f64; 2] {
 /// The page of one record's analysis `a` (its FDD, when computed, behind the diagram and
 /// EFDD's opinion on each mode).
 pub fn ssi_page_data(title: &str, a: &ModalAnalysis) -> PageData {
-    let fdd = a.fdd.as_ref();
+    let fdd = a.fdd.as_ref().map(|(f, _)| f);
     let poles = a
         .ssi
         .diagram
@@ -211,8 +211,10 @@ pub fn ssi_page_data(title: &str, a: &ModalAnalysis) -> PageData {
             damping_ratio: m.damping_ratio,
             damping_se: m.damping_se,
             mpc: m.shape.as_deref().map(mpc),
-            efdd: fdd
-                .and_then(|f| efdd(f, m.frequency_hz, &FddOptions::default()))
+            efdd: a
+                .fdd
+                .as_ref()
+                .and_then(|(f, o)| efdd(f, m.frequency_hz, o))
                 .map(|e| (e.frequency_hz, e.damping_ratio)),
             seen: None,
         })

@@ -252,9 +252,10 @@ pub struct ModalAnalysis {
     /// ([`crate::decision`]).
     pub decision: ModeDecision,
     /// The FDD of the record analysed, when asked for ([`AnalysisOptions::fdd`]) and the
-    /// record long enough for its segments. A page's, not the report's: not serialized.
+    /// record long enough for its segments, with the options it was made with (EFDD reads
+    /// them). A page's, not the report's: not serialized.
     #[cfg_attr(feature = "serde", serde(skip))]
-    pub fdd: Option<crate::fdd::Fdd>,
+    pub fdd: Option<(crate::fdd::Fdd, crate::fdd::FddOptions)>,
 }
 
 /// The channels `y` sampled at `fs` Hz decimated as `opts.decimation` says, SSI on them,
@@ -363,7 +364,7 @@ pub fn analyze_with_progress(
     let fdd = opts
         .fdd
         .as_ref()
-        .and_then(|o| crate::fdd::fdd(y, fs, o).ok());
+        .and_then(|o| crate::fdd::fdd(y, fs, o).ok().map(|f| (f, o.clone())));
     Ok(ModalAnalysis {
         channels: (0..y.len()).map(|c| c.to_string()).collect(),
         fs_hz: fs,

@@ -6,7 +6,6 @@
 //! - `cargo xtask report-screenshots`: the report of the OMA record and of the steel frame's
 //!   merged setups, opened in headless Chromium, saved as `docs/figures/report_*.png`.
 
-use std::path::PathBuf;
 use std::process::Command;
 
 use hyst_testkit::run_ok as run;
@@ -18,10 +17,6 @@ const PACKAGES: [&str; 3] = ["three@0.187.0", "uplot@1.6.32", "esbuild@0.25.12"]
 const THREE_ENTRY: &str = "export { Scene, PerspectiveCamera, BufferGeometry, Float32BufferAttribute, LineBasicMaterial, LineSegments, Group, Color } from 'three';\n\
 export { SVGRenderer } from 'three/addons/renderers/SVGRenderer.js';\n\
 export { OrbitControls } from 'three/addons/controls/OrbitControls.js';\n";
-
-fn root() -> PathBuf {
-    hyst_testkit::workspace_root()
-}
 
 pub fn vendor_js() -> Result<(), String> {
     let work = std::env::temp_dir().join(format!("hyst-vendor-js-{}", std::process::id()));
@@ -38,7 +33,7 @@ pub fn vendor_js() -> Result<(), String> {
         "npm install",
     )?;
     std::fs::write(work.join("entry.js"), THREE_ENTRY).map_err(|e| e.to_string())?;
-    let vendor = root().join("src/html/vendor");
+    let vendor = hyst_testkit::workspace_root().join("src/html/vendor");
     run(
         Command::new("npx")
             .args([
@@ -79,12 +74,12 @@ pub fn screenshots() -> Result<(), String> {
     run(
         Command::new(cargo)
             .args(["build", "--release", "--quiet", "--bin", "hyst"])
-            .current_dir(root()),
+            .current_dir(hyst_testkit::workspace_root()),
         "cargo build --release --bin hyst",
     )?;
-    let hyst = root().join("target/release/hyst");
-    let pages = root().join("target/html-report");
-    let figures = root().join("docs/figures");
+    let hyst = hyst_testkit::workspace_root().join("target/release/hyst");
+    let pages = hyst_testkit::workspace_root().join("target/html-report");
+    let figures = hyst_testkit::workspace_root().join("docs/figures");
     std::fs::create_dir_all(&pages).map_err(|e| e.to_string())?;
     let oma = data.join("oma/data_3dof.csv");
     let frame = data.join("steelframe");
