@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 
-use super::ssi::{ChannelArgs, SsiFlags, channels, flag_error};
+use super::ssi::{ChannelArgs, channels, flag_error};
 use super::{Error, fail, steps_bar};
 use hyst::ident::amplitude::{self, AmplitudeMethod, AmplitudeOptions, Quantity};
 
@@ -98,7 +98,7 @@ pub(crate) struct AmplitudeArgs {
     #[arg(help_heading = "Amplitude curves", long, value_name = "SAMPLES")]
     pub(crate) period: Option<usize>,
     #[command(flatten)]
-    pub(crate) ssi: SsiFlags,
+    pub(crate) ssi: hyst::settings::SsiSettings,
     /// Write the curves as JSON here (optional: the report is printed either way).
     #[arg(help_heading = "Output files", long)]
     pub(crate) json: Option<PathBuf>,
@@ -160,7 +160,7 @@ fn analyse(
 
 pub(crate) fn run(a: &AmplitudeArgs) -> Result<(), Error> {
     // Settings that are wrong whatever the record, before any is read.
-    let analysis = a.ssi.analysis()?;
+    let analysis = super::ssi::analysis_of(&a.ssi)?;
     let opts = a.options();
     opts.check().map_err(flag_of)?;
     let name = |p: &PathBuf| p.display().to_string();

@@ -5,7 +5,7 @@
 //! added to one side alone fails these tests.
 
 use clap::CommandFactory;
-use hyst::settings::SsiSettings;
+use hyst::settings::{SsiSettings, TrackSettings};
 
 use super::Cli;
 
@@ -74,7 +74,10 @@ const PAIRS: &[Pair] = &[
             ("skip", "Python slices the array: y[skip:]"),
             ("gains", "Python divides the array's columns: y / gains"),
             ("json", "Python: result.to_json()"),
-            ("svg", "Python: result.stabilization_svg()"),
+            (
+                "svg",
+                "Python draws result.poles and result.pole_status (matplotlib), or result.html()",
+            ),
             ("shapes-uff", "Python: result.write_shapes_uff(path)"),
             ("html", "Python: result.html() (report.html() for setups)"),
         ],
@@ -363,6 +366,23 @@ fn ssi_and_track_take_every_ssi_setting_on_both_sides() {
                 "__init__.pyi's {function} lacks the setting {name}"
             );
         }
+    }
+}
+
+#[test]
+fn track_takes_every_tracking_setting_on_both_sides() {
+    let src = python_source("__init__.py");
+    let stub = python_source("__init__.pyi");
+    let cli: Vec<String> = flags("track").iter().map(|f| keyword_of(f)).collect();
+    let py = python_parameters(&src, "track");
+    let typed = python_parameters(&stub, "track");
+    for name in TrackSettings::names() {
+        assert!(cli.contains(&name), "hyst track lacks the setting {name}");
+        assert!(py.contains(&name), "hyst.track lacks the setting {name}");
+        assert!(
+            typed.contains(&name),
+            "__init__.pyi's track lacks the setting {name}"
+        );
     }
 }
 

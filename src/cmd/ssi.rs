@@ -58,7 +58,7 @@ pub(crate) struct SsiArgs {
     #[command(flatten)]
     pub(crate) record: ChannelArgs,
     #[command(flatten)]
-    pub(crate) ssi: SsiFlags,
+    pub(crate) ssi: SsiSettings,
     /// Write the modes, real poles and per-order poles as JSON here (optional: the report is
     /// printed either way).
     #[arg(help_heading = "Output files", long)]
@@ -92,132 +92,26 @@ pub(crate) struct SsiArgs {
     pub(crate) lines: Option<PathBuf>,
 }
 
-/// SSI's and the refinement's flags, shared by `hyst ssi` and `hyst track`.
-#[derive(Args, Debug)]
-#[command(next_help_heading = "SSI and its refinement")]
-pub(crate) struct SsiFlags {
-    /// Decimate by this factor first (an ideal low-pass below the new Nyquist, then every
-    /// FACTOR-th sample); default: read from the record's spectrum (said in the report), 1
-    /// keeps the rate.
-    #[arg(long, value_name = "FACTOR")]
-    pub(crate) decimate: Option<usize>,
-    /// Block rows of the Toeplitz matrix (lags up to 2·N−1); default: read from the record,
-    /// enough for ten periods of its lowest spectral peak within a size budget (said in the
-    /// report).
-    #[arg(long)]
-    pub(crate) block_rows: Option<usize>,
-    /// Instead of --block-rows: as many block rows as make the largest lag cover this many
-    /// seconds (after any --decimate).
-    #[arg(
-        long,
-        value_name = "SECONDS",
-        conflicts_with_all = ["block_rows", "lag_periods"]
-    )]
-    pub(crate) lag_seconds: Option<f64>,
-    /// Instead of --block-rows: as many block rows as make the largest lag cover COUNT periods
-    /// of HZ, e.g. `--lag-periods 10 1.5` for ten periods of a 1.5 Hz mode (the paper's
-    /// choice: ten periods of the dominant mode).
-    #[arg(
-        long,
-        num_args = 2,
-        value_names = ["COUNT", "HZ"],
-        conflicts_with = "block_rows"
-    )]
-    pub(crate) lag_periods: Option<Vec<f64>>,
-    /// Largest model order; default: 40, or four per spectral peak when the record shows
-    /// more than ten, at most the Toeplitz rank.
-    #[arg(long)]
-    pub(crate) max_order: Option<usize>,
-    /// Model order step.
-    #[arg(long, default_value_t = SsiSettings::default().order_step)]
-    pub(crate) order_step: usize,
-    /// Stabilization threshold on the relative frequency change.
-    #[arg(long, default_value_t = SsiSettings::default().df)]
-    pub(crate) df: f64,
-    /// Stabilization threshold on the relative damping change.
-    #[arg(long, default_value_t = SsiSettings::default().dzeta)]
-    pub(crate) dzeta: f64,
-    /// Stabilization threshold on 1 − MAC (several channels).
-    #[arg(long, default_value_t = SsiSettings::default().dmac)]
-    pub(crate) dmac: f64,
-    /// Stabilization threshold for real poles: eq. (31) of Bajrić & Høgsberg (2018), the paper
-    /// hyst implements (see the README).
-    #[arg(long, default_value_t = SsiSettings::default().dreal)]
-    pub(crate) dreal: f64,
-    /// Reference channels (0-based indices among --columns), comma-separated; default: all.
-    #[arg(long, value_delimiter = ',')]
-    pub(crate) references: Option<Vec<usize>>,
-    /// Skip the maximum-likelihood refinement of the modes and real poles (on by default: it
-    /// fits them to the whole record, gives each a standard error, and drops those the record
-    /// does not support).
-    #[arg(long)]
-    pub(crate) no_refine: bool,
-    /// Standard errors for SSI's modes: the jackknife over at most BLOCKS blocks of the
-    /// record (default 10; 0: none). They are the errors reported where SSI's modes are the
-    /// answer, and the decision of what is a mode reads them: a mode must be found again in
-    /// the record's parts, its frequency determined.
-    #[arg(long, value_name = "BLOCKS")]
-    pub(crate) ssi_errors: Option<usize>,
-    /// The largest damping ratio of a mode (default 0.2): a candidate damped more is set
-    /// apart with its reason, not reported.
-    #[arg(long, value_name = "RATIO")]
-    pub(crate) max_damping: Option<f64>,
-    /// Refine with each channel's likelihood alone, not the joint likelihood of all channels
-    /// (which uses their cross-spectra; on by default for 2 to 4 channels, and above 4 through 4
-    /// combinations of them, band by band when there are more than 4 modes).
-    #[arg(long)]
-    pub(crate) no_joint: bool,
+/// The analysis SSI's flags ask for ([`SsiSettings`], whose fields are the flags), a
+/// setting out of range named by its flag.
+pub(crate) fn analysis_of(ssi: &SsiSettings) -> Result<hyst::covssi::AnalysisOptions, Error> {
+    ssi.analysis().map_err(|e| setting_error(ssi, e))
 }
 
-impl SsiFlags {
-    /// The settings these flags give, field by field ([`SsiSettings`]: the same set as
-    /// `hyst.ssi`'s keywords; `cmd/parity.rs` checks that each has its flag).
-    pub(crate) fn settings(&self) -> SsiSettings {
-        let mut s = SsiSettings::default();
-        s.block_rows = self.block_rows;
-        s.lag_seconds = self.lag_seconds;
-        s.lag_periods = match self.lag_periods.as_deref() {
-            Some(&[count, hz]) => Some((count, hz)),
-            _ => None,
-        };
-        s.decimate = self.decimate;
-        s.max_order = self.max_order;
-        s.order_step = self.order_step;
-        s.references = self.references.clone();
-        s.df = self.df;
-        s.dzeta = self.dzeta;
-        s.dmac = self.dmac;
-        s.dreal = self.dreal;
-        s.refine = !self.no_refine;
-        s.joint = !self.no_joint;
-        s.ssi_errors = self.ssi_errors;
-        s.max_damping = self.max_damping;
-        s
-    }
-
-    /// The analysis these flags ask for, a setting out of range named by its flag.
-    pub(crate) fn analysis(&self) -> Result<hyst::covssi::AnalysisOptions, Error> {
-        self.settings()
-            .analysis()
-            .map_err(|e| self.setting_error(e))
-    }
-
-    /// A setting out of range named by its flag.
-    fn setting_error(&self, e: SettingsError) -> Error {
-        match e {
-            SettingsError::TooSmall { name, least, value } => fail(format!(
-                "--{} must be at least {least}, got {value}",
-                name.replace('_', "-")
-            )),
-            // No record read: no rate, and no reference checked (that needs its channels).
-            SettingsError::Ssi(e) => {
-                option_error(self, &e, 0, None).unwrap_or_else(|| fail(e.to_string()))
-            }
-            e => fail(e.to_string()),
+/// A setting out of range named by its flag.
+fn setting_error(ssi: &SsiSettings, e: SettingsError) -> Error {
+    match e {
+        SettingsError::TooSmall { name, least, value } => fail(format!(
+            "--{} must be at least {least}, got {value}",
+            name.replace('_', "-")
+        )),
+        // No record read: no rate, and no reference checked (that needs its channels).
+        SettingsError::Ssi(e) => {
+            option_error(ssi, &e, 0, None).unwrap_or_else(|| fail(e.to_string()))
         }
+        e => fail(e.to_string()),
     }
 }
-
 /// The channels to analyse, after `--skip`.
 pub(crate) struct Channels {
     pub(crate) names: Vec<String>,
@@ -282,7 +176,7 @@ pub(crate) fn channels(input: &Path, a: &ChannelArgs) -> Result<Channels, Error>
 /// named by the flag that set it, with what it must be; `None` for any other error. `fs_used`
 /// is the rate analysed, when a record was read (a lag too short for it is said in samples).
 fn option_error(
-    ssi: &SsiFlags,
+    ssi: &SsiSettings,
     e: &hyst::covssi::SsiError,
     channels: usize,
     fs_used: Option<f64>,
@@ -342,7 +236,7 @@ fn option_error(
 /// decimation, which may be what made the record too short or constant).
 pub(crate) fn flag_error(
     input: &Path,
-    ssi: &SsiFlags,
+    ssi: &SsiSettings,
     e: hyst::covssi::SsiError,
     names: &[String],
     fs_used: f64,
@@ -364,9 +258,9 @@ pub(crate) fn flag_error(
 pub(crate) fn run(a: &SsiArgs) -> Result<(), Error> {
     use hyst::covssi;
     // Settings that are wrong whatever the record, before it is read.
-    let opts = a.ssi.analysis()?;
+    let opts = analysis_of(&a.ssi)?;
     let input = match (&a.input, &a.setups) {
-        (_, Some(setups)) => return run_setups(a, setups, &a.ssi.analysis()?),
+        (_, Some(setups)) => return run_setups(a, setups, &analysis_of(&a.ssi)?),
         (Some(input), None) => input,
         (None, None) => return Err(fail("give --input or --setups".to_string())),
     };

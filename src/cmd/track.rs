@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
 use clap::Args;
-use hyst::monitor::{Loaded, RecordModes, TrackOptions, TrackReport};
+use hyst::monitor::{Loaded, RecordModes, TrackReport};
 
 use super::{Error, channel_names, check_fs, fail, read_record, steps_bar};
 
@@ -40,7 +40,7 @@ pub(crate) struct TrackArgs {
     pub(crate) columns: Option<Vec<String>>,
     /// SSI's and the refinement's options, as `hyst ssi` takes them.
     #[command(flatten)]
-    pub(crate) ssi: super::ssi::SsiFlags,
+    pub(crate) ssi: hyst::settings::SsiSettings,
     /// Covariates per record: a CSV with a column `record` (the file's name, or the window's
     /// number from 0), an optional `time` (s) and one column per covariate.
     #[arg(long)]
@@ -49,25 +49,9 @@ pub(crate) struct TrackArgs {
     /// record with the most modes among the first 24.
     #[arg(long)]
     pub(crate) reference: Option<PathBuf>,
-    /// The first this many records train the baselines (default: 336, at most half).
-    #[arg(long)]
-    pub(crate) training: Option<usize>,
-    /// Chart the standardized residuals as they are, even when the training records show a
-    /// slow effect the covariates leave unexplained (by default its model's filter is run
-    /// and its innovations charted, so that the effect is not taken for a change).
-    #[arg(long)]
-    pub(crate) no_whiten: bool,
-    /// Regress on the covariates as they are. By default each mode's environmental model is
-    /// chosen on the training records by BIC: each covariate through a first-order lag of
-    /// whole hours (up to 12) and its slope changing below a breakpoint (frost); the report
-    /// says what was chosen, and the table which records lie outside the training range
-    /// (column `extrapolated`).
-    #[arg(long)]
-    pub(crate) no_environment_model: bool,
-    /// Add each record's excitation level as a covariate (`log_rms`: ln of its RMS
-    /// response, in the record's units), for frequencies that drift with amplitude.
-    #[arg(long, conflicts_with = "estimates")]
-    pub(crate) level_covariate: bool,
+    /// How the modes are tracked (the training, the chart, the environmental model).
+    #[command(flatten)]
+    pub(crate) tracking: hyst::settings::TrackSettings,
     /// Folder for the campaign's store `store.sqlite` (each record's modes, committed as
     /// they come: a run interrupted continues where it stopped), the tidy table (record ×
     /// mode) as `table.csv`, `table.parquet` and `table.jsonl`, and `report.json`.
@@ -354,7 +338,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
     // Settings wrong whatever the record, before any is read (else each would be skipped
     // for the same reason).
     a.fs.map(check_fs).transpose()?;
-    let asked = a.ssi.analysis()?;
+    let asked = super::ssi::analysis_of(&a.ssi)?;
     let mut sources = sources(a, records)?;
     let (covs, cov_names) = match &a.covariates {
         Some(p) => hyst::io::read_covariates(p)?,
@@ -445,13 +429,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
     if let Some(e) = store_error.into_inner().ok().flatten() {
         return Err(e.into());
     }
-    let mut opts = TrackOptions::for_campaign(
-        names.len(),
-        a.training,
-        !a.no_whiten,
-        !a.no_environment_model,
-    );
-    opts.level_covariate = a.level_covariate;
+    let opts = a.tracking.options(names.len());
     let reference = a.reference.as_deref().map(reference_modes).transpose()?;
     let mut report = hyst::monitor::track(&records, reference.as_deref(), &opts)
         .map_err(|e| fail(e.to_string()))?;
@@ -492,12 +470,7 @@ fn run_estimates(a: &TrackArgs, path: &Path) -> Result<(), Error> {
         );
     }
     std::fs::create_dir_all(&a.out).map_err(|e| fail(format!("{}: {e}", a.out.display())))?;
-    let opts = TrackOptions::for_campaign(
-        records.len(),
-        a.training,
-        !a.no_whiten,
-        !a.no_environment_model,
-    );
+    let opts = a.tracking.options(records.len());
     let mut report = hyst::monitor::track_estimates(&records, &table.modes, &opts)
         .map_err(|e| fail(e.to_string()))?;
     report.name_covariates(cov_names);

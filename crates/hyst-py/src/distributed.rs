@@ -84,17 +84,13 @@ pub(crate) fn identify_record(
 /// Track records identified apart (each a `RecordModes` JSON document, in time order), as
 /// `hyst.track` tracks the records it identifies.
 #[pyfunction]
-#[pyo3(signature = (records, *, covariate_names, training, whiten, reference, environment_model, level_covariate=false))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (records, *, covariate_names, tracking, reference))]
 pub(crate) fn track_identified(
     py: Python<'_>,
     records: Vec<String>,
     covariate_names: Vec<String>,
-    training: Option<usize>,
-    whiten: bool,
+    tracking: &str,
     reference: Option<&str>,
-    environment_model: bool,
-    level_covariate: bool,
 ) -> PyResult<Report> {
     let records = records
         .iter()
@@ -104,13 +100,5 @@ pub(crate) fn track_identified(
                 .map_err(|e| value_error(format!("record {i}: {e}")))
         })
         .collect::<PyResult<Vec<_>>>()?;
-    crate::monitor::Campaign::new(
-        covariate_names,
-        training,
-        whiten,
-        reference,
-        environment_model,
-        level_covariate,
-    )?
-    .track(py, &records)
+    crate::monitor::Campaign::new(covariate_names, tracking, reference)?.track(py, &records)
 }

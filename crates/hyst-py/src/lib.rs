@@ -204,12 +204,6 @@ impl SsiResult {
         py.import("json")?.call_method1("loads", (json,))
     }
 
-    /// The stabilization diagram as SVG text, up to `max_frequency_hz` (default: Nyquist).
-    #[pyo3(signature = (title = "Stabilization diagram", max_frequency_hz = None))]
-    fn stabilization_svg(&self, title: &str, max_frequency_hz: Option<f64>) -> String {
-        covssi::svg::stabilization_svg(&self.analysis.ssi.diagram, max_frequency_hz, title)
-    }
-
     /// The report a browser opens (`hyst ssi --html`): one self-contained page with the
     /// stabilization diagram over the FDD singular values, the modes with their errors and
     /// EFDD's, each mode shape animated, and the MAC matrix.

@@ -4,29 +4,29 @@
 use numpy::PyReadonlyArray2;
 use pyo3::prelude::*;
 
-use hyst::monitor::{Loaded, RecordModes, TrackOptions};
+use hyst::monitor::{Loaded, RecordModes};
+use hyst::settings::TrackSettings;
 
 use crate::ident::{Report, value_error};
 
 /// Track another system's modal estimates (`hyst track --estimates`); see the Python
 /// wrapper `hyst.track_estimates`.
 #[pyfunction]
-#[pyo3(signature = (estimates, *, covariates, training, whiten, environment_model))]
+#[pyo3(signature = (estimates, *, covariates, tracking))]
 pub(crate) fn track_estimates(
     py: Python<'_>,
     estimates: std::path::PathBuf,
     covariates: Option<std::path::PathBuf>,
-    training: Option<usize>,
-    whiten: bool,
-    environment_model: bool,
+    tracking: &str,
 ) -> PyResult<Report> {
+    let tracking = tracking_settings(tracking)?;
     let table = hyst::io::read_estimates(&estimates).map_err(value_error)?;
     let covariates = match covariates {
         Some(p) => hyst::io::read_covariates(&p).map_err(value_error)?,
         None => Default::default(),
     };
     let records = table.records(&covariates);
-    let opts = TrackOptions::for_campaign(records.len(), training, whiten, environment_model);
+    let opts = tracking.options(records.len());
     let mut report = py
         .detach(|| hyst::monitor::track_estimates(&records, &table.modes, &opts))
         .map_err(value_error)?;
@@ -38,7 +38,7 @@ pub(crate) fn track_estimates(
 /// Track the modes of `records` (each samples × channels); see the Python wrapper
 /// `hyst.track`.
 #[pyfunction]
-#[pyo3(signature = (records, fs, *, times, covariates, covariate_names, training, settings, whiten, reference, environment_model=true, names=None, level_covariate=false))]
+#[pyo3(signature = (records, fs, *, times, covariates, covariate_names, settings, tracking, reference, names=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn track(
     py: Python<'_>,
@@ -47,13 +47,10 @@ pub(crate) fn track(
     times: Vec<f64>,
     covariates: Vec<Vec<f64>>,
     covariate_names: Vec<String>,
-    training: Option<usize>,
     settings: &str,
-    whiten: bool,
+    tracking: &str,
     reference: Option<&str>,
-    environment_model: bool,
     names: Option<Vec<String>>,
-    level_covariate: bool,
 ) -> PyResult<Report> {
     let n = records.len();
     if times.len() != n || covariates.len() != n {
@@ -102,14 +99,7 @@ pub(crate) fn track(
     };
     let (analysis, _) = hyst::monitor::campaign_analysis(&analysis, n, &resolve);
     // A bad reference said before the records are identified.
-    let campaign = Campaign::new(
-        covariate_names,
-        training,
-        whiten,
-        reference,
-        environment_model,
-        level_covariate,
-    )?;
+    let campaign = Campaign::new(covariate_names, tracking, reference)?;
     // Each record identified moves the terminal's progress line (as `hyst track`'s bar).
     let done = std::sync::atomic::AtomicUsize::new(0);
     let finished = |_: &hyst::monitor::RecordModes| {
@@ -127,48 +117,34 @@ pub(crate) fn track(
 /// How identified records are tracked: what `hyst.track` is given besides the records.
 pub(crate) struct Campaign {
     covariate_names: Vec<String>,
-    training: Option<usize>,
-    whiten: bool,
+    tracking: TrackSettings,
     reference: Option<Vec<hyst::monitor::ModeEstimate>>,
-    environment_model: bool,
-    /// The excitation level as a covariate.
-    level_covariate: bool,
 }
 
 impl Campaign {
     /// The campaign's tracking, `reference` a `hyst ssi --json` document (read here: a bad
     /// one is said before any record is identified).
+    /// `tracking` is a JSON object of [`TrackSettings`].
     pub(crate) fn new(
         covariate_names: Vec<String>,
-        training: Option<usize>,
-        whiten: bool,
+        tracking: &str,
         reference: Option<&str>,
-        environment_model: bool,
-        level_covariate: bool,
     ) -> PyResult<Campaign> {
+        let tracking = tracking_settings(tracking)?;
         let reference = reference
             .map(hyst::report::reference_modes)
             .transpose()
             .map_err(|e| value_error(format!("reference: {e}")))?;
         Ok(Campaign {
             covariate_names,
-            training,
-            whiten,
+            tracking,
             reference,
-            environment_model,
-            level_covariate,
         })
     }
 
     /// Track `records` (identified, in time order): the report `hyst.track` returns.
     pub(crate) fn track(self, py: Python<'_>, records: &[RecordModes]) -> PyResult<Report> {
-        let mut opts = TrackOptions::for_campaign(
-            records.len(),
-            self.training,
-            self.whiten,
-            self.environment_model,
-        );
-        opts.level_covariate = self.level_covariate;
+        let opts = self.tracking.options(records.len());
         let reference = self.reference.as_deref();
         let mut report = py
             .detach(|| hyst::monitor::track(records, reference, &opts))
@@ -177,4 +153,9 @@ impl Campaign {
         let page = hyst::html::track_page(&report);
         Report::of("records", report).map(|r| r.with_html(page))
     }
+}
+
+/// The tracking a JSON object of [`TrackSettings`] asks for; what is wrong as a `ValueError`.
+fn tracking_settings(text: &str) -> PyResult<TrackSettings> {
+    TrackSettings::from_json(text).map_err(|e| value_error(format!("tracking: {e}")))
 }

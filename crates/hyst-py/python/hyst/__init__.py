@@ -213,7 +213,7 @@ def ssi(
         (``source == "ssi"``; NaN with ``ssi_errors=0``); ``to_dict()["decision"]`` says why,
         and lists each candidate set apart with its reasons. ``ssi_modes``, ``real_poles``,
         ``poles`` and ``pole_status`` (the stabilization diagram), ``misfit``,
-        ``to_dict()``, ``to_json()``, ``stabilization_svg()``, ``html()`` (the page ``hyst ssi
+        ``to_dict()``, ``to_json()``, ``html()`` (the page ``hyst ssi
         --html`` writes); ``print(result)`` prints the report of ``hyst ssi``.
 
     Raises
@@ -412,6 +412,20 @@ def _settings(*, block_rows, lag_seconds, lag_periods, decimate, max_order, orde
         if isinstance(v, float) and not _np.isfinite(v):
             raise ValueError(f"{k} must be finite, got {v!r}")
     return json.dumps({k: v for k, v in values.items() if v is not None})
+
+
+def _tracking(*, training, whiten, environment_model, level_covariate=False):
+    """The tracking settings :func:`track` and :func:`track_estimates` share, written as the
+    JSON object the library reads (``hyst::settings::TrackSettings``, whose fields are
+    ``hyst track``'s flags too)."""
+    import json
+
+    return json.dumps({
+        "training": _count(training, "training", 0),
+        "whiten": bool(whiten),
+        "environment_model": bool(environment_model),
+        "level_covariate": bool(level_covariate),
+    })
 
 
 def _count(v, name, least):
@@ -748,9 +762,11 @@ def track(records, fs, *, times=None, covariates=None, training=None, whiten=Tru
 
     if client is not None:
         return _track_on_dask(
-            client, records, fs, times=times, covariates=covariates, training=training,
-            whiten=whiten, environment_model=environment_model, reference=reference,
-            level_covariate=level_covariate, settings=_settings(
+            client, records, fs, times=times, covariates=covariates, reference=reference,
+            tracking=_tracking(training=training, whiten=whiten,
+                               environment_model=environment_model,
+                               level_covariate=level_covariate),
+            settings=_settings(
                 block_rows=block_rows, lag_seconds=lag_seconds, lag_periods=lag_periods,
                 decimate=decimate, max_order=max_order, order_step=order_step,
                 references=references, df=df, dzeta=dzeta, dmac=dmac, dreal=dreal,
@@ -785,16 +801,16 @@ def track(records, fs, *, times=None, covariates=None, training=None, whiten=Tru
     _check_rate(fs)
     return _hyst.track(
         arrays, float(fs), times=t, covariates=x, covariate_names=cov_names, names=names,
-        training=None if training is None else int(training), reference=ref,
+        reference=ref,
+        tracking=_tracking(training=training, whiten=whiten,
+                           environment_model=environment_model,
+                           level_covariate=level_covariate),
         settings=_settings(
             block_rows=block_rows, lag_seconds=lag_seconds, lag_periods=lag_periods,
             decimate=decimate, max_order=max_order, order_step=order_step,
             references=references, df=df, dzeta=dzeta, dmac=dmac, dreal=dreal, refine=refine,
             joint=joint, ssi_errors=ssi_errors, max_damping=max_damping,
         ),
-        whiten=bool(whiten),
-        environment_model=bool(environment_model),
-        level_covariate=bool(level_covariate),
     )
 
 
@@ -882,8 +898,7 @@ def _identify_on_worker(path, fs, time, covariates, name, analysis):
     return _hyst.identify_record(a, rate, time, covariates, name, analysis)
 
 
-def _track_on_dask(client, records, fs, *, times, covariates, training, whiten,
-                   environment_model, reference, level_covariate, settings):
+def _track_on_dask(client, records, fs, *, times, covariates, reference, tracking, settings):
     """:func:`track` with the identification on a Dask cluster (``client``)."""
     import os
 
@@ -931,10 +946,7 @@ def _track_on_dask(client, records, fs, *, times, covariates, training, whiten,
             client.close()
             cluster.close()
     return _hyst.track_identified(
-        identified, covariate_names=cov_names,
-        training=None if training is None else int(training), whiten=bool(whiten),
-        reference=ref, environment_model=bool(environment_model),
-        level_covariate=bool(level_covariate),
+        identified, covariate_names=cov_names, tracking=tracking, reference=ref,
     )
 
 
@@ -968,7 +980,6 @@ def track_estimates(estimates, *, covariates=None, training=None, whiten=True,
     return _hyst.track_estimates(
         os.fspath(estimates),
         covariates=None if covariates is None else os.fspath(covariates),
-        training=None if training is None else int(training),
-        whiten=bool(whiten),
-        environment_model=bool(environment_model),
+        tracking=_tracking(training=training, whiten=whiten,
+                           environment_model=environment_model),
     )

@@ -1,14 +1,23 @@
-//! The settings of a modal analysis as a user gives them, one flat set shared by `hyst ssi`,
-//! `hyst track` and their Python twins `hyst.ssi` and `hyst.track`: each field is a flag of
-//! the command line (`block_rows` is `--block-rows`; `refine` and `joint` are `--no-refine`
-//! and `--no-joint`) and a keyword of the Python function, and a test of the command line
-//! fails when one side lacks a field. [`SsiSettings::analysis`] turns them into covssi's
-//! [`AnalysisOptions`], the one place that does.
+//! The settings as a user gives them, one flat set per surface shared by the command line
+//! and Python: [`SsiSettings`] (a modal analysis: `hyst ssi`, `hyst track`, `hyst
+//! amplitude`, `hyst.ssi`, `hyst.track`) and [`TrackSettings`] (a campaign's tracking:
+//! `hyst track`, `hyst.track`, `hyst.track_estimates`). Each field is a flag (`block_rows` is
+//! `--block-rows`; a setting on by default is `--no-…`): the command line flattens these
+//! types (with the `cli` feature, clap's flags are read into them by a literal naming every
+//! field, so a field without its flag does not compile). Each field is a keyword of the
+//! Python functions, which pass them as a JSON object that `from_json` reads, refusing a
+//! name it does not know; a test of the command line holds the Python signatures to the
+//! fields. [`SsiSettings::analysis`] and [`TrackSettings::options`] turn them into covssi's
+//! [`AnalysisOptions`] and hyst-monitor's [`TrackOptions`], the one place that does.
+
+#[cfg(feature = "cli")]
+mod flags;
 
 use covssi::{
     AnalysisOptions, BlockRows, Decimation, ModeCriteria, RefineOptions, SsiOptions,
     StabilityCriteria,
 };
+use hyst_monitor::TrackOptions;
 use serde::{Deserialize, Serialize};
 
 /// What is wrong with a set of [`SsiSettings`].
@@ -185,6 +194,64 @@ impl SsiSettings {
     }
 }
 
+/// How a campaign's modes are tracked, as a user gives it: `hyst track`'s flags
+/// (`--training`, `--no-whiten`, `--no-environment-model`, `--level-covariate`) and the
+/// keywords of `hyst.track` and `hyst.track_estimates`. [`TrackSettings::options`] makes
+/// hyst-monitor's [`TrackOptions`] of them, the one place that does.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+#[non_exhaustive]
+pub struct TrackSettings {
+    /// The first this many records train the baselines; default (`None`): 336, at most
+    /// half the campaign.
+    pub training: Option<usize>,
+    /// Chart the innovations of a slow effect's model where the training records hold one
+    /// ([`TrackOptions::whiten`]).
+    pub whiten: bool,
+    /// Choose each mode's environmental model on the training records
+    /// ([`TrackOptions::environment`]).
+    pub environment_model: bool,
+    /// Add each record's excitation level as a covariate ([`TrackOptions::level_covariate`]).
+    pub level_covariate: bool,
+}
+
+impl Default for TrackSettings {
+    fn default() -> Self {
+        let o = TrackOptions::default();
+        TrackSettings {
+            training: None,
+            whiten: o.whiten,
+            environment_model: o.environment,
+            level_covariate: o.level_covariate,
+        }
+    }
+}
+
+impl TrackSettings {
+    /// The settings read from a JSON object of them (what the Python package passes): an
+    /// unknown name or a value of the wrong type is an error; a name left out keeps its
+    /// default.
+    pub fn from_json(text: &str) -> Result<Self, SettingsError> {
+        serde_json::from_str(text).map_err(|e| SettingsError::Unreadable(e.to_string()))
+    }
+
+    /// The tracking of a campaign of `records` records these settings ask for.
+    pub fn options(&self, records: usize) -> TrackOptions {
+        let mut opts =
+            TrackOptions::for_campaign(records, self.training, self.whiten, self.environment_model);
+        opts.level_covariate = self.level_covariate;
+        opts
+    }
+
+    /// The settings' names, in order: the flags and keywords both sides must have.
+    pub fn names() -> Vec<String> {
+        match serde_json::to_value(TrackSettings::default()) {
+            Ok(serde_json::Value::Object(map)) => map.keys().cloned().collect(),
+            _ => Vec::new(),
+        }
+    }
+}
+
 fn conflict(first: &'static str, second: &'static str) -> SettingsError {
     SettingsError::Conflict { first, second }
 }
@@ -246,5 +313,28 @@ mod tests {
             .analysis()
             .unwrap_err();
         assert_eq!(e.to_string(), "decimate must be at least 1, got 0");
+    }
+
+    #[test]
+    fn tracking_defaults_are_hyst_monitors_and_each_setting_reaches_the_options() {
+        assert_eq!(TrackSettings::default().options(1000), {
+            let mut o = TrackOptions::default();
+            o.training = 336;
+            o
+        });
+        // Without `training`, at most half the campaign trains.
+        assert_eq!(TrackSettings::default().options(100).training, 50);
+        let s = TrackSettings::from_json(
+            r#"{"training": 40, "whiten": false, "environment_model": false,
+                "level_covariate": true}"#,
+        )
+        .unwrap();
+        let o = s.options(1000);
+        assert_eq!(
+            (o.training, o.whiten, o.environment, o.level_covariate),
+            (40, false, false, true)
+        );
+        let e = TrackSettings::from_json(r#"{"whitening": false}"#).unwrap_err();
+        assert!(e.to_string().contains("unknown field `whitening`"), "{e}");
     }
 }
