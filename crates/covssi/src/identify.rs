@@ -315,7 +315,7 @@ pub(crate) fn identify_with_order_cap(
         channels: l,
     };
     stabilize::label(&mut diagram, opts);
-    let (modes, real_poles, mut notes) = stabilize::cluster(&diagram, opts);
+    let (modes, real_poles, mut notes) = crate::cluster::cluster(&diagram, opts);
     notes.extend(lag_notes(&modes, i, fs));
     Ok(SsiResult {
         block_rows: i,

@@ -51,6 +51,7 @@ struct ReadmeDoctests;
 
 mod analysis;
 mod checks;
+mod cluster;
 pub mod corr;
 pub mod decimate;
 pub mod decision;
@@ -76,6 +77,7 @@ pub use analysis::{
     AnalysisOptions, Decimation, DecimationReport, JACKKNIFE_BLOCKS, ModalAnalysis, ReportedMode,
     analyze, analyze_with_progress, shape_text,
 };
+pub use cluster::{Mode, RealPoleCluster};
 pub use corr::Correlations;
 pub use decision::{ModeCriteria, ModeDecision, ModeSource, NotAMode};
 pub use error::{SsiError, SsiOption};
@@ -91,5 +93,5 @@ pub use refine::{
     DroppedMode, DroppedRealPole, FittedPole, MISFIT_LIMIT, RefineOptions, RefinedMode,
     RefinedRealPole, Refinement, refine, refine_with_real_poles,
 };
-pub use stabilize::{Mode, Pole, PoleStatus, RealPoleCluster, Rejection, Stability, mac, mpc};
+pub use stabilize::{Pole, PoleStatus, Rejection, Stability, mac, mpc};
 pub use survey::{AutoLag, LagLimit, RecordSurvey, survey};

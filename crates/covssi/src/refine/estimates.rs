@@ -1,10 +1,10 @@
 //! Standard errors of the poles and shapes from the inverse Fisher information.
 
+use crate::cluster::Mode;
 use crate::linalg::{self, C64, Dense};
 use crate::refine::model::{Fit, Model, What};
 use crate::refine::pairing::pair_with_ssi_modes;
 use crate::refine::results::{RefinedMode, RefinedRealPole};
-use crate::stabilize::Mode;
 
 /// The modes' estimates and standard errors (frequency Hz, damping ratio), in the order of
 /// the per-channel fit, with what [`Refinement`] reports of the fit that gave them.
@@ -46,7 +46,7 @@ pub(super) fn shape_se(c: &[C64], cov: &Dense, scales: &[f64]) -> (Vec<C64>, Vec
     let l = c.len();
     let c: Vec<C64> = c.iter().zip(scales).map(|(v, d)| v / d).collect();
     let cov_at = |i: usize, j: usize| cov.at(i, j) / (scales[i % l] * scales[j % l]);
-    let b = crate::stabilize::largest_entry(&c);
+    let b = crate::cluster::largest_entry(&c);
     let cb = c[b];
     if cb.norm() == 0.0 {
         return (c, vec![f64::NAN; l]);

@@ -1,8 +1,8 @@
 //! Pairing the refined modes with the SSI modes they came from.
 
+use crate::cluster::{Mode, pole_distance};
 use crate::linalg::C64;
 use crate::refine::results::RefinedMode;
-use crate::stabilize::{Mode, pole_distance};
 
 /// Index of the mode whose pole is nearest λ, by the clustering's relative distance. Poles may
 /// trade places while fitting, so a fitted pole is named by this rather than by the mode it

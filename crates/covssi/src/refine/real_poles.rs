@@ -1,11 +1,11 @@
 //! The SSI real-pole clusters tested against the record, as the modes are.
 
+use crate::cluster::RealPoleCluster;
 use crate::error::SsiError;
 use crate::refine::model::scoring::Evidence;
 use crate::refine::model::{Fit, Model, better};
 use crate::refine::options::RefineOptions;
 use crate::refine::results::DroppedRealPole;
-use crate::stabilize::RealPoleCluster;
 use rayon::iter::{IntoParallelIterator, ParallelIterator};
 
 /// What [`add_real_poles`] leaves.
