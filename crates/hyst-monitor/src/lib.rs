@@ -34,6 +34,7 @@ pub mod chart;
 pub mod environment;
 pub mod estimates;
 pub mod matching;
+pub mod records;
 mod report;
 pub mod screen;
 pub mod subspace;
@@ -45,10 +46,11 @@ pub use baseline::{Baseline, fit_baseline};
 pub use chart::{Alarm, Cusum, Side};
 pub use estimates::{RecordEstimates, track_estimates};
 pub use matching::{Assignment, MatchOptions, ModeEstimate, match_modes};
-pub use track::{
-    Harmonic, Identified, Loaded, ModeAlarm, RecordModes, TrackOptions, TrackReport, TrackRow,
-    campaign_analysis, identify, identify_records, reported_modes, track,
+pub use records::{
+    Harmonic, Identified, Loaded, RecordModes, campaign_analysis, identify, identify_records,
+    reported_modes,
 };
+pub use track::{ModeAlarm, TrackOptions, TrackReport, TrackRow, track};
 pub use training::{OutlierRule, TrainingOutlier};
 pub use whiten::ResidualModel;
 
