@@ -58,7 +58,7 @@ pub(crate) struct RefineArgs {
 }
 
 pub(crate) fn run(a: &RefineArgs) -> Result<(), Error> {
-    use hyst::ident::residual::{self, Record, Start};
+    use hyst::ident::residual::{self, ModelClass, Record};
     if let Some(fs) = a.fs {
         check_fs(fs)?;
     }
@@ -88,9 +88,9 @@ pub(crate) fn run(a: &RefineArgs) -> Result<(), Error> {
         return Err(fail(format!("--mass must be > 0 kg, got {m}")));
     }
     let start = match a.start {
-        StartArg::Linear => Start::Linear,
-        StartArg::Zener => Start::Zener,
-        StartArg::BoucWen => Start::BoucWen,
+        StartArg::Linear => ModelClass::Linear,
+        StartArg::Zener => ModelClass::Zener,
+        StartArg::BoucWen => ModelClass::BoucWen,
     };
     let rec = Record {
         u,

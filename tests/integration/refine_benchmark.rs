@@ -4,7 +4,7 @@
 
 use crate::common;
 
-use hyst::ident::residual::{self, Effect, InputInterpolation, Record, Start};
+use hyst::ident::residual::{self, Effect, InputInterpolation, ModelClass, Record};
 use hyst::model::{Oscillator, Restoring};
 
 /// The training record at 750 Hz, its force band-limited (the benchmark's README).
@@ -25,7 +25,7 @@ fn the_zener_start_lacks_hysteresis_and_the_loop_finds_it() {
     let rec = record(&u, &y);
     // Periods 2-4 estimate (the first holds the start-up transient), period 5 is held out.
     let (estimate, test) = ((8192, 32768), (32768, 40960));
-    let r = residual::refine_record(&rec, Some(2.0), Start::Zener, estimate, &[test]).unwrap();
+    let r = residual::refine_record(&rec, Some(2.0), ModelClass::Zener, estimate, &[test]).unwrap();
     for s in &r.steps {
         eprintln!(
             "step {:?}: held-out ε {:.4} % -> {:.4} %",

@@ -5,7 +5,7 @@
 //! nothing and is said to be at its noise level, a drifting stiffness is reported as
 //! nonstationary and not fitted, and a linear oscillator gets nothing.
 
-use hyst::ident::residual::{self, Effect, InputInterpolation, Record, Start};
+use hyst::ident::residual::{self, Effect, InputInterpolation, ModelClass, Record};
 use hyst::model::{Clearance, Oscillator};
 use hyst::sim::excitation::{Multisine, add_noise, band_limited_noise};
 use hyst::sim::{Input, simulate_drifting};
@@ -62,7 +62,7 @@ fn record(truth: &Oscillator, periodic: bool, drift: f64, coloured: bool) -> Rec
 /// σₓ of the benchmark's response to the random force (the effects are sized from it).
 const SIGMA_X: f64 = 6.6e-4;
 
-fn run(rec: &Record<'_>, start: Start) -> residual::Refinement {
+fn run(rec: &Record<'_>, start: ModelClass) -> residual::Refinement {
     let r = residual::refine_record(rec, Some(2.0), start, ESTIMATE, &[TEST]).unwrap();
     for s in &r.steps {
         eprintln!(
@@ -93,7 +93,7 @@ fn an_asymmetric_spring_is_named() {
     let mut truth = Oscillator::benchmark();
     truth.extras.quadratic_stiffness = 0.14 * K / (2.0 * SIGMA_X);
     let rec = record(&truth, false, 0.0, false);
-    let r = run(&rec, Start::BoucWen);
+    let r = run(&rec, ModelClass::BoucWen);
     assert_eq!(effects(&r).first(), Some(&Effect::QuadraticStiffness));
     assert!(r.steps[0].gain.is_some_and(|g| g.accepts()));
     // The true noise's ε on the test rows: 8e-6 over the output's range there.
@@ -127,7 +127,7 @@ fn a_clearance_is_named() {
         gap: SIGMA_X,
     });
     let rec = record(&truth, true, 0.0, false);
-    let r = run(&rec, Start::BoucWen);
+    let r = run(&rec, ModelClass::BoucWen);
     assert_eq!(effects(&r).first(), Some(&Effect::Clearance));
     let g = r
         .model
@@ -155,7 +155,7 @@ fn a_clearance_is_named() {
 #[test]
 fn a_control_with_coloured_noise_gets_nothing() {
     let rec = record(&Oscillator::benchmark(), false, 0.0, true);
-    let r = run(&rec, Start::BoucWen);
+    let r = run(&rec, ModelClass::BoucWen);
     assert!(effects(&r).is_empty());
     assert!(matches!(
         r.noise,
@@ -172,7 +172,7 @@ fn a_control_with_coloured_noise_gets_nothing() {
 #[test]
 fn a_drifting_stiffness_is_nonstationary() {
     let rec = record(&Oscillator::benchmark(), false, -0.08, false);
-    let r = run(&rec, Start::BoucWen);
+    let r = run(&rec, ModelClass::BoucWen);
     let named: Vec<Effect> = effects(&r)
         .into_iter()
         .filter(|e| *e != Effect::Hysteresis)
@@ -198,7 +198,7 @@ fn a_linear_oscillator_gets_nothing() {
     let w = 2.0 * std::f64::consts::PI * 30.0;
     let truth = Oscillator::linear(2.0, 2.0 * 2.0 * 0.02 * w, 2.0 * w * w);
     let rec = record(&truth, false, 0.0, false);
-    let r = run(&rec, Start::BoucWen);
+    let r = run(&rec, ModelClass::BoucWen);
     assert!(effects(&r).is_empty());
     assert!(r.unexplained.is_none());
     // Within 5 % of the noise's estimated level (measured: 1.003 ×).

@@ -4,7 +4,7 @@
 
 use crate::common;
 
-use hyst::ident::residual::{self, Effect, InputInterpolation, Record, Start};
+use hyst::ident::residual::{self, Effect, InputInterpolation, ModelClass, Record};
 
 #[test]
 fn silverbox_finds_the_cubic_spring() {
@@ -22,7 +22,7 @@ fn silverbox_finds_the_cubic_spring() {
     // The multisine part is rows 40650..127400; its first 75 % estimates.
     let estimate = (40650, 40650 + 3 * (127400 - 40650) / 4);
     let tests = [(100, 40575), (100, 32100)];
-    let r = residual::refine_record(&rec, None, Start::Linear, estimate, &tests).unwrap();
+    let r = residual::refine_record(&rec, None, ModelClass::Linear, estimate, &tests).unwrap();
     let mv = |v: f64| 1e3 * v;
     let first = &r.steps[0];
     eprintln!(
@@ -69,8 +69,8 @@ fn input_and_output_of_different_lengths() {
         fs: 100.0,
         interpolation: InputInterpolation::BandLimited,
     };
-    let e =
-        residual::refine_record(&rec, Some(1.0), Start::Linear, (0, 80), &[(80, 90)]).unwrap_err();
+    let e = residual::refine_record(&rec, Some(1.0), ModelClass::Linear, (0, 80), &[(80, 90)])
+        .unwrap_err();
     assert!(
         e.to_string().contains("input has 100 samples, output 90"),
         "{e}"
@@ -90,7 +90,7 @@ fn test_rows_must_not_overlap_the_estimate() {
         interpolation: InputInterpolation::BandLimited,
     };
     for test in [(0, 3000), (2000, 4000), (500, 1500)] {
-        let e = residual::refine_record(&rec, Some(1.0), Start::Linear, (0, 3000), &[test])
+        let e = residual::refine_record(&rec, Some(1.0), ModelClass::Linear, (0, 3000), &[test])
             .unwrap_err();
         assert!(
             e.to_string().contains("overlap the estimation rows 0:3000"),

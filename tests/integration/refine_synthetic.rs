@@ -6,7 +6,7 @@
 
 use crate::common;
 
-use hyst::ident::residual::{self, Effect, InputInterpolation, Record, Start};
+use hyst::ident::residual::{self, Effect, InputInterpolation, ModelClass, Record};
 use hyst::model::{BoucWen, Coulomb, Oscillator, SecondMass};
 use hyst::sim::excitation::{add_noise, white_noise};
 use hyst::sim::{self, Input, SimOptions};
@@ -51,7 +51,8 @@ fn run_with<R>(
         // The records are simulated with linearly interpolated input.
         interpolation: InputInterpolation::Linear,
     };
-    let r = residual::refine_record(&rec, Some(1.0), Start::Linear, ESTIMATE, &[HELD_OUT]).unwrap();
+    let r = residual::refine_record(&rec, Some(1.0), ModelClass::Linear, ESTIMATE, &[HELD_OUT])
+        .unwrap();
     (r, then(&rec))
 }
 
@@ -169,7 +170,8 @@ fn takes_a_late_output_channel_for_the_acquisition() {
         fs: FS,
         interpolation: InputInterpolation::Linear,
     };
-    let r = residual::refine_record(&rec, Some(1.0), Start::Linear, ESTIMATE, &[HELD_OUT]).unwrap();
+    let r = residual::refine_record(&rec, Some(1.0), ModelClass::Linear, ESTIMATE, &[HELD_OUT])
+        .unwrap();
     report("late output", &r);
     assert_eq!(r.steps[0].effect, Some(Effect::OutputDelay));
     let d = r
@@ -278,8 +280,14 @@ fn the_held_out_test_asks_for_a_consistent_gain() {
         interpolation: InputInterpolation::Linear,
     };
     let held_out = (3 * n / 4, n);
-    let r = residual::refine_record(&rec, Some(1.0), Start::Linear, (0, 3 * n / 4), &[held_out])
-        .unwrap();
+    let r = residual::refine_record(
+        &rec,
+        Some(1.0),
+        ModelClass::Linear,
+        (0, 3 * n / 4),
+        &[held_out],
+    )
+    .unwrap();
     report("held-out check", &r);
     let truth = residual::test_error(&t, &rec, held_out).unwrap();
     eprintln!(

@@ -49,7 +49,7 @@ fn an_ident_report_reads_back_as_written() {
 /// back to the same JSON.
 #[test]
 fn a_refine_report_reads_back_as_written() {
-    use hyst_ident::residual::{InputInterpolation, Record, Start, refine_report};
+    use hyst_ident::residual::{InputInterpolation, ModelClass, Record, refine_report};
     let mut model = Oscillator::linear(2.0, 10.0, 5e4);
     model.extras.cubic_stiffness = 3e9;
     let u = hyst_sim::excitation::white_noise(4096, 50.0, 31).unwrap();
@@ -71,7 +71,7 @@ fn a_refine_report_reads_back_as_written() {
     let report = refine_report(
         &rec,
         Some(2.0),
-        Start::Linear,
+        ModelClass::Linear,
         (0, 3072),
         &[(3072, 4096)],
         &|_| {},

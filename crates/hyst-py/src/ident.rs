@@ -11,7 +11,7 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use serde::Serialize;
 
-use hyst::ident::residual::{self, InputInterpolation, Start};
+use hyst::ident::residual::{self, InputInterpolation, ModelClass};
 use hyst::ident::{self, DampingGuess, IdentOptions, Linearization, ValidationRecord};
 use hyst::model::Oscillator;
 use hyst::sim::{self, Decimation, InputKind, Integrator, SimOptions};
@@ -276,9 +276,9 @@ pub(crate) fn refine(
     record: &str,
 ) -> PyResult<Report> {
     let start = match start {
-        "linear" => Start::Linear,
-        "zener" => Start::Zener,
-        "bouc-wen" => Start::BoucWen,
+        "linear" => ModelClass::Linear,
+        "zener" => ModelClass::Zener,
+        "bouc-wen" => ModelClass::BoucWen,
         other => {
             return Err(value_error(format!(
                 "start {other:?} is not one of \"linear\", \"zener\", \"bouc-wen\""

@@ -60,7 +60,7 @@ fn simulate_many_ratio() {
 /// spring under white noise at 200 Hz, estimate on 75 %, test on 25 %; then on the Silverbox.
 pub(crate) fn run() {
     simulate_many_ratio();
-    use hyst_ident::residual::{self, Record, Start};
+    use hyst_ident::residual::{self, ModelClass, Record};
     let n = 32768;
     let w = 2.0 * std::f64::consts::PI * 10.0;
     let mut o = Oscillator::linear(1.0, 2.0 * 0.02 * w, w * w);
@@ -81,7 +81,7 @@ pub(crate) fn run() {
             residual::refine_record(
                 &rec,
                 Some(1.0),
-                Start::Linear,
+                ModelClass::Linear,
                 (0, 3 * n / 4),
                 &[(3 * n / 4, n)],
             )
@@ -122,7 +122,7 @@ pub(crate) fn run() {
 /// The residual loop on the measured Silverbox, as `tests/integration/refine_silverbox.rs` runs it
 /// (linear start, estimate on the first 75 % of the multisine part, test on the arrow head).
 fn silverbox() {
-    use hyst_ident::residual::{self, Record, Start};
+    use hyst_ident::residual::{self, ModelClass, Record};
     let Some(dir) = hyst_testkit::data_dir() else {
         println!("refine_silverbox_s skipped: no shared data");
         return;
@@ -150,7 +150,7 @@ fn silverbox() {
         r = Some(residual::refine_record(
             &rec,
             None,
-            Start::Linear,
+            ModelClass::Linear,
             estimate,
             &[(100, 40575), (100, 32100)],
         ));

@@ -17,7 +17,7 @@
 use std::time::Instant;
 
 use crate::acquisition::{Chain, TAIL};
-use hyst_ident::residual::{self, Record, Refinement, Start};
+use hyst_ident::residual::{self, ModelClass, Record, Refinement};
 use hyst_model::{
     BoucWen, Clearance, Coulomb, ForceSurface, Oscillator, SURFACE_TERMS, SecondMass,
 };
@@ -83,7 +83,7 @@ pub struct Case {
     /// What the loop should find.
     pub expect: Expect,
     /// The model the loop starts from.
-    pub start: Start,
+    pub start: ModelClass,
     /// The measurement chain between the structure and the record, applied by the battery
     /// ([`crate::acquisition`]), not by the simulator.
     pub chain: Option<Chain>,
@@ -102,7 +102,7 @@ fn case(name: &'static str, effect: fn(&mut Oscillator, f64, f64), expect: Expec
         drift: 0.0,
         coloured_noise: false,
         expect,
-        start: Start::BoucWen,
+        start: ModelClass::BoucWen,
         chain: None,
     }
 }
@@ -127,7 +127,7 @@ fn controls() -> Vec<Case> {
             ..case("control, coloured noise", nothing, Expect::Nothing)
         },
         Case {
-            start: Start::Linear,
+            start: ModelClass::Linear,
             ..case(
                 "hysteresis (linear start)",
                 nothing,

@@ -8,7 +8,7 @@ use hyst_model::display::six_digits;
 
 use super::noise::NoiseMethod;
 use super::{
-    Effect, Evidence, IdentError, ProgressFn, Record, Refinement, SE_BLOCK_ROWS, Start, drift,
+    Effect, Evidence, IdentError, ModelClass, ProgressFn, Record, Refinement, SE_BLOCK_ROWS, drift,
     refine_record_with,
 };
 
@@ -39,7 +39,7 @@ pub fn default_rows(n: usize) -> ((usize, usize), Vec<(usize, usize)>) {
 pub fn refine_report(
     rec: &Record<'_>,
     mass: Option<f64>,
-    start: Start,
+    start: ModelClass,
     estimate: (usize, usize),
     tests: &[(usize, usize)],
     progress: ProgressFn<'_>,
