@@ -47,43 +47,33 @@
 
 mod error;
 mod fft;
-mod models;
 #[cfg(feature = "serde")]
 mod nullable;
 mod numerics;
 mod options;
-mod pipeline;
-mod poles;
-mod prepare;
-mod report;
-mod validation;
-
-pub mod amplitude;
-
-pub mod flatness;
-
-pub mod floor;
-
-pub mod frf;
-
-pub mod levels;
-
 pub mod periodic;
-
+// The paper's pipeline, one step per module (prepare, poles, models, validation, the
+// spectral and flatness fits), and the whole job on one record (`report`).
+mod pipeline;
+// The jobs built on it, one folder each; with the input too, `frf` fits the modes of a
+// periodic record's frequency response.
+pub mod amplitude;
+pub mod frf;
+pub mod levels;
 pub mod residual;
 
-pub mod zener_spectrum;
-
 pub use covssi::{Complex64, Progress};
-pub use error::*;
-pub use models::*;
-pub use numerics::*;
-pub use options::*;
-pub use pipeline::*;
-pub use poles::*;
-pub use prepare::*;
-pub use report::*;
-pub use validation::*;
+pub use error::IdentError;
+pub use numerics::welch_psd;
+pub(crate) use numerics::{LmSchedule, lm_step, lm_step_with, normal_equations, solve};
+pub use options::{DampingGuess, IdentOptions, Linearization};
+pub use pipeline::{
+    BoucWenCandidate, BoucWenRoute, IdentReport, Identification, Models, Prepared, ProfileRow,
+    Score, SelectedPoles, Validation, ValidationRecord, ValidationRow, best_by_validation,
+    build_models, epsilon, fit_flatness, fit_zener_spectrum, flatness, floor, identify,
+    identify_and_validate, prepare, run_ssi, select_poles, simulate_model, validate, validate_all,
+    zener_spectrum,
+};
 
 #[cfg(test)]
 mod tests {

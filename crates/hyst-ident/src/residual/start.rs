@@ -52,7 +52,7 @@ impl ModelClass {
 }
 
 /// The whole loop on a record: the output-only pipeline on the estimation rows gives the
-/// starting model (mass 1 and fitted when `mass` is `None`), then [`refine`]. A start the
+/// starting model (mass 1 and fitted when `mass` is `None`), then [`refine`](super::refine). A start the
 /// pipeline does not give, or whose fit diverges, falls back to the next simpler one
 /// (Bouc-Wen → Zener → linear), and the report says so ([`Refinement::start`]); when the
 /// pipeline gives nothing at all, the linear start comes from the equation-error regression.

@@ -1,10 +1,31 @@
-//! The whole pipeline ([`identify`]), with steps 3b (the Zener spectral fit) and 4b (the
-//! flatness fit).
+//! The paper's pipeline on one record, one step per module — `prepare` (step 1–2),
+//! `poles` (3), [`zener_spectrum`] (3b), `models` (4), [`flatness`] (4b), `validation` (5),
+//! [`floor`] (the lowest error a class reaches with the input) — and here the whole of it
+//! ([`identify`]); `report` the whole job on one record with its validation
+//! ([`identify_and_validate`]).
 
-use crate::{
-    DampingGuess, IdentError, IdentOptions, Models, Prepared, SelectedPoles, build_models,
-    flatness, prepare, run_ssi, select_poles, zener_spectrum,
+pub mod flatness;
+pub mod floor;
+mod models;
+mod poles;
+mod prepare;
+mod report;
+mod validation;
+pub mod zener_spectrum;
+
+pub use models::{Models, build_models};
+pub use poles::{SelectedPoles, select_poles};
+pub use prepare::{Prepared, prepare, run_ssi};
+pub use report::{
+    BoucWenCandidate, BoucWenRoute, IdentReport, ProfileRow, Score, ValidationRow,
+    identify_and_validate,
 };
+pub use validation::{
+    Validation, ValidationRecord, best_by_validation, epsilon, simulate_model, validate,
+    validate_all,
+};
+
+use crate::{DampingGuess, IdentError, IdentOptions};
 use covssi::SsiResult;
 use hyst_model::Oscillator;
 
