@@ -284,6 +284,23 @@ fn python_source(file: &str) -> String {
     std::fs::read_to_string(format!("{path}{file}")).expect("the Python package's source")
 }
 
+/// Every module of the Python package (`__init__.py` and the modules it imports its
+/// functions from), one after another, in name order.
+fn python_package() -> String {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/crates/hyst-py/python/hyst");
+    let mut files: Vec<_> = std::fs::read_dir(path)
+        .expect("the Python package's folder")
+        .map(|e| e.expect("an entry of the package's folder").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "py"))
+        .collect();
+    files.sort();
+    files
+        .iter()
+        .map(|p| std::fs::read_to_string(p).expect("a module of the Python package"))
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
 /// The keyword a flag is on the Python side, by the naming rule: snake case, `no-x` as `x`.
 fn keyword_of(flag: &str) -> String {
     flag.strip_prefix("no-").unwrap_or(flag).replace('-', "_")
@@ -291,7 +308,7 @@ fn keyword_of(flag: &str) -> String {
 
 #[test]
 fn every_flag_has_its_keyword_and_every_keyword_its_flag() {
-    let src = python_source("__init__.py");
+    let src = python_package();
     let mut problems = Vec::new();
     for p in PAIRS {
         let keywords = python_parameters(&src, p.function);
@@ -346,7 +363,7 @@ fn every_flag_has_its_keyword_and_every_keyword_its_flag() {
 
 #[test]
 fn ssi_and_track_take_every_ssi_setting_on_both_sides() {
-    let src = python_source("__init__.py");
+    let src = python_package();
     let stub = python_source("__init__.pyi");
     for (command, function) in [("ssi", "ssi"), ("track", "track")] {
         let cli: Vec<String> = flags(command).iter().map(|f| keyword_of(f)).collect();
@@ -371,7 +388,7 @@ fn ssi_and_track_take_every_ssi_setting_on_both_sides() {
 
 #[test]
 fn track_takes_every_tracking_setting_on_both_sides() {
-    let src = python_source("__init__.py");
+    let src = python_package();
     let stub = python_source("__init__.pyi");
     let cli: Vec<String> = flags("track").iter().map(|f| keyword_of(f)).collect();
     let py = python_parameters(&src, "track");
@@ -388,14 +405,14 @@ fn track_takes_every_tracking_setting_on_both_sides() {
 
 #[test]
 fn the_type_stubs_list_the_same_keywords_as_the_package() {
-    let src = python_source("__init__.py");
+    let src = python_package();
     let stub = python_source("__init__.pyi");
     for p in PAIRS {
         let mut a = python_parameters(&src, p.function);
         let mut b = python_parameters(&stub, p.function);
         a.sort();
         b.sort();
-        assert_eq!(a, b, "hyst.{} in __init__.py and __init__.pyi", p.function);
+        assert_eq!(a, b, "hyst.{} in the package and __init__.pyi", p.function);
     }
 }
 
