@@ -6,7 +6,7 @@
 //! resampling), [`io`] (the readers and writers of records, setups and shapes: hyst-io) and
 //! [`report`] (a library report with the file it came from, as the command line prints and
 //! writes it), with what the command line and the Python package share ([`settings`],
-//! [`setups`], [`html`]).
+//! [`setups`], [`html`]) and the command line's campaign of record files ([`campaign`]).
 
 pub use covssi;
 pub use hyst_ident as ident;
@@ -16,6 +16,7 @@ pub use hyst_model as model;
 pub use hyst_monitor as monitor;
 pub use hyst_sim as sim;
 
+pub mod campaign;
 pub mod html;
 pub mod report;
 pub mod settings;

@@ -171,54 +171,6 @@ fn reference_modes(path: &Path) -> Result<Vec<hyst::monitor::ModeEstimate>, Erro
         .map_err(|e| fail(format!("--reference {}: {e}", path.display())))
 }
 
-/// The records the covariates file gives a time but `files` do not have (a file missing
-/// from the campaign), added to `files` by name, so that each takes its place in time as a
-/// gap, said, rather than the next record's; none when some record has no time (the order is
-/// then the names').
-fn missing_files(
-    files: &mut Vec<PathBuf>,
-    covs: &HashMap<String, (Option<f64>, Vec<f64>)>,
-) -> Vec<String> {
-    let have: std::collections::HashSet<String> = files
-        .iter()
-        .filter_map(|f| f.file_name().map(|n| n.to_string_lossy().into_owned()))
-        .collect();
-    let timed = |n: &String| covs.get(n).is_some_and(|(t, _)| t.is_some());
-    if covs.is_empty() || !have.iter().all(timed) {
-        return Vec::new();
-    }
-    let mut missing: Vec<String> = covs
-        .keys()
-        .filter(|n| !have.contains(*n) && timed(n))
-        .cloned()
-        .collect();
-    missing.sort();
-    files.extend(missing.iter().map(PathBuf::from));
-    missing
-}
-
-/// Put `files` in time order: the covariates' times when they give one for every record,
-/// else the names' natural order (as listed); and say which.
-fn order_files(files: &mut [PathBuf], covs: &HashMap<String, (Option<f64>, Vec<f64>)>) {
-    let time = |f: &PathBuf| {
-        f.file_name()
-            .and_then(|n| covs.get(n.to_string_lossy().as_ref()))
-            .and_then(|(t, _)| *t)
-    };
-    if !covs.is_empty() && files.iter().all(|f| time(f).is_some()) {
-        files.sort_by(|x, y| time(x).unwrap_or(0.0).total_cmp(&time(y).unwrap_or(0.0)));
-        println!(
-            "{} records, in the order of their time in the covariates file",
-            files.len()
-        );
-    } else {
-        println!(
-            "{} records, in natural order of their names (rec_2 before rec_10)",
-            files.len()
-        );
-    }
-}
-
 impl Sources {
     /// Each record's name: its file's, or its window's number.
     fn names(&self) -> Vec<String> {
@@ -344,10 +296,21 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
         Some(p) => hyst::io::read_covariates(p)?,
         None => Default::default(),
     };
+    let covariates = (covs, cov_names);
     let mut gaps = Vec::new();
     if let Sources::Files(files) = &mut sources {
-        gaps = missing_files(files, &covs);
-        order_files(files, &covs);
+        let ordered = hyst::campaign::order_records(std::mem::take(files), &covariates);
+        println!(
+            "{} records, {}",
+            ordered.files.len(),
+            if ordered.by_time {
+                "in the order of their time in the covariates file"
+            } else {
+                "in natural order of their names (rec_2 before rec_10)"
+            }
+        );
+        *files = ordered.files;
+        gaps = ordered.gaps;
     }
     let names = sources.names();
     if let Some(r) = hyst::io::repeated(&names) {
@@ -362,9 +325,8 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
         Sources::Files(_) => i as f64,
         Sources::Windows { fs, step, .. } => (i * step) as f64 / fs,
     };
-    let covariates_of = |name: &str, fallback_time: f64| match covs.get(name) {
-        Some((t, v)) => (t.unwrap_or(fallback_time), v.clone()),
-        None => (fallback_time, vec![f64::NAN; cov_names.len()]),
+    let covariates_of = |name: &str, fallback_time: f64| {
+        hyst::campaign::covariates_of(&covariates, name, fallback_time)
     };
     // Without --columns, the first record's channels are every record's.
     let first_channels = match (&sources, &a.columns) {
@@ -377,10 +339,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
     };
     let load = |i: usize| -> Result<Loaded, String> {
         if gaps.contains(&names[i]) {
-            return Err(
-                "no such file: listed with a time in the covariates file, not among the records (a gap in the campaign)"
-                    .into(),
-            );
+            return Err(hyst::campaign::GAP_REASON.into());
         }
         let (channels, fs) = sources.channels(i, a, first_channels.as_deref())?;
         let (time, covariates) = covariates_of(&names[i], start_of(i));
@@ -433,7 +392,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
     let reference = a.reference.as_deref().map(reference_modes).transpose()?;
     let mut report = hyst::monitor::track(&records, reference.as_deref(), &opts)
         .map_err(|e| fail(e.to_string()))?;
-    report.name_covariates(cov_names);
+    report.name_covariates(covariates.1);
     let table = hyst::store::TrackTable::of(&report);
     store.finish(&keys, &records, &table)?;
     drop(store);

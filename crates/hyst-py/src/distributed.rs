@@ -44,6 +44,42 @@ pub(crate) fn resolve_analysis(
         .transpose()
 }
 
+/// The campaign's analysis (JSON): the analysis `settings` ask for with what they leave to
+/// the record read by [`hyst::monitor::campaign_analysis`]'s rule (the first of the first
+/// records that gives it), `resolve(i)` giving record i's as [`resolve_analysis`] does (on a
+/// worker), JSON or `None`. An exception `resolve` raises is raised here.
+#[pyfunction]
+#[pyo3(signature = (settings, records, resolve))]
+pub(crate) fn campaign_analysis(
+    settings: &str,
+    records: usize,
+    resolve: Bound<'_, PyAny>,
+) -> PyResult<String> {
+    let analysis = crate::analysis_options(settings)?;
+    let failed: std::cell::RefCell<Option<PyErr>> = std::cell::RefCell::new(None);
+    let read = |i: usize| -> Option<covssi::AnalysisOptions> {
+        if failed.borrow().is_some() {
+            return None;
+        }
+        let given = resolve
+            .call1((i,))
+            .and_then(|v| v.extract::<Option<String>>())
+            .and_then(|json| {
+                json.map(|j| serde_json::from_str(&j).map_err(value_error))
+                    .transpose()
+            });
+        given.unwrap_or_else(|e| {
+            *failed.borrow_mut() = Some(e);
+            None
+        })
+    };
+    let (fixed, _) = hyst::monitor::campaign_analysis(&analysis, records, &read);
+    if let Some(e) = failed.into_inner() {
+        return Err(e);
+    }
+    serde_json::to_string(&fixed).map_err(value_error)
+}
+
 /// One record identified with the analysis `analysis` (JSON, from [`resolve_analysis`]),
 /// as a `RecordModes` JSON document; a record that could not be read (`record` None) is
 /// kept with the reason `why`, as `hyst track` keeps it.

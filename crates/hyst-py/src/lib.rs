@@ -427,6 +427,7 @@ fn _hyst(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(monitor::track_estimates, m)?)?;
     m.add_function(wrap_pyfunction!(amplitude::amplitude, m)?)?;
     m.add_function(wrap_pyfunction!(distributed::resolve_analysis, m)?)?;
+    m.add_function(wrap_pyfunction!(distributed::campaign_analysis, m)?)?;
     m.add_function(wrap_pyfunction!(distributed::identify_record, m)?)?;
     m.add_function(wrap_pyfunction!(distributed::track_identified, m)?)?;
     m.add_class::<ident::Report>()?;

@@ -242,15 +242,13 @@ def _track_on_dask(client, records, fs, *, times, covariates, reference, trackin
         cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True)
         client = Client(cluster)
     try:
-        # As hyst track: what the settings leave to the record read from the first of the
-        # first 24 records that gives it, and kept for every record.
-        analysis = None
-        for p in paths[:24]:
-            analysis = client.submit(_resolve_on_worker, p, fs, settings, pure=False).result()
-            if analysis is not None:
-                break
-        if analysis is None:
-            analysis = _hyst.resolve_analysis(None, 1.0, settings)
+        # As hyst track: what the settings leave to the record read by the library's rule
+        # (the first of the first records that gives it), each asked of a worker in turn,
+        # and kept for every record.
+        analysis = _hyst.campaign_analysis(
+            settings, n,
+            lambda i: client.submit(_resolve_on_worker, paths[i], fs, settings,
+                                    pure=False).result())
         names = [os.path.basename(p) for p in paths]
         futures = client.map(_identify_on_worker, paths, [fs] * n, t, x, names,
                              [analysis] * n, pure=False)
