@@ -171,6 +171,26 @@ fn reference_modes(path: &Path) -> Result<Vec<hyst::monitor::ModeEstimate>, Erro
         .map_err(|e| fail(format!("--reference {}: {e}", path.display())))
 }
 
+/// `--inputs`' files put in time order as the covariates file says, with the gaps among them
+/// ([`hyst::campaign::order_records`]), and the order said; the gaps.
+fn put_in_order(sources: &mut Sources, covariates: &hyst::io::Covariates) -> Vec<String> {
+    let Sources::Files(files) = sources else {
+        return Vec::new();
+    };
+    let ordered = hyst::campaign::order_records(std::mem::take(files), covariates);
+    println!(
+        "{} records, {}",
+        ordered.files.len(),
+        if ordered.by_time {
+            "in the order of their time in the covariates file"
+        } else {
+            "in natural order of their names (rec_2 before rec_10)"
+        }
+    );
+    *files = ordered.files;
+    ordered.gaps
+}
+
 impl Sources {
     /// Each record's name: its file's, or its window's number.
     fn names(&self) -> Vec<String> {
@@ -297,21 +317,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
         None => Default::default(),
     };
     let covariates = (covs, cov_names);
-    let mut gaps = Vec::new();
-    if let Sources::Files(files) = &mut sources {
-        let ordered = hyst::campaign::order_records(std::mem::take(files), &covariates);
-        println!(
-            "{} records, {}",
-            ordered.files.len(),
-            if ordered.by_time {
-                "in the order of their time in the covariates file"
-            } else {
-                "in natural order of their names (rec_2 before rec_10)"
-            }
-        );
-        *files = ordered.files;
-        gaps = ordered.gaps;
-    }
+    let gaps = put_in_order(&mut sources, &covariates);
     let names = sources.names();
     if let Some(r) = hyst::io::repeated(&names) {
         return Err(fail(format!("two records named {r}: each file once")));
