@@ -90,7 +90,7 @@ fn no_harmonic_where_there_is_no_machine() {
         let opts = hyst::covssi::AnalysisOptions::default()
             .resolved_for(&channels, *fs)
             .unwrap();
-        let id = hyst::monitor::identify(&channels, *fs, &opts).unwrap();
+        let id = hyst::monitor::identify_record(&channels, *fs, &opts).unwrap();
         let test = hyst::covssi::harmonic::HarmonicTest::new(&channels, *fs);
         let kappa: Vec<f64> = id
             .modes

@@ -120,7 +120,7 @@ impl fmt::Display for Oscillator {
                 s(m.damping)
             )?;
         }
-        if let Some(c) = e.chain {
+        if let Some(c) = self.chain {
             write!(f, ", chain {{delay {} s, lag {} s}}", s(c.delay), s(c.lag))?;
         }
         Ok(())

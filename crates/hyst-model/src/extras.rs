@@ -1,7 +1,6 @@
 //! The extra force terms $f_{\text{extra}}(x, \dot x, x_2, \dot x_2)$ (springs, damping,
 //! friction, a force surface, a preload, a second mass), each off by default.
 
-use crate::MeasurementChain;
 #[cfg(feature = "serde")]
 use crate::schema;
 
@@ -202,8 +201,7 @@ impl ForceSurface {
     }
 }
 
-/// Extra force terms that can be added to any oscillator, and the measurement chain between
-/// its displacement and the record ([`MeasurementChain`]). All off by default.
+/// Extra force terms that can be added to any oscillator. All off by default.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct ExtraForces {
     /// Cubic spring coefficient $k_3$ (N/m³): force $k_3x^3$.
@@ -224,14 +222,10 @@ pub struct ExtraForces {
     /// against the output. It shifts the equilibrium and leaves the dynamics (the poles) as
     /// they are.
     pub offset: f64,
-    /// The measurement chain: not a force, but what the acquisition does to the output
-    /// ([`MeasurementChain`]); `None` for a record of the displacement itself.
-    pub chain: Option<MeasurementChain>,
 }
 
 impl ExtraForces {
-    /// Whether every extra force term is off (the measurement chain, not a force, is not
-    /// counted).
+    /// Whether every extra force term is off.
     pub fn is_empty(&self) -> bool {
         self.cubic_stiffness == 0.0
             && self.quadratic_stiffness == 0.0

@@ -6,7 +6,9 @@ use nalgebra::{Complex, DMatrix};
 use crate::error::{finite, not_negative, positive};
 #[cfg(feature = "serde")]
 use crate::schema;
-use crate::{BoucWen, ExtraForces, Jacobian, ModelError, Restoring, State, ZenerParams};
+use crate::{
+    BoucWen, ExtraForces, Jacobian, MeasurementChain, ModelError, Restoring, State, ZenerParams,
+};
 
 /// The oscillator $m\ddot x + c\dot x + kx + z + f_{\text{extra}} = u$.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -26,6 +28,9 @@ pub struct Oscillator {
     pub restoring: Restoring,
     /// Extra force terms.
     pub extras: ExtraForces,
+    /// The measurement chain: not structure, but what the acquisition does to the output
+    /// ([`MeasurementChain`]); `None` for a record of the displacement itself.
+    pub chain: Option<MeasurementChain>,
 }
 
 /// Linear state-space form $\dot s = A s + B u$, $y = C s$.
@@ -72,6 +77,7 @@ impl Oscillator {
             stiffness,
             restoring: Restoring::None,
             extras: ExtraForces::default(),
+            chain: None,
         }
     }
 
@@ -132,7 +138,7 @@ impl Oscillator {
             finite("second_mass.stiffness", sm.stiffness)?;
             finite("second_mass.damping", sm.damping)?;
         }
-        if let Some(ch) = &e.chain {
+        if let Some(ch) = &self.chain {
             not_negative("chain.delay", ch.delay)?;
             not_negative("chain.lag", ch.lag)?;
         }

@@ -264,7 +264,7 @@ impl From<Oscillator> for OscillatorFile {
             surface: e.surface.map(Into::into),
             second_mass: e.second_mass,
             offset: e.offset,
-            chain: e.chain,
+            chain: o.chain,
             ..Default::default()
         }
     }
@@ -336,8 +336,8 @@ impl TryFrom<OscillatorFile> for Oscillator {
                 surface: f.surface.map(TryInto::try_into).transpose()?,
                 second_mass: f.second_mass,
                 offset: f.offset,
-                chain: f.chain,
             },
+            chain: f.chain,
         };
         o.validate()?;
         Ok(o)
@@ -368,7 +368,7 @@ mod tests {
         o.extras.quadratic_stiffness = -2e6;
         o.extras.quadratic_damping = 4.0;
         o.extras.offset = 0.25;
-        o.extras.chain = Some(MeasurementChain {
+        o.chain = Some(MeasurementChain {
             delay: 1.3e-3,
             lag: 2e-4,
         });

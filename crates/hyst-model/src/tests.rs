@@ -108,7 +108,6 @@ fn jacobian_matches_finite_differences() {
             damping: 3.0,
         }),
         offset: 0.4,
-        chain: None,
     };
     let s = State::new(1e-3, 0.07, 20.0, -2e-4, 0.01);
     let j = o.jacobian(&s);

@@ -2,7 +2,7 @@
 //! time, and a change in them told from estimation noise and the environment's effect.
 //!
 //! One job, in four steps, each its own module, which [`track()`](fn@track) runs over a campaign's
-//! records (each identified by [`identify`], as `hyst ssi` does):
+//! records (each identified by [`identify_record`], as `hyst ssi` does):
 //!
 //! * [`matching`]: a record's modes assigned one-to-one to a reference set, by frequency and
 //!   MAC. A pair is admissible when |f − f_ref| / f_ref ≤ Δf and MAC ≥ MAC_min; among
@@ -47,8 +47,8 @@ pub use chart::{Alarm, Cusum, Side};
 pub use estimates::{RecordEstimates, track_estimates};
 pub use matching::{Assignment, MatchOptions, ModeEstimate, match_modes};
 pub use records::{
-    Harmonic, Identified, Loaded, RecordModes, campaign_analysis, identify, identify_records,
-    reported_modes,
+    Harmonic, Identified, Loaded, RecordModes, campaign_analysis, identify_record,
+    identify_records, reported_modes,
 };
 pub use track::{ModeAlarm, TrackOptions, TrackReport, TrackRow, track};
 pub use training::{OutlierRule, TrainingOutlier};

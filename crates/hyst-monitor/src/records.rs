@@ -1,5 +1,5 @@
 //! Each record of a campaign identified: screened, its machine's lines subtracted, its modes
-//! by SSI and the refinement as `hyst ssi` finds them ([`identify`]), many in parallel
+//! by SSI and the refinement as `hyst ssi` finds them ([`identify_record`]), many in parallel
 //! ([`identify_records`]), with the analysis the campaign keeps read from its first record
 //! ([`campaign_analysis`]).
 
@@ -63,7 +63,7 @@ pub struct Harmonic {
 /// stuck or clipped channel); a machine's steady spectral lines subtracted first and the
 /// poles the analysis's decision takes for harmonics ([`covssi::decision`]), both named in
 /// `harmonics`.
-pub fn identify(
+pub fn identify_record(
     channels: &[&[f64]],
     fs: f64,
     opts: &covssi::AnalysisOptions,
@@ -197,7 +197,7 @@ pub fn identify_records(
                         name: name.clone(),
                         time: l.time,
                         covariates: l.covariates,
-                        outcome: identify(&views, l.fs, opts).map_err(|e| e.to_string()),
+                        outcome: identify_record(&views, l.fs, opts).map_err(|e| e.to_string()),
                     }
                 }
                 Err(why) => RecordModes {

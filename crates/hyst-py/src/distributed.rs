@@ -103,7 +103,7 @@ pub(crate) fn identify_record(
             let data = columns(&r);
             py.detach(|| {
                 let views: Vec<&[f64]> = data.iter().map(|c| c.as_slice()).collect();
-                hyst::monitor::identify(&views, fs, &analysis).map_err(|e| e.to_string())
+                hyst::monitor::identify_record(&views, fs, &analysis).map_err(|e| e.to_string())
             })
         }
         None => Err(why.unwrap_or_else(|| "not read".into())),

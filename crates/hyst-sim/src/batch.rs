@@ -641,13 +641,13 @@ mod tests {
         v.push(surf);
         // Measurement chains, in a chunk beside lanes without one.
         let mut lagged = bw(1.0);
-        lagged.extras.chain = Some(hyst_model::MeasurementChain {
+        lagged.chain = Some(hyst_model::MeasurementChain {
             delay: 3.3e-3,
             lag: 1e-3,
         });
         v.push(lagged);
         let mut delayed = zen;
-        delayed.extras.chain = Some(hyst_model::MeasurementChain {
+        delayed.chain = Some(hyst_model::MeasurementChain {
             delay: 7e-3,
             lag: 0.0,
         });

@@ -14,7 +14,7 @@ use hyst_model::{MeasurementChain, Oscillator};
 
 /// The chain `model`'s output goes through, unless it has none or it does nothing.
 pub(crate) fn of(model: &Oscillator) -> Option<MeasurementChain> {
-    model.extras.chain.filter(|c| !c.is_identity())
+    model.chain.filter(|c| !c.is_identity())
 }
 
 /// The weights of $s_{j+1} = E s_j + w_0 x_j + w_1 x_{j+1} + w_2 h m_j + w_3 h m_{j+1}$ ($m$ the

@@ -385,7 +385,7 @@ pub fn make(case: &Case, kind: Force, seed: u64, generator: Generator) -> Option
         clean.truncate(N);
         u.truncate(N);
         if let Chain::DelayLag { delay, lag } = c {
-            truth.extras.chain = Some(hyst_model::MeasurementChain { delay, lag });
+            truth.chain = Some(hyst_model::MeasurementChain { delay, lag });
         }
     }
     let noise = sensor_noise(case.coloured_noise, seed.wrapping_add(0x5eed));
@@ -437,8 +437,8 @@ fn truth_value(name: &str, t: &Oscillator) -> Option<f64> {
         "second_mass" => e.second_mass.map(|m| m.mass),
         "second_stiffness" => e.second_mass.map(|m| m.stiffness),
         "second_damping" => e.second_mass.map(|m| m.damping),
-        "chain_delay" => e.chain.map(|c| c.delay).filter(|v| *v != 0.0),
-        "chain_lag" => e.chain.map(|c| c.lag).filter(|v| *v != 0.0),
+        "chain_delay" => t.chain.map(|c| c.delay).filter(|v| *v != 0.0),
+        "chain_lag" => t.chain.map(|c| c.lag).filter(|v| *v != 0.0),
         _ => None,
     }
 }
@@ -467,7 +467,7 @@ impl Row {
             && (r.model.extras.coulomb.is_some() == self.truth.extras.coulomb.is_some())
             && (r.model.extras.second_mass.is_some() == self.truth.extras.second_mass.is_some())
             && (r.model.extras.clearance.is_some() == self.truth.extras.clearance.is_some())
-            && (r.model.extras.chain.is_some() == self.truth.extras.chain.is_some())
+            && (r.model.chain.is_some() == self.truth.chain.is_some())
             && ((r.model.extras.cubic_stiffness != 0.0)
                 == (self.truth.extras.cubic_stiffness != 0.0))
             && ((r.model.extras.quadratic_stiffness != 0.0)

@@ -5,7 +5,7 @@
 use std::time::Instant;
 
 use hyst_monitor::campaign::Campaign;
-use hyst_monitor::{RecordModes, Side, TrackOptions, identify, track};
+use hyst_monitor::{RecordModes, Side, TrackOptions, identify_record, track};
 use rayon::prelude::*;
 
 /// The campaign's size, on the command line.
@@ -218,7 +218,7 @@ pub fn bench() {
         .map(|i| {
             let r = campaign.record(i);
             let views: Vec<&[f64]> = r.channels.iter().map(|c| c.as_slice()).collect();
-            identify(&views, campaign.fs, &analysis).map_or(0, |m| m.modes.len())
+            identify_record(&views, campaign.fs, &analysis).map_or(0, |m| m.modes.len())
         })
         .collect();
     let s = t0.elapsed().as_secs_f64();
@@ -297,7 +297,8 @@ fn identify_campaign(campaign: &Campaign) -> (Vec<RecordModes>, f64) {
             .map(|i| {
                 let r = campaign.record(i);
                 let views: Vec<&[f64]> = r.channels.iter().map(|c| c.as_slice()).collect();
-                let outcome = identify(&views, campaign.fs, &analysis).map_err(|e| e.to_string());
+                let outcome =
+                    identify_record(&views, campaign.fs, &analysis).map_err(|e| e.to_string());
                 bar.inc(1);
                 RecordModes {
                     name: format!("record {i}"),

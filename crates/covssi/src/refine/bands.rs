@@ -1,12 +1,12 @@
 //! Many modes: groups at the widest frequency gaps, each fitted jointly over its own band.
 
 use crate::linalg::{self, C64, Dense};
-use crate::refine::estimates::{Estimates, channel_block, pole_se, shape_se};
 use crate::refine::joint;
 use crate::refine::model::{Fit, Model};
 use crate::refine::options::RefineOptions;
 use crate::refine::results::MisfitCounts;
 use crate::refine::spectra::Spectra;
+use crate::refine::standard_errors::{Estimates, channel_block, pole_se, shape_se};
 use std::ops::Range;
 
 /// The modes of a per-channel fit split into groups of at most `p`, by increasing frequency:

@@ -81,7 +81,6 @@ use crate::{Mode, RealPoleCluster, SsiError, SsiOption};
 use rayon::prelude::*;
 
 mod bands;
-mod estimates;
 mod joint;
 mod model;
 mod options;
@@ -90,19 +89,20 @@ mod parametrization;
 mod real_poles;
 mod results;
 mod spectra;
+mod standard_errors;
 
-use bands::*;
-use estimates::*;
-use model::*;
+use bands::joint_by_bands;
+use model::{Fit, Model, What};
 pub use options::RefineOptions;
 pub use pairing::SAME_MODE_DISTANCE;
-use pairing::*;
-use real_poles::*;
+use pairing::nearest_mode;
+use real_poles::{RealPoles, add_real_poles, bic_penalty, real_pole_evidence, weakest};
 pub use results::{
     DroppedMode, DroppedRealPole, FittedPole, MISFIT_LIMIT, RefinedMode, RefinedRealPole,
     Refinement, exponential_misfit,
 };
-use spectra::*;
+use spectra::{Scale, Spectra};
+use standard_errors::{per_channel_estimates, refined_modes, refined_real_poles};
 
 /// Most channels fitted by the joint likelihood; its cost grows as l⁴ (4lm parameters, l²
 /// observations per frequency). More channels are fitted through this many combinations of

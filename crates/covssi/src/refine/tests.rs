@@ -1,4 +1,6 @@
+use super::bands::split_into_bands;
 use super::model::scoring::Evidence;
+use super::pairing::pair_with_ssi_modes;
 use super::results::MisfitCounts;
 use super::*;
 use rand::rngs::Xoshiro256PlusPlus;

@@ -34,8 +34,11 @@ mod randec;
 mod report;
 pub(crate) mod slope;
 
-pub use report::*;
-pub use slope::*;
+pub use report::{
+    AmplitudeAnalysis, AmplitudeCampaign, CLIP_RUN, ClippedChannel, PooledMode, amplitude_analysis,
+    amplitude_campaign, clipped_channels,
+};
+pub use slope::pooled_linearity;
 use slope::{jackknife_se, linearity};
 
 /// A mode whose band holds more white noise than this share of its variance is said to be

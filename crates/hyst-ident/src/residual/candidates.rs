@@ -271,10 +271,10 @@ pub(super) fn already_has(o: &Oscillator, effect: Effect) -> Option<&'static str
         Effect::SecondMode if x.second_mass.is_some() => {
             Some("the model already has a second mass (one is supported)")
         }
-        Effect::OutputDelay if x.chain.is_some_and(|c| c.delay != 0.0) => {
+        Effect::OutputDelay if o.chain.is_some_and(|c| c.delay != 0.0) => {
             Some("the model already has an output delay")
         }
-        Effect::SensorLag if x.chain.is_some_and(|c| c.lag != 0.0) => {
+        Effect::SensorLag if o.chain.is_some_and(|c| c.lag != 0.0) => {
             Some("the model already has a sensor lag")
         }
         _ => None,
@@ -350,13 +350,13 @@ pub(super) fn chain_start(
         return Err("the residual does not lag the model's output (no causal chain to start)");
     }
     let mut m = *o;
-    let mut c = o.extras.chain.unwrap_or_default();
+    let mut c = o.chain.unwrap_or_default();
     if e == Effect::OutputDelay {
         c.delay = d;
     } else {
         c.lag = d;
     }
-    m.extras.chain = Some(c);
+    m.chain = Some(c);
     Ok(m)
 }
 

@@ -80,7 +80,7 @@ pub(super) fn free(o: &Oscillator, fit_mass: bool) -> Vec<P> {
     if e.second_mass.is_some() {
         v.extend([P::M2, P::K2, P::C2]);
     }
-    if let Some(c) = e.chain {
+    if let Some(c) = o.chain {
         if c.delay != 0.0 {
             v.push(P::Delay);
         }
@@ -140,8 +140,8 @@ pub(super) fn get(o: &Oscillator, p: P) -> f64 {
         (P::M2, _) => e.second_mass.map_or(0.0, |s| s.mass),
         (P::K2, _) => e.second_mass.map_or(0.0, |s| s.stiffness),
         (P::C2, _) => e.second_mass.map_or(0.0, |s| s.damping),
-        (P::Delay, _) => e.chain.map_or(0.0, |c| c.delay),
-        (P::Lag, _) => e.chain.map_or(0.0, |c| c.lag),
+        (P::Delay, _) => o.chain.map_or(0.0, |c| c.delay),
+        (P::Lag, _) => o.chain.map_or(0.0, |c| c.lag),
         _ => 0.0,
     }
 }
@@ -207,7 +207,7 @@ pub(super) fn set(o: &mut Oscillator, p: P, v: f64) {
             }
         }
         P::Delay | P::Lag => {
-            if let Some(c) = &mut e.chain {
+            if let Some(c) = &mut o.chain {
                 if p == P::Delay {
                     c.delay = v
                 } else {

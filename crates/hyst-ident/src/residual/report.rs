@@ -207,7 +207,7 @@ impl fmt::Display for RefineReport {
         )?;
         self.fmt_steps(f)?;
         writeln!(f, "final model: {}", r.model)?;
-        if let Some(c) = r.model.extras.chain.filter(|c| !c.is_identity()) {
+        if let Some(c) = r.model.chain.filter(|c| !c.is_identity()) {
             writeln!(
                 f,
                 "  measurement chain: the recorded output lags the structure's by a delay of {} s \

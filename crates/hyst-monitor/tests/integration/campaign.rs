@@ -3,7 +3,7 @@
 //! reason.
 
 use hyst_monitor::campaign::Campaign;
-use hyst_monitor::{RecordModes, Side, TrackOptions, identify, track};
+use hyst_monitor::{RecordModes, Side, TrackOptions, identify_record, track};
 use rayon::prelude::*;
 
 fn analysis() -> covssi::AnalysisOptions {
@@ -22,7 +22,7 @@ fn identified(c: &Campaign, i: usize, broken: impl Fn(&mut Vec<Vec<f64>>)) -> Re
         name: format!("{i}"),
         time: r.time_s,
         covariates: vec![r.temperature],
-        outcome: identify(&views, c.fs, &analysis()).map_err(|e| e.to_string()),
+        outcome: identify_record(&views, c.fs, &analysis()).map_err(|e| e.to_string()),
     }
 }
 

@@ -11,7 +11,7 @@
 
 use crate::common;
 
-use hyst_monitor::{RecordModes, Side, TrackOptions, identify, track};
+use hyst_monitor::{RecordModes, Side, TrackOptions, identify_record, track};
 use rayon::prelude::*;
 
 /// What is wrong with record `i` of the campaign seeded `seed`, if anything: about one record
@@ -67,7 +67,7 @@ fn a_confounded_campaign_alarms_only_on_its_change() {
                     name: format!("{i}"),
                     time: r.time_s,
                     covariates: vec![r.temperature],
-                    outcome: identify(&views, c.fs, &opts).map_err(|e| e.to_string()),
+                    outcome: identify_record(&views, c.fs, &opts).map_err(|e| e.to_string()),
                 }
             })
             .collect();

@@ -8,7 +8,7 @@
 use crate::common;
 
 use hyst_monitor::subspace::{hankel, subspace_chart};
-use hyst_monitor::{Cusum, RecordModes, Side, TrackOptions, identify, track};
+use hyst_monitor::{Cusum, RecordModes, Side, TrackOptions, identify_record, track};
 use rayon::prelude::*;
 
 /// Twelve days of records every two hours (`HYST_CAMPAIGN_DAYS` more), the first half
@@ -35,7 +35,7 @@ fn subspace_test_beside_the_modal_chart() {
                     name: format!("{i}"),
                     time: r.time_s,
                     covariates: vec![r.temperature],
-                    outcome: identify(&views, c.fs, &opts).map_err(|e| e.to_string()),
+                    outcome: identify_record(&views, c.fs, &opts).map_err(|e| e.to_string()),
                 };
                 (modes, Some(hankel(&views, 2)))
             })
