@@ -1,7 +1,9 @@
 //! What the project's tests and tasks (`cargo xtask`) share and no user of the libraries
 //! needs, with nothing but the standard library so that the task runner builds in seconds:
 //!
-//! - [`data_dir`]: the shared data sets' folder (`HYST_DATA_DIR`, else `../shared/data`);
+//! - [`data_dir`]: the shared data sets' folder (`HYST_DATA_DIR`, else `../shared/data`),
+//!   and [`data_file`], one of its files as a test takes it (missing: a failure under CI,
+//!   else a skip that says so), and [`rel_rms`], a record's error relative to another;
 //! - [`chromium`]: Debian's headless Chromium opening a report page (the tests of what a
 //!   browser shows, the documentation's screenshots);
 //! - [`run_ok`], [`succeeded`]: a command run to success, its failure naming it.
@@ -25,6 +27,36 @@ pub fn data_dir() -> Option<PathBuf> {
         workspace_root().join("../shared/data"),
     ];
     candidates.into_iter().find(|p| p.is_dir())
+}
+
+/// Path of a shared data file, e.g. `boucwen/multisine_val.csv`.
+///
+/// When the data folder or the file is missing: a test run under CI (`CI` set) fails, since
+/// CI must have the data; elsewhere the test is skipped with a message saying so.
+pub fn data_file(rel: &str) -> Option<PathBuf> {
+    let found = data_dir().map(|d| d.join(rel)).filter(|p| p.is_file());
+    match found {
+        Some(p) => Some(p),
+        None if std::env::var_os("CI").is_some() => {
+            panic!(
+                "shared data file `{rel}` is missing (set HYST_DATA_DIR or provide ../shared/data)"
+            )
+        }
+        None => {
+            eprintln!(
+                "SKIPPED: shared data file `{rel}` not found (set HYST_DATA_DIR or provide ../shared/data)"
+            );
+            None
+        }
+    }
+}
+
+/// ‖a − b‖ / ‖b‖: the RMS of `a`'s error relative to the reference `b`'s RMS.
+pub fn rel_rms(a: &[f64], b: &[f64]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    let num: f64 = a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum();
+    let den: f64 = b.iter().map(|y| y * y).sum();
+    (num / den).sqrt()
 }
 
 /// The workspace's root folder (this crate is `crates/hyst-testkit` in it).

@@ -119,7 +119,7 @@ pub(crate) fn run() {
     silverbox();
 }
 
-/// The residual loop on the measured Silverbox, as `tests/integration/refine_silverbox.rs` runs it
+/// The residual loop on the measured Silverbox, as `crates/hyst-ident/tests/integration/refine_silverbox.rs` runs it
 /// (linear start, estimate on the first 75 % of the multisine part, test on the arrow head).
 fn silverbox() {
     use hyst_ident::residual::{self, ModelClass, Record};

@@ -433,7 +433,7 @@ fn calibration(r: &hyst::covssi::Refinement, modes: usize) -> String {
 
 /// The refinement with real poles on ten records of the Zener oscillator the pipeline
 /// identifies on the benchmark (m = 2, c = 11.70, k = 46899, k∞ = 81432, Ω = 61.72), as in
-/// `tests/integration/zener_real_pole.rs`: 2¹⁵ samples at 750 Hz under white noise, 5 % measurement
+/// `crates/hyst-ident/tests/integration/zener_real_pole.rs`: 2¹⁵ samples at 750 Hz under white noise, 5 % measurement
 /// noise, SSI with 60 block rows. Each record is refined once by `refine_with_real_poles` and
 /// once by `refine`; the line gives the median and range of their times and the kept real
 /// pole's RMS error against the model's exact one, beside SSI's (its largest real cluster).

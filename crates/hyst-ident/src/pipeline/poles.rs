@@ -169,7 +169,7 @@ pub(crate) fn real_pole(
 /// follows that model too and it keeps the pair and a real pole, their refined values are
 /// returned (the real pole with the most evidence), to be used in place of SSI's. SSI sees
 /// the record only through its correlations: on Zener records under white noise the
-/// refined poles are several times closer (`tests/integration/zener_real_pole.rs`). Records that do not
+/// refined poles are several times closer (`crates/hyst-ident/tests/integration/zener_real_pole.rs`). Records that do not
 /// follow the model (a multisine's line spectrum) are not refitted.
 pub(crate) fn check_support(
     mode: &covssi::Mode,

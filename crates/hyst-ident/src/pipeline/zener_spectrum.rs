@@ -508,7 +508,7 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
-    /// The Zener model of tests/integration/zener_real_pole.rs (the one the pipeline finds on the
+    /// The Zener model of crates/hyst-ident/tests/integration/zener_real_pole.rs (the one the pipeline finds on the
     /// benchmark record).
     fn zener() -> Oscillator {
         Oscillator::zener(

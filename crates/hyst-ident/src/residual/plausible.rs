@@ -9,7 +9,7 @@ use super::Effect;
 
 /// A second mass below this share of the main mass is not a finding: the project's second
 /// modes to find are 5–10 % of the main mass (`cargo xtask loop-battery`,
-/// `tests/integration/refine_synthetic.rs`); the spurious ones that took up a decimation filter's or a
+/// `crates/hyst-ident/tests/integration/refine_synthetic.rs`); the spurious ones that took up a decimation filter's or a
 /// coloured noise's share were 0.1–0.3 % (issue 45).
 pub const MIN_SECOND_MASS_SHARE: f64 = 0.01;
 

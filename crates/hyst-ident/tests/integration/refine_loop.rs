@@ -5,10 +5,10 @@
 //! nothing and is said to be at its noise level, a drifting stiffness is reported as
 //! nonstationary and not fitted, and a linear oscillator gets nothing.
 
-use hyst::ident::residual::{self, Effect, InputInterpolation, ModelClass, Record};
-use hyst::model::{Clearance, Oscillator};
-use hyst::sim::excitation::{Multisine, add_noise, band_limited_noise};
-use hyst::sim::{Input, simulate_drifting};
+use hyst_ident::residual::{self, Effect, InputInterpolation, ModelClass, Record};
+use hyst_model::{Clearance, Oscillator};
+use hyst_sim::excitation::{Multisine, add_noise, band_limited_noise};
+use hyst_sim::{Input, simulate_drifting};
 
 const FS: f64 = 750.0;
 const N: usize = 16384;

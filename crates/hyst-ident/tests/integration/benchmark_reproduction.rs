@@ -5,8 +5,8 @@
 use crate::common;
 
 use common::{load_uy, rel_rms};
-use hyst::model::Oscillator;
-use hyst::sim::{self, Decimation, Input, Integrator, SimOptions, excitation::Sweep};
+use hyst_model::Oscillator;
+use hyst_sim::{self as sim, Decimation, Input, Integrator, SimOptions, excitation::Sweep};
 
 const FS: f64 = 750.0;
 

@@ -3,10 +3,10 @@
 
 use crate::common;
 
-use hyst::ident::{self, IdentError, IdentOptions, Linearization};
-use hyst::model::Oscillator;
-use hyst::sim::excitation::{Multisine, add_noise};
-use hyst::sim::{self, Input, SimOptions};
+use hyst_ident::{self as ident, IdentError, IdentOptions, Linearization};
+use hyst_model::Oscillator;
+use hyst_sim::excitation::{Multisine, add_noise};
+use hyst_sim::{self as sim, Input, SimOptions};
 
 /// Identify from the output of `multisine_train.csv` only (first, transient period dropped);
 /// validate on `multisine_val.csv` and `sinesweep_val.csv`.
@@ -82,8 +82,8 @@ fn section4_on_the_benchmark() {
 /// it implies matches the recorded input the fit never saw.
 #[test]
 fn section4_flatness_route_beats_the_zener_floor() {
-    use hyst::ident::flatness::{self, ExcitationBand};
-    use hyst::model::Restoring;
+    use hyst_ident::flatness::{self, ExcitationBand};
+    use hyst_model::Restoring;
     let Some((u, y)) = common::load_uy("boucwen/multisine_train.csv") else {
         return;
     };
@@ -195,7 +195,7 @@ fn nearly_linear_case_recovers_stiffness_and_damping() {
 #[test]
 fn no_stable_pair_is_an_error() {
     // White noise has no resonance.
-    let y = hyst::sim::excitation::white_noise(20000, 1.0, 3).unwrap();
+    let y = hyst_sim::excitation::white_noise(20000, 1.0, 3).unwrap();
     let e = ident::identify(&y, 750.0, &IdentOptions::default()).unwrap_err();
     assert!(matches!(e, IdentError::NoStablePair { .. }), "{e}");
 }
@@ -208,7 +208,7 @@ fn no_stable_pair_is_an_error() {
 fn white_noise_never_yields_a_model() {
     let (mut no_pair, mut not_supported) = (0, 0);
     for seed in 0..24 {
-        let y = hyst::sim::excitation::white_noise(20000, 1.0, seed).unwrap();
+        let y = hyst_sim::excitation::white_noise(20000, 1.0, seed).unwrap();
         match ident::identify(&y, 750.0, &IdentOptions::default()) {
             Err(IdentError::NoStablePair { .. }) => no_pair += 1,
             Err(IdentError::PairNotSupported {
@@ -262,15 +262,12 @@ fn a_free_decay_keeps_its_pair_with_notes() {
 /// range, not a "constant" record or a garbage dominant frequency.
 #[test]
 fn a_record_beyond_the_double_range_is_an_error() {
-    let y = hyst::sim::excitation::white_noise(4000, 1.0, 9).unwrap();
+    let y = hyst_sim::excitation::white_noise(4000, 1.0, 9).unwrap();
     for s in [1e-160, 1e160] {
         let ys: Vec<f64> = y.iter().map(|v| v * s).collect();
         let e = ident::identify(&ys, 750.0, &IdentOptions::default()).unwrap_err();
         assert!(
-            matches!(
-                e,
-                IdentError::Ssi(hyst::covssi::SsiError::OutOfRange { .. })
-            ),
+            matches!(e, IdentError::Ssi(covssi::SsiError::OutOfRange { .. })),
             "scale {s:e}: {e}"
         );
     }
@@ -287,7 +284,7 @@ fn too_short_and_bad_mass() {
         mass: 0.0,
         ..IdentOptions::default()
     };
-    let y = hyst::sim::excitation::white_noise(2000, 1.0, 3).unwrap();
+    let y = hyst_sim::excitation::white_noise(2000, 1.0, 3).unwrap();
     assert!(matches!(
         ident::identify(&y, 750.0, &opts),
         Err(IdentError::NonPositiveMass { .. })
@@ -299,7 +296,7 @@ fn no_real_pole_falls_back_to_the_linear_model() {
     // A linear oscillator's record, cut so short and sampled so that no real pole stabilises:
     // when none is found the Zener and Bouc-Wen models are absent and a note says why.
     let model = Oscillator::linear(2.0, 20.0, 1e5);
-    let u = hyst::sim::excitation::white_noise(40000, 10.0, 5).unwrap();
+    let u = hyst_sim::excitation::white_noise(40000, 10.0, 5).unwrap();
     let y = sim::simulate(
         &model,
         Input::Sampled(&u),

@@ -5,11 +5,11 @@
 //! one-amplitude mapping, and the model fitted by simulation (indirect inference) better still,
 //! its parameters within four standard errors of the benchmark's.
 
-use hyst::ident::{self, IdentOptions, Linearization};
-use hyst::linearize::statistical;
-use hyst::model::{Oscillator, Restoring};
-use hyst::sim::InputKind;
-use hyst::sim::excitation::add_noise;
+use hyst_ident::{self as ident, IdentOptions, Linearization};
+use hyst_linearize::statistical;
+use hyst_model::{Oscillator, Restoring};
+use hyst_sim::InputKind;
+use hyst_sim::excitation::add_noise;
 
 const FS: f64 = 750.0;
 
@@ -21,7 +21,7 @@ fn steady(level: f64, samples: usize, seed: u64) -> (Vec<f64>, Vec<f64>) {
 
 /// [`steady`] of any oscillator.
 fn steady_of(o: &Oscillator, level: f64, samples: usize, seed: u64) -> (Vec<f64>, Vec<f64>) {
-    hyst::sim::WhiteForceRecord::new(level, samples, seed)
+    hyst_sim::WhiteForceRecord::new(level, samples, seed)
         .with_input(InputKind::Periodic)
         .generate(o, FS)
         .unwrap()
@@ -160,7 +160,7 @@ fn levels_tell_the_exponent() {
         2.0,
         10.0,
         5e4,
-        hyst::model::BoucWen::from_products(5e4, bg, -0.5 * bg, 2.0),
+        hyst_model::BoucWen::from_products(5e4, bg, -0.5 * bg, 2.0),
     );
     let opts = IdentOptions {
         mass: truth.mass,

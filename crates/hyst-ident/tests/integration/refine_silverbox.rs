@@ -4,14 +4,14 @@
 
 use crate::common;
 
-use hyst::ident::residual::{self, Effect, InputInterpolation, ModelClass, Record};
+use hyst_ident::residual::{self, Effect, InputInterpolation, ModelClass, Record};
 
 #[test]
 fn silverbox_finds_the_cubic_spring() {
     let Some(p) = common::data_file("silverbox/SNLS80mV.csv") else {
         return;
     };
-    let t = hyst::io::read_csv(&p).unwrap();
+    let t = hyst_io::read_csv(&p).unwrap();
     let (u, y) = (t.column("u").unwrap(), t.column("y").unwrap());
     let rec = Record {
         u,

@@ -2,9 +2,9 @@
 //! refinement with real poles (`covssi::refine_with_real_poles`) on records simulated by
 //! hyst-sim, against the exact poles of the model's state-space form (hyst-model).
 
-use hyst::covssi::{self, BlockRows, SsiOptions};
-use hyst::model::{Oscillator, Restoring, ZenerParams};
-use hyst::sim::{self, SimOptions};
+use covssi::{self, BlockRows, SsiOptions};
+use hyst_model::{Oscillator, Restoring, ZenerParams};
+use hyst_sim::{self as sim, SimOptions};
 
 const FS: f64 = 750.0;
 
@@ -90,8 +90,8 @@ fn the_zener_real_pole_is_found_from_the_response_alone() {
 /// poles alone differ.
 #[test]
 fn the_pipeline_maps_the_refined_poles_to_a_closer_zener_model() {
-    use hyst::ident::{DampingGuess, IdentOptions, identify};
-    use hyst::linearize::zener_from_poles;
+    use hyst_ident::{DampingGuess, IdentOptions, identify};
+    use hyst_linearize::zener_from_poles;
     let opts = IdentOptions {
         damping_guess: DampingGuess::Value(11.70),
         ..IdentOptions::default()
@@ -159,7 +159,7 @@ fn periodic_record(seed: u64) -> Vec<f64> {
 /// which more data does not improve.
 #[test]
 fn the_pipeline_finds_c_and_the_zener_model_from_the_response_alone() {
-    use hyst::ident::{DampingGuess, IdentOptions, identify};
+    use hyst_ident::{DampingGuess, IdentOptions, identify};
     let truth = [11.70, 46899.0, 81432.0, 61.72];
     let relative = |o: &Oscillator| -> [f64; 4] {
         let Restoring::Zener(z) = o.restoring else {

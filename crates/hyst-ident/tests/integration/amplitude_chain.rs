@@ -4,7 +4,7 @@
 //! broadband force at one mass, accelerations with the force's direct share, several modes seen
 //! by three sensors).
 
-use hyst::ident::amplitude::{AmplitudeOptions, Quantity, amplitude_analysis};
+use hyst_ident::amplitude::{AmplitudeOptions, Quantity, amplitude_analysis};
 use rand::SeedableRng;
 use rand::rngs::Xoshiro256PlusPlus;
 use rand_distr::{Distribution, StandardNormal};
@@ -174,7 +174,7 @@ fn a_hysteretic_link_makes_its_mode_amplitude_dependent() {
     let records: Vec<Vec<Vec<f64>>> = (6100..6104)
         .map(|seed| chain_record(120_000, 10.0, Some(link), seed))
         .collect();
-    let campaign = hyst::ident::amplitude::amplitude_campaign(
+    let campaign = hyst_ident::amplitude::amplitude_campaign(
         records.len(),
         &[4.5, 13.2, 19.5],
         |i, follow| {

@@ -4,7 +4,7 @@
 
 use crate::common;
 
-use hyst::ident::floor;
+use hyst_ident::floor;
 
 #[test]
 fn floors_on_multisine_val() {

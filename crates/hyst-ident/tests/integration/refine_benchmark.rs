@@ -4,8 +4,8 @@
 
 use crate::common;
 
-use hyst::ident::residual::{self, Effect, InputInterpolation, ModelClass, Record};
-use hyst::model::{Oscillator, Restoring};
+use hyst_ident::residual::{self, Effect, InputInterpolation, ModelClass, Record};
+use hyst_model::{Oscillator, Restoring};
 
 /// The training record at 750 Hz, its force band-limited (the benchmark's README).
 fn record<'a>(u: &'a [f64], y: &'a [f64]) -> Record<'a> {
@@ -106,12 +106,12 @@ fn the_benchmark_s_exponent_comes_back_to_one() {
     };
     let seg = &y[estimate.0..estimate.1];
     let sx = (seg.iter().map(|v| v * v).sum::<f64>() / seg.len() as f64).sqrt();
-    let df = hyst::linearize::describing_function(&b, sx).unwrap();
+    let df = hyst_linearize::describing_function(&b, sx).unwrap();
     let mut found = Vec::new();
     for nu in [0.7, 1.5] {
         let mut start = bench;
         start.restoring =
-            Restoring::BoucWen(hyst::linearize::bouc_wen_exact(b.alpha, nu, &df).unwrap());
+            Restoring::BoucWen(hyst_linearize::bouc_wen_exact(b.alpha, nu, &df).unwrap());
         let (m, _) = residual::fit(&start, &rec, estimate, false, 300).unwrap();
         let se = residual::standard_errors(&m, &rec, estimate, false).unwrap();
         let e = se.iter().find(|e| e.name == "nu").expect("ν is free");

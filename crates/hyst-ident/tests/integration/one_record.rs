@@ -7,11 +7,11 @@
 //! integrator than the identification's (trapezoidal at 40 sub-steps, FIR decimation
 //! 2·4·5), 1·10⁻⁵ m of white sensor noise.
 
-use hyst::ident::amplitude::ModeToFollow;
-use hyst::ident::{self, IdentOptions};
-use hyst::model::{BoucWen, Oscillator};
-use hyst::sim::excitation::{add_noise, white_noise};
-use hyst::sim::{
+use hyst_ident::amplitude::ModeToFollow;
+use hyst_ident::{self as ident, IdentOptions};
+use hyst_model::{BoucWen, Oscillator};
+use hyst_sim::excitation::{add_noise, white_noise};
+use hyst_sim::{
     Decimation, Input, InputKind, Integrator, SensorNoise, SimOptions, WhiteForceRecord,
 };
 
@@ -107,7 +107,7 @@ fn a_bouc_wen_model_worse_than_its_zener_is_not_kept() {
 /// the record, and a fit from there keeps every held parameter and improves on the truth's χ².
 #[test]
 fn one_record_indirect_inference_is_consistent_at_the_truth() {
-    use hyst::ident::levels::{
+    use hyst_ident::levels::{
         BoucWenParameter, OneRecord, SimulationOptions, bouc_wen_from_one_record,
     };
     let truth = truth();
@@ -163,7 +163,7 @@ fn one_record_indirect_inference_is_consistent_at_the_truth() {
         fitted.chi2,
         at_truth.chi2
     );
-    let (hyst::model::Restoring::BoucWen(a), hyst::model::Restoring::BoucWen(b)) =
+    let (hyst_model::Restoring::BoucWen(a), hyst_model::Restoring::BoucWen(b)) =
         (fitted.oscillator.restoring, truth.restoring)
     else {
         unreachable!("Bouc-Wen oscillators")
@@ -250,7 +250,7 @@ fn study_generator_floor() {
                 },
             ),
         ] {
-            let y = hyst::sim::simulate(&truth, Input::BandLimited(&u), FS, u.len(), &o).unwrap();
+            let y = hyst_sim::simulate(&truth, Input::BandLimited(&u), FS, u.len(), &o).unwrap();
             eprintln!(
                 "{level} N {name}: {:.2} noise units",
                 ident::epsilon(&base, &y).rms / NOISE
@@ -262,7 +262,7 @@ fn study_generator_floor() {
 #[test]
 #[ignore = "a study: one record's profile along βδ/βγ at 20, 50 and 80 N in noise units, and the several-level model beside it (minutes)"]
 fn study_one_record_profile() {
-    use hyst::ident::levels::{
+    use hyst_ident::levels::{
         OneRecord, PROFILE_RATIOS, SimulationOptions, beta_delta_profile, bouc_wen_by_simulation,
         bouc_wen_from_levels,
     };

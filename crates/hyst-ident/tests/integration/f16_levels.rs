@@ -1,7 +1,7 @@
 //! The measured F-16 at its four force levels (12–98 N RMS): output-only SSI on the three
 //! accelerations follows the wing torsion mode's softening and rising damping, which the
 //! mounting's friction and clearance cause. Checked against a second method with the force,
-//! the fit of the force-to-acceleration response (`hyst::ident::frf`), and that fit at the
+//! the fit of the force-to-acceleration response (`hyst_ident::frf`), and that fit at the
 //! lowest level against the figures the benchmark's README publishes. The offset between the
 //! two methods is the force's colour: the shaker's force drops at the resonance, which
 //! output-only methods cannot see, and flattening the force removes it.
@@ -9,8 +9,8 @@
 
 use crate::common;
 
-use hyst::covssi::{self, BlockRows, SsiOptions};
-use hyst::ident::frf::{self, PeriodicRecord};
+use covssi::{self, BlockRows, SsiOptions};
+use hyst_ident::frf::{self, PeriodicRecord};
 
 const PERIOD: usize = 8192;
 const FS: f64 = 400.0;
@@ -36,7 +36,7 @@ const MODES: [(f64, (f64, f64)); 2] = [(7.3, (6.8, 7.8)), (5.2, (4.6, 5.8))];
 
 fn level(n: u32) -> Option<Level> {
     let p = common::data_file(&format!("f16/msine_level{n}.csv"))?;
-    let t = hyst::io::read_csv(&p).expect("shared data must parse");
+    let t = hyst_io::read_csv(&p).expect("shared data must parse");
     // The first period is the start-up transient.
     let col = |c: &str| t.column(c).unwrap()[PERIOD..].to_vec();
     let force = col("force");
@@ -57,7 +57,7 @@ fn level(n: u32) -> Option<Level> {
     let ssi = |ch: &[Vec<f64>]| -> [(f64, f64, Vec<covssi::Complex64>); 2] {
         let dec: Vec<Vec<f64>> = ch
             .iter()
-            .map(|c| hyst::sim::resample::decimate(c, 8))
+            .map(|c| hyst_sim::resample::decimate(c, 8))
             .collect();
         let views: Vec<&[f64]> = dec.iter().map(|c| c.as_slice()).collect();
         let res = covssi::identify(&views, FS / 8.0, &opts).unwrap();

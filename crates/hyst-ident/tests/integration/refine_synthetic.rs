@@ -6,10 +6,10 @@
 
 use crate::common;
 
-use hyst::ident::residual::{self, Effect, InputInterpolation, ModelClass, Record};
-use hyst::model::{BoucWen, Coulomb, Oscillator, SecondMass};
-use hyst::sim::excitation::{add_noise, white_noise};
-use hyst::sim::{self, Input, SimOptions};
+use hyst_ident::residual::{self, Effect, InputInterpolation, ModelClass, Record};
+use hyst_model::{BoucWen, Coulomb, Oscillator, SecondMass};
+use hyst_sim::excitation::{add_noise, white_noise};
+use hyst_sim::{self as sim, Input, SimOptions};
 
 const FS: f64 = 200.0;
 const N: usize = 8192;
@@ -322,11 +322,11 @@ fn a_start_without_viscous_damping_recovers_it() {
     let fs = 750.0;
     let n = 16384;
     let truth = Oscillator::benchmark();
-    let u = hyst::sim::excitation::band_limited_noise(n, fs, 5.0, 150.0, 50.0, 97_001).unwrap();
+    let u = hyst_sim::excitation::band_limited_noise(n, fs, 5.0, 150.0, 50.0, 97_001).unwrap();
     let opts = SimOptions {
         oversample: 40,
-        integrator: hyst::sim::Integrator::Trapezoidal,
-        decimation: hyst::sim::Decimation::Fir(vec![2, 4, 5]),
+        integrator: hyst_sim::Integrator::Trapezoidal,
+        decimation: hyst_sim::Decimation::Fir(vec![2, 4, 5]),
         ..SimOptions::default()
     };
     let mut y = sim::simulate(&truth, Input::BandLimited(&u), fs, n, &opts).unwrap();
