@@ -66,6 +66,20 @@ pub enum SetupsError {
     Merge(#[from] MergeError),
 }
 
+/// What a test of several setups is doing as it runs: how many setups are identified, and
+/// the step one of them (or the merge) is at.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SetupsProgress<'a> {
+    /// Setups identified so far.
+    pub identified: usize,
+    /// Setups in all.
+    pub setups: usize,
+    /// The setup the step is of; `None` for the merge and the global estimation.
+    pub setup: Option<&'a str>,
+    /// What runs now (the analysis's step, [`covssi::Progress::what`]).
+    pub what: &'a str,
+}
+
 /// Read and identify every setup of `setups` (in parallel), at `fs` Hz or each file's stated
 /// rate, and merge them.
 pub fn analyze_setups(
@@ -75,14 +89,53 @@ pub fn analyze_setups(
     opts: &AnalysisOptions,
     merge_opts: &MergeOptions,
 ) -> Result<SetupsReport, SetupsError> {
+    analyze_setups_with_progress(setups, fs, read, opts, merge_opts, &|_| {})
+}
+
+/// [`analyze_setups`], telling `progress` of each setup's steps as they start, of each setup
+/// identified, and of the merge.
+pub fn analyze_setups_with_progress(
+    setups: &[SetupSpec],
+    fs: Option<f64>,
+    read: &ReadOptions,
+    opts: &AnalysisOptions,
+    merge_opts: &MergeOptions,
+    progress: &(dyn Fn(SetupsProgress<'_>) + Sync),
+) -> Result<SetupsReport, SetupsError> {
+    let identified = std::sync::atomic::AtomicUsize::new(0);
+    let tell = |setup: Option<&str>, what: &str| {
+        progress(SetupsProgress {
+            identified: identified.load(std::sync::atomic::Ordering::Relaxed),
+            setups: setups.len(),
+            setup,
+            what,
+        })
+    };
     let (analysed, records): (Vec<SetupAnalysis>, Vec<Vec<Vec<f64>>>) = setups
         .par_iter()
-        .map(|s| analyze_one(s, fs, read, opts))
+        .map(|s| {
+            let one = analyze_one(s, fs, read, opts, &|p: covssi::Progress<'_>| {
+                tell(Some(&s.name), p.what)
+            });
+            let n = identified.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            progress(SetupsProgress {
+                identified: n,
+                setups: setups.len(),
+                setup: Some(&s.name),
+                what: "identified",
+            });
+            one
+        })
         .collect::<Result<Vec<_>, _>>()?
         .into_iter()
         .unzip();
+    tell(
+        None,
+        "the global estimation (SSI on every setup's correlations)",
+    );
     let global = global(setups, &analysed, &records, opts);
     drop(records);
+    tell(None, "merging the setups on their references");
     let mut report = merge_analysed(setups, analysed, merge_opts)?;
     match global {
         Ok(g) => report.global = Some(g),
@@ -168,6 +221,7 @@ fn analyze_one(
     fs: Option<f64>,
     read: &ReadOptions,
     opts: &AnalysisOptions,
+    progress: &(dyn Fn(covssi::Progress<'_>) + Sync),
 ) -> Result<(SetupAnalysis, Vec<Vec<f64>>), SetupsError> {
     let mut table = crate::io::read_record(&s.file, read)?;
     let fs = table.rate(fs.or(s.fs_hz))?;
@@ -179,10 +233,12 @@ fn analyze_one(
     let views: Vec<&[f64]> = data.iter().map(Vec::as_slice).collect();
     let file = s.file.display().to_string();
     let mut analysis =
-        covssi::analyze(&views, fs, opts).map_err(|source| SetupsError::Analysis {
-            setup: s.name.clone(),
-            file: file.clone(),
-            source,
+        covssi::analyze_with_progress(&views, fs, opts, progress).map_err(|source| {
+            SetupsError::Analysis {
+                setup: s.name.clone(),
+                file: file.clone(),
+                source,
+            }
         })?;
     analysis.channels = s.columns.clone();
     let setup = SetupAnalysis {

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 
 use super::{
-    Error, READ_OPTIONS, channel_names, check_fs, fail, read_record, show, spinner, steps_bar,
+    Error, READ_OPTIONS, channel_names, check_fs, fail, read_record, show, steps_bar,
     warn_on_force_like,
 };
 use hyst::settings::{SettingsError, SsiSettings};
@@ -52,7 +52,7 @@ pub(crate) struct SsiArgs {
     #[arg(
         long,
         value_name = "FILE",
-        conflicts_with_all = ["input", "columns", "skip", "gains", "references", "svg", "shapes_uff"]
+        conflicts_with_all = ["input", "columns", "skip", "gains", "references", "svg"]
     )]
     pub(crate) setups: Option<PathBuf>,
     #[command(flatten)]
@@ -68,7 +68,9 @@ pub(crate) struct SsiArgs {
     pub(crate) svg: Option<PathBuf>,
     /// Write the reported modes' shapes as Universal File dataset 55 here (one dataset per
     /// mode: its complex eigenvalue and, per node, the X, Y, Z entries; channels of a Universal
-    /// File at their nodes and directions, others as nodes 1, 2, … along Z).
+    /// File at their nodes and directions, others as nodes 1, 2, … along Z). With --setups:
+    /// the merged modes, each node's motion, after a dataset 15 of the nodes' positions when
+    /// the geometry is known (--geometry, or a pyOMA folder's grid.txt).
     #[arg(help_heading = "Output files", long, value_name = "FILE")]
     pub(crate) shapes_uff: Option<PathBuf>,
     /// Write a report a browser opens here: one self-contained page (no network needed) with
@@ -319,14 +321,22 @@ fn run_setups(a: &SsiArgs, path: &Path, opts: &hyst::covssi::AnalysisOptions) ->
     };
     let setups = hyst::io::read_setups_with(path, paths)?;
     let read = READ_OPTIONS.get().cloned().unwrap_or_default();
-    let bar = spinner();
-    bar.set_message(format!("identifying {} setups", setups.len()));
-    let report = hyst::setups::analyze_setups(
+    // Each setup identified moves the bar; its message is the latest step of any setup.
+    let bar = steps_bar();
+    bar.set_length(setups.len() as u64);
+    let report = hyst::setups::analyze_setups_with_progress(
         &setups,
         a.record.fs,
         &read,
         opts,
         &hyst::covssi::multisetup::MergeOptions::default(),
+        &|p| {
+            bar.set_position(p.identified as u64);
+            bar.set_message(match p.setup {
+                Some(setup) => format!("setups identified; setup {setup}: {}", p.what),
+                None => p.what.to_string(),
+            });
+        },
     );
     bar.finish_and_clear();
     let report = hyst::report::FileReport::new(path.display().to_string(), report?);
@@ -334,8 +344,26 @@ fn run_setups(a: &SsiArgs, path: &Path, opts: &hyst::covssi::AnalysisOptions) ->
     if let Some(json) = &a.json {
         report.write_json(json)?;
     }
+    // The nodes' positions, for the outputs that draw or place the shapes.
+    let geometry = if a.html.is_some() || a.shapes_uff.is_some() {
+        hyst::io::setups_geometry(path, a.geometry.as_deref(), a.lines.as_deref())?
+    } else {
+        None
+    };
+    if let Some(uff) = &a.shapes_uff {
+        hyst::io::write_merged_shapes_uff(
+            uff,
+            &report.report.merged,
+            geometry.as_ref().map(|(g, _)| g),
+            &path.display().to_string(),
+        )?;
+        println!(
+            "{} merged mode shapes written to {}",
+            report.report.merged.modes.len(),
+            uff.display()
+        );
+    }
     if let Some(html) = &a.html {
-        let geometry = hyst::io::setups_geometry(path, a.geometry.as_deref(), a.lines.as_deref())?;
         let title = format!("hyst ssi --setups {}", path.display());
         let g = geometry.as_ref().map(|(g, p)| (g, p.as_path()));
         write_text(

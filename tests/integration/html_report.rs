@@ -201,7 +201,7 @@ fn merged_setups_open_on_the_steel_frames_geometry() {
     let Some(browser) = browser() else {
         return;
     };
-    let Some((_, report)) = common::steel_frame() else {
+    let Some((_, report, _)) = common::steel_frame() else {
         return;
     };
     // The page `hyst ssi --setups FOLDER --html` writes, from the merge the other steel

@@ -96,7 +96,7 @@ fn steel_frame_setups_with_defaults() {
     // Each setup's analysis as `hyst ssi --setups` made it (shared with the merge's tests):
     // its five channels (channel 5 left out, as each setup's file says) at 256 Hz, with the
     // defaults — the library's own, which the settings' defaults are.
-    let Some((setups, report)) = common::steel_frame() else {
+    let Some((setups, report, _)) = common::steel_frame() else {
         return;
     };
     assert_eq!(

@@ -54,7 +54,7 @@ fn ratio_z(ratios: &[(C64, f64)], expected: f64) -> Vec<f64> {
 
 #[test]
 fn the_steel_frames_setups_merge_into_its_modes_and_find_the_sensors_factor() {
-    let Some((setups, report)) = common::steel_frame() else {
+    let Some((setups, report, _)) = common::steel_frame() else {
         return;
     };
     let mut setups = setups.clone();
@@ -114,4 +114,54 @@ fn the_steel_frames_setups_merge_into_its_modes_and_find_the_sensors_factor() {
     let z = ratio_z(&ratios, 1.0);
     println!("told the factor, node/reference on the top floor: {ratios:.4?}, z {z:.2?}");
     assert!(z.iter().all(|z| *z < 3.5), "{ratios:?} {z:?}");
+}
+
+#[test]
+fn the_setups_progress_is_told_setup_by_setup() {
+    let Some((setups, _, told)) = common::steel_frame() else {
+        return;
+    };
+    // Every setup tells its analysis's steps before it is identified, and each identified
+    // setup is counted once: 1, 2, … up to all of them (two setups finishing together may
+    // tell their counts in either order).
+    for s in setups {
+        let own: Vec<&common::Told> = told
+            .iter()
+            .filter(|t| t.setup.as_deref() == Some(&s.name))
+            .collect();
+        let done = own.iter().position(|t| t.what == "identified");
+        assert!(
+            matches!(done, Some(i) if i > 0),
+            "setup {}: {own:?}",
+            s.name
+        );
+    }
+    let mut counts: Vec<usize> = told
+        .iter()
+        .filter(|t| t.what == "identified")
+        .map(|t| t.identified)
+        .collect();
+    counts.sort_unstable();
+    assert_eq!(counts, (1..=setups.len()).collect::<Vec<_>>());
+    // Then the global estimation and the merge, told after every setup.
+    let last: Vec<&str> = told.iter().rev().take(2).map(|t| t.what.as_str()).collect();
+    assert!(
+        last[0].starts_with("merging") && last[1].starts_with("the global"),
+        "{last:?}"
+    );
+    assert!(told.iter().rev().take(2).all(|t| t.setup.is_none()));
+    // The longest silence, for the record (the test binary shares the machine with the
+    // other tests, so this is no measure of the command alone).
+    let (gap, after) = told
+        .windows(2)
+        .map(|w| (w[1].seconds - w[0].seconds, &w[0]))
+        .fold(
+            (0.0, None),
+            |(g, a), (d, t)| if d > g { (d, Some(t)) } else { (g, a) },
+        );
+    eprintln!(
+        "steel frame: {} steps told in {:.1} s, the longest silence {gap:.1} s, after {after:?}",
+        told.len(),
+        told.last().map_or(0.0, |t| t.seconds)
+    );
 }

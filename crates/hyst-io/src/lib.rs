@@ -10,7 +10,8 @@
 //!   which also states the sampling rate and each channel's node and direction;
 //!
 //! chosen by the file's extension or by [`Format`] ([`read_record`]). The identified mode
-//! shapes can be written as dataset 55 ([`write_shapes_uff`]). Every error names the file,
+//! shapes can be written as dataset 55 ([`write_shapes_uff`]; a test's merged modes with its
+//! nodes' positions as dataset 15, [`write_merged_shapes_uff`]). Every error names the file,
 //! and where it applies the column, the row (1-based, counting the header as row 1, as a
 //! spreadsheet does), the dataset or variable, and the offending text.
 
@@ -325,7 +326,7 @@ pub use npy::{read_npy, read_npz};
 pub use paths::check_outputs;
 pub use setups::{RecordPaths, SetupSpec, read_setups, read_setups_with};
 pub use setups_pyoma::read_pyoma_setups;
-pub use shapes_uff::{ShapeMode, write_shapes_uff};
+pub use shapes_uff::{ShapeMode, write_merged_shapes_uff, write_shapes_uff};
 pub use uff::read_uff;
 
 /// A record file's format.

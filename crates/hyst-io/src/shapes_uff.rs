@@ -6,7 +6,9 @@ use std::path::Path;
 
 use num_complex::Complex64;
 
-use super::{IoError, MeasurementPoint};
+use covssi::multisetup::MergedModes;
+
+use super::{Geometry, IoError, MeasurementPoint};
 
 /// One identified mode, as dataset 55 writes it.
 #[derive(Debug, Clone, PartialEq)]
@@ -100,41 +102,146 @@ pub fn write_shapes_uff(
     }
     let mut text = String::new();
     for (k, m) in modes.iter().enumerate() {
-        let w = 2.0 * std::f64::consts::PI * m.frequency_hz;
-        let z = m.damping_ratio;
-        let eig = Complex64::new(-z * w, w * (1.0 - z * z).max(0.0).sqrt());
-        let id = |s: &str| format!("{:<80}\n", s.chars().take(80).collect::<String>());
-        text.push_str("    -1\n    55\n");
-        text.push_str(&id(&format!("hyst ssi: {description}")));
-        text.push_str(&id("NONE"));
-        text.push_str(&id("NONE"));
-        text.push_str(&id("NONE"));
-        text.push_str(&id(&format!(
-            "Mode {:>10} Frequency {:13.5e} Hz, damping ratio {:.5}",
-            k + 1,
-            m.frequency_hz,
-            z
-        )));
-        // Structural model, complex eigenvalue, 3-DOF translation, unknown data, complex, 3.
-        text.push_str(&format!(
-            "{:10}{:10}{:10}{:10}{:10}{:10}\n",
-            1, 3, 2, 0, 5, 3
-        ));
-        text.push_str(&format!("{:10}{:10}{:10}{:10}\n", 2, 6, 1, k + 1));
-        text.push_str(&e13(&[eig.re, eig.im, 0.0, 0.0, 0.0, 0.0]));
-        for (node, axes) in &nodes {
-            text.push_str(&format!("{node:10}\n"));
-            let mut v = [0.0; 6];
-            for (a, slot) in axes.iter().enumerate() {
-                if let Some((c, sign)) = slot {
-                    v[2 * a] = sign * m.shape[*c].re;
-                    v[2 * a + 1] = sign * m.shape[*c].im;
+        let motions: Vec<(i64, [Complex64; 3])> = nodes
+            .iter()
+            .map(|(node, axes)| {
+                let mut v = [Complex64::new(0.0, 0.0); 3];
+                for (a, slot) in axes.iter().enumerate() {
+                    if let Some((c, sign)) = slot {
+                        v[a] = m.shape[*c] * *sign;
+                    }
                 }
+                (*node, v)
+            })
+            .collect();
+        push_dataset_55(
+            &mut text,
+            k,
+            m.frequency_hz,
+            m.damping_ratio,
+            description,
+            &motions,
+        );
+    }
+    write_text(path, &text)
+}
+
+/// The merged modes of a test of several setups as datasets 55 at `path`, each node's x, y,
+/// z motion ([`NodeMotion`](covssi::multisetup::NodeMotion); an axis no setup measured is 0)
+/// under its number, and with `geometry` first a dataset 15 of its nodes' positions, so that
+/// a reader draws the shapes on the structure. Universal Files number nodes: every node's
+/// name (the merge's and the geometry's) must be a whole number from 1, else an error names
+/// it. A mode without a node motion is written with none.
+pub fn write_merged_shapes_uff(
+    path: &Path,
+    merged: &MergedModes,
+    geometry: Option<&Geometry>,
+    description: &str,
+) -> Result<(), IoError> {
+    let misfit = |what: String| IoError::ShapesUff {
+        path: path.to_path_buf(),
+        what,
+    };
+    let label = |name: &str, whose: &str| -> Result<i64, IoError> {
+        name.trim()
+            .parse::<i64>()
+            .ok()
+            .filter(|n| *n >= 1)
+            .ok_or_else(|| {
+                misfit(format!(
+                    "{whose} node `{name}` is not a whole number from 1: a Universal File numbers its nodes"
+                ))
+            })
+    };
+    let mut text = String::new();
+    if let Some(g) = geometry {
+        text.push_str("    -1\n    15\n");
+        for (name, [x, y, z]) in &g.nodes {
+            let n = label(name, "the geometry's")?;
+            if ![x, y, z].iter().all(|v| v.is_finite()) {
+                return Err(misfit(format!(
+                    "the geometry's node `{name}` has a coordinate that is not finite"
+                )));
             }
-            text.push_str(&e13(&v));
+            // Node, definition and displacement coordinate systems (global), colour; x, y, z.
+            text.push_str(&format!("{n:10}{:10}{:10}{:10}", 0, 0, 8));
+            text.push_str(&e13(&[*x, *y, *z]));
         }
         text.push_str("    -1\n");
     }
+    for (k, m) in merged.modes.iter().enumerate() {
+        if !(m.frequency_hz.is_finite() && m.damping_ratio.is_finite()) {
+            return Err(misfit(format!(
+                "the mode at {} Hz (damping ratio {}) has a value that is not finite",
+                m.frequency_hz, m.damping_ratio
+            )));
+        }
+        let mut motions = Vec::with_capacity(m.nodes.len());
+        for node in &m.nodes {
+            let zero = Complex64::new(0.0, 0.0);
+            let v = node.motion.map(|c| c.unwrap_or(zero));
+            if v.iter().any(|c| !(c.re.is_finite() && c.im.is_finite())) {
+                return Err(misfit(format!(
+                    "the mode at {} Hz moves node `{}` by a value that is not finite",
+                    m.frequency_hz, node.node
+                )));
+            }
+            motions.push((label(&node.node, "the merged modes'")?, v));
+        }
+        push_dataset_55(
+            &mut text,
+            k,
+            m.frequency_hz,
+            m.damping_ratio,
+            description,
+            &motions,
+        );
+    }
+    write_text(path, &text)
+}
+
+/// Mode `k` (numbered from 1 in the file) as one dataset 55: its complex eigenvalue
+/// λ = 2πf(−ζ + i√(1−ζ²)) (analysis type 3) and each node's complex x, y, z translation.
+fn push_dataset_55(
+    text: &mut String,
+    k: usize,
+    frequency_hz: f64,
+    damping_ratio: f64,
+    description: &str,
+    motions: &[(i64, [Complex64; 3])],
+) {
+    let w = 2.0 * std::f64::consts::PI * frequency_hz;
+    let z = damping_ratio;
+    let eig = Complex64::new(-z * w, w * (1.0 - z * z).max(0.0).sqrt());
+    let id = |s: &str| format!("{:<80}\n", s.chars().take(80).collect::<String>());
+    text.push_str("    -1\n    55\n");
+    text.push_str(&id(&format!("hyst ssi: {description}")));
+    text.push_str(&id("NONE"));
+    text.push_str(&id("NONE"));
+    text.push_str(&id("NONE"));
+    text.push_str(&id(&format!(
+        "Mode {:>10} Frequency {:13.5e} Hz, damping ratio {:.5}",
+        k + 1,
+        frequency_hz,
+        z
+    )));
+    // Structural model, complex eigenvalue, 3-DOF translation, unknown data, complex, 3.
+    text.push_str(&format!(
+        "{:10}{:10}{:10}{:10}{:10}{:10}\n",
+        1, 3, 2, 0, 5, 3
+    ));
+    text.push_str(&format!("{:10}{:10}{:10}{:10}\n", 2, 6, 1, k + 1));
+    text.push_str(&e13(&[eig.re, eig.im, 0.0, 0.0, 0.0, 0.0]));
+    for (node, v) in motions {
+        text.push_str(&format!("{node:10}\n"));
+        text.push_str(&e13(&[
+            v[0].re, v[0].im, v[1].re, v[1].im, v[2].re, v[2].im,
+        ]));
+    }
+    text.push_str("    -1\n");
+}
+
+fn write_text(path: &Path, text: &str) -> Result<(), IoError> {
     std::fs::write(path, text).map_err(|source| IoError::File {
         path: path.to_path_buf(),
         source,
@@ -266,5 +373,87 @@ mod tests {
                 .to_string();
             assert!(e.contains(says), "{e}");
         }
+    }
+
+    #[test]
+    fn merged_shapes_follow_the_geometry_and_refuse_nodes_without_a_number() {
+        use covssi::multisetup::{MergedMode, NodeMotion};
+        let c = |re: f64, im: f64| Some(Complex64::new(re, im));
+        let mode = MergedMode {
+            frequency_hz: 3.0,
+            frequency_se_hz: None,
+            damping_ratio: 0.02,
+            damping_se: None,
+            scatter_ratio: None,
+            seen_in: Vec::new(),
+            shape: Vec::new(),
+            shape_se: Vec::new(),
+            nodes: vec![
+                NodeMotion {
+                    node: "12".into(),
+                    motion: [c(1.0, 0.0), None, c(-0.5, 0.25)],
+                    se: [None; 3],
+                },
+                NodeMotion {
+                    node: "4".into(),
+                    motion: [None, c(0.125, 0.0), None],
+                    se: [None; 3],
+                },
+            ],
+        };
+        let merged = MergedModes {
+            setups: vec!["one".into()],
+            dofs: Vec::new(),
+            modes: vec![mode],
+            notes: Vec::new(),
+        };
+        let geometry = Geometry {
+            nodes: vec![
+                ("4".into(), [0.0, 1.0, 2.0]),
+                ("12".into(), [3.5, -1.0, 0.0]),
+            ],
+            lines: vec![[0, 1]],
+        };
+        let p = file_path("merged.uff");
+        write_merged_shapes_uff(&p, &merged, Some(&geometry), "test").unwrap();
+        let text = std::fs::read_to_string(&p).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        // Dataset 15: each node's number, coordinate systems 0, colour 8, then x, y, z.
+        assert_eq!(&lines[..2], ["    -1", "    15"]);
+        let node4 = format!("{:10}{:10}{:10}{:10}{}", 4, 0, 0, 8, e13(&[0.0, 1.0, 2.0]));
+        assert_eq!(lines[2], node4.trim_end());
+        assert_eq!(lines[4], "    -1");
+        // Dataset 55: node 12 moves along x and z, node 4 along y; an axis not measured is 0.
+        assert_eq!(&lines[5..7], ["    -1", "    55"]);
+        assert_eq!(lines[15], "        12");
+        assert_eq!(lines[16], e13(&[1.0, 0.0, 0.0, 0.0, -0.5, 0.25]).trim_end());
+        assert_eq!(lines[17], "         4");
+        assert_eq!(lines[18], e13(&[0.0, 0.0, 0.125, 0.0, 0.0, 0.0]).trim_end());
+        assert_eq!(lines[19], "    -1");
+        // A node a Universal File cannot number, in the modes or the geometry: refused by name.
+        let mut named = merged.clone();
+        named.modes[0].nodes[1].node = "roof".into();
+        let e = write_merged_shapes_uff(&p, &named, None, "test")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("node `roof` is not a whole number from 1"),
+            "{e}"
+        );
+        let mut bad = geometry.clone();
+        bad.nodes[0].0 = "0".into();
+        let e = write_merged_shapes_uff(&p, &merged, Some(&bad), "test")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("the geometry's node `0`"), "{e}");
+        bad.nodes[0] = ("4".into(), [f64::NAN, 0.0, 0.0]);
+        let e = write_merged_shapes_uff(&p, &merged, Some(&bad), "test")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("not finite"), "{e}");
+        // Without the geometry, the modes alone.
+        write_merged_shapes_uff(&p, &merged, None, "test").unwrap();
+        let text = std::fs::read_to_string(&p).unwrap();
+        assert!(text.starts_with("    -1\n    55\n"), "{text}");
     }
 }

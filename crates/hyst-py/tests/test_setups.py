@@ -69,6 +69,35 @@ def test_setups_give_the_commands_report_and_the_resonators_modes(hyst_bin, setu
         assert mac > 0.99, (j, mac, v)
 
 
+def test_merged_shapes_go_to_a_universal_file_that_pyuff_reads_with_the_nodes(hyst_bin, setups, tmp_path):
+    """`hyst ssi --setups --shapes-uff --geometry`: pyuff reads a dataset 15 with the
+    geometry's nodes and positions, then one dataset 55 per merged mode whose eigenvalue is
+    the mode's and whose nodes move as the merged report's JSON says, to the six significant
+    digits of the format's E13.5 fields."""
+    pyuff = need("pyuff")
+    grid = tmp_path / "grid.txt"
+    positions = {3: (0.0, 0.0, 3.0), 4: (0.0, 0.0, 4.0), 5: (0.0, 0.0, 5.0), 6: (0.0, 0.0, 6.0)}
+    grid.write_text("node x y z\n" + "".join(f"{n} {x} {y} {z}\n" for n, (x, y, z) in positions.items()))
+    out, uff = tmp_path / "merged.json", tmp_path / "merged.uff"
+    run = subprocess.run([str(hyst_bin), "ssi", "--setups", str(setups), "--fs", str(FS), "--json", str(out),
+                          "--shapes-uff", str(uff), "--geometry", str(grid)], check=True, capture_output=True, text=True)
+    assert "2 merged mode shapes written" in run.stdout
+    merged = json.loads(out.read_text())["merged"]
+    sets = pyuff.UFF(str(uff)).read_sets()
+    assert [s["type"] for s in sets] == [15] + [55] * len(merged["modes"])
+    assert list(sets[0]["node_nums"]) == list(positions)
+    assert np.allclose(np.c_[sets[0]["x"], sets[0]["y"], sets[0]["z"]], list(positions.values()))
+    for k, (s, m) in enumerate(zip(sets[1:], merged["modes"])):
+        assert s["analysis_type"] == 3 and s["mode_n"] == k + 1
+        f = abs(s["eig"]) / (2 * np.pi)
+        assert abs(f - m["frequency_hz"]) <= 1e-5 * f
+        assert list(s["node_nums"]) == [int(n["node"]) for n in m["nodes"]]
+        for axis, r in enumerate(("r1", "r2", "r3")):
+            want = np.array([complex(*n["motion"][axis]) if n["motion"][axis] else 0 for n in m["nodes"]])
+            # E13.5 keeps six significant digits of each part.
+            assert np.allclose(s[r], want, rtol=1e-5, atol=1e-5 * np.abs(want).max())
+
+
 def test_setups_refuse_a_record_beside_them(setups):
     with pytest.raises(ValueError, match="give y or setups, not both"):
         hyst.ssi(np.zeros((10, 2)), 20.0, setups=setups)
