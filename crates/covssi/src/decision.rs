@@ -47,7 +47,6 @@
 
 use std::fmt;
 
-use crate::analysis::ReportedMode;
 use crate::jackknife::SsiErrors;
 use crate::plausibility::{NotPhysical, NotReported};
 use crate::refine::MISFIT_LIMIT;
@@ -270,6 +269,33 @@ pub enum RefinementVerdict {
         /// SSI's modes within its half-power band (Hz).
         overlaps: Vec<f64>,
     },
+}
+
+/// A mode as reported: the refinement's, or SSI's when the refinement does not hold.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct ReportedMode {
+    /// Natural frequency (Hz).
+    pub frequency_hz: f64,
+    /// Its standard error (Hz): the refinement's, or for SSI's modes the jackknife's
+    /// ([`AnalysisOptions::ssi_errors`](crate::AnalysisOptions::ssi_errors)); `None` when
+    /// neither was made.
+    pub frequency_se_hz: Option<f64>,
+    /// Damping ratio.
+    pub damping_ratio: f64,
+    /// Its standard error: as `frequency_se_hz`'s.
+    pub damping_se: Option<f64>,
+    /// The shape, one entry per channel, its largest entry 1; `None` for a refined mode
+    /// the refinement gave no shape and SSI no mode near it.
+    pub shape: Option<Vec<crate::Complex64>>,
+    /// Whether `shape` is SSI's (the mode's SSI mode's, where the refinement gave none).
+    pub shape_from_ssi: bool,
+    /// Standard error of each entry of `shape` (√E|δ|², 0 for the entry scaled to 1): the
+    /// refinement's, or the jackknife's for SSI's shapes; `None` when neither was made.
+    pub shape_se: Option<Vec<f64>>,
+    /// The SSI mode it is (SSI's answer) or comes from (the refinement's), by its index
+    /// among SSI's modes.
+    pub ssi_mode: Option<usize>,
 }
 
 /// The decision: the modes reported, which list they come from, and what was set apart.

@@ -74,12 +74,12 @@ pub mod svg;
 pub mod synth;
 
 pub use analysis::{
-    AnalysisOptions, Decimation, DecimationReport, JACKKNIFE_BLOCKS, ModalAnalysis, ReportedMode,
-    analyze, analyze_with_progress, shape_text,
+    AnalysisOptions, Decimation, DecimationReport, JACKKNIFE_BLOCKS, ModalAnalysis, analyze,
+    analyze_with_progress, shape_text,
 };
 pub use cluster::{Mode, RealPoleCluster};
 pub use corr::Correlations;
-pub use decision::{ModeCriteria, ModeDecision, ModeSource, NotAMode};
+pub use decision::{ModeCriteria, ModeDecision, ModeSource, NotAMode, ReportedMode};
 pub use error::{SsiError, SsiOption};
 pub use identify::{
     MIN_CORRELATION, OrderPoles, Spectrum, SsiResult, StabilizationDiagram, identify,

@@ -6,7 +6,7 @@ mod text;
 
 pub use text::shape_text;
 
-use crate::decision::{Evidence, ModeCriteria, ModeDecision, ModeSource};
+use crate::decision::{Evidence, ModeCriteria, ModeDecision, ModeSource, ReportedMode};
 use crate::plausibility::{NotReported, not_physical};
 use crate::progress::Progress;
 use crate::{
@@ -421,32 +421,6 @@ impl ModalAnalysis {
     pub fn reported_modes(&self) -> Vec<ReportedMode> {
         self.decision.modes.clone()
     }
-}
-
-/// A mode as reported: the refinement's, or SSI's when the refinement does not hold.
-#[derive(Debug, Clone, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct ReportedMode {
-    /// Natural frequency (Hz).
-    pub frequency_hz: f64,
-    /// Its standard error (Hz): the refinement's, or for SSI's modes the jackknife's
-    /// ([`AnalysisOptions::ssi_errors`]); `None` when neither was made.
-    pub frequency_se_hz: Option<f64>,
-    /// Damping ratio.
-    pub damping_ratio: f64,
-    /// Its standard error: as `frequency_se_hz`'s.
-    pub damping_se: Option<f64>,
-    /// The shape, one entry per channel, its largest entry 1; `None` for a refined mode
-    /// the refinement gave no shape and SSI no mode near it.
-    pub shape: Option<Vec<crate::Complex64>>,
-    /// Whether `shape` is SSI's (the mode's SSI mode's, where the refinement gave none).
-    pub shape_from_ssi: bool,
-    /// Standard error of each entry of `shape` (√E|δ|², 0 for the entry scaled to 1): the
-    /// refinement's, or the jackknife's for SSI's shapes; `None` when neither was made.
-    pub shape_se: Option<Vec<f64>>,
-    /// The SSI mode it is (SSI's answer) or comes from (the refinement's), by its index
-    /// among SSI's modes.
-    pub ssi_mode: Option<usize>,
 }
 
 #[cfg(test)]
