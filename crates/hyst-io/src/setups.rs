@@ -489,6 +489,53 @@ two,b.uff,9,9,,0,3,4,,,velocity,no,
         }
     }
 
+    /// A pyOMA setup folder's `channel_gains.txt`: each listed channel takes its gain, the
+    /// others keep 1; a zero, a word, a channel the setup does not analyse (not in
+    /// channel_dofs.txt, or deleted) or listed twice is refused with its row.
+    #[test]
+    fn pyoma_setups_take_each_channels_gain_from_channel_gains_txt() {
+        let dir = file_path("pyoma-gains");
+        let _ = std::fs::remove_dir_all(&dir);
+        let one = dir.join("s1");
+        std::fs::create_dir_all(&one).unwrap();
+        std::fs::write(
+            one.join("setup_info.txt"),
+            "Setup Name:\ns1\nSampling Rate [Hz]:\n100\nReference Channels:\n0\nDelete Channels:\n2\nAccel. Channels:\n0 1 2\nVelo. Channels:\n\nDisp. Channels:\n\n",
+        )
+        .unwrap();
+        std::fs::write(
+            one.join("channel_dofs.txt"),
+            "Channel-Nr.\tNode\tAzimuth\tElevation\n0\t1\t0\t0\n1\t2\t0\t0\n2\t3\t0\t0\n",
+        )
+        .unwrap();
+        std::fs::write(one.join("rec.npy"), b"").unwrap();
+        let gains = one.join("channel_gains.txt");
+        std::fs::write(&gains, "Channel-Nr.\tGain\n\n1\t-0.5\n").unwrap();
+        let s = read_setups(&dir).unwrap();
+        let g: Vec<f64> = s[0].channels.iter().map(|c| c.gain).collect();
+        assert_eq!(g, [1.0, -0.5]);
+        for (text, says) in [
+            (
+                "c g\n1 0\n",
+                "row 2: gain `0` is not a finite nonzero number",
+            ),
+            ("c g\n1 NaN\n", "gain `NaN`"),
+            ("c g\nx 2\n", "`x` is not a channel number"),
+            ("c g\n1\n", "expected a channel number and its gain"),
+            ("c g\n7 2\n", "channel 7 is not analysed by this setup"),
+            ("c g\n2 2\n", "channel 2 is not analysed by this setup"),
+            ("c g\n1 2\n1 3\n", "row 3: channel 1 is given a gain twice"),
+        ] {
+            std::fs::write(&gains, text).unwrap();
+            let e = read_setups(&dir).unwrap_err().to_string();
+            assert!(
+                e.contains("channel_gains.txt") && e.contains(says),
+                "{text}: {e}"
+            );
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
     /// A valid file with bytes replaced, cut or added never panics the reader; what it reads
     /// has a unit direction and a nonzero gain on every channel.
     mod fuzz {
@@ -509,6 +556,36 @@ two,b.uff,9,9,,0,3,4,,,velocity,no,
                     for ch in setups.iter().flat_map(|s| &s.channels) {
                         let n: f64 = ch.direction.iter().map(|v| v * v).sum::<f64>().sqrt();
                         prop_assert!((n - 1.0).abs() < 1e-12 && ch.gain != 0.0, "{ch:?}");
+                    }
+                }
+            }
+
+            #[test]
+            fn mutated_gain_files_read_or_fail_cleanly(
+                flips in proptest::collection::vec((0usize..40, any::<u8>()), 0..6),
+                cut in 0usize..45,
+                tail in proptest::collection::vec(any::<u8>(), 0..20),
+            ) {
+                let dir = file_path("fuzz-pyoma-gains");
+                let one = dir.join("s1");
+                std::fs::create_dir_all(&one).unwrap();
+                std::fs::write(
+                    one.join("setup_info.txt"),
+                    "Sampling Rate [Hz]:\n100\nReference Channels:\n0\nAccel. Channels:\n0 1\n",
+                )
+                .unwrap();
+                std::fs::write(
+                    one.join("channel_dofs.txt"),
+                    "Channel-Nr.\tNode\tAzimuth\tElevation\n0\t1\t0\t0\n1\t2\t0\t0\n",
+                )
+                .unwrap();
+                std::fs::write(one.join("rec.npy"), b"").unwrap();
+                let good = b"Channel-Nr.\tGain\n0\t1\n1\t-0.5\n".to_vec();
+                std::fs::write(one.join("channel_gains.txt"), mutated(good, &flips, cut, &tail))
+                    .unwrap();
+                if let Ok(setups) = read_setups(&dir) {
+                    for ch in setups.iter().flat_map(|s| &s.channels) {
+                        prop_assert!(ch.gain.is_finite() && ch.gain != 0.0, "{ch:?}");
                     }
                 }
             }

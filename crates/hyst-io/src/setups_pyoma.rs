@@ -1,7 +1,9 @@
 //! The setups of a modal test in pyOMA's layout (the steel frame of `shared/data`): one folder
 //! per setup, each holding its record (`.npy`), `setup_info.txt` (rate, reference, deleted,
 //! acceleration, velocity and displacement channels) and `channel_dofs.txt` (per channel:
-//! node, azimuth and elevation of its direction in degrees).
+//! node, azimuth and elevation of its direction in degrees), and optionally
+//! `channel_gains.txt` (per channel: the factor its reading carries, as a setup file's `gain`:
+//! −1 for a sensor mounted the other way, a calibration in other units).
 
 use std::path::{Path, PathBuf};
 
@@ -9,7 +11,8 @@ use super::{IoError, SetupSpec};
 use covssi::multisetup::{Quantity, SetupChannel};
 
 /// Every setup folder of `dir` (natural name order) read as a [`SetupSpec`]: the channels not
-/// deleted, their directions (cos e cos a, cos e sin a, sin e), gain 1.
+/// deleted, their directions (cos e cos a, cos e sin a, sin e), and their gains from the
+/// folder's `channel_gains.txt` when it has one (1 for a channel it does not list).
 pub fn read_pyoma_setups(dir: &Path) -> Result<Vec<SetupSpec>, IoError> {
     let entries = std::fs::read_dir(dir).map_err(|source| IoError::File {
         path: dir.to_path_buf(),
@@ -197,6 +200,12 @@ fn read_one(folder: &Path) -> Result<SetupSpec, IoError> {
             reference: info.references.contains(&c),
         });
     }
+    let gains_path = folder.join("channel_gains.txt");
+    if gains_path.is_file() {
+        for (i, gain) in gains(&gains_path, &columns)? {
+            channels[i].gain = gain;
+        }
+    }
     for r in &info.references {
         if !columns.iter().any(|c| *c == r.to_string()) {
             return Err(IoError::Params {
@@ -222,4 +231,53 @@ fn read_one(folder: &Path) -> Result<SetupSpec, IoError> {
         channels,
         fs_hz: Some(info.rate),
     })
+}
+
+/// The gains `channel_gains.txt` at `path` gives (a header line, then per line a channel
+/// number and the factor its reading carries, separated by tabs or spaces), as (index among
+/// `columns`, gain): each a finite nonzero number, each channel once and among those the
+/// setup analyses; blank lines skipped.
+fn gains(path: &Path, columns: &[String]) -> Result<Vec<(usize, f64)>, IoError> {
+    let text = read_text(path)?;
+    let bad = |row: usize, what: String| IoError::Malformed {
+        path: path.to_path_buf(),
+        row,
+        what,
+    };
+    let mut found: Vec<(usize, f64)> = Vec::new();
+    for (i, line) in text.lines().enumerate().skip(1) {
+        let row = i + 1;
+        let cells: Vec<&str> = line.split_whitespace().collect();
+        let [c, g] = cells.as_slice() else {
+            if cells.is_empty() {
+                continue;
+            }
+            return Err(bad(row, "expected a channel number and its gain".into()));
+        };
+        let channel: usize = c
+            .parse()
+            .map_err(|_| bad(row, format!("`{c}` is not a channel number")))?;
+        let gain = g
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite() && *v != 0.0)
+            .ok_or_else(|| bad(row, format!("gain `{g}` is not a finite nonzero number")))?;
+        let index = columns
+            .iter()
+            .position(|x| *x == channel.to_string())
+            .ok_or_else(|| {
+                bad(
+                    row,
+                    format!(
+                        "channel {channel} is not analysed by this setup (channel_dofs.txt: {}; deleted ones left out)",
+                        columns.join(" ")
+                    ),
+                )
+            })?;
+        if found.iter().any(|(j, _)| *j == index) {
+            return Err(bad(row, format!("channel {channel} is given a gain twice")));
+        }
+        found.push((index, gain));
+    }
+    Ok(found)
 }
