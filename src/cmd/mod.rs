@@ -317,12 +317,7 @@ pub(crate) fn output_files(c: &Command) -> Vec<(&'static str, &std::path::Path)>
     let v: Vec<(&'static str, Option<&std::path::Path>)> = match c {
         Command::Simulate(a) => vec![("--out", Some(&a.out))],
         Command::Excite(a) => vec![("--out", Some(&a.out))],
-        Command::Ssi(a) => vec![
-            ("--json", a.json.as_deref()),
-            ("--svg", a.svg.as_deref()),
-            ("--shapes-uff", a.shapes_uff.as_deref()),
-            ("--html", a.html.as_deref()),
-        ],
+        Command::Ssi(a) => return a.output_files(),
         Command::Ident(a) => vec![("--json", a.json.as_deref())],
         Command::Refine(a) => vec![("--json", a.json.as_deref())],
         Command::Levels(a) => vec![("--json", a.json.as_deref())],

@@ -94,6 +94,21 @@ pub(crate) struct SsiArgs {
     pub(crate) lines: Option<PathBuf>,
 }
 
+impl SsiArgs {
+    /// The files `hyst ssi` will write, with the flag that names each.
+    pub(crate) fn output_files(&self) -> Vec<(&'static str, &Path)> {
+        [
+            ("--json", self.json.as_deref()),
+            ("--svg", self.svg.as_deref()),
+            ("--shapes-uff", self.shapes_uff.as_deref()),
+            ("--html", self.html.as_deref()),
+        ]
+        .into_iter()
+        .filter_map(|(f, p)| Some((f, p?)))
+        .collect()
+    }
+}
+
 /// The analysis SSI's flags ask for ([`SsiSettings`], whose fields are the flags), a
 /// setting out of range named by its flag.
 pub(crate) fn analysis_of(ssi: &SsiSettings) -> Result<hyst::covssi::AnalysisOptions, Error> {
@@ -114,6 +129,7 @@ fn setting_error(ssi: &SsiSettings, e: SettingsError) -> Error {
         e => fail(e.to_string()),
     }
 }
+
 /// The channels to analyse, after `--skip`.
 pub(crate) struct Channels {
     pub(crate) names: Vec<String>,
@@ -262,7 +278,7 @@ pub(crate) fn run(a: &SsiArgs) -> Result<(), Error> {
     // Settings that are wrong whatever the record, before it is read.
     let opts = analysis_of(&a.ssi)?;
     let input = match (&a.input, &a.setups) {
-        (_, Some(setups)) => return run_setups(a, setups, &analysis_of(&a.ssi)?),
+        (_, Some(setups)) => return run_setups(a, setups, &opts),
         (Some(input), None) => input,
         (None, None) => return Err(fail("give --input or --setups".to_string())),
     };
@@ -320,6 +336,13 @@ fn run_setups(a: &SsiArgs, path: &Path, opts: &hyst::covssi::AnalysisOptions) ->
         hyst::io::RecordPaths::InsideFolder
     };
     let setups = hyst::io::read_setups_with(path, paths)?;
+    // The setups' records are inputs too: no output may land on one (checked before any is
+    // read, as the command's own inputs are).
+    let records: Vec<(&str, &Path)> = setups
+        .iter()
+        .map(|s| ("--setups", s.file.as_path()))
+        .collect();
+    hyst::io::check_outputs(&records, &a.output_files())?;
     let read = READ_OPTIONS.get().cloned().unwrap_or_default();
     // Each setup identified moves the bar; its message is the latest step of any setup.
     let bar = steps_bar();

@@ -899,6 +899,18 @@ fn ssi_merges_setups_on_their_references() {
         s(&json),
     ]);
     assert!(ok, "{err}");
+    // An output on one of the setups' records is refused before any is read, the record
+    // kept byte for byte.
+    let before = std::fs::read(&one).unwrap();
+    for flag in ["--json", "--shapes-uff", "--html"] {
+        let (ok, _, err) = hyst(&["ssi", "--setups", s(&setups), "--fs", "20", flag, s(&one)]);
+        assert!(
+            !ok && err.contains(&format!("{flag} {}", s(&one)))
+                && err.contains("is the file --setups reads"),
+            "{flag}: {err}"
+        );
+        assert_eq!(std::fs::read(&one).unwrap(), before, "{flag}");
+    }
     // Named by absolute paths: refused, unless allowed, and then the same merge.
     let absolute = write(
         "setups_absolute.csv",
