@@ -122,7 +122,7 @@ impl SsiSettings {
     /// unknown name or a value of the wrong type is an error; a name left out keeps its
     /// default.
     pub fn from_json(text: &str) -> Result<Self, SettingsError> {
-        serde_json::from_str(text).map_err(|e| SettingsError::Unreadable(e.to_string()))
+        read_json(text)
     }
 
     /// The analysis these settings ask for. Values out of range that covssi checks
@@ -187,10 +187,7 @@ impl SsiSettings {
 
     /// The settings' names, in order: the flags and keywords both sides must have.
     pub fn names() -> Vec<String> {
-        match serde_json::to_value(SsiSettings::default()) {
-            Ok(serde_json::Value::Object(map)) => map.keys().cloned().collect(),
-            _ => Vec::new(),
-        }
+        field_names(&SsiSettings::default())
     }
 }
 
@@ -232,7 +229,7 @@ impl TrackSettings {
     /// unknown name or a value of the wrong type is an error; a name left out keeps its
     /// default.
     pub fn from_json(text: &str) -> Result<Self, SettingsError> {
-        serde_json::from_str(text).map_err(|e| SettingsError::Unreadable(e.to_string()))
+        read_json(text)
     }
 
     /// The tracking of a campaign of `records` records these settings ask for.
@@ -245,10 +242,21 @@ impl TrackSettings {
 
     /// The settings' names, in order: the flags and keywords both sides must have.
     pub fn names() -> Vec<String> {
-        match serde_json::to_value(TrackSettings::default()) {
-            Ok(serde_json::Value::Object(map)) => map.keys().cloned().collect(),
-            _ => Vec::new(),
-        }
+        field_names(&TrackSettings::default())
+    }
+}
+
+/// Settings read from a JSON object of them: an unknown name or a value of the wrong type is
+/// [`SettingsError::Unreadable`].
+fn read_json<T: serde::de::DeserializeOwned>(text: &str) -> Result<T, SettingsError> {
+    serde_json::from_str(text).map_err(|e| SettingsError::Unreadable(e.to_string()))
+}
+
+/// The field names of a settings type, in order, as its JSON object has them.
+fn field_names<T: Serialize>(settings: &T) -> Vec<String> {
+    match serde_json::to_value(settings) {
+        Ok(serde_json::Value::Object(map)) => map.keys().cloned().collect(),
+        _ => Vec::new(),
     }
 }
 
