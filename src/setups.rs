@@ -102,10 +102,11 @@ pub fn analyze_setups_with_progress(
     merge_opts: &MergeOptions,
     progress: &(dyn Fn(SetupsProgress<'_>) + Sync),
 ) -> Result<SetupsReport, SetupsError> {
-    let identified = std::sync::atomic::AtomicUsize::new(0);
-    let tell = |setup: Option<&str>, what: &str| {
+    use std::sync::atomic::{AtomicUsize, Ordering::Relaxed};
+    let identified = AtomicUsize::new(0);
+    let tell = |count: usize, setup: Option<&str>, what: &str| {
         progress(SetupsProgress {
-            identified: identified.load(std::sync::atomic::Ordering::Relaxed),
+            identified: count,
             setups: setups.len(),
             setup,
             what,
@@ -115,27 +116,29 @@ pub fn analyze_setups_with_progress(
         .par_iter()
         .map(|s| {
             let one = analyze_one(s, fs, read, opts, &|p: covssi::Progress<'_>| {
-                tell(Some(&s.name), p.what)
+                tell(identified.load(Relaxed), Some(&s.name), p.what)
             });
-            let n = identified.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-            progress(SetupsProgress {
-                identified: n,
-                setups: setups.len(),
-                setup: Some(&s.name),
-                what: "identified",
-            });
+            if one.is_ok() {
+                tell(
+                    identified.fetch_add(1, Relaxed) + 1,
+                    Some(&s.name),
+                    "identified",
+                );
+            }
             one
         })
         .collect::<Result<Vec<_>, _>>()?
         .into_iter()
         .unzip();
+    let all = setups.len();
     tell(
+        all,
         None,
         "the global estimation (SSI on every setup's correlations)",
     );
     let global = global(setups, &analysed, &records, opts);
     drop(records);
-    tell(None, "merging the setups on their references");
+    tell(all, None, "merging the setups on their references");
     let mut report = merge_analysed(setups, analysed, merge_opts)?;
     match global {
         Ok(g) => report.global = Some(g),
