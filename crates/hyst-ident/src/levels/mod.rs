@@ -238,7 +238,15 @@ pub fn bouc_wen_by_simulation(
     let aux = |p: &[f64]| simulated_fits(&osc(p), fits, lengths, opts);
     let mut nonnegative = vec![false; p.len()];
     nonnegative[0] = true;
-    let fit = indirect_lm(&mut p, &nonnegative, &aux, &resid, opts, progress)?;
+    // c at least 0.1 N s/m: large enough that the fits' own convergence tolerance does not
+    // show; the others 1e-3.
+    let mut min_step = vec![1e-3; p.len()];
+    min_step[0] = 0.1;
+    let bounds = ParameterSteps {
+        nonnegative: &nonnegative,
+        min_step: &min_step,
+    };
+    let fit = indirect_lm(&mut p, &bounds, &aux, &resid, opts, progress)?;
     let se_of = |k: usize| {
         fit.covariance
             .as_ref()
@@ -335,36 +343,45 @@ fn fit_weights(fits: &[&ZenerSpectralFit]) -> Result<Vec<Matrix4<f64>>, IdentErr
         .collect()
 }
 
-/// The auxiliary statistics of a parameter vector: each level's (c, k, k∞, Ω) fitted to the
-/// model's simulated record.
-type AuxiliaryStatistics<'a, S> = dyn Fn(&[f64]) -> Result<S, IdentError> + Sync + 'a;
+/// The auxiliary statistics of a parameter vector (here each level's (c, k, k∞, Ω) fitted
+/// to the model's simulated record).
+pub(crate) type AuxiliaryStatistics<'a, S> = dyn Fn(&[f64]) -> Result<S, IdentError> + Sync + 'a;
 
 /// Where the indirect-inference fit ended.
-struct IndirectFit<S> {
+pub(crate) struct IndirectFit<S> {
     /// The auxiliary statistics at the optimum.
-    simulated: S,
+    pub(crate) simulated: S,
     /// Weighted sum of squares there.
-    cost: f64,
+    pub(crate) cost: f64,
     /// Residuals in the sum.
-    residuals: usize,
-    iterations: usize,
+    pub(crate) residuals: usize,
+    pub(crate) iterations: usize,
     /// (JᵀJ)⁻¹ of the last iteration's Jacobian, when it is invertible.
-    covariance: Option<DMatrix<f64>>,
+    pub(crate) covariance: Option<DMatrix<f64>>,
+    /// The last iteration's Jacobian of the residuals (one column per parameter).
+    pub(crate) jacobian: Option<Vec<Vec<f64>>>,
+}
+
+/// How [`indirect_lm`] steps each parameter: which may not go below 0, and the smallest
+/// finite-difference step of each.
+pub(crate) struct ParameterSteps<'a> {
+    pub(crate) nonnegative: &'a [bool],
+    pub(crate) min_step: &'a [f64],
 }
 
 /// The crate's Levenberg–Marquardt on the simulated statistics: forward differences of
-/// 1 % of each parameter (c at least 0.1 N s/m: large enough that the fits' own
-/// convergence tolerance does not show), λ from 1e-2, ÷3 on success (at least 1e-7), ×10 on
-/// failure up to 1e6; stops when an iteration gains less than the options' tolerance.
-/// `nonnegative` says which parameters may not go below 0 (c).
-fn indirect_lm<S>(
+/// 1 % of each parameter (at least its `min_step`), λ from 1e-2, ÷3 on success (at least
+/// 1e-7), ×10 on failure up to 1e6; stops when an iteration gains less than the options'
+/// tolerance. The `nonnegative` parameters are held at 0 or above.
+pub(crate) fn indirect_lm<S>(
     p: &mut Vec<f64>,
-    nonnegative: &[bool],
+    bounds: &ParameterSteps<'_>,
     aux: &AuxiliaryStatistics<'_, S>,
-    resid: &dyn Fn(&S) -> Vec<f64>,
+    resid: &(dyn Fn(&S) -> Vec<f64> + Sync),
     opts: &SimulationOptions,
     progress: &(dyn Fn(usize, f64) + Sync),
 ) -> Result<IndirectFit<S>, IdentError> {
+    use rayon::prelude::*;
     const SCHEDULE: crate::LmSchedule = crate::LmSchedule {
         shrink: 1.0 / 3.0,
         grow: 10.0,
@@ -378,27 +395,35 @@ fn indirect_lm<S>(
     let mut lambda: f64 = 1e-2;
     let mut iterations = 0;
     let mut last_jtj = None;
+    let mut last_jacobian = None;
     while iterations < opts.max_iterations {
         iterations += 1;
         let steps: Vec<f64> = p
             .iter()
             .enumerate()
-            .map(|(k, v)| (0.01 * v.abs()).max(if nonnegative[k] { 0.1 } else { 1e-3 }))
+            .map(|(k, v)| (0.01 * v.abs()).max(bounds.min_step[k]))
             .collect();
         let columns: Vec<Vec<f64>> = (0..p.len())
+            .into_par_iter()
             .map(|k| {
-                let mut q = p.clone();
-                q[k] += steps[k];
-                let rq = resid(&aux(&q)?);
-                Ok(rq.iter().zip(&r).map(|(a, b)| (a - b) / steps[k]).collect())
+                // Forward, or backward where the forward step leaves what the model
+                // allows (a share reaching 1, say).
+                let at = |h: f64| -> Result<Vec<f64>, IdentError> {
+                    let mut q = p.clone();
+                    q[k] += h;
+                    let rq = resid(&aux(&q)?);
+                    Ok(rq.iter().zip(&r).map(|(a, b)| (a - b) / h).collect())
+                };
+                at(steps[k]).or_else(|_| at(-steps[k]))
             })
             .collect::<Result<_, IdentError>>()?;
         let (jtj, jtr) = crate::normal_equations(&columns, &r);
         last_jtj = Some(DMatrix::from_fn(p.len(), p.len(), |i, j| jtj[i][j]));
+        last_jacobian = Some(columns);
         let before = cost;
         crate::lm_step_with(&SCHEDULE, &jtj, &jtr, &mut lambda, |step| {
             let mut q: Vec<f64> = p.iter().zip(step).map(|(a, b)| a - b).collect();
-            for (v, _) in q.iter_mut().zip(nonnegative).filter(|(_, n)| **n) {
+            for (v, _) in q.iter_mut().zip(bounds.nonnegative).filter(|(_, n)| **n) {
                 *v = v.max(0.0);
             }
             let s = aux(&q).ok()?;
@@ -420,6 +445,7 @@ fn indirect_lm<S>(
         residuals: r.len(),
         iterations,
         covariance: last_jtj.and_then(|m| m.try_inverse()),
+        jacobian: last_jacobian,
     })
 }
 

@@ -159,7 +159,16 @@ pub fn bouc_wen_from_one_record(
         });
     }
     let nonnegative: Vec<bool> = free.iter().map(|&i| i == 0).collect();
-    let fitted = indirect_lm(&mut p, &nonnegative, &aux, &resid, opts, progress)?;
+    // c at least 0.1 N s/m (the fits' own tolerance must not show), the others 1e-3.
+    let min_step: Vec<f64> = free
+        .iter()
+        .map(|&i| if i == 0 { 0.1 } else { 1e-3 })
+        .collect();
+    let bounds = super::ParameterSteps {
+        nonnegative: &nonnegative,
+        min_step: &min_step,
+    };
+    let fitted = indirect_lm(&mut p, &bounds, &aux, &resid, opts, progress)?;
     let mut se = [f64::NAN; 5];
     if let Some(c) = &fitted.covariance {
         for (k, &i) in free.iter().enumerate() {
