@@ -8,6 +8,9 @@ use hyst_sim::SimError;
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum IdentError {
+    /// A storey fit's input or step ([`crate::storeys`]).
+    #[error("storey fit: {0}")]
+    Storey(#[from] crate::storeys::StoreyError),
     /// SSI failed.
     #[error("SSI: {0}")]
     Ssi(#[from] covssi::SsiError),

@@ -41,7 +41,9 @@
 //! Across records: [`levels::bouc_wen_from_levels`] takes the step-3b fits of records at two
 //! or more force levels and gives one Bouc-Wen model for all, through the statistical
 //! linearization of [`hyst_linearize::statistical`] ([`levels::bouc_wen_and_exponent_from_levels`]
-//! its exponent ν too, from three or more).
+//! its exponent ν too, from three or more). For a shear structure of several floors,
+//! [`storeys::fit_storeys`] locates the storey holding a Bouc-Wen element (or none) from
+//! records at several levels and fits the structure by simulation.
 
 #![warn(missing_docs)]
 
@@ -61,6 +63,7 @@ pub mod amplitude;
 pub mod frf;
 pub mod levels;
 pub mod residual;
+pub mod storeys;
 
 pub use covssi::{Complex64, Progress};
 pub use error::IdentError;

@@ -17,4 +17,5 @@ mod refine_silverbox;
 mod refine_synthetic;
 mod serde;
 mod statistical_linearization;
+mod storeys;
 mod zener_real_pole;

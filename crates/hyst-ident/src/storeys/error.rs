@@ -1,0 +1,93 @@
+//! What can stop a storey fit.
+
+/// Errors of [`crate::storeys`].
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum StoreyError {
+    /// Fewer than two levels were given.
+    #[error("a storey fit needs records at two or more levels, got {levels}")]
+    FewLevels {
+        /// Levels given.
+        levels: usize,
+    },
+    /// No floor mass, or a mass that is not a positive number.
+    #[error("floor {floor}'s mass must be > 0 kg, got {mass}")]
+    BadMass {
+        /// The floor (1 = the lowest).
+        floor: usize,
+        /// The mass given (NaN when none was).
+        mass: f64,
+    },
+    /// A channel's floor is not in the structure.
+    #[error("channel {channel} is said to be on floor {floor}; the structure has {floors} floors")]
+    SensorBeyondTop {
+        /// The channel (1-based).
+        channel: usize,
+        /// Its floor (1-based).
+        floor: usize,
+        /// Floors of the structure.
+        floors: usize,
+    },
+    /// A level's record has another number of channels than the sensors named.
+    #[error(
+        "level {level}'s record has {channels} channel(s); {sensors} sensor floor(s) were named"
+    )]
+    ChannelCount {
+        /// The level (1-based).
+        level: usize,
+        /// Its channels.
+        channels: usize,
+        /// Sensors named.
+        sensors: usize,
+    },
+    /// A level's channels differ in length, or are too short.
+    #[error(
+        "level {level}'s record: channel {channel} has {samples} samples (the first has {first}; at least {needed} are needed)"
+    )]
+    BadLength {
+        /// The level (1-based).
+        level: usize,
+        /// The channel (1-based).
+        channel: usize,
+        /// Its samples.
+        samples: usize,
+        /// The first channel's.
+        first: usize,
+        /// Fewest usable.
+        needed: usize,
+    },
+    /// SSI of the quietest level did not find a mode per floor.
+    #[error(
+        "the quietest level's record shows {found} mode(s) below {max_hz:.3} Hz; a shear structure of {floors} floors has {floors}: are the masses and the records of one structure?"
+    )]
+    TooFewModes {
+        /// Modes found.
+        found: usize,
+        /// Floors.
+        floors: usize,
+        /// Highest frequency searched (Hz).
+        max_hz: f64,
+    },
+    /// A model the fit reached is not physical (the step is refused).
+    #[error("{name} = {value} is not physical")]
+    Unphysical {
+        /// Which parameter.
+        name: &'static str,
+        /// Its value.
+        value: f64,
+    },
+    /// No candidate's fit could be made.
+    #[error("no candidate location could be fitted: {}", reasons.join("; "))]
+    NoCandidateFitted {
+        /// Each failed fit's reason.
+        reasons: Vec<String>,
+    },
+    /// A candidate storey is not in the structure.
+    #[error("candidate storey {storey} is not in a structure of {floors} storeys")]
+    NoSuchStorey {
+        /// The storey (1-based).
+        storey: usize,
+        /// Storeys.
+        floors: usize,
+    },
+}
