@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use clap::Args;
+use clap::{Args, ValueEnum};
 
 use super::{Error, check_fs, fail, output_after_skip, read_record, show, steps_bar};
 
@@ -15,8 +15,47 @@ pub(crate) struct LevelsArgs {
     #[arg(long)]
     pub(crate) fs: f64,
     /// Mass of the oscillator (kg), assumed known.
-    #[arg(long)]
-    pub(crate) mass: f64,
+    #[arg(long, required_unless_present = "masses", conflicts_with = "masses")]
+    pub(crate) mass: Option<f64>,
+    /// A shear structure instead of one oscillator: its floor masses (kg), the lowest first.
+    /// The records' --channels are then read at once, and the storey holding a hysteretic
+    /// element is located (or none), fitted by simulation with standard errors.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        help_heading = "A structure of several floors"
+    )]
+    pub(crate) masses: Vec<f64>,
+    /// With --masses: the records' columns, one per sensor (default: every column but the
+    /// time column).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        help_heading = "A structure of several floors"
+    )]
+    pub(crate) channels: Option<Vec<String>>,
+    /// With --masses: each channel's floor, 1 = the lowest (default: 1, 2, … in order).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        help_heading = "A structure of several floors"
+    )]
+    pub(crate) floors: Option<Vec<usize>>,
+    /// With --masses: what the channels read.
+    #[arg(
+        long,
+        value_enum,
+        default_value = "acceleration",
+        help_heading = "A structure of several floors"
+    )]
+    pub(crate) quantity: QuantityArg,
+    /// With --masses: the floors the force acts on, 1 = the lowest (default: every floor).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        help_heading = "A structure of several floors"
+    )]
+    pub(crate) load_floors: Option<Vec<usize>>,
     #[command(flatten)]
     pub(crate) columns: super::args::RecordColumns,
     /// Validation records (input and output columns): the model is simulated with the input
@@ -50,11 +89,25 @@ pub(crate) struct LevelsArgs {
     pub(crate) fit_exponent: bool,
 }
 
+/// What the channels of a structure's records read.
+#[derive(Clone, Copy, ValueEnum, PartialEq, Eq, Debug)]
+pub(crate) enum QuantityArg {
+    /// Accelerations.
+    Acceleration,
+    /// Velocities.
+    Velocity,
+    /// Displacements.
+    Displacement,
+}
+
 pub(crate) fn run(a: &LevelsArgs) -> Result<(), Error> {
     use hyst::ident::levels::{self, LevelsOptions, SimulationOptions};
     let fs = check_fs(a.fs)?;
-    if !(a.mass.is_finite() && a.mass > 0.0) {
-        return Err(fail(format!("--mass must be > 0 kg, got {}", a.mass)));
+    let Some(mass) = a.mass else {
+        return run_storeys(a, fs);
+    };
+    if !(mass.is_finite() && mass > 0.0) {
+        return Err(fail(format!("--mass must be > 0 kg, got {mass}")));
     }
     let data: Vec<(String, Vec<f64>)> = a
         .data
@@ -79,7 +132,7 @@ pub(crate) fn run(a: &LevelsArgs) -> Result<(), Error> {
         periodic: a.data_periodic,
         ..SimulationOptions::default()
     });
-    let opts = LevelsOptions::with_mass(a.mass)
+    let opts = LevelsOptions::with_mass(mass)
         .fit_exponent(a.fit_exponent)
         .by_simulation(simulation);
     let bar = steps_bar();
@@ -92,6 +145,80 @@ pub(crate) fn run(a: &LevelsArgs) -> Result<(), Error> {
     }
     if let Some(path) = &a.json {
         hyst::report::write_json(&report, path)?;
+    }
+    Ok(())
+}
+
+/// `hyst levels --masses`: the storey fit of a shear structure.
+fn run_storeys(a: &LevelsArgs, fs: f64) -> Result<(), Error> {
+    use hyst::ident::storeys::{Quantity, StoreyOptions, StoreyStructure, fit_storeys};
+    let one_based = |flag: &str, v: &[usize]| -> Result<Vec<usize>, Error> {
+        v.iter()
+            .map(|&f| {
+                f.checked_sub(1)
+                    .ok_or_else(|| fail(format!("{flag}: floors count from 1, got 0")))
+            })
+            .collect()
+    };
+    if !a.validate.is_empty() || a.svg_dir.is_some() || a.by_simulation || a.fit_exponent {
+        return Err(fail(
+            "--masses fits a structure by simulation: --validate, --svg-dir, --by-simulation and --fit-exponent are the one-oscillator route's",
+        ));
+    }
+    let mut records = Vec::new();
+    let mut names: Option<Vec<String>> = None;
+    for p in &a.data {
+        let t = read_record(p)?;
+        let rate = check_fs(t.rate(Some(fs))?)?;
+        if rate != fs {
+            return Err(fail(format!(
+                "{}: its time column gives {rate} Hz, --fs {fs}",
+                p.display()
+            )));
+        }
+        let cols = super::channel_names(&t, a.channels.as_deref(), &[]);
+        let skip = a.columns.skip;
+        let channels = cols
+            .iter()
+            .map(|c| {
+                let v = t.column(c)?;
+                if skip >= v.len() {
+                    return Err(fail(format!(
+                        "--skip {skip} leaves none of the {} rows of {}",
+                        v.len(),
+                        p.display()
+                    )));
+                }
+                Ok(v[skip..].to_vec())
+            })
+            .collect::<Result<Vec<_>, Error>>()?;
+        records.push(channels);
+        names.get_or_insert(cols);
+    }
+    let channels = names.map_or(0, |n| n.len());
+    let sensors = match &a.floors {
+        Some(f) => one_based("--floors", f)?,
+        None => (0..channels).collect(),
+    };
+    let quantity = match a.quantity {
+        QuantityArg::Acceleration => Quantity::Acceleration,
+        QuantityArg::Velocity => Quantity::Velocity,
+        QuantityArg::Displacement => Quantity::Displacement,
+    };
+    let structure = StoreyStructure::new(a.masses.clone(), sensors, quantity, fs);
+    let mut opts = StoreyOptions::default();
+    if let Some(l) = &a.load_floors {
+        opts.load_floors = Some(one_based("--load-floors", l)?);
+    }
+    let bar = steps_bar();
+    let fit = fit_storeys(&records, &structure, &opts, &|p| {
+        bar.set_message(format!("{} [iteration {}]", p.stage, p.iteration));
+    });
+    bar.finish_and_clear();
+    let fit = fit.map_err(|e| fail(e.to_string()))?;
+    print!("{fit}");
+    if let Some(path) = &a.json {
+        hyst::report::write_json(&fit, path)?;
     }
     Ok(())
 }

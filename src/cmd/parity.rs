@@ -199,6 +199,10 @@ const PAIRS: &[Pair] = &[
             ),
             ("json", FILES),
             ("svg-dir", FILES),
+            (
+                "channels",
+                "Python takes each record as an array (samples, channels)",
+            ),
         ],
         python_only: &[],
     },

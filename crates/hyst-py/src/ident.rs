@@ -320,6 +320,71 @@ pub(crate) fn refine(
     Report::of(record, report)
 }
 
+/// The storey fit of a shear structure from records at several levels; see the Python
+/// wrapper `hyst.levels(..., masses=...)`. `records` are (name, channels × samples);
+/// `floors` and `load_floors` count from 1, as the command's flags.
+#[pyfunction]
+#[pyo3(signature = (records, fs, masses, *, floors, quantity, load_floors))]
+pub(crate) fn storeys(
+    py: Python<'_>,
+    records: Vec<(String, Vec<Vec<f64>>)>,
+    fs: f64,
+    masses: Vec<f64>,
+    floors: Option<Vec<usize>>,
+    quantity: &str,
+    load_floors: Option<Vec<usize>>,
+) -> PyResult<Report> {
+    use hyst::ident::storeys::{Quantity, StoreyOptions, StoreyStructure, fit_storeys};
+    let zero_based = |name: &str, v: Vec<usize>| -> PyResult<Vec<usize>> {
+        v.into_iter()
+            .map(|f| {
+                f.checked_sub(1)
+                    .ok_or_else(|| value_error(format!("{name}: floors count from 1, got 0")))
+            })
+            .collect()
+    };
+    let quantity = match quantity {
+        "acceleration" => Quantity::Acceleration,
+        "velocity" => Quantity::Velocity,
+        "displacement" => Quantity::Displacement,
+        other => {
+            return Err(value_error(format!(
+                "quantity must be \"acceleration\", \"velocity\" or \"displacement\", got {other:?}"
+            )));
+        }
+    };
+    let channels = records.first().map_or(0, |(_, r)| r.len());
+    let sensors = match floors {
+        Some(f) => zero_based("floors", f)?,
+        None => (0..channels).collect(),
+    };
+    let mut opts = StoreyOptions::default();
+    if let Some(l) = load_floors {
+        opts.load_floors = Some(zero_based("load_floors", l)?);
+    }
+    let structure = StoreyStructure::new(masses, sensors, quantity, fs);
+    let data: Vec<Vec<Vec<f64>>> = records.iter().map(|(_, r)| r.clone()).collect();
+    let fit = py
+        .detach(|| {
+            let r = fit_storeys(&data, &structure, &opts, &|p| {
+                crate::terminal_progress(hyst::ident::Progress {
+                    done: p.iteration,
+                    total: p.iteration.max(1),
+                    what: p.stage,
+                })
+            });
+            crate::clear_terminal_progress();
+            r
+        })
+        .map_err(value_error)?;
+    let record = records
+        .iter()
+        .map(|(n, _)| n.as_str())
+        .collect::<Vec<_>>()
+        .join(", ");
+    Report::of(&record, fit)
+}
+
 /// One Bouc-Wen model from records at several levels; see the Python wrapper `hyst.levels`.
 #[pyfunction]
 #[pyo3(signature = (records, fs, mass, *, by_simulation, data_periodic, fit_exponent, validate))]

@@ -423,6 +423,7 @@ fn _hyst(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ident::identify, m)?)?;
     m.add_function(wrap_pyfunction!(ident::refine, m)?)?;
     m.add_function(wrap_pyfunction!(ident::levels, m)?)?;
+    m.add_function(wrap_pyfunction!(ident::storeys, m)?)?;
     m.add_function(wrap_pyfunction!(monitor::track, m)?)?;
     m.add_function(wrap_pyfunction!(monitor::track_estimates, m)?)?;
     m.add_function(wrap_pyfunction!(amplitude::amplitude, m)?)?;

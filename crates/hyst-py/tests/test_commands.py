@@ -394,3 +394,68 @@ def test_track_estimates_gives_the_commands_report(hyst_bin, tmp_path):
     alarms = doc["alarms"]
     assert alarms and all(x["mode"] == 1 and x["side"] == "down" for x in alarms), alarms
     assert all(x["record"] >= 60 for x in alarms), alarms
+
+
+def shear_chain_accelerations(sigma, seconds, seed, fs=200.0):
+    """A linear three-storey chain (masses 1000, 1000, 800 kg; storeys 1.2, 1.0, 0.8 MN/m;
+    Rayleigh damping of 2 % at modes 1 and 3) under a white force on each floor held over
+    each sample (standard deviation `sigma` N), its exact zero-order-hold discretization
+    (scipy's matrix exponential): the floors' accelerations, an independent generator."""
+    from scipy.linalg import expm
+
+    m = np.array([1000.0, 1000.0, 800.0])
+    k = np.array([1.2e6, 1.0e6, 0.8e6])
+    kk = np.array([[k[0] + k[1], -k[1], 0.0], [-k[1], k[1] + k[2], -k[2]], [0.0, -k[2], k[2]]])
+    w = np.sqrt(np.sort(np.linalg.eigvals(kk / m[:, None]).real))
+    a1 = 2 * 0.02 / (w[0] + w[2])
+    c = a1 * w[0] * w[2] * np.diag(m) + a1 * kk
+    minv = np.diag(1.0 / m)
+    a = np.block([[np.zeros((3, 3)), np.eye(3)], [-minv @ kk, -minv @ c]])
+    b = np.vstack([np.zeros((3, 3)), minv])
+    big = expm(np.block([[a, b], [np.zeros((3, 9))]]) / fs)
+    ad, bd = big[:6, :6], big[:6, 6:]
+    rng = np.random.default_rng(seed)
+    n = int(seconds * fs)
+    warm = int(60 * fs)
+    f = sigma * rng.standard_normal((warm + n, 3))
+    x = np.zeros(6)
+    out = np.empty((n, 3))
+    for i in range(warm + n):
+        if i >= warm:
+            out[i - warm] = (a @ x + b @ f[i])[3:]
+        x = ad @ x + bd @ f[i]
+    return out + 0.01 * out.std(axis=0) * rng.standard_normal(out.shape)
+
+
+def test_levels_of_a_structure_give_the_commands_document(hyst_bin, tmp_path):
+    """`hyst.levels(..., masses=)` and `hyst levels --masses` on the same three records of a
+    linear chain: the same document; and no element is found in it (the chain has none)."""
+    paths, records = [], {}
+    for i, sigma in enumerate([100.0, 300.0, 900.0]):
+        y = shear_chain_accelerations(sigma, 90.0, 8_300_601 + i)
+        p = tmp_path / f"level{i}.csv"
+        np.savetxt(p, y, delimiter=",", header="a1,a2,a3", comments="")
+        paths.append(p)
+        records[str(p)] = y
+    out = run(hyst_bin, "levels", "--data", *paths, "--fs", 200, "--masses", "1000,1000,800",
+              "--json", tmp_path / "s.json")
+    report = hyst.levels(records, 200.0, masses=[1000.0, 1000.0, 800.0])
+    assert comparable(report.to_dict()) == document(tmp_path / "s.json")
+    assert report.to_dict()["storey"] is None, out.stdout
+    assert "Hysteretic element: none" in out.stdout
+
+
+@pytest.mark.parametrize(
+    "call, says",
+    [
+        (lambda: hyst.levels([np.ones((900, 3))] * 2, 200.0, 2.0, masses=[1.0, 1.0, 1.0]), "mass, by_simulation"),
+        (lambda: hyst.levels([np.ones(900)] * 2, 200.0, masses=[1.0, 1.0, 1.0]), "(samples, channels)"),
+        (lambda: hyst.levels([np.ones((900, 3))] * 2, 200.0, masses=[1.0] * 3, floors=[0, 1, 2]), "floors must be at least 1"),
+        (lambda: hyst.levels([np.ones((900, 3))] * 2, 200.0, masses=[1.0] * 3, quantity="strain"), 'got "strain"'),
+        (lambda: hyst.levels([np.ones(900)] * 2, 200.0), "needs mass"),
+    ],
+)
+def test_a_structures_bad_input_is_named(call, says):
+    with pytest.raises(ValueError) as e:
+        call()
+    assert says in str(e.value), str(e.value)

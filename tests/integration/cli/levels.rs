@@ -293,3 +293,110 @@ fn levels_gives_one_bouc_wen_model_of_several_records() {
     assert!(!ok);
     assert!(err.contains("2 values required"), "{err}");
 }
+
+/// Three levels of a three-storey shear chain with a Bouc-Wen element in its second storey
+/// (the project's building generator: this tests the command's plumbing; the route is
+/// judged on an independent generator in hyst-ident's `storeys` tests), accelerations in
+/// columns a1..a3 at 200 Hz.
+fn storey_records(seconds: f64) -> Vec<PathBuf> {
+    let mut b = hyst_sim::building::ShearBuilding::three_storey_example(Some(1));
+    let fine = b.fine_rate().unwrap();
+    [300.0, 1200.0, 3600.0]
+        .iter()
+        .enumerate()
+        .map(|(i, sigma)| {
+            // The same density σ²/8000 N²/Hz as the independent generator's levels.
+            b.load.rms = sigma * (fine / 8000.0f64).sqrt();
+            let y = b
+                .generate((seconds * 200.0) as usize, 8_300_501 + i as u64)
+                .unwrap();
+            let mut text = String::from("a1,a2,a3\n");
+            for ((a, b), c) in y[0].iter().zip(&y[1]).zip(&y[2]) {
+                text.push_str(&format!("{a},{b},{c}\n"));
+            }
+            write(&format!("storey_level_{i}.csv"), &text)
+        })
+        .collect()
+}
+
+#[test]
+fn levels_with_masses_locate_the_storey_and_write_the_fit() {
+    let data = storey_records(150.0);
+    let json = tmp("storey_fit.json");
+    let mut args = vec![
+        "levels",
+        "--fs",
+        "200",
+        "--masses",
+        "1000,1000,800",
+        "--data",
+    ];
+    args.extend(data.iter().map(|p| s(p)));
+    args.extend(["--json", s(&json)]);
+    let (ok, out, err) = hyst(&args);
+    assert!(ok, "{err}");
+    assert!(out.contains("Hysteretic element: storey 2"), "{out}");
+    assert!(out.contains("runner-up"), "{out}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    // The JSON counts storeys from 0 (the library's type), the text from 1.
+    assert_eq!(v["storey"], 1, "{v}");
+    assert_eq!(v["candidates"].as_array().unwrap().len(), 4);
+    let names: Vec<&str> = v["parameters"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        names,
+        [
+            "k1", "k2", "k3", "zeta1", "zeta2", "zeta3", "q1", "q2", "q3", "b", "a", "beta",
+            "gamma"
+        ]
+    );
+    // Bad input is named: a floor counted from 0, a sensor above the top, one level.
+    let (ok, _, err) = hyst(&[
+        "levels",
+        "--fs",
+        "200",
+        "--masses",
+        "1000,1000,800",
+        "--floors",
+        "0,1,2",
+        "--data",
+        s(&data[0]),
+        s(&data[1]),
+    ]);
+    assert!(
+        !ok && err.contains("--floors: floors count from 1"),
+        "{err}"
+    );
+    let (ok, _, err) = hyst(&[
+        "levels",
+        "--fs",
+        "200",
+        "--masses",
+        "1000,1000",
+        "--data",
+        s(&data[0]),
+        s(&data[1]),
+    ]);
+    assert!(
+        !ok && err.contains("channel 3 is said to be on floor 3; the structure has 2 floors"),
+        "{err}"
+    );
+    let (ok, _, err) = hyst(&[
+        "levels",
+        "--fs",
+        "200",
+        "--masses",
+        "1000,1000,800",
+        "--mass",
+        "2",
+        "--data",
+        s(&data[0]),
+        s(&data[1]),
+    ]);
+    assert!(!ok && err.contains("--mass"), "{err}");
+}

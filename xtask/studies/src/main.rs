@@ -22,6 +22,7 @@
 mod acquisition;
 mod bench_command;
 mod bench_refine;
+mod bench_storeys;
 mod compare;
 mod compare_roving;
 mod compare_setups;
@@ -690,6 +691,8 @@ enum BenchGroup {
     Amplitude,
     /// The longest time between two of SSI's progress reports.
     Progress,
+    /// The storey fit of a three-storey chain from three levels (`bench_storeys.rs`).
+    Storeys,
 }
 
 #[derive(clap::Subcommand)]
@@ -737,7 +740,7 @@ fn main() {
     use clap::Parser;
     match Cli::parse().task {
         Task::Bench { groups } => {
-            let all: [(BenchGroup, fn()); 9] = [
+            let all: [(BenchGroup, fn()); 10] = [
                 (BenchGroup::Rk4, bench),
                 (BenchGroup::Covssi, bench_covssi),
                 (BenchGroup::Ident, bench_ident),
@@ -747,6 +750,7 @@ fn main() {
                 (BenchGroup::Monitor, monitor::bench),
                 (BenchGroup::Amplitude, bench_amplitude),
                 (BenchGroup::Progress, bench_progress),
+                (BenchGroup::Storeys, bench_storeys::run),
             ];
             for (group, run) in all {
                 if groups.is_empty() || groups.contains(&group) {

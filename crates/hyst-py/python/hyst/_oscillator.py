@@ -1,8 +1,10 @@
 """The oscillator's commands on arrays: :func:`excite`, :func:`simulate`, :func:`identify`,
 :func:`refine` and :func:`levels` (``hyst simulate``, ``ident``, ``refine``, ``levels``)."""
 
+import numpy as _np
+
 from . import _hyst
-from ._checks import _count, _vector
+from ._checks import _count, _real, _vector
 
 
 def _model_json(model):
@@ -204,19 +206,22 @@ def refine(u, y, fs, *, mass=None, start="linear", input_interpolation="band-lim
     )
 
 
-def levels(records, fs, mass, *, by_simulation=False, data_periodic=False, fit_exponent=False,
-           validate=None):
+def levels(records, fs, mass=None, *, by_simulation=False, data_periodic=False,
+           fit_exponent=False, validate=None, masses=None, floors=None,
+           quantity="acceleration", load_floors=None):
     """One Bouc-Wen model from records of one structure at several force levels, each under
-    a random force (``hyst levels``).
+    a random force (``hyst levels``); with ``masses``, a shear structure of several floors:
+    the storey holding a hysteretic element located (or none) and fitted by simulation.
 
     Parameters
     ----------
     records : list of array_like, or dict of name -> array_like
-        The displacement records, one per level.
+        The records, one per level: displacements (samples,) of one oscillator; with
+        ``masses``, arrays (samples, channels) of the structure's sensors.
     fs : float
         Sampling rate (Hz).
     mass : float
-        The mass (kg).
+        The oscillator's mass (kg); not with ``masses``.
     by_simulation : bool
         Then fit the model by simulation (indirect inference; slower), ``data_periodic``
         when the records are periodic.
@@ -224,12 +229,44 @@ def levels(records, fs, mass, *, by_simulation=False, data_periodic=False, fit_e
         Fit the Bouc-Wen exponent too (three or more records).
     validate : list, optional
         As for :func:`identify`.
+    masses : list of float, optional
+        A shear structure's floor masses (kg), the lowest first.
+    floors : list of int, optional
+        With ``masses``: each channel's floor, 1 = the lowest (default 1, 2, ...).
+    quantity : str
+        With ``masses``: what the channels read, "acceleration", "velocity" or
+        "displacement".
+    load_floors : list of int, optional
+        With ``masses``: the floors the force acts on, 1 = the lowest (default every floor).
 
     Returns
     -------
     Report
         As ``hyst levels`` prints and writes.
     """
+    if masses is not None:
+        if mass is not None or by_simulation or data_periodic or fit_exponent or validate:
+            raise ValueError(
+                "masses fits a structure by simulation: mass, by_simulation, data_periodic, "
+                "fit_exponent and validate are the one-oscillator route's")
+        items = records.items() if isinstance(records, dict) else (
+            (f"level {i}", r) for i, r in enumerate(records))
+        named = []
+        for n, r in items:
+            a = _np.ascontiguousarray(_real(r, "each record"))
+            if a.ndim != 2:
+                raise ValueError(
+                    f"with masses each record is (samples, channels), got shape {a.shape}")
+            named.append((str(n), a.T.tolist()))
+        return _hyst.storeys(
+            named, float(fs), [float(m) for m in masses],
+            floors=None if floors is None else [_count(f, "floors", 1) for f in floors],
+            quantity=str(quantity),
+            load_floors=None if load_floors is None else [
+                _count(f, "load_floors", 1) for f in load_floors],
+        )
+    if mass is None:
+        raise ValueError("levels needs mass (one oscillator) or masses (a structure)")
     items = records.items() if isinstance(records, dict) else (
         (f"level {i}", r) for i, r in enumerate(records))
     named = [(str(n), _vector(r, "each record").tolist()) for n, r in items]
