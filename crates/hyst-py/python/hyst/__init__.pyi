@@ -102,12 +102,16 @@ def refine(
 def levels(
     records: Union[Sequence[npt.ArrayLike], dict[str, npt.ArrayLike]],
     fs: float,
-    mass: float,
+    mass: Optional[float] = ...,
     *,
     by_simulation: bool = ...,
     data_periodic: bool = ...,
     fit_exponent: bool = ...,
     validate: Optional[Sequence[Validation]] = ...,
+    masses: Optional[Sequence[float]] = ...,
+    floors: Optional[Sequence[int]] = ...,
+    quantity: Literal["acceleration", "velocity", "displacement"] = ...,
+    load_floors: Optional[Sequence[int]] = ...,
 ) -> Report: ...
 
 def track(
