@@ -132,15 +132,8 @@ pub(super) fn spread(
     let mut sds = Vec::new();
     let mut covs = Vec::new();
     for (l, (&n, &q)) in lengths.iter().zip(q).enumerate() {
-        let stats: Vec<Vec<f64>> = (0..r)
-            .into_par_iter()
-            .map(|i| {
-                let seed = opts.seed.wrapping_add(100_000 + 1000 * l as u64 + i as u64);
-                Ok(setup
-                    .reading
-                    .of(&sim.replicate(building, n, (q, folded), seed)?))
-            })
-            .collect::<Result<_, IdentError>>()?;
+        let first_seed = opts.seed.wrapping_add(100_000 + 1000 * l as u64);
+        let stats = replicates(setup, &sim, building, (n, (q, folded)), (r, first_seed))?;
         let d = stats[0].len();
         let mean: Vec<f64> = (0..d)
             .map(|k| stats.iter().map(|s| s[k]).sum::<f64>() / r as f64)
@@ -156,6 +149,24 @@ pub(super) fn spread(
         covs.push(cov);
     }
     Ok((sds, covs))
+}
+
+/// The statistics of `count` records of `n` samples of `building` under forces (density,
+/// folded band) drawn afresh from seeds `first_seed`, `first_seed + 1`, … (in parallel).
+fn replicates(
+    setup: &Setup,
+    sim: &Simulator,
+    building: &ShearBuilding,
+    (n, force): (usize, (f64, f64)),
+    (count, first_seed): (usize, u64),
+) -> Result<Vec<Vec<f64>>, IdentError> {
+    (0..count)
+        .into_par_iter()
+        .map(|i| {
+            let y = sim.replicate(building, n, force, first_seed.wrapping_add(i as u64))?;
+            Ok(setup.reading.of(&y))
+        })
+        .collect()
 }
 
 /// The whitened distance of the held-out halves' statistics from the mean of four fresh
@@ -174,15 +185,14 @@ pub(super) fn held_out_score(
     let mut total = 0.0;
     for (l, r) in second.iter().enumerate() {
         let n = r[0].len();
-        let stats: Vec<Vec<f64>> = (0..DRAWS)
-            .into_par_iter()
-            .map(|i| {
-                let seed = opts.seed.wrapping_add(500_000 + 1000 * l as u64 + i as u64);
-                Ok(setup
-                    .reading
-                    .of(&sim.replicate(building, n, (q[l], folded), seed)?))
-            })
-            .collect::<Result<_, IdentError>>()?;
+        let first_seed = opts.seed.wrapping_add(500_000 + 1000 * l as u64);
+        let stats = replicates(
+            setup,
+            &sim,
+            building,
+            (n, (q[l], folded)),
+            (DRAWS, first_seed),
+        )?;
         for k in 0..measured[l].len() {
             let mean = stats.iter().map(|s| s[k]).sum::<f64>() / DRAWS as f64;
             total += ((mean - measured[l][k]) / spread[l][k]).powi(2);
