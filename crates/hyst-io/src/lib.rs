@@ -178,7 +178,7 @@ pub enum IoError {
         /// What the CSV reader found.
         what: String,
     },
-    /// A parameters file that is not an oscillator in the schema.
+    /// A JSON document (an oscillator, a fitted structure) that is not what was asked for.
     #[error("{path}: {what}")]
     Params {
         /// The file.
@@ -797,6 +797,19 @@ pub fn repeated(names: &[String]) -> Option<&str> {
 /// ([`hyst_model::schema`]). `FILE#/POINTER` reads the model at that JSON pointer inside the
 /// file, e.g. `ident.json#/bouc_wen` or `refine.json#/model`.
 pub fn read_oscillator(spec: &Path) -> Result<hyst_model::Oscillator, IoError> {
+    read_document(
+        spec,
+        "the model must be a JSON object of named parameters ({\"mass\": …})",
+    )
+}
+
+/// Read a value a report wrote (a JSON object; its type refuses keys it does not know) from
+/// `FILE` or from the JSON pointer `FILE#/POINTER` inside it. `what` says what the value must
+/// be, for the error when it is not an object.
+pub fn read_document<T: serde::de::DeserializeOwned>(
+    spec: &Path,
+    what: &str,
+) -> Result<T, IoError> {
     let text = spec.to_string_lossy();
     let (path, pointer) = match text.rsplit_once("#/") {
         Some((p, ptr)) => (PathBuf::from(p), Some(format!("/{ptr}"))),
@@ -819,10 +832,10 @@ pub fn read_oscillator(spec: &Path) -> Result<hyst_model::Oscillator, IoError> {
             .ok_or_else(|| params(format!("nothing at `#{ptr}`")))?,
     };
     // serde reads a struct from an array too, by position: [1, 10, 5e4, …] would silently
-    // become mass, damping, stiffness in whatever order the fields are declared.
+    // become its fields in whatever order they are declared.
     if !value.is_object() {
         return Err(params(format!(
-            "the model must be a JSON object of named parameters ({{\"mass\": …}}), not {}",
+            "{what}, not {}",
             match value {
                 serde_json::Value::Array(_) => "an array",
                 serde_json::Value::String(_) => "a string",

@@ -28,6 +28,7 @@ use crate::SimError;
 /// A storey's Bouc-Wen element (in parallel with the rest of its stiffness).
 #[derive(Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct StoreyHysteresis {
     /// The storey (0: between the ground and floor 1).
     pub storey: usize,
@@ -69,6 +70,7 @@ pub enum Colour {
 /// The loads.
 #[derive(Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct Load {
     /// Floors loaded (0-based), each by its own noise.
     pub floors: Vec<usize>,
@@ -97,6 +99,7 @@ pub enum Reading {
 /// A shear building, its loads and its sensors.
 #[derive(Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct ShearBuilding {
     /// Floor masses (kg), from the first floor up.
     pub masses: Vec<f64>,

@@ -90,4 +90,26 @@ pub enum StoreyError {
         /// Storeys.
         floors: usize,
     },
+    /// A fit given to a prediction whose parts disagree (read from an edited report).
+    #[error("the storey fit does not hold together: {what}")]
+    InconsistentFit {
+        /// What disagrees.
+        what: String,
+    },
+    /// A prediction or a record shorter than the fit's reading needs.
+    #[error("{samples} samples are too few: the fit's reading needs at least {needed}")]
+    TooShort {
+        /// Samples asked for or given.
+        samples: usize,
+        /// Fewest usable (three of Welch's segments).
+        needed: usize,
+    },
+    /// Force columns given for another number of loaded floors.
+    #[error("{given} force column(s) given; the fit loads {loaded} floor(s), one column each")]
+    ForceColumns {
+        /// Columns given.
+        given: usize,
+        /// Floors loaded.
+        loaded: usize,
+    },
 }

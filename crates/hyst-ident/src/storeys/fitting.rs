@@ -8,9 +8,10 @@ use rayon::prelude::*;
 use super::model::{self, Layout};
 use super::setup::Setup;
 use super::statistics::Simulator;
-use super::{ShearBuilding, StoreyOptions, StoreyProgress};
+use super::types::{StoreyOptions, StoreyProgress};
 use crate::IdentError;
 use crate::levels::{ParameterSteps, SimulationOptions, indirect_lm};
+use hyst_sim::building::ShearBuilding;
 
 /// One fit's end.
 pub(super) struct Fitted {
@@ -201,12 +202,12 @@ pub(super) fn held_out_score(
     Ok(total)
 }
 
-/// Standard errors of θ: the sandwich of the whitened Jacobian with the statistics'
+/// The covariance of θ: the sandwich of the whitened Jacobian with the statistics'
 /// covariance (whitened the same way), doubled for the simulated records' own noise, in
-/// physical units. NaN when the Jacobian is singular.
-pub(super) fn sandwich(fit: &Fitted, spread: &[Vec<f64>], cov: &[DMatrix<f64>]) -> Vec<f64> {
+/// physical units (rows in θ's order). NaN when the Jacobian is singular.
+pub(super) fn sandwich(fit: &Fitted, spread: &[Vec<f64>], cov: &[DMatrix<f64>]) -> DMatrix<f64> {
     let np = fit.theta.len();
-    let nan = vec![f64::NAN; np];
+    let nan = DMatrix::from_element(np, np, f64::NAN);
     let Some(cols) = &fit.jacobian else {
         return nan;
     };
@@ -228,9 +229,7 @@ pub(super) fn sandwich(fit: &Fitted, spread: &[Vec<f64>], cov: &[DMatrix<f64>]) 
         return nan;
     };
     let v = &inv * j.transpose() * s * &j * &inv * 2.0;
-    (0..np)
-        .map(|k| v[(k, k)].max(0.0).sqrt() * fit.scale[k])
-        .collect()
+    DMatrix::from_fn(np, np, |a, b| v[(a, b)] * fit.scale[a] * fit.scale[b])
 }
 
 /// The two halves of every record, their statistics, and the statistics' spread at half

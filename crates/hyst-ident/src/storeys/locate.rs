@@ -1,11 +1,13 @@
 //! Where the element is: every candidate cross-validated over the records' halves, the
 //! storey of best held-out score, and the test of whether there is an element at all.
 
+use super::error::StoreyError;
 use super::fitting::{Halves, cross_validate};
 use super::model::Layout;
 use super::setup::{Setup, start_for};
-use super::{ShearBuilding, StoreyCandidate, StoreyError, StoreyOptions, StoreyProgress};
+use super::types::{StoreyCandidate, StoreyOptions, StoreyProgress};
 use crate::IdentError;
+use hyst_sim::building::ShearBuilding;
 
 /// Each candidate's scores (none first, then the storeys) and its first fit, `None` where
 /// its fit failed (the reason in its candidate).
@@ -79,6 +81,7 @@ pub(super) fn locate(
 /// the element is kept when it improves by more than that distribution's 99 % point.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct ElementEvidence {
     /// The best-placed element's storey (0-based).
     pub storey: usize,

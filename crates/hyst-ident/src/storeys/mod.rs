@@ -35,14 +35,23 @@ mod error;
 mod fitting;
 mod locate;
 mod model;
+mod predict;
 mod report;
+mod response;
 mod setup;
 mod statistics;
+mod types;
 
 pub use error::StoreyError;
 pub use hyst_sim::building::{Reading as Quantity, ShearBuilding, StoreyHysteresis};
 
 pub use locate::ElementEvidence;
+pub use predict::{LevelPrediction, PredictionOptions, level_statistics, predict_level};
+pub use response::{ChannelError, response_errors, simulate_structure};
+pub use types::{
+    LevelStatistics, StoreyCandidate, StoreyFit, StoreyOptions, StoreyParameter, StoreyProgress,
+    StoreyReading, StoreyStructure,
+};
 
 use rayon::prelude::*;
 
@@ -51,163 +60,6 @@ use fitting::{Fitted, Halves, fit, sandwich, spread};
 use model::Layout;
 use setup::Setup;
 use statistics::Simulator;
-
-/// The structure the records come from: what is known before the fit.
-#[derive(Debug, Clone, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-#[non_exhaustive]
-pub struct StoreyStructure {
-    /// Floor masses (kg), the lowest floor first.
-    pub masses: Vec<f64>,
-    /// Each channel's floor (0 = the lowest).
-    pub sensors: Vec<usize>,
-    /// What the channels read.
-    pub quantity: Quantity,
-    /// The records' rate (Hz).
-    pub fs: f64,
-}
-
-impl StoreyStructure {
-    /// A structure of these floor masses, each channel on the floor given, read as
-    /// `quantity` at `fs` Hz.
-    pub fn new(masses: Vec<f64>, sensors: Vec<usize>, quantity: Quantity, fs: f64) -> Self {
-        StoreyStructure {
-            masses,
-            sensors,
-            quantity,
-            fs,
-        }
-    }
-}
-
-/// Options of [`fit_storeys`].
-#[derive(Debug, Clone, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-#[cfg_attr(feature = "serde", serde(default, deny_unknown_fields))]
-#[non_exhaustive]
-pub struct StoreyOptions {
-    /// Floors the force acts on (0-based), each its own white noise. Default: every floor.
-    pub load_floors: Option<Vec<usize>>,
-    /// Storeys that may hold the element (0 = between the ground and the first floor);
-    /// "none" is always a candidate. Default: every storey.
-    pub candidates: Option<Vec<usize>>,
-    /// The Bouc-Wen exponent ν, held. Default 1.
-    pub nu: f64,
-    /// Most Levenberg–Marquardt iterations of each fit. Default 8.
-    pub max_iterations: usize,
-    /// Stop when an iteration lowers the weighted sum of squares by less than this share.
-    /// Default 1e-3.
-    pub tolerance: f64,
-    /// Seed of the simulated forces (common random numbers). Default 9100.
-    pub seed: u64,
-    /// Replicates behind each statistic's spread. Default 16.
-    pub replicates: usize,
-}
-
-impl Default for StoreyOptions {
-    fn default() -> Self {
-        StoreyOptions {
-            load_floors: None,
-            candidates: None,
-            nu: 1.0,
-            max_iterations: 8,
-            tolerance: 1e-3,
-            seed: 9100,
-            replicates: 16,
-        }
-    }
-}
-
-/// One fitted parameter.
-#[derive(Debug, Clone, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct StoreyParameter {
-    /// `k1`… (N/m), `zeta1`…, `q1`… (N²/Hz, two-sided, each loaded floor), `a`, `beta`,
-    /// `gamma` (1/m^ν).
-    pub name: String,
-    /// Its value.
-    pub value: f64,
-    /// Its standard error (NaN when the fit's Jacobian is singular).
-    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
-    pub se: f64,
-}
-
-/// A candidate location and how well it predicted the held-out halves.
-#[derive(Debug, Clone, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct StoreyCandidate {
-    /// The storey (0-based), or none.
-    pub storey: Option<usize>,
-    /// Whitened squared distance of each half's statistics from the model fitted on the
-    /// other half, summed over both (about 2.5 times the statistics' count when the model is
-    /// right, plus the fitted parameters' own error).
-    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
-    pub held_out: f64,
-    /// The same on the halves it was fitted to.
-    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
-    pub fitted: f64,
-    /// Why its fit stopped, when it did (its scores are then ∞ and NaN).
-    pub failed: Option<String>,
-}
-
-/// What a level's record says (or a simulated one's), mode by mode: its band's centroid
-/// and relative spread, its channels' summed power and their power ratios (`statistics.rs`).
-#[derive(Debug, Clone, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct LevelStatistics {
-    /// Each mode band's centroid frequency (Hz).
-    pub centroid_hz: Vec<f64>,
-    /// Each mode band's relative spread (standard deviation over centroid): wider with more
-    /// damping.
-    pub spread: Vec<f64>,
-    /// Each mode band's RMS at each channel (the record's unit), mode by mode.
-    pub band_rms: Vec<Vec<f64>>,
-    /// The spread of each statistic over replicates of the fitted model (centroids,
-    /// spreads, then band by band the log summed power and the other channels' log power
-    /// ratios to the first), as a standard error; empty for a simulated level.
-    pub se: Vec<f64>,
-}
-
-/// What [`fit_storeys`] finds.
-#[derive(Debug, Clone, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-pub struct StoreyFit {
-    /// The storey holding the element (0-based), or none.
-    pub storey: Option<usize>,
-    /// The fitted structure (its load is a unit one: see `force_densities`).
-    pub building: ShearBuilding,
-    /// Each level's force density (N²/Hz, two-sided, on each loaded floor).
-    pub force_densities: Vec<f64>,
-    /// Floors loaded.
-    pub load_floors: Vec<usize>,
-    /// The parameters with their standard errors.
-    pub parameters: Vec<StoreyParameter>,
-    /// Every candidate: the chosen one first, then the others by held-out score (the
-    /// runner-up next).
-    pub candidates: Vec<StoreyCandidate>,
-    /// Whether an element is needed at all ([`ElementEvidence`]); `None` when "none" or
-    /// every element candidate could not be fitted.
-    pub element_evidence: Option<ElementEvidence>,
-    /// Each level's statistics, measured on the whole record.
-    pub measured: Vec<LevelStatistics>,
-    /// The same from the fitted model's simulated records.
-    pub simulated: Vec<LevelStatistics>,
-    /// RMS of the whitened differences of the final fit.
-    pub residual_rms: f64,
-    /// Iterations of the final fit.
-    pub iterations: usize,
-}
-
-/// A step of the fit, for progress output.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct StoreyProgress<'a> {
-    /// What is being done.
-    pub stage: &'a str,
-    /// The iteration (0 before the first).
-    pub iteration: usize,
-    /// Its weighted sum of squares (NaN when none).
-    pub cost: f64,
-}
 
 /// Fit the storey model to `records` (one per level: channels × samples, each channel on the
 /// floor [`StoreyStructure::sensors`] names), locate the element by held-out evidence, and
@@ -317,7 +169,44 @@ pub fn fit_storeys(
     )?;
     report.candidates = scored;
     report.element_evidence = evidence;
+    report.predictions = predictions(&report, records, opts, progress)?;
     Ok(report)
+}
+
+/// The levels not recorded that `opts.predict` asks for: forces a factor times the loudest
+/// level's RMS (checked with the records), records as long as its.
+fn predictions(
+    fit: &StoreyFit,
+    records: &[Vec<Vec<f64>>],
+    opts: &StoreyOptions,
+    progress: &(dyn Fn(StoreyProgress<'_>) + Sync),
+) -> Result<Vec<LevelPrediction>, IdentError> {
+    let Some((loudest, q)) = fit
+        .force_densities
+        .iter()
+        .copied()
+        .enumerate()
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+    else {
+        return Ok(vec![]);
+    };
+    let samples = records[loudest][0].len();
+    let how = PredictionOptions {
+        replicates: opts.replicates,
+        seed: opts.seed.wrapping_add(7000),
+    };
+    opts.predict
+        .iter()
+        .enumerate()
+        .map(|(i, &factor)| {
+            progress(StoreyProgress {
+                stage: "predicting a level not recorded",
+                iteration: i + 1,
+                cost: f64::NAN,
+            });
+            predict_level(fit, q * factor * factor, samples, &how)
+        })
+        .collect()
 }
 
 /// The first or second half of every channel of every record.
@@ -368,7 +257,10 @@ fn finish(
         cost: whole.cost,
     });
     let (sd, cov) = spread(setup, &building, (&q, folded), &lengths(records), opts)?;
-    let se = sandwich(whole, weights, &cov);
+    let covariance = sandwich(whole, weights, &cov);
+    let se: Vec<f64> = (0..covariance.nrows())
+        .map(|k| covariance[(k, k)].max(0.0).sqrt())
+        .collect();
     let parameters = layout
         .names()
         .into_iter()
@@ -377,22 +269,7 @@ fn finish(
         .map(|((name, &value), &se)| StoreyParameter { name, value, se })
         .collect();
     let (n, channels) = (setup.floors, setup.channels);
-    let level = |s: &[f64], se: Vec<f64>| LevelStatistics {
-        centroid_hz: s[..n].to_vec(),
-        spread: s[n..2 * n].to_vec(),
-        band_rms: s[2 * n..]
-            .chunks(channels)
-            .map(|c| {
-                // Back from (ln Σ P, ln P_c/P_1 …) to each channel's RMS √P_c.
-                let ratios: Vec<f64> = std::iter::once(1.0)
-                    .chain(c[1..].iter().map(|r| r.exp()))
-                    .collect();
-                let first = c[0].exp() / ratios.iter().sum::<f64>();
-                ratios.iter().map(|r| (first * r).sqrt()).collect()
-            })
-            .collect(),
-        se,
-    };
+    let level = |s: &[f64], se: Vec<f64>| statistics::level(s, (n, channels), se);
     Ok(StoreyFit {
         storey: layout.storey,
         building,
@@ -407,6 +284,17 @@ fn finish(
             .map(|(s, sd)| level(s, sd))
             .collect(),
         simulated: whole.simulated.iter().map(|s| level(s, vec![])).collect(),
+        predictions: vec![],
+        covariance: covariance
+            .row_iter()
+            .map(|r| r.iter().copied().collect())
+            .collect(),
+        reading: StoreyReading {
+            bands_hz: setup.reading.edges.clone(),
+            segment: setup.reading.segment,
+            steps_per_sample: setup.stepping.0,
+            warm_up: setup.stepping.1,
+        },
         residual_rms: (whole.cost / whole.residuals as f64).sqrt(),
         iterations: whole.iterations,
     })

@@ -7,7 +7,7 @@
 use hyst_sim::building::{Load, Reading as Quantity, ShearBuilding, StoreyHysteresis};
 use nalgebra::{DMatrix, SymmetricEigen};
 
-use super::StoreyError;
+use super::error::StoreyError;
 
 /// Where each parameter sits in the vector.
 #[derive(Debug, Clone, PartialEq)]

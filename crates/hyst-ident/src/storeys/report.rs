@@ -3,7 +3,9 @@
 
 use std::fmt;
 
-use super::{Quantity, StoreyFit};
+use super::predict::LevelPrediction;
+use super::types::StoreyFit;
+use hyst_sim::building::Reading as Quantity;
 
 /// A location as users count it: storeys from 1 (between the ground and the first floor).
 fn place(storey: Option<usize>) -> String {
@@ -111,10 +113,53 @@ impl fmt::Display for StoreyFit {
             }
             writeln!(f)?;
         }
+        if let Some(loudest) = self
+            .force_densities
+            .iter()
+            .copied()
+            .max_by(|a, b| a.total_cmp(b))
+        {
+            for p in &self.predictions {
+                prediction(f, p, (p.force_density / loudest).sqrt())?;
+            }
+        }
         writeln!(
             f,
             "Whitened residual RMS {:.2} (about 1 when the model explains every level) after {} iterations",
             self.residual_rms, self.iterations
         )
     }
+}
+
+/// A level not recorded: each storey's drift, each mode's centroid and spread with the
+/// parameters' standard error and a record's own spread.
+fn prediction(f: &mut fmt::Formatter<'_>, p: &LevelPrediction, factor: f64) -> fmt::Result {
+    writeln!(
+        f,
+        "Predicted at {factor:.3} × the loudest level's force (density {:.4e} N²/Hz), records of {} samples:",
+        p.force_density, p.samples
+    )?;
+    let drifts: Vec<String> = p
+        .drift_rms
+        .iter()
+        .enumerate()
+        .map(|(s, d)| format!("storey {} {d:.3e}", s + 1))
+        .collect();
+    writeln!(f, "  RMS drift (m): {}", drifts.join(", "))?;
+    let s = &p.statistics;
+    let n = s.centroid_hz.len();
+    for j in 0..n {
+        writeln!(
+            f,
+            "  mode {}: centroid {:.3} Hz ± {:.3} (a record: ± {:.3}), spread {:.4} ± {:.4} (a record: ± {:.4})",
+            j + 1,
+            s.centroid_hz[j],
+            p.parameters_se[j],
+            s.se[j],
+            s.spread[j],
+            p.parameters_se[n + j],
+            s.se[n + j]
+        )?;
+    }
+    Ok(())
 }

@@ -4,9 +4,10 @@
 
 use hyst_sim::building::{Reading as Quantity, ShearBuilding};
 
+use super::error::StoreyError;
 use super::model::{self, Layout};
 use super::statistics::{Reading, Simulator};
-use super::{StoreyError, StoreyOptions, StoreyProgress, StoreyStructure};
+use super::types::{StoreyOptions, StoreyProgress, StoreyStructure};
 use crate::IdentError;
 
 /// The records' statistics and what every fit shares.
@@ -84,6 +85,12 @@ pub(super) fn check(
         return Err(StoreyError::NoSuchStorey {
             storey: s + 1,
             floors,
+        });
+    }
+    if let Some(&factor) = opts.predict.iter().find(|f| !(**f > 0.0 && f.is_finite())) {
+        return Err(StoreyError::Unphysical {
+            name: "a predicted level's force factor",
+            value: factor,
         });
     }
     // Each half must hold SSI's lags and a few periods; 400 samples is a floor, not a

@@ -19,6 +19,7 @@ use rand::SeedableRng;
 use rand::rngs::Xoshiro256PlusPlus;
 use rand_distr::{Distribution, StandardNormal};
 
+use super::types::LevelStatistics;
 use crate::IdentError;
 use hyst_sim::building::{Reading as Quantity, ShearBuilding};
 
@@ -107,6 +108,39 @@ impl Reading {
         centroid.extend(power);
         centroid
     }
+}
+
+/// A statistics vector as [`LevelStatistics`] (`floors` modes, `channels` channels), with
+/// its standard errors `se` (empty when none).
+pub(crate) fn level(s: &[f64], (n, channels): (usize, usize), se: Vec<f64>) -> LevelStatistics {
+    LevelStatistics {
+        centroid_hz: s[..n].to_vec(),
+        spread: s[n..2 * n].to_vec(),
+        band_rms: s[2 * n..]
+            .chunks(channels)
+            .map(|c| {
+                // Back from (ln Σ P, ln P_c/P_1 …) to each channel's RMS √P_c.
+                let ratios: Vec<f64> = std::iter::once(1.0)
+                    .chain(c[1..].iter().map(|r| r.exp()))
+                    .collect();
+                let first = c[0].exp() / ratios.iter().sum::<f64>();
+                ratios.iter().map(|r| (first * r).sqrt()).collect()
+            })
+            .collect(),
+        se,
+    }
+}
+
+/// [`level`] backwards: the statistics vector of a [`LevelStatistics`].
+pub(crate) fn vector(l: &LevelStatistics) -> Vec<f64> {
+    let mut out = l.centroid_hz.clone();
+    out.extend(&l.spread);
+    for band in &l.band_rms {
+        let power: Vec<f64> = band.iter().map(|r| r * r).collect();
+        out.push(power.iter().sum::<f64>().ln());
+        out.extend(power[1..].iter().map(|p| (p / power[0]).ln()));
+    }
+    out
 }
 
 fn prev_power_of_two(n: usize) -> usize {

@@ -5,7 +5,10 @@
 //! (not linear) and reddened by a one-pole filter at 150 Hz, its own random numbers
 //! (rand's StdRng, not Xoshiro), sensor noise of 1 % of each channel's deviation.
 
-use hyst_ident::storeys::{Quantity, StoreyFit, StoreyOptions, StoreyStructure, fit_storeys};
+use hyst_ident::storeys::{
+    PredictionOptions, Quantity, StoreyFit, StoreyOptions, StoreyStructure, fit_storeys,
+    level_statistics, predict_level,
+};
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 
@@ -231,6 +234,23 @@ pub fn fit(truth: &Truth, seconds: f64, seed: u64, opts: &StoreyOptions) -> Stor
     .expect("the fit runs")
 }
 
+/// A level no record of the fit was taken at (force σ, N per fine step): its record from the
+/// independent generator, read as the fit reads its levels, against the fitted model's
+/// prediction at the true force density. The z-scores (record's spread, prediction's and
+/// parameters' uncertainty together) and the predicted and true drifts' RMS.
+pub fn held_out_level(
+    truth: &Truth,
+    got: &StoreyFit,
+    (sigma, seconds, seed): (f64, f64, u64),
+) -> (Vec<f64>, Vec<f64>) {
+    let (record, clean, _) = truth.record_with_force(sigma, seconds, seed, None);
+    let measured = level_statistics(got, &record).expect("the record reads");
+    let q = sigma * sigma / (FS * STEPS as f64);
+    let predicted = predict_level(got, q, clean[0].len(), &PredictionOptions::default())
+        .expect("the prediction runs");
+    (predicted.z_scores(&measured), predicted.drift_rms)
+}
+
 #[test]
 #[ignore = "a study: STOREY_SEEDS=a..b cargo test --release -p hyst-ident --test integration storeys::study -- --ignored --nocapture"]
 fn study() {
@@ -291,24 +311,86 @@ fn study() {
                 )
             })
             .collect();
+        // Levels not recorded, between the recorded ones and beyond the loudest: the
+        // statistics predicted against those of an independent record.
+        for (sigma, at) in [(2400.0, 7), (6000.0, 8)] {
+            let (z, drift) = held_out_level(&truth, &got, (sigma, seconds, seed * 10 + at));
+            let within = z.iter().filter(|z| z.abs() <= 2.0).count();
+            let rms = (z.iter().map(|v| v * v).sum::<f64>() / z.len() as f64).sqrt();
+            let zs: Vec<String> = z.iter().map(|v| format!("{v:+.2}")).collect();
+            println!(
+                "  unrecorded level σ {sigma} N: statistics within 2 SE {within}/{} (z RMS {rms:.2}): {}; predicted drift RMS {:?} m",
+                z.len(),
+                zs.join(" "),
+                drift.iter().map(|d| format!("{d:.2e}")).collect::<Vec<_>>()
+            );
+        }
         // A fourth level, its force kept: the fitted model driven by it (respond at the
         // generator's own step) against the noise-free record.
-        let (_, clean, forces) = truth.record_with_force(2400.0, 60.0, seed * 10 + 7, Some(()));
+        let (noisy, clean, forces) =
+            truth.record_with_force(2400.0, 60.0, seed * 10 + 7, Some(()));
         let mut model = got.building.clone();
         model.reading = hyst_sim::building::Reading::Acceleration;
         let warm = (30.0 * FS) as usize;
         let predicted = model.respond(&forces, STEPS, warm).expect("the model runs");
-        let errors: Vec<String> = predicted
-            .iter()
-            .zip(&clean)
-            .map(|(p, c)| {
-                let sd = (c.iter().map(|v| v * v).sum::<f64>() / c.len() as f64).sqrt();
-                let e = (p.iter().zip(c).map(|(a, b)| (a - b).powi(2)).sum::<f64>()
-                    / c.len() as f64)
-                    .sqrt();
-                format!("{:.1}%", 100.0 * e / sd)
+        let rms = |a: &[f64], b: &[f64]| -> f64 {
+            (a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>() / a.len() as f64).sqrt()
+        };
+        // Per floor: the error against the noise-free record as a share of its deviation,
+        // and the error against the measured (noisy) record over the noise's own RMS.
+        let errors: Vec<String> = (0..predicted.len())
+            .map(|i| {
+                let zero = vec![0.0; clean[i].len()];
+                let share = rms(&predicted[i], &clean[i]) / rms(&clean[i], &zero);
+                let over_noise = rms(&predicted[i], &noisy[i]) / rms(&noisy[i], &clean[i]);
+                format!("{:.1}% ({over_noise:.2}× noise)", 100.0 * share)
             })
             .collect();
+        // What the parameters' uncertainty alone makes of that prediction: models drawn
+        // from the fit's covariance, driven by the same force, against the fitted one.
+        let spread_of = |a: &[Vec<f64>], b: &[Vec<f64>]| -> f64 {
+            let mut worst: f64 = 0.0;
+            for (p, c) in a.iter().zip(b) {
+                let sd = (c.iter().map(|v| v * v).sum::<f64>() / c.len() as f64).sqrt();
+                let e = (p.iter().zip(c).map(|(x, y)| (x - y).powi(2)).sum::<f64>()
+                    / c.len() as f64)
+                    .sqrt();
+                worst = worst.max(e / sd);
+            }
+            worst
+        };
+        let np = got.parameters.len();
+        let cov = nalgebra::DMatrix::from_fn(np, np, |a, b| got.covariance[a][b]);
+        let mut implied = Vec::new();
+        if let Some(chol) = cov.cholesky() {
+            let mut rng = rand::rngs::StdRng::seed_from_u64(seed * 10 + 9);
+            for _ in 0..8 {
+                let z = nalgebra::DVector::from_fn(np, |_, _| StandardNormal.sample(&mut rng));
+                let d = chol.l() * z;
+                let v = |name: &str| -> f64 {
+                    let i = got.parameters.iter().position(|p| p.name == name).unwrap();
+                    got.parameters[i].value + d[i]
+                };
+                let mut m = model.clone();
+                m.stiffnesses = (1..=3).map(|s| v(&format!("k{s}"))).collect();
+                m.damping_ratios = (1..=3).map(|s| v(&format!("zeta{s}"))).collect();
+                if let Some(h) = m.hysteresis.as_mut() {
+                    (h.linear_share, h.beta, h.gamma) = (v("a"), v("beta"), v("gamma"));
+                }
+                if let Ok(y) = m.respond(&forces, STEPS, warm) {
+                    implied.push(spread_of(&y, &predicted));
+                }
+            }
+        }
+        implied.sort_by(f64::total_cmp);
+        println!(
+            "  the parameters' uncertainty alone: models drawn from the covariance differ from the fitted one by (worst floor) {} of the deviation",
+            implied
+                .iter()
+                .map(|v| format!("{:.1}%", 100.0 * v))
+                .collect::<Vec<_>>()
+                .join(" ")
+        );
         println!(
             "  held-out level (σ 2400 N, 60 s): RMS error of the fitted model's accelerations under the recorded force, per floor, as a share of the record's deviation: {} (sensor noise 1 %)",
             errors.join(" ")
@@ -355,4 +437,8 @@ fn the_top_storeys_element_is_found_and_fitted() {
             assert!(z.abs() < 4.0 && zs.abs() < 4.0, "mode {j}: {z} {zs}\n{got}");
         }
     }
+    // A level not recorded (between the second and third): its statistics predicted within
+    // four standard errors (15 of them: by chance one is beyond under 0.1 % of the time).
+    let (z, _) = held_out_level(&truth, &got, (2400.0, 300.0, 8_300_409));
+    assert!(z.iter().all(|z| z.abs() < 4.0), "{z:?}\n{got}");
 }
