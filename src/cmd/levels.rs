@@ -41,14 +41,9 @@ pub(crate) struct LevelsArgs {
         help_heading = "A structure of several floors"
     )]
     pub(crate) floors: Option<Vec<usize>>,
-    /// With --masses: what the channels read.
-    #[arg(
-        long,
-        value_enum,
-        default_value = "acceleration",
-        help_heading = "A structure of several floors"
-    )]
-    pub(crate) quantity: QuantityArg,
+    /// With --masses: what the channels read [default: acceleration].
+    #[arg(long, value_enum, help_heading = "A structure of several floors")]
+    pub(crate) quantity: Option<QuantityArg>,
     /// With --masses: the floors the force acts on, 1 = the lowest (default: every floor).
     #[arg(
         long,
@@ -56,6 +51,15 @@ pub(crate) struct LevelsArgs {
         help_heading = "A structure of several floors"
     )]
     pub(crate) load_floors: Option<Vec<usize>>,
+    /// With --masses: levels not recorded to predict, each a force this many times the
+    /// loudest record's RMS (e.g. 2 for a storm twice as strong): each storey's RMS drift and
+    /// each mode's band, with their standard errors.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        help_heading = "A structure of several floors"
+    )]
+    pub(crate) predict: Vec<f64>,
     #[command(flatten)]
     pub(crate) columns: super::args::RecordColumns,
     /// Validation records (input and output columns): the model is simulated with the input
@@ -106,6 +110,16 @@ pub(crate) fn run(a: &LevelsArgs) -> Result<(), Error> {
     let Some(mass) = a.mass else {
         return run_storeys(a, fs);
     };
+    if a.channels.is_some()
+        || a.floors.is_some()
+        || a.quantity.is_some()
+        || a.load_floors.is_some()
+        || !a.predict.is_empty()
+    {
+        return Err(fail(
+            "--channels, --floors, --quantity, --load-floors and --predict describe a structure of several floors: give its --masses instead of --mass",
+        ));
+    }
     if !(mass.is_finite() && mass > 0.0) {
         return Err(fail(format!("--mass must be > 0 kg, got {mass}")));
     }
@@ -195,7 +209,7 @@ fn run_storeys(a: &LevelsArgs, fs: f64) -> Result<(), Error> {
         Some(f) => one_based("--floors", f)?,
         None => (0..channels).collect(),
     };
-    let quantity = match a.quantity {
+    let quantity = match a.quantity.unwrap_or(QuantityArg::Acceleration) {
         QuantityArg::Acceleration => Quantity::Acceleration,
         QuantityArg::Velocity => Quantity::Velocity,
         QuantityArg::Displacement => Quantity::Displacement,
@@ -205,6 +219,7 @@ fn run_storeys(a: &LevelsArgs, fs: f64) -> Result<(), Error> {
     if let Some(l) = &a.load_floors {
         opts.load_floors = Some(one_based("--load-floors", l)?);
     }
+    opts.predict = a.predict.clone();
     let bar = steps_bar();
     let fit = fit_storeys(&records, &structure, &opts, &|p| {
         bar.set_message(format!("{} [iteration {}]", p.stage, p.iteration));

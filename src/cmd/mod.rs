@@ -347,6 +347,8 @@ pub(crate) fn input_files(c: &Command) -> Vec<(&'static str, &std::path::Path)> 
         Command::Simulate(a) => {
             v.extend(one("--input", a.input.as_ref()));
             v.extend(one("--params", a.params.as_ref()));
+            v.extend(one("--structure", a.structure.as_ref()));
+            v.extend(one("--measured", a.measured.as_ref()));
         }
         Command::Excite(_) => {}
         Command::Ssi(a) => {

@@ -221,8 +221,25 @@ const PAIRS: &[Pair] = &[
             ("f-min", "Python: u = hyst.excite(f_min=...)"),
             ("f-max", "Python: u = hyst.excite(f_max=...)"),
             ("out", "Python returns the response"),
+            (
+                "structure",
+                "Python: model = a storey fit's dict, hyst.levels(..., masses=...).to_dict()",
+            ),
+            (
+                "forces",
+                "Python takes the forces as u, one column per loaded floor",
+            ),
+            (
+                "measured",
+                "Python compares the returned array with its own: numpy does it in a line",
+            ),
+            ("channels", "Python selects the measured array's columns"),
+            ("compare-skip", "Python slices the arrays"),
         ],
-        python_only: &[("model", "the model; the command's --system or --params")],
+        python_only: &[(
+            "model",
+            "the model; the command's --system, --params or --structure",
+        )],
     },
     Pair {
         command: "excite",

@@ -126,7 +126,41 @@ pub(crate) struct SimulateArgs {
     /// Seed of the measurement noise.
     #[arg(long, default_value_t = 2)]
     pub(crate) noise_seed: u64,
-    /// Output CSV file (`u,y`).
+    /// A fitted structure to simulate instead of an oscillator: a storey fit as `hyst levels
+    /// --masses --json` writes it (`FILE#/POINTER` for one inside a larger report). It is
+    /// driven by --input's --forces columns (one per loaded floor) from rest, and writes its
+    /// channels.
+    #[arg(long, help_heading = "A structure of several floors")]
+    pub(crate) structure: Option<PathBuf>,
+    /// With --structure: the --input columns holding each loaded floor's force (N), in the
+    /// fit's order of loaded floors.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        help_heading = "A structure of several floors"
+    )]
+    pub(crate) forces: Vec<String>,
+    /// With --structure: a record measured under that force, to compare the simulated
+    /// channels with (each channel's RMS error beside its deviation).
+    #[arg(long, help_heading = "A structure of several floors")]
+    pub(crate) measured: Option<PathBuf>,
+    /// With --measured: its channel columns, in the fit's order (default: every column but
+    /// the time column and the --forces).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        help_heading = "A structure of several floors"
+    )]
+    pub(crate) channels: Option<Vec<String>>,
+    /// With --measured: samples at the start left out of the error (the model starts from
+    /// rest, the structure did not).
+    #[arg(
+        long,
+        default_value_t = 0,
+        help_heading = "A structure of several floors"
+    )]
+    pub(crate) compare_skip: usize,
+    /// Output CSV file (`u,y`; with --structure the forces and one column per channel).
     #[arg(help_heading = "Output files", long)]
     pub(crate) out: PathBuf,
 }
@@ -171,6 +205,14 @@ fn rms(x: &[f64]) -> f64 {
 }
 
 pub(crate) fn run(a: &SimulateArgs) -> Result<(), Error> {
+    if let Some(structure) = &a.structure {
+        return run_structure(a, structure);
+    }
+    if !a.forces.is_empty() || a.measured.is_some() || a.channels.is_some() || a.compare_skip > 0 {
+        return Err(fail(
+            "--forces, --measured, --channels and --compare-skip go with --structure",
+        ));
+    }
     let model: Oscillator = match &a.params {
         Some(p) => hyst::io::read_oscillator(p).map_err(|e| fail(e.to_string()))?,
         None => match a.system {
@@ -238,4 +280,108 @@ pub(crate) fn run(a: &SimulateArgs) -> Result<(), Error> {
         }
     );
     Ok(())
+}
+
+/// `hyst simulate --structure`: a storey fit driven by measured forces, compared with a
+/// measured record when one is given.
+fn run_structure(a: &SimulateArgs, structure: &std::path::Path) -> Result<(), Error> {
+    use hyst::ident::storeys::{StoreyFit, response_errors, simulate_structure};
+    if a.params.is_some() || a.excitation.is_some() || a.periodic || a.noise != 0.0 {
+        return Err(fail(
+            "--structure is driven by --input's --forces from rest: --params, --excitation, --periodic and --noise are the oscillator's",
+        ));
+    }
+    let Some(input) = &a.input else {
+        return Err(fail(
+            "--structure needs the --input file holding its --forces",
+        ));
+    };
+    if a.forces.is_empty() {
+        return Err(fail(
+            "--structure needs --forces: the --input columns of each loaded floor's force",
+        ));
+    }
+    let fit: StoreyFit = hyst::io::read_document(
+        structure,
+        "a storey fit must be a JSON object (as `hyst levels --masses --json` writes)",
+    )?;
+    let t = read_record(input)?;
+    let fs = t.rate(a.fs)?;
+    if (fs - fit.building.fs).abs() > 1e-9 * fs {
+        return Err(fail(format!(
+            "--input {} is at {fs} Hz; the structure was fitted at {} Hz",
+            input.display(),
+            fit.building.fs
+        )));
+    }
+    let forces = a
+        .forces
+        .iter()
+        .map(|c| Ok(t.column(c)?.to_vec()))
+        .collect::<Result<Vec<_>, Error>>()?;
+    let y = simulate_structure(&fit, &forces).map_err(|e| fail(e.to_string()))?;
+    let names = channel_columns(&fit);
+    let mut cols: Vec<&str> = a.forces.iter().map(String::as_str).collect();
+    cols.extend(names.iter().map(String::as_str));
+    let mut data: Vec<&[f64]> = forces.iter().map(Vec::as_slice).collect();
+    data.extend(y.iter().map(Vec::as_slice));
+    write_csv(&a.out, &cols, &data)?;
+    println!(
+        "wrote {}: {} from rest; the fitted structure's {} under --input's {}",
+        a.out.display(),
+        span(y.first().map_or(0, Vec::len), fs),
+        names.join(", "),
+        a.forces.join(", ")
+    );
+    let Some(measured) = &a.measured else {
+        return Ok(());
+    };
+    let m = read_record(measured)?;
+    m.rate(Some(fs))?;
+    let besides: Vec<&str> = a.forces.iter().map(String::as_str).collect();
+    let channels = super::channel_names(&m, a.channels.as_deref(), &besides);
+    let record = channels
+        .iter()
+        .map(|c| Ok(m.column(c)?.to_vec()))
+        .collect::<Result<Vec<_>, Error>>()?;
+    let errors = response_errors(&y, &record, a.compare_skip).map_err(|e| fail(e.to_string()))?;
+    println!(
+        "against {} (from sample {}): RMS error per channel, and as a share of the channel's deviation (compare the sensors' noise):",
+        measured.display(),
+        a.compare_skip
+    );
+    for (c, e) in channels.iter().zip(&errors) {
+        println!(
+            "  {c:<12} {:.4e} of {:.4e}: {:.2} %",
+            e.rms_error,
+            e.measured_sd,
+            100.0 * e.share()
+        );
+    }
+    Ok(())
+}
+
+/// The simulated channels' column names: the quantity's letter and the floor (from 1), and a
+/// count after it when a floor has two channels.
+fn channel_columns(fit: &hyst::ident::storeys::StoreyFit) -> Vec<String> {
+    use hyst::ident::storeys::Quantity;
+    let letter = match fit.building.reading {
+        Quantity::Displacement => "x",
+        Quantity::Velocity => "v",
+        Quantity::Acceleration => "a",
+    };
+    let sensors = &fit.building.sensors;
+    sensors
+        .iter()
+        .enumerate()
+        .map(|(i, &s)| {
+            let before = sensors[..i].iter().filter(|&&f| f == s).count();
+            let twice = sensors.iter().filter(|&&f| f == s).count() > 1;
+            if twice {
+                format!("{letter}{}_{}", s + 1, before + 1)
+            } else {
+                format!("{letter}{}", s + 1)
+            }
+        })
+        .collect()
 }

@@ -136,6 +136,20 @@ pub(crate) fn excite<'py>(
     Ok(u.into_pyarray(py))
 }
 
+/// A storey fit's channels (channels × samples) under `forces` (one per loaded floor, each
+/// `samples` long); see the Python wrapper `hyst.simulate` with a storey fit as its model.
+#[pyfunction]
+pub(crate) fn simulate_structure(
+    py: Python<'_>,
+    fit_json: &str,
+    forces: Vec<Vec<f64>>,
+) -> PyResult<Vec<Vec<f64>>> {
+    let fit: hyst::ident::storeys::StoreyFit = serde_json::from_str(fit_json)
+        .map_err(|e| value_error(format!("model: not a storey fit: {e}")))?;
+    py.detach(|| hyst::ident::storeys::simulate_structure(&fit, &forces))
+        .map_err(value_error)
+}
+
 /// The response of a model to the force `u`; see the Python wrapper `hyst.simulate`.
 #[pyfunction]
 #[pyo3(signature = (model_json, u, fs, *, input, oversample, integrator, decimation, noise, noise_seed))]
@@ -324,7 +338,8 @@ pub(crate) fn refine(
 /// wrapper `hyst.levels(..., masses=...)`. `records` are (name, channels × samples);
 /// `floors` and `load_floors` count from 1, as the command's flags.
 #[pyfunction]
-#[pyo3(signature = (records, fs, masses, *, floors, quantity, load_floors))]
+#[pyo3(signature = (records, fs, masses, *, floors, quantity, load_floors, predict))]
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn storeys(
     py: Python<'_>,
     records: Vec<(String, Vec<Vec<f64>>)>,
@@ -333,6 +348,7 @@ pub(crate) fn storeys(
     floors: Option<Vec<usize>>,
     quantity: &str,
     load_floors: Option<Vec<usize>>,
+    predict: Vec<f64>,
 ) -> PyResult<Report> {
     use hyst::ident::storeys::{Quantity, StoreyOptions, StoreyStructure, fit_storeys};
     let zero_based = |name: &str, v: Vec<usize>| -> PyResult<Vec<usize>> {
@@ -362,6 +378,7 @@ pub(crate) fn storeys(
     if let Some(l) = load_floors {
         opts.load_floors = Some(zero_based("load_floors", l)?);
     }
+    opts.predict = predict;
     let structure = StoreyStructure::new(masses, sensors, quantity, fs);
     let data: Vec<Vec<Vec<f64>>> = records.iter().map(|(_, r)| r.clone()).collect();
     let fit = py

@@ -419,6 +419,7 @@ fn _hyst(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ssi_setups, m)?)?;
     m.add_function(wrap_pyfunction!(read_record, m)?)?;
     m.add_function(wrap_pyfunction!(ident::simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(ident::simulate_structure, m)?)?;
     m.add_function(wrap_pyfunction!(ident::excite, m)?)?;
     m.add_function(wrap_pyfunction!(ident::identify, m)?)?;
     m.add_function(wrap_pyfunction!(ident::refine, m)?)?;

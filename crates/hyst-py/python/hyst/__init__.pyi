@@ -112,6 +112,7 @@ def levels(
     floors: Optional[Sequence[int]] = ...,
     quantity: Literal["acceleration", "velocity", "displacement"] = ...,
     load_floors: Optional[Sequence[int]] = ...,
+    predict: Optional[Sequence[float]] = ...,
 ) -> Report: ...
 
 def track(

@@ -71,16 +71,20 @@ def excite(fs=750.0, *, excitation="multisine", rms=50.0, samples=8192, seed=1, 
 
 def simulate(model, u, fs, *, periodic=False, input_interpolation="band-limited",
              oversample=20, integrator="rk4", decimation="sample", noise=0.0, noise_seed=2):
-    """The response of an oscillator to a force record, as ``hyst simulate`` writes it.
+    """The response of an oscillator to a force record, as ``hyst simulate`` writes it; or of
+    a fitted structure (``hyst simulate --structure``).
 
     Parameters
     ----------
     model : dict or "benchmark"
         The oscillator in the JSON schema ``--params`` reads (``{"mass", "damping",
         "stiffness", "bouc_wen": {...}, ...}``; a report's model, e.g.
-        ``report.to_dict()["bouc_wen"]``), or ``"benchmark"`` for the Bouc-Wen benchmark's.
-    u : array_like, shape (samples,)
-        The force (N) at ``fs`` Hz.
+        ``report.to_dict()["bouc_wen"]``), or ``"benchmark"`` for the Bouc-Wen benchmark's;
+        or a storey fit, ``hyst.levels(..., masses=...).to_dict()``, driven from rest with
+        the force linear between samples (the oscillator's options do not apply).
+    u : array_like, shape (samples,), or (samples, loaded floors) for a storey fit
+        The force (N) at ``fs`` Hz; for a storey fit one column per loaded floor, in the
+        fit's ``load_floors`` order.
     fs : float
         Sampling rate (Hz).
     periodic : bool
@@ -101,8 +105,11 @@ def simulate(model, u, fs, *, periodic=False, input_interpolation="band-limited"
     Returns
     -------
     numpy.ndarray, shape (samples,)
-        The displacement (m).
+        The displacement (m); for a storey fit (samples, channels), its channels' quantity.
     """
+    if isinstance(model, dict) and "building" in model:
+        return _simulate_structure(model, u, fs, periodic, input_interpolation, oversample,
+                                   integrator, decimation, noise)
     if input_interpolation not in ("band-limited", "linear"):
         raise ValueError(
             f'input_interpolation {input_interpolation!r} is not one of "band-limited", "linear"'
@@ -113,6 +120,30 @@ def simulate(model, u, fs, *, periodic=False, input_interpolation="band-limited"
         oversample=int(oversample), integrator=str(integrator), decimation=str(decimation),
         noise=float(noise), noise_seed=int(noise_seed),
     )
+
+
+def _simulate_structure(fit, u, fs, periodic, input_interpolation, oversample, integrator,
+                        decimation, noise):
+    import json
+
+    if (periodic or input_interpolation != "band-limited" or oversample != 20
+            or integrator != "rk4" or decimation != "sample" or noise != 0.0):
+        raise ValueError(
+            "a storey fit is driven from rest at its own step with the force linear between "
+            "samples: periodic, input_interpolation, oversample, integrator, decimation and "
+            "noise are the oscillator's")
+    rate = fit["building"]["fs"]
+    if abs(float(fs) - rate) > 1e-9 * rate:
+        raise ValueError(f"fs {fs} Hz: the structure was fitted at {rate} Hz")
+    forces = _np.ascontiguousarray(_real(u, "u"))
+    if forces.ndim == 1:
+        forces = forces[:, None]
+    if forces.ndim != 2:
+        raise ValueError(f"u for a storey fit is (samples, loaded floors), got shape {forces.shape}")
+    # The report's own keys (its record's name, its run time) are not the fit's.
+    fit = {k: v for k, v in fit.items() if k not in ("record", "seconds")}
+    out = _hyst.simulate_structure(json.dumps(fit), forces.T.tolist())
+    return _np.asarray(out).T
 
 
 def identify(y, fs, mass, *, damping="spectrum", c=None, excitation_band=None, period=None,
@@ -208,7 +239,7 @@ def refine(u, y, fs, *, mass=None, start="linear", input_interpolation="band-lim
 
 def levels(records, fs, mass=None, *, by_simulation=False, data_periodic=False,
            fit_exponent=False, validate=None, masses=None, floors=None,
-           quantity="acceleration", load_floors=None):
+           quantity="acceleration", load_floors=None, predict=None):
     """One Bouc-Wen model from records of one structure at several force levels, each under
     a random force (``hyst levels``); with ``masses``, a shear structure of several floors:
     the storey holding a hysteretic element located (or none) and fitted by simulation.
@@ -238,6 +269,10 @@ def levels(records, fs, mass=None, *, by_simulation=False, data_periodic=False,
         "displacement".
     load_floors : list of int, optional
         With ``masses``: the floors the force acts on, 1 = the lowest (default every floor).
+    predict : list of float, optional
+        With ``masses``: levels not recorded to predict, each a force this many times the
+        loudest record's RMS: each storey's RMS drift and each mode's band, with standard
+        errors (the report's ``predictions``).
 
     Returns
     -------
@@ -264,7 +299,12 @@ def levels(records, fs, mass=None, *, by_simulation=False, data_periodic=False,
             quantity=str(quantity),
             load_floors=None if load_floors is None else [
                 _count(f, "load_floors", 1) for f in load_floors],
+            predict=[float(f) for f in (predict or ())],
         )
+    if floors is not None or quantity != "acceleration" or load_floors is not None or predict:
+        raise ValueError(
+            "floors, quantity, load_floors and predict describe a structure of several "
+            "floors: give its masses instead of mass")
     if mass is None:
         raise ValueError("levels needs mass (one oscillator) or masses (a structure)")
     items = records.items() if isinstance(records, dict) else (
