@@ -97,6 +97,11 @@ pub(crate) struct AmplitudeArgs {
     /// repeat one another and the standard errors come out too small).
     #[arg(help_heading = "Amplitude curves", long, value_name = "SAMPLES")]
     pub(crate) period: Option<usize>,
+    /// Each channel's floor, 1 = the lowest above the ground, one channel per floor: each
+    /// point's amplitude is then also given across every storey (its drift), beside each
+    /// channel's.
+    #[arg(help_heading = "Amplitude curves", long, value_delimiter = ',')]
+    pub(crate) floors: Option<Vec<usize>>,
     #[command(flatten)]
     pub(crate) ssi: hyst::settings::SsiSettings,
     /// Write the curves as JSON here (optional: the report is printed either way).
@@ -124,8 +129,19 @@ fn flag_of(e: amplitude::AmplitudeError) -> Error {
 }
 
 impl AmplitudeArgs {
-    fn options(&self) -> AmplitudeOptions {
+    fn options(&self) -> Result<AmplitudeOptions, Error> {
         let mut o = AmplitudeOptions::default();
+        o.floors = match &self.floors {
+            None => None,
+            Some(f) => Some(
+                f.iter()
+                    .map(|&v| {
+                        v.checked_sub(1)
+                            .ok_or_else(|| fail("--floors: floors count from 1, got 0"))
+                    })
+                    .collect::<Result<_, _>>()?,
+            ),
+        };
         o.levels = self.levels;
         o.cycles = self.cycles;
         o.groups = self.groups;
@@ -138,7 +154,7 @@ impl AmplitudeArgs {
             MethodArg::Envelope => AmplitudeMethod::Envelope,
             MethodArg::Extrema => AmplitudeMethod::Extrema,
         };
-        o
+        Ok(o)
     }
 }
 
@@ -161,7 +177,7 @@ fn analyse(
 pub(crate) fn run(a: &AmplitudeArgs) -> Result<(), Error> {
     // Settings that are wrong whatever the record, before any is read.
     let analysis = super::ssi::analysis_of(&a.ssi)?;
-    let opts = a.options();
+    let opts = a.options()?;
     opts.check().map_err(flag_of)?;
     let name = |p: &PathBuf| p.display().to_string();
     let bar = steps_bar();

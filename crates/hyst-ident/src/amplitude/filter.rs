@@ -8,7 +8,7 @@ use super::ModeToFollow;
 
 /// The real shape closest to `shape` (its entries turned by the phase that makes the
 /// shape most real), scaled to unit length.
-fn real_shape(shape: &[covssi::Complex64]) -> Vec<f64> {
+pub(super) fn real_shape(shape: &[covssi::Complex64]) -> Vec<f64> {
     // The phase θ maximizing Σ Re(φ e^{-iθ})² is half the argument of Σ φ².
     let s: covssi::Complex64 = shape.iter().map(|p| p * p).sum();
     let rot = covssi::Complex64::from_polar(1.0, -0.5 * s.arg());

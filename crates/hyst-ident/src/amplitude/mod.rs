@@ -30,6 +30,7 @@
 mod decay;
 mod envelope;
 mod filter;
+mod physical;
 mod randec;
 mod report;
 pub(crate) mod slope;
@@ -141,6 +142,9 @@ pub struct AmplitudeOptions {
     /// periods are averaged into one, which is then read as circular. Without it, a
     /// periodic record's stretches repeat one another and the standard errors are too small.
     pub period: Option<usize>,
+    /// Each channel's floor (0 = the lowest above the ground), one channel per floor: the
+    /// points then carry each storey's drift. Default none.
+    pub floors: Option<Vec<usize>>,
 }
 
 impl Default for AmplitudeOptions {
@@ -155,6 +159,7 @@ impl Default for AmplitudeOptions {
             report_as: None,
             method: AmplitudeMethod::Envelope,
             period: None,
+            floors: None,
         }
     }
 }
@@ -247,6 +252,18 @@ pub enum AmplitudeError {
         /// The period.
         period: usize,
     },
+    /// [`AmplitudeOptions::floors`] names another number of floors than there are channels,
+    /// or one floor twice.
+    #[error(
+        "floors {:?} (from 1) for {channels} channels: give one floor per channel, each floor once",
+        floors.iter().map(|f| f + 1).collect::<Vec<_>>()
+    )]
+    Floors {
+        /// The floors given (0-based).
+        floors: Vec<usize>,
+        /// Channels.
+        channels: usize,
+    },
     /// A mode's shape has another length than the channels.
     #[error("mode at {frequency_hz} Hz: its shape has {shape} entries for {channels} channels")]
     ShapeLength {
@@ -334,6 +351,16 @@ pub struct AmplitudePoint {
     pub damping_ratio: f64,
     /// Its standard error.
     pub damping_se: f64,
+    /// The mode's amplitude at each channel (the same quantity): the amplitude times the
+    /// channel's entry of the mode's unit real shape (empty when the shape is not known).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub channels: Vec<f64>,
+    /// Each storey's drift amplitude (the same quantity), storey 1 (the ground to floor 1)
+    /// first, when [`AmplitudeOptions::floors`] places the channels: the difference of the
+    /// shape's entries at its two floors times the amplitude (NaN for a storey whose floors
+    /// are not both measured; the ground does not move).
+    #[cfg_attr(feature = "serde", serde(default, with = "crate::nullable"))]
+    pub drifts: Vec<f64>,
 }
 
 /// A slope's test.
@@ -478,6 +505,7 @@ pub(crate) fn curves_judged(
         }
     }
     within_record(y[0].len(), fs, modes, opts)?;
+    physical::check_floors(opts.floors.as_deref(), channels)?;
     let (opts, repeats) = &with_detected_period(y, fs, modes, opts);
     let all: Vec<ModeToFollow> = modes.iter().chain(others).cloned().collect();
     let weights = filter::modal_weights(&all, channels);
@@ -508,6 +536,7 @@ pub(crate) fn curves_judged(
                 None => q,
             };
             let mut curve = mode_curve(&q, fs, (m, band), opts, report_as, criteria);
+            physical::place(&mut curve, m, channels, opts.floors.as_deref());
             curve.notes.extend(repeats.clone());
             curve
         })
@@ -811,6 +840,8 @@ fn mode_curve(
             frequency_se_hz: jackknife_se(&f),
             damping_ratio: d.damping_ratio,
             damping_se: jackknife_se(&z),
+            channels: vec![],
+            drifts: vec![],
         };
         let se = point.frequency_se_hz;
         let why = if se.is_nan() || se > criteria.max_frequency_cv * d.frequency_hz {

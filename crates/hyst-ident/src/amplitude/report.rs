@@ -251,6 +251,29 @@ impl fmt::Display for ModeCurve {
                 p.triggers
             )?;
         }
+        if let Some(p) = self.points.iter().find(|p| p.amplitude > 0.0) {
+            let per = |v: &[f64]| -> String {
+                v.iter()
+                    .map(|x| format!("{:.3}", x / p.amplitude))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            };
+            if !p.channels.is_empty() {
+                write!(
+                    f,
+                    "  where it moves: each channel's amplitude is the amplitude × [{}]",
+                    per(&p.channels)
+                )?;
+                if !p.drifts.is_empty() {
+                    write!(
+                        f,
+                        "; each storey's drift, from the ground up, × [{}]",
+                        per(&p.drifts)
+                    )?;
+                }
+                writeln!(f)?;
+            }
+        }
         if let Some(l) = &self.linearity {
             let (a0, a1) = self
                 .points

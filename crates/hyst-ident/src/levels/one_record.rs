@@ -399,6 +399,8 @@ mod tests {
             frequency_se_hz: 1.0,
             damping_ratio: z,
             damping_se: 1.0,
+            channels: vec![],
+            drifts: vec![],
         }
     }
 

@@ -327,8 +327,7 @@ fn study() {
         }
         // A fourth level, its force kept: the fitted model driven by it (respond at the
         // generator's own step) against the noise-free record.
-        let (noisy, clean, forces) =
-            truth.record_with_force(2400.0, 60.0, seed * 10 + 7, Some(()));
+        let (noisy, clean, forces) = truth.record_with_force(2400.0, 60.0, seed * 10 + 7, Some(()));
         let mut model = got.building.clone();
         model.reading = hyst_sim::building::Reading::Acceleration;
         let warm = (30.0 * FS) as usize;

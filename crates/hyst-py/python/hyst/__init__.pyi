@@ -255,5 +255,6 @@ def amplitude(
     joint: bool = ...,
     ssi_errors: Optional[int] = ...,
     max_damping: Optional[float] = ...,
+    floors: Optional[Sequence[int]] = ...,
     record: str = ...,
 ) -> Report: ...

@@ -187,7 +187,7 @@ def amplitude(y, fs, *, modes=None, measured="displacement", amplitude_of=None, 
               period=None, block_rows=None, lag_seconds=None, lag_periods=None, decimate=None,
               max_order=None, order_step=1, references=None, df=None, dzeta=None, dmac=None,
               dreal=None, refine=True, joint=True, ssi_errors=None, max_damping=None,
-              record="array"):
+              floors=None, record="array"):
     """Each mode's natural frequency and damping ratio against its amplitude (``hyst
     amplitude``): the modes as :func:`ssi` finds them, each mode's response filtered out
     (a modal filter, then a band-pass), random decrement conditioned on its envelope in
@@ -226,6 +226,10 @@ def amplitude(y, fs, *, modes=None, measured="displacement", amplitude_of=None, 
     block_rows, lag_seconds, lag_periods, decimate, max_order, order_step, references,
     df, dzeta, dmac, dreal, refine, joint, ssi_errors, max_damping
         The modal analysis, as for :func:`ssi`.
+    floors : list of int, optional
+        Each channel's floor, 1 = the lowest above the ground, one channel per floor: each
+        point then carries its amplitude across every storey (``drifts``) beside each
+        channel's (``channels``).
     record : str
         What the data is, for the report (several records are named ``record[i]``).
 
@@ -235,7 +239,8 @@ def amplitude(y, fs, *, modes=None, measured="displacement", amplitude_of=None, 
         ``str(report)`` as ``hyst amplitude`` prints it; ``report.to_dict()`` its JSON (with
         several records: ``records``, a list of [name, analysis], and ``pooled``):
         ``curves.modes[j].points`` (``amplitude``, ``frequency_hz``, ``frequency_se_hz``,
-        ``damping_ratio``, ``damping_se``, ``triggers``), ``linearity``, ``notes``.
+        ``damping_ratio``, ``damping_se``, ``triggers``, ``channels``, ``drifts``),
+        ``linearity``, ``notes``.
     """
     import json
 
@@ -266,6 +271,7 @@ def amplitude(y, fs, *, modes=None, measured="displacement", amplitude_of=None, 
         "report_as": amplitude_of,
         "method": method,
         "period": _count(period, "period", 1),
+        "floors": None if floors is None else [_count(f, "floors", 1) - 1 for f in floors],
     }
     settings = _settings(
         block_rows=block_rows, lag_seconds=lag_seconds, lag_periods=lag_periods,
