@@ -102,6 +102,12 @@ pub(crate) struct AmplitudeArgs {
     /// channel's.
     #[arg(help_heading = "Amplitude curves", long, value_delimiter = ',')]
     pub(crate) floors: Option<Vec<usize>>,
+    /// A structure fitted to these records (`hyst levels --masses ... --json`, the same
+    /// records in the same order): its own records at each level are simulated, analysed
+    /// alike, drawn beside the measured curves, and each measured point is set against the
+    /// model's curve at its amplitude.
+    #[arg(help_heading = "Amplitude curves", long, value_name = "STOREY_FIT")]
+    pub(crate) model: Option<PathBuf>,
     #[command(flatten)]
     pub(crate) ssi: hyst::settings::SsiSettings,
     /// Write the curves as JSON here (optional: the report is printed either way).
@@ -179,6 +185,10 @@ pub(crate) fn run(a: &AmplitudeArgs) -> Result<(), Error> {
     let analysis = super::ssi::analysis_of(&a.ssi)?;
     let opts = a.options()?;
     opts.check().map_err(flag_of)?;
+    let fit = match &a.model {
+        None => None,
+        Some(path) => Some(read_fit(a, path)?),
+    };
     let name = |p: &PathBuf| p.display().to_string();
     let bar = steps_bar();
     bar.set_length(a.input.len() as u64);
@@ -193,6 +203,9 @@ pub(crate) fn run(a: &AmplitudeArgs) -> Result<(), Error> {
     });
     bar.finish_and_clear();
     let mut campaign = campaign?;
+    if let Some(fit) = &fit {
+        return beside_model(a, campaign, fit, (&analysis, &opts));
+    }
     if campaign.records.len() == 1 {
         let (record, analysis) = campaign.records.remove(0);
         let report = hyst::report::FileReport::new(record.clone(), analysis);
@@ -209,6 +222,92 @@ pub(crate) fn run(a: &AmplitudeArgs) -> Result<(), Error> {
     let curves: Vec<(String, &amplitude::AmplitudeReport)> = campaign
         .records
         .iter()
+        .map(|(n, r)| (n.clone(), &r.curves))
+        .collect();
+    draw(a, &curves)
+}
+
+/// The storey fit of `--model`, checked against the records before any is analysed.
+fn read_fit(
+    a: &AmplitudeArgs,
+    path: &std::path::Path,
+) -> Result<hyst::ident::storeys::StoreyFit, Error> {
+    let fit: hyst::ident::storeys::StoreyFit = hyst::io::read_document(
+        path,
+        "a storey fit must be a JSON object (as `hyst levels --masses --json` writes)",
+    )?;
+    if a.input.len() != fit.force_densities.len() {
+        return Err(fail(format!(
+            "--model {} was fitted to {} records; give the same {} as --input, in the same order ({} given)",
+            path.display(),
+            fit.force_densities.len(),
+            fit.force_densities.len(),
+            a.input.len()
+        )));
+    }
+    Ok(fit)
+}
+
+/// The measured campaign beside the fitted model's own records analysed alike.
+fn beside_model(
+    a: &AmplitudeArgs,
+    measured: amplitude::AmplitudeCampaign,
+    fit: &hyst::ident::storeys::StoreyFit,
+    (analysis, opts): (&hyst::covssi::AnalysisOptions, &AmplitudeOptions),
+) -> Result<(), Error> {
+    let mut lengths = Vec::new();
+    for input in &a.input {
+        let ch = channels(input, &a.record)?;
+        if ch.data.len() != fit.building.sensors.len()
+            || (ch.fs - fit.building.fs).abs() > 1e-9 * ch.fs
+        {
+            return Err(fail(format!(
+                "{}: {} channels at {} Hz; the --model was fitted to {} at {} Hz",
+                input.display(),
+                ch.data.len(),
+                ch.fs,
+                fit.building.sensors.len(),
+                fit.building.fs
+            )));
+        }
+        lengths.push(ch.data[0].len());
+    }
+    let bar = steps_bar();
+    bar.set_message("the fitted model's records");
+    let records = hyst::ident::storeys::model_records(fit, &lengths, 9500)
+        .map_err(|e| fail(e.to_string()))?;
+    let followed: Vec<f64> = measured
+        .records
+        .first()
+        .map(|r| {
+            r.1.curves
+                .modes
+                .iter()
+                .map(|m| m.mode.frequency_hz)
+                .collect()
+        })
+        .unwrap_or_default();
+    bar.set_length(records.len() as u64);
+    let model = amplitude::amplitude_campaign(records.len(), &followed, |i, follow| {
+        bar.set_position(i as u64);
+        bar.set_message(format!("the model's record {}: its amplitude bands", i + 1));
+        let views: Vec<&[f64]> = records[i].iter().map(Vec::as_slice).collect();
+        let r = amplitude::amplitude_analysis(&views, fit.building.fs, analysis, opts, follow)
+            .map_err(|e| fail(format!("the model's record {}: {e}", i + 1)))?;
+        let name = format!("{}{}", a.input[i].display(), hyst::figures::MODEL_SUFFIX);
+        Ok::<_, Error>((name, r))
+    });
+    bar.finish_and_clear();
+    let both = amplitude::CurvesBesideModel::new(measured, model?);
+    print!("{both}");
+    if let Some(json) = &a.json {
+        hyst::report::write_json(&both, json)?;
+    }
+    let curves: Vec<(String, &amplitude::AmplitudeReport)> = both
+        .measured
+        .records
+        .iter()
+        .chain(&both.model.records)
         .map(|(n, r)| (n.clone(), &r.curves))
         .collect();
     draw(a, &curves)

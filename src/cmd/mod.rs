@@ -357,7 +357,10 @@ pub(crate) fn input_files(c: &Command) -> Vec<(&'static str, &std::path::Path)> 
             v.extend(one("--geometry", a.geometry.as_ref()));
             v.extend(one("--lines", a.lines.as_ref()));
         }
-        Command::Amplitude(a) => v.extend(a.input.iter().map(|p| ("--input", p.as_path()))),
+        Command::Amplitude(a) => {
+            v.extend(a.input.iter().map(|p| ("--input", p.as_path())));
+            v.extend(one("--model", a.model.as_ref()));
+        }
         Command::Ident(a) => {
             v.extend(one("--data", a.data.as_ref()));
             v.extend(many("--validate", &a.validate));

@@ -34,6 +34,10 @@ const PALETTE: [RGBColor; 6] = [
     colors::GREY,
 ];
 
+/// How the records of a model drawn beside the measured ones are named: the measured
+/// record's name and this.
+pub const MODEL_SUFFIX: &str = " (model)";
+
 type Value = dyn Fn(&AmplitudePoint) -> (f64, f64);
 
 /// A point with its bar: (amplitude, value, standard error).
@@ -131,8 +135,31 @@ fn panel(
         .x_label_formatter(&|v| format!("{v:.2e}"))
         .draw()
         .map_err(|e| e.to_string())?;
+    // A model's records (named "… (model)", after the measured ones) are drawn as lines
+    // through hollow points, in the colour of the measured record they stand beside.
+    let measured = series
+        .iter()
+        .filter(|(n, _)| !n.ends_with(MODEL_SUFFIX))
+        .count();
     for (k, (name, pts)) in series.iter().enumerate() {
-        let color = PALETTE[k % PALETTE.len()];
+        let model = name.ends_with(MODEL_SUFFIX);
+        let color = PALETTE[if model { k - measured } else { k } % PALETTE.len()];
+        let label: String = name.rsplit('/').next().unwrap_or(name).to_string();
+        if model {
+            let mut line: Vec<(f64, f64)> = pts.iter().map(|&(x, y, _)| (x, y)).collect();
+            line.sort_by(|a, b| a.0.total_cmp(&b.0));
+            chart
+                .draw_series(pts.iter().map(|&(x, y, _)| Circle::new((x, y), 3, color)))
+                .map_err(|e| e.to_string())?;
+            chart
+                .draw_series(LineSeries::new(line, color.stroke_width(2)))
+                .map_err(|e| e.to_string())?
+                .label(label)
+                .legend(move |(x, y)| {
+                    PathElement::new([(x, y), (x + 14, y)], color.stroke_width(2))
+                });
+            continue;
+        }
         chart
             .draw_series(
                 pts.iter().map(|&(x, y, se)| {
@@ -147,7 +174,6 @@ fn panel(
             )
             .map_err(|e| e.to_string())?;
         if series.len() > 1 {
-            let label: String = name.rsplit('/').next().unwrap_or(name).to_string();
             drawn
                 .label(label)
                 .legend(move |(x, y)| Circle::new((x + 7, y), 3, color.filled()));

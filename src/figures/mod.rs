@@ -8,7 +8,7 @@ mod loops;
 mod residual;
 mod track;
 
-pub use amplitude::amplitude_svg;
+pub use amplitude::{MODEL_SUFFIX, amplitude_svg};
 pub use ident::ident_figures;
 pub use levels::levels_figures;
 pub use residual::residual_figures;

@@ -27,6 +27,7 @@
 //!    $t$ with $G-1$ degrees of freedom; the mode is called linear when neither slope is
 //!    significant at [`LINEARITY_LEVEL`] (Bonferroni over the two).
 
+mod agreement;
 mod decay;
 mod envelope;
 mod filter;
@@ -35,6 +36,7 @@ mod randec;
 mod report;
 pub(crate) mod slope;
 
+pub use agreement::{CurveAgreement, CurvesBesideModel, ModeAgreement, curve_agreement};
 pub use report::{
     AmplitudeAnalysis, AmplitudeCampaign, CLIP_RUN, ClippedChannel, PooledMode, amplitude_analysis,
     amplitude_campaign, clipped_channels,

@@ -1,8 +1,10 @@
 //! The hysteretic storey of a shear structure from output-only records at several load
 //! levels: where the element is, what it is, and the response it predicts.
 //!
-//! Status (issue 60): measured on an independent generator in `docs/storeys.md`; the
-//! prediction of an unrecorded level in the time domain is not yet at its target.
+//! Status (issue 60, ended blocked on one target): measured on an independent generator in
+//! `docs/storeys.md`; a level not recorded is predicted in its statistics
+//! ([`predict_level`]) and, under a measured force, in time ([`simulate_structure`]), the
+//! latter within the issue's 1.5 × the noise only from records of about 20 minutes.
 //!
 //! The model (`model.rs`): floors of known masses joined by storeys of stiffness $k_s$,
 //! classical damping of ratio $\zeta_j$ per mode, each level's white force of two-sided
@@ -46,7 +48,9 @@ pub use error::StoreyError;
 pub use hyst_sim::building::{Reading as Quantity, ShearBuilding, StoreyHysteresis};
 
 pub use locate::ElementEvidence;
-pub use predict::{LevelPrediction, PredictionOptions, level_statistics, predict_level};
+pub use predict::{
+    LevelPrediction, PredictionOptions, level_statistics, model_records, predict_level,
+};
 pub use response::{ChannelError, response_errors, simulate_structure};
 pub use types::{
     LevelStatistics, StoreyCandidate, StoreyFit, StoreyOptions, StoreyParameter, StoreyProgress,

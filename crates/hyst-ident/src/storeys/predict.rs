@@ -319,6 +319,34 @@ fn gradient(
     Ok(out)
 }
 
+/// Records of the fitted structure at each recorded level (its fitted force density and,
+/// for accelerations, the folded band), `lengths[l]` samples for level `l`, forces drawn
+/// from `seed` (level l from seed + l): what the fitted model says the records are, to be
+/// analysed exactly as the measured ones (e.g. their amplitude curves set beside theirs).
+pub fn model_records(
+    fit: &StoreyFit,
+    lengths: &[usize],
+    seed: u64,
+) -> Result<Vec<Vec<Vec<f64>>>, IdentError> {
+    let r = rebuild(fit, seed)?;
+    if lengths.len() != fit.force_densities.len() {
+        return Err(inconsistent(format!(
+            "{} records asked for; the fit has {} levels",
+            lengths.len(),
+            fit.force_densities.len()
+        )));
+    }
+    let (b, q, folded) = model::building(&r.template, &r.layout, &r.theta, r.nu)?;
+    lengths
+        .par_iter()
+        .enumerate()
+        .map(|(l, &n)| {
+            r.sim
+                .replicate(&b, n, (q[l], folded), seed.wrapping_add(l as u64))
+        })
+        .collect()
+}
+
 /// Each storey's RMS drift (m), the mean over the replicates' forces.
 fn drifts(
     r: &Rebuilt,

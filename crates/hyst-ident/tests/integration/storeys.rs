@@ -210,6 +210,16 @@ fn modes(m: &[f64; 3], k: &[f64; 3]) -> Vec<f64> {
 pub const SIGMAS: [f64; 3] = [300.0, 1200.0, 3600.0];
 
 pub fn fit(truth: &Truth, seconds: f64, seed: u64, opts: &StoreyOptions) -> StoreyFit {
+    fit_with_records(truth, seconds, seed, opts).0
+}
+
+/// [`fit`], with the records it was fitted to.
+pub fn fit_with_records(
+    truth: &Truth,
+    seconds: f64,
+    seed: u64,
+    opts: &StoreyOptions,
+) -> (StoreyFit, Vec<Vec<Vec<f64>>>) {
     let own = std::env::var("STOREY_GEN").is_ok_and(|v| v == "sim");
     let records: Vec<Vec<Vec<f64>>> = SIGMAS
         .iter()
@@ -228,10 +238,44 @@ pub fn fit(truth: &Truth, seconds: f64, seed: u64, opts: &StoreyOptions) -> Stor
         Quantity::Acceleration,
         FS,
     );
-    fit_storeys(&records, &structure, opts, &|p| {
+    let fit = fit_storeys(&records, &structure, opts, &|p| {
         eprintln!("  {} [{}] {:.2}", p.stage, p.iteration, p.cost)
     })
-    .expect("the fit runs")
+    .expect("the fit runs");
+    (fit, records)
+}
+
+/// The fitted model's amplitude curves against the measured records' (its own records at
+/// each level analysed alike): (z's within 2, all z's).
+pub fn model_curves(got: &StoreyFit, records: &[Vec<Vec<f64>>]) -> (usize, usize) {
+    use hyst_ident::amplitude::{
+        AmplitudeOptions, Quantity as Measured, amplitude_analysis, amplitude_campaign,
+        curve_agreement,
+    };
+    let mut opts = AmplitudeOptions::default();
+    opts.measured = Measured::Acceleration;
+    let analysis = covssi::AnalysisOptions::default();
+    let campaign = |recs: &[Vec<Vec<f64>>], follow: &[f64]| {
+        amplitude_campaign(recs.len(), follow, |i, f| {
+            let views: Vec<&[f64]> = recs[i].iter().map(Vec::as_slice).collect();
+            amplitude_analysis(&views, FS, &analysis, &opts, f).map(|a| (format!("{i}"), a))
+        })
+        .expect("the curves")
+    };
+    let measured = campaign(records, &[]);
+    let followed: Vec<f64> = measured.records[0]
+        .1
+        .curves
+        .modes
+        .iter()
+        .map(|m| m.mode.frequency_hz)
+        .collect();
+    let lengths: Vec<usize> = records.iter().map(|r| r[0].len()).collect();
+    let model = campaign(
+        &hyst_ident::storeys::model_records(got, &lengths, 9500).expect("the model's records"),
+        &followed,
+    );
+    curve_agreement(&measured, &model).within_two()
 }
 
 /// A level no record of the fit was taken at (force σ, N per fine step): its record from the
@@ -280,8 +324,12 @@ fn study() {
             opts.max_iterations = i.parse().unwrap();
             opts.tolerance = 1e-7;
         }
-        let got = fit(&truth, seconds, seed * 10, &opts);
+        let (got, records) = fit_with_records(&truth, seconds, seed * 10, &opts);
         println!("residual rms {:.2}", got.residual_rms);
+        let (inside, all) = model_curves(&got, &records);
+        println!(
+            "  the model's amplitude curves: {inside} of {all} z's within 2 SE of the measured"
+        );
         let z: Vec<String> = got
             .parameters
             .iter()
