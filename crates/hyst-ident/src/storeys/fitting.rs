@@ -22,8 +22,10 @@ pub(super) struct Fitted {
     pub(super) simulated: Vec<Vec<f64>>,
     /// The last Jacobian of the whitened residuals in the scaled parameters.
     pub(super) jacobian: Option<Vec<Vec<f64>>>,
-    /// The scales: θ = p · scale.
+    /// The scales: θ = p · scale (for an element, its last two are (β + γ, β − γ)).
     pub(super) scale: Vec<f64>,
+    /// The last two parameters are an element's sum and difference.
+    pub(super) element: bool,
 }
 
 /// Indirect inference of `layout`'s parameters from `theta0` against `measured` (per level)
@@ -40,19 +42,38 @@ pub(super) fn fit(
     stage: &str,
     progress: &(dyn Fn(StoreyProgress<'_>) + Sync),
 ) -> Result<Fitted, IdentError> {
-    let mut scale: Vec<f64> = theta0
+    // The element's (β, γ) move as (β + γ, β − γ): its bounded range (β + γ > 0, γ ≤ β)
+    // is then a box the Levenberg–Marquardt clamps to, not a wall it is refused at (refused
+    // steps left long records' fits stuck at γ = β, their residuals three times chance).
+    let element = layout.storey.is_some();
+    let mut start = theta0.to_vec();
+    let k = start.len();
+    if element {
+        let (b, g) = (theta0[k - 2], theta0[k - 1]);
+        (start[k - 2], start[k - 1]) = (b + g, b - g);
+    }
+    let mut scale: Vec<f64> = start
         .iter()
         .map(|v| if *v != 0.0 { v.abs() } else { 1.0 })
         .collect();
-    if layout.storey.is_some() {
-        // β and γ move on one scale (γ may cross zero, β reach it).
-        let k = scale.len();
-        let s = theta0[k - 2].abs().max(theta0[k - 1].abs());
-        let s = if s > 0.0 { s } else { 1.0 };
+    if element {
+        // Sum and difference on the sum's scale (the difference may reach zero).
+        let s = if start[k - 2] > 0.0 {
+            start[k - 2]
+        } else {
+            1.0
+        };
         scale[k - 2] = s;
         scale[k - 1] = s;
     }
-    let theta = |p: &[f64]| -> Vec<f64> { p.iter().zip(&scale).map(|(a, b)| a * b).collect() };
+    let theta = |p: &[f64]| -> Vec<f64> {
+        let mut t: Vec<f64> = p.iter().zip(&scale).map(|(a, b)| a * b).collect();
+        if element {
+            let (sum, diff) = (t[k - 2], t[k - 1]);
+            (t[k - 2], t[k - 1]) = (0.5 * (sum + diff), 0.5 * (sum - diff));
+        }
+        t
+    };
     let aux = |p: &[f64]| -> Result<Vec<Vec<f64>>, IdentError> {
         let (b, q, folded) = model::building(&setup.template, layout, &theta(p), opts.nu)?;
         (0..setup.levels)
@@ -73,12 +94,8 @@ pub(super) fn fit(
             })
             .collect()
     };
-    let mut p: Vec<f64> = theta0.iter().zip(&scale).map(|(a, b)| a / b).collect();
-    let mut nonnegative = vec![true; p.len()];
-    if layout.storey.is_some() {
-        let k = p.len();
-        nonnegative[k - 1] = false;
-    }
+    let mut p: Vec<f64> = start.iter().zip(&scale).map(|(a, b)| a / b).collect();
+    let nonnegative = vec![true; p.len()];
     let min_step = vec![1e-3; p.len()];
     let lm = SimulationOptions {
         max_iterations: opts.max_iterations,
@@ -115,6 +132,7 @@ pub(super) fn fit(
         simulated: fit.simulated,
         jacobian: fit.jacobian,
         scale,
+        element,
     })
 }
 
@@ -229,7 +247,17 @@ pub(super) fn sandwich(fit: &Fitted, spread: &[Vec<f64>], cov: &[DMatrix<f64>]) 
         return nan;
     };
     let v = &inv * j.transpose() * s * &j * &inv * 2.0;
-    DMatrix::from_fn(np, np, |a, b| v[(a, b)] * fit.scale[a] * fit.scale[b])
+    // From the scaled parameters to θ: the scales, and (β, γ) = ((s + d)/2, (s − d)/2).
+    let mut to_theta = DMatrix::from_diagonal(&nalgebra::DVector::from_column_slice(&fit.scale));
+    if fit.element {
+        let (a, b) = (np - 2, np - 1);
+        let s = fit.scale[a];
+        to_theta[(a, a)] = 0.5 * s;
+        to_theta[(a, b)] = 0.5 * s;
+        to_theta[(b, a)] = 0.5 * s;
+        to_theta[(b, b)] = -0.5 * s;
+    }
+    &to_theta * v * to_theta.transpose()
 }
 
 /// The two halves of every record, their statistics, and the statistics' spread at half
