@@ -47,14 +47,13 @@ mod types;
 pub use error::StoreyError;
 pub use hyst_sim::building::{Reading as Quantity, ShearBuilding, StoreyHysteresis};
 
-pub use locate::ElementEvidence;
 pub use predict::{
     LevelPrediction, PredictionOptions, level_statistics, model_records, predict_level,
 };
 pub use response::{ChannelError, response_errors, simulate_structure};
 pub use types::{
-    LevelStatistics, StoreyCandidate, StoreyFit, StoreyOptions, StoreyParameter, StoreyProgress,
-    StoreyReading, StoreyStructure,
+    ElementEvidence, LevelStatistics, StoreyCandidate, StoreyFit, StoreyOptions, StoreyParameter,
+    StoreyProgress, StoreyReading, StoreyStructure,
 };
 
 use rayon::prelude::*;

@@ -4,8 +4,6 @@
 
 use hyst_sim::building::{Reading as Quantity, ShearBuilding};
 
-use super::locate::ElementEvidence;
-
 /// The structure the records come from: what is known before the fit.
 #[derive(Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -194,4 +192,23 @@ pub struct StoreyProgress<'a> {
     pub iteration: usize,
     /// Its weighted sum of squares (NaN when none).
     pub cost: f64,
+}
+
+/// Whether the records need an element: the best-placed element's fits (both halves)
+/// against the linear structure's. Cross-validation alone cannot say it: a nested model's
+/// extra parameters cost its held-out score only about their number, less than the score's
+/// own chance swings, so it picks a spurious element with a probability that does not vanish
+/// (Shao 1993). Under no element the improvement of the fitted whitened sums is about
+/// $2\chi^2_{6}$ (three parameters, two folds; the 2 for the simulated records' own noise);
+/// the element is kept when it improves by more than that distribution's 99 % point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
+pub struct ElementEvidence {
+    /// The best-placed element's storey (0-based).
+    pub storey: usize,
+    /// The linear structure's fitted sums less the element's.
+    pub improvement: f64,
+    /// The improvement chance reaches 1 % of the time under no element.
+    pub threshold: f64,
 }
