@@ -43,7 +43,8 @@
 //! linearization of [`hyst_linearize::statistical`] ([`levels::bouc_wen_and_exponent_from_levels`]
 //! its exponent ν too, from three or more). For a shear structure of several floors,
 //! [`storeys::fit_storeys`] locates the storey holding a Bouc-Wen element (or none) from
-//! records at several levels and fits the structure by simulation.
+//! records at several levels and fits the structure by simulation;
+//! [`storeys::predict_level`] predicts a level not recorded.
 
 #![warn(missing_docs)]
 

@@ -17,7 +17,8 @@ def comparable(doc):
 
 
 @pytest.mark.parametrize(
-    "keywords", [{}, {"levels": 5, "cycles": 6.0, "method": "extrema", "amplitude_of": "velocity"}]
+    "keywords", [{}, {"levels": 5, "cycles": 6.0, "method": "extrema", "amplitude_of": "velocity"},
+                 {"floors": [1, 2, 3]}]
 )
 def test_amplitude_gives_the_commands_report(data_dir, hyst_bin, tmp_path, keywords):
     """The same curves from the command and from Python, with the defaults and with options
