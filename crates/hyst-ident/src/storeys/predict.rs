@@ -268,11 +268,12 @@ pub fn predict_level(
     })
 }
 
+/// Every replicate's statistics at a parameter vector.
+type Statistics<'a> = dyn Fn(&[f64]) -> Result<Vec<Vec<f64>>, IdentError> + Sync + 'a;
+
 /// Each parameter's derivative of the mean statistics (the levels' densities left out: a
 /// prediction has its own), by a step of 1 % of the parameter (β and γ: of the larger),
 /// forward unless that leaves the model's range.
-type Statistics<'a> = dyn Fn(&[f64]) -> Result<Vec<Vec<f64>>, IdentError> + Sync + 'a;
-
 fn gradient(
     r: &Rebuilt,
     at: &Statistics<'_>,
