@@ -48,6 +48,10 @@ use slope::{jackknife_se, linearity};
 /// weak.
 pub const WEAK_MODE_SHARE: f64 = 0.5;
 
+/// Floors a structure may have ([`AmplitudeOptions::floors`]; the tallest building has 163):
+/// each point's drifts are listed storey by storey up to the highest floor named.
+pub const MAX_FLOORS: usize = 1000;
+
 /// Overall significance of the linearity test (both slopes together).
 pub const LINEARITY_LEVEL: f64 = 0.01;
 
@@ -190,6 +194,14 @@ impl AmplitudeOptions {
         if opts.period == Some(0) {
             return bad(AmplitudeOption::Period, 0.0, "at least 1 sample");
         }
+        if let Some(&f) = opts.floors.iter().flatten().find(|&&f| f >= MAX_FLOORS) {
+            // Said as users count floors, from 1.
+            return bad(
+                AmplitudeOption::Floors,
+                f as f64 + 1.0,
+                "a floor from 1 to 1000 (no structure has more)",
+            );
+        }
         if let Some(b) = opts.band
             && !(b > 0.0 && b < 1.0)
         {
@@ -217,6 +229,8 @@ pub enum AmplitudeOption {
     Band,
     /// [`AmplitudeOptions::period`].
     Period,
+    /// [`AmplitudeOptions::floors`].
+    Floors,
 }
 
 impl AmplitudeOption {
@@ -228,6 +242,7 @@ impl AmplitudeOption {
             AmplitudeOption::Groups => "groups",
             AmplitudeOption::Band => "band",
             AmplitudeOption::Period => "period",
+            AmplitudeOption::Floors => "floors",
         }
     }
 }

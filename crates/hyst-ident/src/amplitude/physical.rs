@@ -87,6 +87,16 @@ mod tests {
         assert!(check_floors(Some(&[0, 0, 1]), 3).is_err());
         assert!(check_floors(Some(&[0, 1]), 3).is_err());
         assert!(check_floors(Some(&[2, 0, 1]), 3).is_ok());
+        // A floor beyond any structure is refused with the options, before any work.
+        let opts = crate::amplitude::AmplitudeOptions {
+            floors: Some(vec![0, usize::MAX]),
+            ..Default::default()
+        };
+        let e = opts.check().unwrap_err().to_string();
+        assert!(
+            e.contains("floors = 18446744073709552000 is out of range"),
+            "{e}"
+        );
     }
 }
 
