@@ -164,20 +164,36 @@ impl AmplitudeArgs {
     }
 }
 
-/// One record's analysis, following `modes` (every reported mode when empty).
+/// What a record read holds: its channels, samples and rate.
+#[derive(Clone, Copy)]
+struct RecordShape {
+    channels: usize,
+    samples: usize,
+    fs: f64,
+}
+
+/// One record's analysis, following `modes` (every reported mode when empty), and the
+/// record's shape.
 fn analyse(
     a: &AmplitudeArgs,
     input: &std::path::Path,
     analysis: &hyst::covssi::AnalysisOptions,
     opts: &AmplitudeOptions,
     modes: &[f64],
-) -> Result<amplitude::AmplitudeAnalysis, Error> {
+) -> Result<(amplitude::AmplitudeAnalysis, RecordShape), Error> {
     let ch = channels(input, &a.record)?;
+    let shape = RecordShape {
+        channels: ch.data.len(),
+        samples: ch.data.first().map_or(0, Vec::len),
+        fs: ch.fs,
+    };
     let views: Vec<&[f64]> = ch.data.iter().map(|c| c.as_slice()).collect();
-    amplitude::amplitude_analysis(&views, ch.fs, analysis, opts, modes).map_err(|e| match e {
-        hyst::ident::IdentError::Ssi(e) => flag_error(input, &a.ssi, e, &ch.names, ch.fs),
-        e => fail(format!("{}: {e}", input.display())),
-    })
+    amplitude::amplitude_analysis(&views, ch.fs, analysis, opts, modes)
+        .map(|r| (r, shape))
+        .map_err(|e| match e {
+            hyst::ident::IdentError::Ssi(e) => flag_error(input, &a.ssi, e, &ch.names, ch.fs),
+            e => fail(format!("{}: {e}", input.display())),
+        })
 }
 
 pub(crate) fn run(a: &AmplitudeArgs) -> Result<(), Error> {
@@ -190,6 +206,7 @@ pub(crate) fn run(a: &AmplitudeArgs) -> Result<(), Error> {
         Some(path) => Some(read_fit(a, path)?),
     };
     let name = |p: &PathBuf| p.display().to_string();
+    let mut shapes = Vec::with_capacity(a.input.len());
     let bar = steps_bar();
     bar.set_length(a.input.len() as u64);
     let campaign = amplitude::amplitude_campaign(a.input.len(), &a.modes, |i, follow| {
@@ -199,12 +216,14 @@ pub(crate) fn run(a: &AmplitudeArgs) -> Result<(), Error> {
             "{}: its modes, then their amplitude bands",
             input.display()
         ));
-        Ok::<_, Error>((name(input), analyse(a, input, &analysis, &opts, follow)?))
+        let (analysis, shape) = analyse(a, input, &analysis, &opts, follow)?;
+        shapes.push(shape);
+        Ok::<_, Error>((name(input), analysis))
     });
     bar.finish_and_clear();
     let mut campaign = campaign?;
     if let Some(fit) = &fit {
-        return beside_model(a, campaign, fit, (&analysis, &opts));
+        return beside_model(a, campaign, (fit, &shapes), (&analysis, &opts));
     }
     if campaign.records.len() == 1 {
         let (record, analysis) = campaign.records.remove(0);
@@ -252,26 +271,23 @@ fn read_fit(
 fn beside_model(
     a: &AmplitudeArgs,
     measured: amplitude::AmplitudeCampaign,
-    fit: &hyst::ident::storeys::StoreyFit,
+    (fit, shapes): (&hyst::ident::storeys::StoreyFit, &[RecordShape]),
     (analysis, opts): (&hyst::covssi::AnalysisOptions, &AmplitudeOptions),
 ) -> Result<(), Error> {
-    let mut lengths = Vec::new();
-    for input in &a.input {
-        let ch = channels(input, &a.record)?;
-        if ch.data.len() != fit.building.sensors.len()
-            || (ch.fs - fit.building.fs).abs() > 1e-9 * ch.fs
-        {
+    let b = &fit.building;
+    for (input, r) in a.input.iter().zip(shapes) {
+        if r.channels != b.sensors.len() || (r.fs - b.fs).abs() > 1e-9 * r.fs {
             return Err(fail(format!(
                 "{}: {} channels at {} Hz; the --model was fitted to {} at {} Hz",
                 input.display(),
-                ch.data.len(),
-                ch.fs,
-                fit.building.sensors.len(),
-                fit.building.fs
+                r.channels,
+                r.fs,
+                b.sensors.len(),
+                b.fs
             )));
         }
-        lengths.push(ch.data[0].len());
     }
+    let lengths: Vec<usize> = shapes.iter().map(|r| r.samples).collect();
     let bar = steps_bar();
     bar.set_message("the fitted model's records");
     let records = hyst::ident::storeys::model_records(fit, &lengths, 9500)
