@@ -85,7 +85,58 @@ pub fn track_figures(dir: &std::path::Path, r: &TrackReport) -> Result<(), Strin
     if let Some(c) = &r.subspace {
         subspace_figure(dir, c)?;
     }
+    if let Some(c) = &r.joint {
+        joint_figure(dir, c)?;
+    }
     Ok(())
+}
+
+/// The joint chart's statistic against time: the training records, the later ones and
+/// those that raised an alarm.
+fn joint_figure(
+    dir: &std::path::Path,
+    c: &crate::monitor::joint::JointChart,
+) -> Result<(), String> {
+    use crate::plot::{colors, scatter};
+    let day = |i: usize| c.time.get(i).copied().unwrap_or(i as f64) / 86400.0;
+    let n = c.statistic.len();
+    let points = |range: std::ops::Range<usize>| -> Vec<(f64, f64)> {
+        range
+            .filter(|&i| c.statistic[i].is_finite() && c.time[i].is_finite())
+            .map(|i| (day(i), c.statistic[i]))
+            .collect()
+    };
+    scatter(
+        &dir.join("joint.svg"),
+        &format!(
+            "Modes judged together: what {} shared factor(s) leave of {} modes' residuals",
+            c.common_factors,
+            c.modes.len()
+        ),
+        "time (days)",
+        "statistic Q",
+        &[
+            (
+                "training".to_string(),
+                points(0..c.training.min(n)),
+                colors::GREY,
+            ),
+            (
+                "later records".to_string(),
+                points(c.training.min(n)..n),
+                colors::BLUE,
+            ),
+            (
+                "alarm".to_string(),
+                c.alarms
+                    .iter()
+                    .filter(|a| a.record < n)
+                    .map(|a| (a.time / 86400.0, c.statistic[a.record]))
+                    .collect(),
+                colors::RED,
+            ),
+        ],
+    )
 }
 
 /// The subspace test's T² against time: the training records, the later ones, those the

@@ -59,12 +59,7 @@ pub fn track_page_data(title: &str, report: &TrackReport) -> PageData {
         .map_or(0, |m| m + 1);
     PageData {
         title: title.to_string(),
-        summary: vec![format!(
-            "{records} records, {} reference modes, {} alarms, {} records skipped.",
-            report.reference.len(),
-            report.alarms.len(),
-            report.skipped.len()
-        )],
+        summary: summary(report, records, t0),
         diagram: None,
         modes: report
             .reference
@@ -103,4 +98,37 @@ pub fn track_page_data(title: &str, report: &TrackReport) -> PageData {
             training_end_days,
         }),
     }
+}
+
+/// The page's summary: the campaign in a sentence, and the joint chart's verdict (days from
+/// `t0`, the first record's time, as the page's axes count them).
+fn summary(report: &TrackReport, records: usize, t0: f64) -> Vec<String> {
+    let mut lines = vec![format!(
+        "{records} records, {} reference modes, {} alarms, {} records skipped.",
+        report.reference.len(),
+        report.alarms.len(),
+        report.skipped.len()
+    )];
+    if let Some(j) = &report.joint {
+        let alarms: Vec<String> = j
+            .alarms
+            .iter()
+            .map(|a| {
+                let driver = a.drivers.first().map_or_else(String::new, |d| {
+                    format!(", driven by mode {}", report.mode_name(d.0))
+                });
+                format!("day {:.2}{driver}", (a.time - t0) / 86_400.0)
+            })
+            .collect();
+        lines.push(format!(
+            "Modes judged together: {} shared factor(s) set apart; {}.",
+            j.common_factors,
+            if alarms.is_empty() {
+                "no alarm".to_string()
+            } else {
+                format!("alarms at {}", alarms.join("; "))
+            }
+        ));
+    }
+    lines
 }

@@ -164,6 +164,18 @@ pub(super) struct TrackFlags {
     /// response, in the record's units), for frequencies that drift with amplitude.
     #[arg(long, conflicts_with = "estimates")]
     level_covariate: bool,
+    /// Each chart's limit the one independent standard normal values would ask (h = 12).
+    /// By default each limit is calibrated on the training records' own charted values
+    /// (their block bootstrap: their correlation from record to record and their tail), never
+    /// below that, and the report says the false-alarm rate measured on them.
+    #[arg(long)]
+    nominal_limit: bool,
+    /// Chart each mode alone only. By default the modes' residuals are also judged
+    /// together: the factors they share (a slow effect of the environment common to all)
+    /// set apart on the training records, and what they leave charted as one statistic,
+    /// whose alarms name the modes that drive them.
+    #[arg(long)]
+    no_joint_chart: bool,
 }
 
 impl From<TrackFlags> for TrackSettings {
@@ -174,6 +186,8 @@ impl From<TrackFlags> for TrackSettings {
             whiten: !f.no_whiten,
             environment_model: !f.no_environment_model,
             level_covariate: f.level_covariate,
+            calibrate: !f.nominal_limit,
+            joint_chart: !f.no_joint_chart,
         }
     }
 }

@@ -192,7 +192,8 @@ impl SsiSettings {
 }
 
 /// How a campaign's modes are tracked, as a user gives it: `hyst track`'s flags
-/// (`--training`, `--no-whiten`, `--no-environment-model`, `--level-covariate`) and the
+/// (`--training`, `--no-whiten`, `--no-environment-model`, `--level-covariate`,
+/// `--nominal-limit`, `--no-joint-chart`) and the
 /// keywords of `hyst.track` and `hyst.track_estimates`. [`TrackSettings::options`] makes
 /// hyst-monitor's [`TrackOptions`] of them, the one place that does.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -210,6 +211,11 @@ pub struct TrackSettings {
     pub environment_model: bool,
     /// Add each record's excitation level as a covariate ([`TrackOptions::level_covariate`]).
     pub level_covariate: bool,
+    /// Calibrate each chart's limit on the training records' charted values
+    /// ([`TrackOptions::calibrate`]).
+    pub calibrate: bool,
+    /// Judge the modes together beside each alone ([`TrackOptions::joint`]).
+    pub joint_chart: bool,
 }
 
 impl Default for TrackSettings {
@@ -220,6 +226,8 @@ impl Default for TrackSettings {
             whiten: o.whiten,
             environment_model: o.environment,
             level_covariate: o.level_covariate,
+            calibrate: o.calibrate,
+            joint_chart: o.joint,
         }
     }
 }
@@ -237,6 +245,8 @@ impl TrackSettings {
         let mut opts =
             TrackOptions::for_campaign(records, self.training, self.whiten, self.environment_model);
         opts.level_covariate = self.level_covariate;
+        opts.calibrate = self.calibrate;
+        opts.joint = self.joint_chart;
         opts
     }
 

@@ -54,6 +54,18 @@ pub struct Campaign {
     /// first-order autoregression over the records with φ = e^{−Δt/τ} (an unmeasured slow
     /// effect: moisture, the structure's temperature lagging the air's).
     pub unexplained_hours: f64,
+    /// An unexplained effect the modes share (a support's stiffness wandering with moisture
+    /// or frost beyond what the temperature says): its standard deviation (relative
+    /// frequency change of the first mode; mode j of n feels it times 1 − j/(2(n − 1)), so
+    /// the last mode half as much) and its correlation time (hours; a first-order
+    /// autoregression over the records as `unexplained_hours`'s). Default none (0, 0).
+    pub shared_unexplained: (f64, f64),
+    /// Episodes of that shared effect (a support that sticks, or freezes, for days at a
+    /// time): the campaign cut in blocks of the second value's hours, each block in an
+    /// episode with the probability of the third value, drawn from the block's own seed;
+    /// during one the frequencies change by the first value (relative, the first mode's;
+    /// the others by the shared effect's loadings). Default none (0, 48, 0).
+    pub shared_episodes: (f64, f64, f64),
     /// Standard deviation of the log of the excitation level.
     pub level_spread: f64,
     /// The sensors' noise as a fraction of the response at level 1.
@@ -92,6 +104,8 @@ impl Default for Campaign {
             temperature_noise: 0.2,
             unexplained: 2e-4,
             unexplained_hours: 0.0,
+            shared_unexplained: (0.0, 0.0),
+            shared_episodes: (0.0, 48.0, 0.0),
             thermal_lag_hours: 0.0,
             level_spread: 0.5,
             noise: 0.05,
@@ -147,21 +161,28 @@ impl Campaign {
     }
 
     /// The unit-variance autoregressive effect of each mode at record `i` (`None` when the
-    /// effect is independent): √(1 − φ²) Σ_k φ^k w_{i−k}, the sum cut where φ^k < 10⁻⁴, each
-    /// w_m a standard normal drawn from its own seed, so that any record is made alone.
+    /// effect is independent).
     fn correlated_unexplained(&self, i: usize) -> Option<Vec<f64>> {
-        if self.unexplained_hours.is_nan() || self.unexplained_hours <= 0.0 {
+        self.autoregression(i, self.unexplained_hours, self.modes.len(), 0xc0_ffee)
+    }
+
+    /// `count` unit-variance first-order autoregressions over the records with correlation
+    /// time `hours` at record `i`, √(1 − φ²) Σ_k φ^k w_{i−k}, the sum cut where φ^k < 10⁻⁴,
+    /// each w_m a standard normal drawn from its own seed (the campaign's seed, `salt` and
+    /// m), so that any record is made alone; `None` for a time of 0 (or NaN).
+    fn autoregression(&self, i: usize, hours: f64, count: usize, salt: u64) -> Option<Vec<f64>> {
+        if hours.is_nan() || hours <= 0.0 {
             return None;
         }
         let step_hours = 24.0 / self.per_day as f64;
-        let phi = (-step_hours / self.unexplained_hours).exp();
+        let phi = (-step_hours / hours).exp();
         let terms = ((1e-4f64).ln() / phi.ln()).ceil().max(1.0) as i64;
         let normal = Normal::new(0.0, 1.0).expect("unit normal");
-        let mut eta = vec![0.0; self.modes.len()];
+        let mut eta = vec![0.0; count];
         let mut weight = (1.0 - phi * phi).sqrt();
         for k in 0..terms {
             let m = i as i64 - k;
-            let seed = (self.seed ^ 0xc0_ffee_u64).wrapping_add(m as u64);
+            let seed = (self.seed ^ salt).wrapping_add(m as u64);
             let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
             for e in eta.iter_mut() {
                 *e += weight * normal.sample(&mut rng);
@@ -169,6 +190,44 @@ impl Campaign {
             weight *= phi;
         }
         Some(eta)
+    }
+
+    /// The shared unexplained effect's relative change of each mode at record `i` (zeros
+    /// without one).
+    fn shared_effect(&self, i: usize) -> Vec<f64> {
+        let n = self.modes.len();
+        let (size, hours) = self.shared_unexplained;
+        let g = if size == 0.0 {
+            0.0
+        } else {
+            // A correlation time of 0 makes it independent from record to record.
+            self.autoregression(i, hours.max(1e-9), 1, 0x5a4e_d000)
+                .map_or(0.0, |g| g[0])
+        };
+        let (jump, block_hours, share) = self.shared_episodes;
+        let episode = if jump != 0.0 && block_hours > 0.0 && share > 0.0 {
+            let hours = i as f64 * 24.0 / self.per_day as f64;
+            let block = (hours / block_hours).floor() as u64;
+            let mut rng =
+                Xoshiro256PlusPlus::seed_from_u64((self.seed ^ 0xe915_0de0).wrapping_add(block));
+            if rand::RngExt::random::<f64>(&mut rng) < share {
+                jump
+            } else {
+                0.0
+            }
+        } else {
+            0.0
+        };
+        (0..n)
+            .map(|j| {
+                let loading = if n > 1 {
+                    1.0 - j as f64 / (2.0 * (n - 1) as f64)
+                } else {
+                    1.0
+                };
+                loading * (size * g + episode)
+            })
+            .collect()
     }
 
     /// The state of the structure and its environment at record `i`, without the record
@@ -187,6 +246,7 @@ impl Campaign {
         };
         let structure = t0 + lagged(daily, 1.0) + lagged(seasonal, period);
         let correlated = self.correlated_unexplained(i);
+        let shared = self.shared_effect(i);
         let frequencies: Vec<f64> = self
             .modes
             .iter()
@@ -200,7 +260,8 @@ impl Campaign {
                 let mut f = f
                     * (1.0 + self.temperature_coefficient * (structure - t0))
                     * (1.0 + per_degree * (structure - freezing).min(0.0))
-                    * (1.0 + self.unexplained * eta);
+                    * (1.0 + self.unexplained * eta)
+                    * (1.0 + shared[j]);
                 if let Some((day, mode, change)) = self.change
                     && t >= day
                     && mode == j

@@ -60,21 +60,41 @@ impl Cusum {
     /// The alarms over `z` (NaN values, records without the mode, are passed over); after
     /// an alarm the side that raised it starts again from zero.
     pub fn alarms(&self, z: &[f64]) -> Vec<Alarm> {
+        self.runs(z).into_iter().map(|(a, _)| a).collect()
+    }
+
+    /// The alarms over `z` as [`Cusum::alarms`] finds them, each with the index where its
+    /// side's run began (the first value after the side last stood at zero): the values
+    /// that raised it.
+    pub fn runs(&self, z: &[f64]) -> Vec<(Alarm, usize)> {
         let (mut up, mut down) = (0.0f64, 0.0f64);
+        let (mut up_from, mut down_from) = (0usize, 0usize);
         let mut out = Vec::new();
         for (index, &v) in z.iter().enumerate() {
             if !v.is_finite() {
                 continue;
             }
+            if up == 0.0 {
+                up_from = index;
+            }
+            if down == 0.0 {
+                down_from = index;
+            }
             up = (up + v - self.k).max(0.0);
             down = (down - v - self.k).max(0.0);
-            for (s, side) in [(&mut up, Side::Up), (&mut down, Side::Down)] {
+            for (s, from, side) in [
+                (&mut up, up_from, Side::Up),
+                (&mut down, down_from, Side::Down),
+            ] {
                 if *s > self.h {
-                    out.push(Alarm {
-                        index,
-                        side,
-                        statistic: *s,
-                    });
+                    out.push((
+                        Alarm {
+                            index,
+                            side,
+                            statistic: *s,
+                        },
+                        from,
+                    ));
                     *s = 0.0;
                 }
             }
@@ -130,6 +150,8 @@ mod tests {
         assert_eq!(a[0].side, Side::Down);
         // (2 − 0.5) per value: past 12 on the 9th.
         assert_eq!(a[0].index, 108);
+        // The run that raised it began with the shift.
+        assert_eq!(chart.runs(&z)[0].1, 100);
         assert!(Cusum::new(0.5, f64::NAN).is_err());
     }
 }

@@ -28,11 +28,13 @@
 #![warn(missing_docs)]
 
 pub mod baseline;
+pub mod calibration;
 #[cfg(feature = "synth")]
 pub mod campaign;
 pub mod chart;
 pub mod environment;
 pub mod estimates;
+pub mod joint;
 pub mod matching;
 pub mod records;
 mod report;
@@ -121,6 +123,22 @@ pub enum MonitorError {
         first: String,
         /// Why it was skipped.
         why: String,
+    },
+    /// The joint chart needs two modes or more.
+    #[error("{modes} mode(s) with a baseline: the joint chart judges two modes or more together")]
+    TooFewModesForJoint {
+        /// Modes with a baseline.
+        modes: usize,
+    },
+    /// Too few training records hold every mode for the joint chart's model.
+    #[error(
+        "{records} training record(s) hold all {modes} modes; the joint chart needs at least 20 and five per mode (a longer training period)"
+    )]
+    TooFewForJoint {
+        /// Training records holding every mode.
+        records: usize,
+        /// Modes judged.
+        modes: usize,
     },
     /// A CUSUM parameter out of range.
     #[error("CUSUM {parameter} must be positive and finite, got {value}")]

@@ -82,6 +82,65 @@ impl TrackReport {
             (_, Some(Some(e))) => writeln!(f, "; no baseline: {e}")?,
             _ => writeln!(f)?,
         }
+        if let Some(Some(c)) = self.calibrations.get(j) {
+            fmt_calibration(f, c)?;
+        }
+        Ok(())
+    }
+
+    /// The joint chart's lines, or why it was not drawn.
+    fn fmt_joint(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if let Some(c) = &self.joint {
+            let names: Vec<String> = c.modes.iter().map(|&j| self.mode_name(j)).collect();
+            let eigen: Vec<String> = c.eigenvalues.iter().map(|l| format!("{l:.2}")).collect();
+            writeln!(
+                f,
+                "modes judged together ({}; trained on {} records holding them all): {} factor(s) they share (eigenvalues of their residuals' correlations {} against {:.2} for independent residuals); the statistic of what the shared factors leave charted, limit h = {:.2}",
+                names.join(", "),
+                c.trained_on,
+                c.common_factors,
+                eigen.join(", "),
+                c.noise_edge,
+                c.limit
+            )?;
+            if let Some(cal) = &c.calibration {
+                fmt_calibration(f, cal)?;
+            }
+            if c.alarms.is_empty() {
+                writeln!(f, "  the joint chart raised no alarm")?;
+            }
+            // The first few: a lasting change raises one every few records after.
+            const SAID: usize = 5;
+            for a in c.alarms.iter().take(SAID) {
+                let drivers: Vec<String> = a
+                    .drivers
+                    .iter()
+                    .filter(|d| d.1 >= 0.1)
+                    .map(|&(j, share)| {
+                        format!("mode {} ({:.0} %)", self.mode_name(j), 100.0 * share)
+                    })
+                    .collect();
+                writeln!(
+                    f,
+                    "ALARM (modes judged together) at record {} (time {} s), driven by {}",
+                    self.record_name(a.record),
+                    a.time,
+                    drivers.join(", ")
+                )?;
+            }
+            if c.alarms.len() > SAID {
+                let last = &c.alarms[c.alarms.len() - 1];
+                writeln!(
+                    f,
+                    "  and {} more alarm(s) of the modes judged together, the last at record {} (all in report.json's `joint.alarms`)",
+                    c.alarms.len() - SAID,
+                    self.record_name(last.record)
+                )?;
+            }
+        }
+        if let Some(e) = &self.joint_error {
+            writeln!(f, "modes not judged together: {e}")?;
+        }
         Ok(())
     }
 
@@ -171,6 +230,26 @@ impl TrackReport {
     }
 }
 
+/// A chart limit's calibration, one indented line.
+fn fmt_calibration(f: &mut fmt::Formatter<'_>, c: &crate::calibration::Calibration) -> fmt::Result {
+    let how = if c.bootstrap_h > c.nominal_h {
+        format!(
+            "calibrated on its {} training values (lag-one correlation {:.2}; a block bootstrap in blocks of {})",
+            c.values, c.lag_one, c.block
+        )
+    } else {
+        format!(
+            "the nominal limit, which the {} training values' block bootstrap does not ask to raise (it would go to {:.2}; no lower: a bootstrap cannot see a tail its values do not show)",
+            c.values, c.bootstrap_h
+        )
+    };
+    writeln!(
+        f,
+        "  chart limit h = {:.2}, {how}: one false alarm per {:.2e} records measured on them (the nominal h = {:.2} would give one per {:.2e})",
+        c.h, c.run_length, c.nominal_h, c.nominal_run_length
+    )
+}
+
 impl TrackReport {
     /// Record `record`'s name, as its rows give it.
     fn record_name(&self, record: usize) -> &str {
@@ -249,11 +328,20 @@ impl fmt::Display for TrackReport {
             )?;
         }
         self.fmt_subspace(f)?;
-        writeln!(
-            f,
-            "CUSUM of the standardized residuals (of their filter's innovations where a slow effect was found): one false alarm per {:.3e} records per mode when nothing changes and the values charted are independent",
-            self.in_control_run_length
-        )?;
+        self.fmt_joint(f)?;
+        if self.calibrations.iter().any(Option::is_some) {
+            writeln!(
+                f,
+                "CUSUM of the standardized residuals (of their filter's innovations where a slow effect was found): each mode's limit calibrated on its training values for one false alarm per {:.3e} records (above)",
+                self.in_control_run_length
+            )?;
+        } else {
+            writeln!(
+                f,
+                "CUSUM of the standardized residuals (of their filter's innovations where a slow effect was found): one false alarm per {:.3e} records per mode when nothing changes and the values charted are independent",
+                self.in_control_run_length
+            )?;
+        }
         if self.alarms.is_empty() {
             writeln!(f, "no alarm")?;
         }

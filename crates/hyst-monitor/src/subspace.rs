@@ -10,20 +10,28 @@
 //!
 //! - **Excitation level**: each H is divided by its Frobenius norm (the null space does not
 //!   depend on the scale; the level would).
-//! - **Environmental variability**: the residuals' mean μ and covariance Σ are estimated from
-//!   the training records themselves, so the reference spans the range of temperature and
-//!   excitation the training period saw (the scatter within a record, Döhler's usual Σ,
-//!   would call every change of temperature a damage).
-//! - **The test**: Hotelling's T² = (ζ − μ)ᵀ Σ⁻¹ (ζ − μ) of a new record; with m training
-//!   records and d entries, T² (m − d) m / (d (m − 1)(m + 1)) follows F(d, m − d) when the
-//!   records are independent and normal, from which the threshold at the nominal
-//!   false-alarm probability α per record. The campaign's records are neither (temperature
-//!   cycles, slow effects): the false-alarm rate measured on undamaged records is reported
-//!   beside α.
+//! - **Environmental variability**: the residual's mean and covariance Σ are estimated from
+//!   the training records themselves (the scatter within a record, Döhler's usual Σ, would
+//!   call every change of temperature a damage), and with the records' environmental
+//!   regressors x (the covariates through the lags, breakpoints and curvatures the modes'
+//!   environmental models chose, [`crate::environment`]) its mean follows them:
+//!   ζ = B [1; x] + e, B fitted by least squares over the training records, as each mode's
+//!   frequency is. A frequency moved by ±1.5 % over a season moves ζ nearly linearly, so the
+//!   reference no longer has to hold the season's swing in Σ, where a 1 % change of one mode
+//!   lay largely within it.
+//! - **The test**: Hotelling's T² = eᵀ Σ⁻¹ e / (1 + x̃ᵀ(XᵀX)⁻¹x̃) of a new record (e its
+//!   residual from the regression's prediction, x̃ = [1; x]); with m training records, q
+//!   regressors with the intercept, ν = m − q and d entries, T² (ν − d + 1)/(d ν) follows
+//!   F(d, ν − d + 1) when the records are independent and normal, from which the threshold at
+//!   the nominal false-alarm probability α per record. The campaign's records are neither
+//!   (temperature cycles, slow effects): the threshold used is fitted to the training
+//!   records' own leave-one-out T², and the CUSUM's limit calibrated on their scores
+//!   ([`crate::calibration`]).
 
 use nalgebra::{DMatrix, DVector};
 use statrs::distribution::{ContinuousCDF, FisherSnedecor, Gamma, Normal};
 
+use crate::calibration::{Calibration, Sides};
 use crate::chart::{Cusum, Side};
 
 use crate::MonitorError;
@@ -125,7 +133,10 @@ pub const ALPHA: f64 = 0.01;
 pub struct SubspaceTest {
     null: DMatrix<f64>,
     columns: DMatrix<f64>,
-    mean: DVector<f64>,
+    /// B: the residual's regression on [1; x] (entries × regressors).
+    coefficients: DMatrix<f64>,
+    /// (XᵀX)⁻¹, for the prediction's own variance.
+    gram_inverse: DMatrix<f64>,
     /// Σ⁻¹ through its Cholesky factor.
     cholesky: nalgebra::Cholesky<f64, nalgebra::Dyn>,
     /// Entries of ζ.
@@ -139,16 +150,20 @@ pub struct SubspaceTest {
     pub nominal_threshold: f64,
     /// The nominal false-alarm probability per record.
     pub alpha: f64,
+    /// The training records' leave-one-out T², as new records' would be.
+    pub leave_one_out: Vec<f64>,
     /// The law of an undamaged record's T² (fitted to the leave-one-out values).
     law: Gamma,
 }
 
 impl SubspaceTest {
-    /// Train on `hankels` (of the training records, each from [`hankel`]) for a model of
-    /// order `order` (twice the modes), alarms at the nominal false-alarm probability
-    /// `alpha` per record.
+    /// Train on `hankels` (of the training records, each from [`hankel`]) with their
+    /// environmental regressors `regressors` (one vector per record, all of one length;
+    /// empty: the residual's mean alone) for a model of order `order` (twice the modes),
+    /// alarms at the nominal false-alarm probability `alpha` per record.
     pub fn train(
         hankels: &[DMatrix<f64>],
+        regressors: &[Vec<f64>],
         order: usize,
         alpha: f64,
     ) -> Result<SubspaceTest, MonitorError> {
@@ -165,7 +180,8 @@ impl SubspaceTest {
             return Err(MonitorError::NoSubspaceOrder);
         }
         let dof = (rows - order) * order;
-        if m <= dof + 1 {
+        let q = 1 + regressors.first().map_or(0, Vec::len);
+        if m <= dof + q {
             return Err(MonitorError::TooFewForSubspace {
                 records: m,
                 entries: dof,
@@ -180,61 +196,83 @@ impl SubspaceTest {
         // compression: those of H₀ᵀH₀ with the largest (the leading right singular vectors).
         let null = eigenvectors(&h0 * h0.transpose(), rows - order, false);
         let columns = eigenvectors(h0.transpose() * &h0, order, true);
-        let residuals: Vec<DVector<f64>> = hankels
-            .iter()
-            .map(|h| residual(&null, &columns, h))
-            .collect();
-        let mut mean = DVector::<f64>::zeros(dof);
-        for z in &residuals {
-            mean += z;
-        }
-        mean /= m as f64;
-        let mut cov = DMatrix::<f64>::zeros(dof, dof);
-        for z in &residuals {
-            let d = z - &mean;
-            cov += &d * d.transpose();
-        }
-        cov /= (m - 1) as f64;
-        let cholesky = cov.cholesky().ok_or(MonitorError::Collinear)?;
-        let (mf, df) = (m as f64, dof as f64);
-        let f = FisherSnedecor::new(df, mf - df).map_err(|_| MonitorError::Collinear)?;
-        let nominal_threshold =
-            f.inverse_cdf(1.0 - alpha) * df * (mf - 1.0) * (mf + 1.0) / ((mf - df) * mf);
-        // Each training record's T² against the others (leave one out, by Sherman–Morrison
-        // from the in-sample D² = dᵀΣ⁻¹d): as a new record's would be.
-        let c = mf / ((mf - 1.0) * (mf - 1.0));
-        let loo: Vec<f64> = residuals
-            .iter()
-            .map(|z| {
-                let big_d = mahalanobis(&cholesky, z - &mean);
-                (mf / (mf - 1.0)).powi(2) * (mf - 2.0) / (mf - 1.0) * big_d / (1.0 - c * big_d)
+        let z = DMatrix::from_columns(
+            &hankels
+                .iter()
+                .map(|h| residual(&null, &columns, h))
+                .collect::<Vec<_>>(),
+        );
+        let x = DMatrix::from_fn(m, q, |i, k| {
+            if k == 0 {
+                1.0
+            } else {
+                regressors
+                    .get(i)
+                    .and_then(|r| r.get(k - 1))
+                    .copied()
+                    .unwrap_or(f64::NAN)
+            }
+        });
+        let gram_inverse = (x.transpose() * &x)
+            .try_inverse()
+            .filter(|g| g.iter().all(|v| v.is_finite()))
+            .ok_or(MonitorError::Collinear)?;
+        let coefficients = &z * &x * &gram_inverse;
+        let e = &z - &coefficients * x.transpose();
+        let nu = (m - q) as f64;
+        let sums = &e * e.transpose();
+        let cholesky = (&sums / nu).cholesky().ok_or(MonitorError::Collinear)?;
+        let sums_cholesky = sums.cholesky().ok_or(MonitorError::Collinear)?;
+        let df = dof as f64;
+        let f = FisherSnedecor::new(df, nu - df + 1.0).map_err(|_| MonitorError::Collinear)?;
+        let nominal_threshold = f.inverse_cdf(1.0 - alpha) * df * nu / (nu - df + 1.0);
+        // Each training record's T² against the others (leave one out): with g = eᵢᵀA⁻¹eᵢ
+        // (A = Σ eeᵀ) and its leverage hᵢ, deleting the record leaves A − eᵢeᵢᵀ/(1 − hᵢ),
+        // its prediction error is eᵢ/(1 − hᵢ) of variance Σ/(1 − hᵢ), so by Sherman–Morrison
+        // T²ᵢ = (ν − 1) g / ((1 − hᵢ) − g), as a new record's.
+        let leave_one_out: Vec<f64> = (0..m)
+            .map(|i| {
+                let g = mahalanobis(&sums_cholesky, e.column(i).into_owned());
+                let xi = x.row(i).transpose();
+                let h = (xi.transpose() * &gram_inverse * &xi)[(0, 0)];
+                (nu - 1.0) * g / ((1.0 - h) - g)
             })
             .collect();
-        let mean_t2 = loo.iter().sum::<f64>() / mf;
-        let var_t2 = loo.iter().map(|t| (t - mean_t2).powi(2)).sum::<f64>() / (mf - 1.0);
-        let law = Gamma::new(mean_t2 * mean_t2 / var_t2, mean_t2 / var_t2)
-            .map_err(|_| MonitorError::Collinear)?;
+        let law =
+            crate::calibration::gamma_by_moments(&leave_one_out).ok_or(MonitorError::Collinear)?;
         let threshold = law.inverse_cdf(1.0 - alpha);
         Ok(SubspaceTest {
             null,
             columns,
-            mean,
+            coefficients,
+            gram_inverse,
             cholesky,
             dof,
             training: m,
             threshold,
             nominal_threshold,
             alpha,
+            leave_one_out,
             law,
         })
     }
 
-    /// A record's T² (from its [`hankel`]).
-    pub fn statistic(&self, h: &DMatrix<f64>) -> f64 {
-        mahalanobis(
-            &self.cholesky,
-            residual(&self.null, &self.columns, h) - &self.mean,
-        )
+    /// A record's T² (from its [`hankel`] and its regressors, as in training).
+    pub fn statistic(&self, h: &DMatrix<f64>, regressors: &[f64]) -> f64 {
+        let q = self.gram_inverse.nrows();
+        let x = DVector::from_fn(q, |k, _| {
+            if k == 0 {
+                1.0
+            } else {
+                regressors.get(k - 1).copied().unwrap_or(f64::NAN)
+            }
+        });
+        if x.iter().any(|v| !v.is_finite()) {
+            return f64::NAN;
+        }
+        let leverage = (x.transpose() * &self.gram_inverse * &x)[(0, 0)];
+        let e = residual(&self.null, &self.columns, h) - &self.coefficients * x;
+        mahalanobis(&self.cholesky, e) / (1.0 + leverage)
     }
 
     /// A record's T² as a standard normal score, Φ⁻¹(G(T²)) with G the fitted law: standard
@@ -279,7 +317,7 @@ pub struct SubspaceChart {
     /// Each record's time (s).
     #[cfg_attr(feature = "serde", serde(default))]
     pub time: Vec<f64>,
-    /// Each record's T² (NaN for a record without a Hankel matrix).
+    /// Each record's T² (NaN for a record without a Hankel matrix or regressors).
     pub t2: Vec<f64>,
     /// Its score (standard normal when undamaged), charted.
     pub score: Vec<f64>,
@@ -287,8 +325,13 @@ pub struct SubspaceChart {
     pub dof: usize,
     /// The records before charting (the training period).
     pub training: usize,
-    /// Those of them the reference was trained on (with correlations, not skipped).
+    /// Those of them the reference was trained on (with correlations and regressors, not
+    /// skipped).
     pub trained_on: usize,
+    /// The environmental model the residual was regressed on (the union of the modes'
+    /// terms; `None`: its mean alone, without covariates).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub environment: Option<crate::environment::Environment>,
     /// The single-record threshold of T² at the nominal false-alarm probability `alpha`
     /// (fitted), and under normal theory.
     pub threshold: f64,
@@ -296,42 +339,68 @@ pub struct SubspaceChart {
     pub nominal_threshold: f64,
     /// The nominal false-alarm probability per record.
     pub alpha: f64,
+    /// The CUSUM's limit calibrated on the training records' leave-one-out scores (`None`:
+    /// not asked, or too few: the nominal limit).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub calibration: Option<Calibration>,
+    /// The CUSUM's limit charted.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub limit: f64,
     /// Records after training whose T² passed `threshold`.
     pub above_threshold: Vec<usize>,
     /// Records at which the CUSUM of the scores (upper side) passed its limit.
     pub alarms: Vec<usize>,
 }
 
-/// The subspace test over `hankels` (each record's, from [`hankel`]; `None` for a record
-/// that has none; recorded at `time`, s), trained on the first `training`, for a model of
-/// order `order`; its scores after training charted by `chart`'s upper side (a change makes
-/// T² larger).
+/// A record as the subspace test takes it: its Hankel matrix (from [`hankel`]) and its
+/// environmental regressors (empty without covariates).
+pub type SubspaceRecord = (DMatrix<f64>, Vec<f64>);
+
+/// The subspace test over `records` (each record's [`SubspaceRecord`]; `None` for a record
+/// without correlations or covariates; recorded at `time`, s), trained on the first
+/// `training`, for a model of order `order`; its scores after training charted by `chart`'s
+/// upper side (a change makes T² larger), the limit calibrated on the training records'
+/// leave-one-out scores when `calibrate`.
 pub fn subspace_chart(
-    hankels: &[Option<DMatrix<f64>>],
+    records: &[Option<SubspaceRecord>],
     time: &[f64],
     training: usize,
     order: usize,
     alpha: f64,
     chart: &Cusum,
+    calibrate: bool,
 ) -> Result<SubspaceChart, MonitorError> {
-    let train: Vec<DMatrix<f64>> = hankels.iter().take(training).flatten().cloned().collect();
-    let test = SubspaceTest::train(&train, order, alpha)?;
-    let t2: Vec<f64> = hankels
+    let (train, regressors): (Vec<DMatrix<f64>>, Vec<Vec<f64>>) = records
         .iter()
-        .map(|h| h.as_ref().map_or(f64::NAN, |h| test.statistic(h)))
+        .take(training)
+        .flatten()
+        .filter(|(_, x)| x.iter().all(|v| v.is_finite()))
+        .cloned()
+        .unzip();
+    let test = SubspaceTest::train(&train, &regressors, order, alpha)?;
+    let t2: Vec<f64> = records
+        .iter()
+        .map(|r| r.as_ref().map_or(f64::NAN, |(h, x)| test.statistic(h, x)))
         .collect();
     let score: Vec<f64> = t2
         .iter()
         .map(|&t| if t.is_nan() { t } else { test.score(t) })
         .collect();
+    let calibration = if calibrate {
+        let trained: Vec<f64> = test.leave_one_out.iter().map(|&t| test.score(t)).collect();
+        crate::calibration::calibrate(&trained, chart, Sides::Up)
+    } else {
+        None
+    };
+    let used = calibration.as_ref().map_or(*chart, |c| c.chart(chart));
     let later: Vec<f64> = score.iter().skip(training).copied().collect();
-    let alarms = chart
+    let alarms = used
         .alarms(&later)
         .into_iter()
         .filter(|a| a.side == Side::Up)
         .map(|a| a.index + training)
         .collect();
-    let above_threshold = (training..hankels.len())
+    let above_threshold = (training..records.len())
         .filter(|&i| t2[i] > test.threshold)
         .collect();
     Ok(SubspaceChart {
@@ -341,9 +410,12 @@ pub fn subspace_chart(
         dof: test.dof,
         training,
         trained_on: test.training,
+        environment: None,
         threshold: test.threshold,
         nominal_threshold: test.nominal_threshold,
         alpha,
+        calibration,
+        limit: used.h,
         above_threshold,
         alarms,
     })
@@ -393,14 +465,15 @@ mod tests {
     #[test]
     fn a_change_of_one_mode_is_charted_and_noise_is_not() {
         let level = |i: u64| (0.5 * ((i as f64 * 0.7).sin())).exp();
-        let mut hankels: Vec<Option<DMatrix<f64>>> = (0..120)
-            .map(|i| Some(record(3.4, level(i), 4_610_000 + i)))
+        let with = |h: DMatrix<f64>| Some((h, Vec::new()));
+        let mut hankels: Vec<Option<SubspaceRecord>> = (0..120)
+            .map(|i| with(record(3.4, level(i), 4_610_000 + i)))
             .collect();
-        hankels.extend((0..300).map(|i| Some(record(3.4, level(i + 7), 4_620_000 + i))));
+        hankels.extend((0..300).map(|i| with(record(3.4, level(i + 7), 4_620_000 + i))));
         let undamaged = hankels.len();
-        hankels.extend((0..60).map(|i| Some(record(3.4 * 0.98, level(i + 3), 4_630_000 + i))));
+        hankels.extend((0..60).map(|i| with(record(3.4 * 0.98, level(i + 3), 4_630_000 + i))));
         let time: Vec<f64> = (0..hankels.len()).map(|i| 3600.0 * i as f64).collect();
-        let c = subspace_chart(&hankels, &time, 120, 4, 0.01, &Cusum::default()).unwrap();
+        let c = subspace_chart(&hankels, &time, 120, 4, 0.01, &Cusum::default(), true).unwrap();
         assert_eq!(c.dof, 16);
         let passed = c.above_threshold.iter().filter(|&&i| i < undamaged).count();
         let nominal = (120..undamaged)
@@ -429,7 +502,7 @@ mod tests {
     #[test]
     fn too_few_training_records_are_said() {
         let h: Vec<DMatrix<f64>> = (0..5).map(|i| record(3.4, 1.0, 4_640_000 + i)).collect();
-        let e = SubspaceTest::train(&h, 4, 0.01).unwrap_err();
+        let e = SubspaceTest::train(&h, &[], 4, 0.01).unwrap_err();
         assert!(
             matches!(
                 e,
@@ -441,7 +514,7 @@ mod tests {
             "{e}"
         );
         // No reference mode: order 0 is said, not a panic on an empty set of vectors.
-        let e = SubspaceTest::train(&h, 0, 0.01).unwrap_err();
+        let e = SubspaceTest::train(&h, &[], 0, 0.01).unwrap_err();
         assert!(matches!(e, MonitorError::NoSubspaceOrder), "{e}");
     }
 }

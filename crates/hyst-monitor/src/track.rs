@@ -3,8 +3,10 @@
 
 use crate::MonitorError;
 use crate::baseline::{Baseline, fit_baseline};
+use crate::calibration::{self, Calibration, Sides};
 use crate::chart::{Cusum, Side};
 use crate::environment::{Environment, Series};
+use crate::joint::{JointChart, joint_chart};
 use crate::matching::{MatchOptions, ModeEstimate, match_modes};
 use crate::records::{Identified, RecordModes};
 use crate::training::{self, OutlierRule, TrainingOutlier};
@@ -41,6 +43,20 @@ pub struct TrackOptions {
     /// it as on the temperature.
     #[cfg_attr(feature = "serde", serde(default))]
     pub level_covariate: bool,
+    /// Calibrate each chart's limit on the training records' own charted values
+    /// ([`crate::calibration`]; default), rather than take the limit independent standard
+    /// normal values would ask.
+    #[cfg_attr(feature = "serde", serde(default = "yes"))]
+    pub calibrate: bool,
+    /// Judge the modes together ([`crate::joint`]; default): the joint chart beside the
+    /// modes' own.
+    #[cfg_attr(feature = "serde", serde(default = "yes"))]
+    pub joint: bool,
+}
+
+#[cfg(feature = "serde")]
+fn yes() -> bool {
+    true
 }
 
 impl Default for TrackOptions {
@@ -53,6 +69,8 @@ impl Default for TrackOptions {
             whiten: true,
             environment: true,
             level_covariate: false,
+            calibrate: true,
+            joint: true,
         }
     }
 }
@@ -183,6 +201,16 @@ pub struct TrackReport {
     pub tracked: Vec<f64>,
     /// The alarms, in time order.
     pub alarms: Vec<ModeAlarm>,
+    /// Each mode's chart limit as calibrated on its training values (`None`: not
+    /// calibrated, too few values, or no baseline; the nominal limit charted).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub calibrations: Vec<Option<Calibration>>,
+    /// The modes judged together ([`crate::joint`]), when asked and possible.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub joint: Option<JointChart>,
+    /// Why the joint chart could not be drawn, when it could not.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub joint_error: Option<String>,
     /// Training values set apart from their mode's baseline ([`crate::training`]), by
     /// record.
     #[cfg_attr(feature = "serde", serde(default))]
@@ -255,11 +283,15 @@ fn consensus_reference(records: &[RecordModes], opts: &TrackOptions) -> Vec<Mode
 }
 
 /// The subspace test over the `usable` records that carry their correlations (on the
-/// channels of the first that does), for a model of order `order`; `None` when no record
-/// carries them (estimates made elsewhere).
+/// channels of the first that does), for a model of order `order`, the residual regressed
+/// on the union of the modes' environmental models `environments` (each record's covariates
+/// `covariates`, `None` where it has none); `None` when no record carries correlations
+/// (estimates made elsewhere).
 fn subspace_over(
     records: &[RecordModes],
     usable: &[bool],
+    covariates: &[Option<Vec<f64>>],
+    environments: &[Option<Environment>],
     order: usize,
     opts: &TrackOptions,
 ) -> Result<Option<crate::subspace::SubspaceChart>, MonitorError> {
@@ -277,24 +309,53 @@ fn subspace_over(
     let Some(channels) = correlations.iter().flatten().map(|c| c.channels).next() else {
         return Ok(None);
     };
-    let blocks = crate::subspace::blocks_for(order, channels);
-    let hankels: Vec<_> = correlations
+    let mut terms: Vec<crate::environment::Term> = Vec::new();
+    for t in environments.iter().flatten().flat_map(|e| &e.terms) {
+        if !terms.contains(t) {
+            terms.push(*t);
+        }
+    }
+    let environment = (!terms.is_empty()).then(|| Environment {
+        terms,
+        bic_gain: 0.0,
+        ranges: Vec::new(),
+    });
+    let at: Vec<(f64, Vec<f64>)> = records
         .iter()
-        .map(|c| {
-            c.filter(|c| c.channels == channels)
-                .and_then(|c| c.hankel(blocks))
+        .zip(covariates)
+        .filter_map(|(r, x)| Some((r.time, x.clone()?)))
+        .collect();
+    let series = Series::new(&at);
+    let blocks = crate::subspace::blocks_for(order, channels);
+    let inputs: Vec<Option<crate::subspace::SubspaceRecord>> = correlations
+        .iter()
+        .zip(records.iter().zip(covariates))
+        .map(|(c, (r, x))| {
+            let h = c
+                .filter(|c| c.channels == channels)
+                .and_then(|c| c.hankel(blocks))?;
+            let features = match &environment {
+                Some(e) => e.features(&series, r.time, x.as_ref()?),
+                None => Vec::new(),
+            };
+            features
+                .iter()
+                .all(|v| v.is_finite())
+                .then_some((h, features))
         })
         .collect();
     let time: Vec<f64> = records.iter().map(|r| r.time).collect();
-    crate::subspace::subspace_chart(
-        &hankels,
+    let mut chart = crate::subspace::subspace_chart(
+        &inputs,
         &time,
         opts.training,
         order,
         crate::subspace::ALPHA,
         &opts.chart,
-    )
-    .map(Some)
+        opts.calibrate,
+    )?;
+    chart.environment = environment;
+    Ok(Some(chart))
 }
 
 /// What the campaign's records have in common, against which one is unlike the rest: the
@@ -368,6 +429,7 @@ pub fn track(
     let mut harmonics = Vec::new();
     let unlike = Unlike::of(records, &reference);
     let mut usable = vec![false; records.len()];
+    let mut record_covariates: Vec<Option<Vec<f64>>> = vec![None; records.len()];
     for (i, r) in records.iter().enumerate() {
         let id = match &r.outcome {
             Ok(id) => id,
@@ -385,6 +447,7 @@ pub fn track(
         if opts.level_covariate {
             covariates.push(if id.rms > 0.0 { id.rms.ln() } else { f64::NAN });
         }
+        record_covariates[i] = Some(covariates.clone());
         identified += 1;
         harmonics.extend(id.harmonics.iter().map(|h| (i, h.frequency_hz)));
         let a = match_modes(&reference, &id.modes, &opts.matching);
@@ -427,7 +490,14 @@ pub fn track(
         .map(|&s| s as f64 / identified.max(1) as f64)
         .collect();
     let mut report = chart_modes(reference, rows, records.len(), opts);
-    match subspace_over(records, &usable, 2 * report.reference.len(), opts) {
+    match subspace_over(
+        records,
+        &usable,
+        &record_covariates,
+        &report.environments,
+        2 * report.reference.len(),
+        opts,
+    ) {
         Ok(chart) => report.subspace = chart,
         Err(e) => report.subspace_error = Some(e.to_string()),
     }
@@ -465,6 +535,8 @@ pub(crate) fn chart_modes(
         }
     }
     let series = Series::new(&at);
+    let mut calibrations = Vec::with_capacity(reference.len());
+    let mut z = Vec::with_capacity(reference.len());
     for mode in 0..reference.len() {
         match chart_mode(&mut rows, mode, records, &series, opts) {
             Ok(c) => {
@@ -474,15 +546,33 @@ pub(crate) fn chart_modes(
                 residual_models.push(c.residual_model);
                 alarms.extend(c.alarms);
                 training_outliers.extend(c.outliers);
+                calibrations.push(c.calibration);
+                z.push(c.z);
             }
             Err(e) => {
                 baselines.push(None);
                 baseline_errors.push(Some(e.to_string()));
                 environments.push(None);
                 residual_models.push(None);
+                calibrations.push(None);
+                z.push(vec![f64::NAN; records]);
             }
         }
     }
+    let (joint, joint_error) = if opts.joint && reference.len() > 1 {
+        let mut time = vec![f64::NAN; records];
+        for r in &rows {
+            if r.record < records {
+                time[r.record] = r.time;
+            }
+        }
+        match joint_chart(&z, &time, opts.training, &opts.chart, opts.calibrate) {
+            Ok(j) => (Some(j), None),
+            Err(e) => (None, Some(e.to_string())),
+        }
+    } else {
+        (None, None)
+    };
     alarms.sort_by(|a, b| a.record.cmp(&b.record).then(a.mode.cmp(&b.mode)));
     rows.sort_by(|a, b| a.record.cmp(&b.record).then(a.mode.cmp(&b.mode)));
     TrackReport {
@@ -499,6 +589,9 @@ pub(crate) fn chart_modes(
         residual_models,
         tracked: Vec::new(),
         alarms,
+        calibrations,
+        joint,
+        joint_error,
         training_outliers,
         in_control_run_length: opts.chart.in_control_run_length(),
         mode_names: Vec::new(),
@@ -569,6 +662,20 @@ fn chart_mode(
         ),
         None => later.to_vec(),
     };
+    // What the chart would have been given over the training records, to calibrate its
+    // limit on.
+    let calibration = if opts.calibrate {
+        let trained = match &model {
+            Some(m) => m.innovations((&[], &[]), &r[..training], &n[..training]),
+            None => z[..training].to_vec(),
+        };
+        calibration::calibrate(&trained, &opts.chart, Sides::Both)
+    } else {
+        None
+    };
+    let chart = calibration
+        .as_ref()
+        .map_or(opts.chart, |c| c.chart(&opts.chart));
     for (i, (&v, &a)) in later.iter().zip(&innovations).enumerate() {
         if let Some(k) = row_of[training + i] {
             rows[k].z = v.is_finite().then_some(v);
@@ -576,7 +683,7 @@ fn chart_mode(
         }
     }
     let mut alarms = Vec::new();
-    for a in opts.chart.alarms(&innovations) {
+    for a in chart.alarms(&innovations) {
         let Some(k) = row_of[training + a.index] else {
             continue;
         };
@@ -594,6 +701,8 @@ fn chart_mode(
         residual_model: model,
         alarms,
         outliers,
+        calibration,
+        z,
     })
 }
 
@@ -604,6 +713,10 @@ struct ModeChart {
     residual_model: Option<ResidualModel>,
     alarms: Vec<ModeAlarm>,
     outliers: Vec<TrainingOutlier>,
+    calibration: Option<Calibration>,
+    /// Every record's standardized residual (NaN where it has none), the training
+    /// records' in-sample: the joint chart's input.
+    z: Vec<f64>,
 }
 
 /// The baseline of `mode` and its environmental model, fitted on the training rows `train`

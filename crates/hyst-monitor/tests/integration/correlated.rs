@@ -47,16 +47,22 @@ fn run(seed: u64, hours: f64, whiten: bool) -> (usize, Option<f64>) {
     c.seed = seed;
     c.unexplained = 1e-3;
     c.unexplained_hours = hours;
-    run_campaign(c, whiten, true)
+    run_campaign(c, whiten, true, true)
 }
 
 /// `c` tracked, whitened or not, with the environmental model chosen or the covariates as
-/// they are.
-fn run_campaign(c: Campaign, whiten: bool, environment: bool) -> (usize, Option<f64>) {
+/// they are, the charts' limits calibrated on the training values or nominal.
+fn run_campaign(
+    c: Campaign,
+    whiten: bool,
+    environment: bool,
+    calibrate: bool,
+) -> (usize, Option<f64>) {
     let records: Vec<RecordModes> = (0..c.len()).map(|i| estimated(&c, i)).collect();
     let mut opts = TrackOptions::default();
     opts.whiten = whiten;
     opts.environment = environment;
+    opts.calibrate = calibrate;
     let report = track(&records, None, &opts).unwrap();
     let (day, mode, _) = c.change.unwrap();
     let change = day * 86400.0;
@@ -79,33 +85,40 @@ fn seeds(first: u64, count: u64) -> impl Iterator<Item = u64> {
     base..base + count
 }
 
-/// (false alarms, losses found, longest delay in hours) over `campaigns`, charted raw and
-/// whitened, with the environmental model or without; prints each.
+/// (false alarms, losses found, longest delay in hours) over `campaigns`, charted raw
+/// with the nominal limit, raw with the limit calibrated on the training values, and
+/// whitened (calibrated: the default), with the environmental model or without; prints
+/// each.
 fn compare(
     what: &str,
     campaigns: impl Iterator<Item = Campaign>,
     environment: bool,
-) -> [(usize, usize, f64); 2] {
-    let mut out = [(0, 0, 0.0f64); 2];
+) -> [(usize, usize, f64); 3] {
+    let mut out = [(0, 0, 0.0f64); 3];
     let mut count = 0;
+    let arms = [
+        ("raw", false, false),
+        ("raw calibrated", false, true),
+        ("whitened", true, true),
+    ];
     for c in campaigns {
         count += 1;
-        for (k, whiten) in [false, true].into_iter().enumerate() {
-            let (alarms, delay) = run_campaign(c.clone(), whiten, environment);
+        for (k, (name, whiten, calibrate)) in arms.into_iter().enumerate() {
+            let (alarms, delay) = run_campaign(c.clone(), whiten, environment, calibrate);
             out[k].0 += alarms;
             if let Some(d) = delay {
                 out[k].1 += 1;
                 out[k].2 = out[k].2.max(d);
             }
             println!(
-                "{what}, seed {}, whiten {whiten}: {alarms} false alarm(s), found after {delay:?} h",
+                "{what}, seed {}, {name}: {alarms} false alarm(s), found after {delay:?} h",
                 c.seed
             );
         }
     }
     println!(
-        "{what}: {count} campaigns; raw {} false alarms, {} found (at most {} h); whitened {} false alarms, {} found (at most {} h)",
-        out[0].0, out[0].1, out[0].2, out[1].0, out[1].1, out[1].2
+        "{what}: {count} campaigns; (false alarms, found, at most h) raw {:?}, raw calibrated {:?}, whitened {:?}",
+        out[0], out[1], out[2]
     );
     out
 }
@@ -127,8 +140,12 @@ fn a_slow_unexplained_effect_is_not_taken_for_a_change() {
         c.unexplained_hours = 24.0;
         c
     });
-    let [raw, white] = compare("slow effect", campaigns, true);
+    let [raw, calibrated, white] = compare("slow effect", campaigns, true);
     assert!(raw.0 >= 100, "the scenario: {raw:?}");
+    // The limit calibrated on the training values alone (no whitening): 36 false alarms
+    // over seeds 9000001–9000020 against 760 (the limit there 2–4 times the nominal 12),
+    // every loss found within 39 h. Asserted: at least five times fewer.
+    assert!(5 * calibrated.0 <= raw.0, "{calibrated:?} against {raw:?}");
     assert!(50 * white.0 <= raw.0, "{white:?} against {raw:?}");
     assert!(white.1 == 20 && white.2 <= 48.0, "{white:?}");
 }
@@ -157,12 +174,12 @@ fn a_thermal_lag_is_not_taken_for_a_change() {
             c
         })
     };
-    let [raw, white] = compare("thermal lag, covariate as it is", campaigns(), false);
+    let [raw, _, white] = compare("thermal lag, covariate as it is", campaigns(), false);
     assert!(raw.0 >= 100, "the scenario: {raw:?}");
     assert!(50 * white.0 <= raw.0, "{white:?} against {raw:?}");
     assert!(white.1 >= 16, "{white:?}");
-    let [raw, white] = compare("thermal lag, environmental model", campaigns(), true);
-    for r in [raw, white] {
+    let [raw, calibrated, white] = compare("thermal lag, environmental model", campaigns(), true);
+    for r in [raw, calibrated, white] {
         assert!(r.0 <= 5 && r.1 == 20 && r.2 <= 24.0, "{r:?}");
     }
 }
@@ -182,4 +199,89 @@ fn independent_residuals_are_charted_as_they_are() {
         let (a, b) = (raw_delay.unwrap_or(f64::NAN), delay.unwrap_or(f64::NAN));
         assert!(b <= a + 2.0, "seed {seed}: {a} h raw, {b} h whitened");
     }
+}
+
+/// What one campaign gave each chart: (false alarms before the change, the first alarm's
+/// delay after it in hours) for the modes' own charts (on the changed mode) and the joint
+/// chart (driven first by the changed mode).
+struct Charts {
+    modes: (usize, Option<f64>),
+    joint: (usize, Option<f64>),
+}
+
+fn charts(c: &Campaign, opts: &TrackOptions) -> Charts {
+    let records: Vec<RecordModes> = (0..c.len()).map(|i| estimated(c, i)).collect();
+    let report = track(&records, None, opts).unwrap();
+    let (day, mode, _) = c.change.unwrap();
+    let change = day * 86400.0;
+    let before = report.alarms.iter().filter(|a| a.time < change).count();
+    let delay = report
+        .alarms
+        .iter()
+        .find(|a| a.time >= change && a.mode == mode)
+        .map(|a| (a.time - change) / 3600.0);
+    let joint = report.joint.as_ref().expect("a joint chart");
+    let joint_before = joint.alarms.iter().filter(|a| a.time < change).count();
+    let joint_delay = joint
+        .alarms
+        .iter()
+        .find(|a| a.time >= change && a.drivers.first().map(|d| d.0) == Some(mode))
+        .map(|a| (a.time - change) / 3600.0);
+    Charts {
+        modes: (before, delay),
+        joint: (joint_before, joint_delay),
+    }
+}
+
+/// Campaigns whose four modes share an unexplained effect — 0.2 % of the first mode's
+/// frequency (the last mode half of it) wandering with a correlation time of a day, and in
+/// episodes of two days (a fifth of them) a support that sticks, 0.5 % — with a 1 % loss
+/// of mode 2 from day 45. Each mode's chart meets the episodes alone: its filter of a slow
+/// effect expects no jump, and its limit, calibrated on two weeks that may hold no episode,
+/// cannot know them. The joint chart finds the shared factor in the training records and
+/// charts what it leaves. Measured on seeds 8500401–8500410: the modes' charts 9 false
+/// alarms (in 2 campaigns; 9 with the nominal limit too), the joint chart none; every loss
+/// found by both within 3 h, the joint chart naming mode 2 first. Asserted: the scenario
+/// (the modes' charts alarm falsely at least once), the joint chart at most one false alarm
+/// over the ten campaigns and every loss found within 24 h with mode 2 its first driver.
+#[test]
+fn a_shared_slow_effect_is_judged_together() {
+    let mut totals = [(0usize, 0usize, 0.0f64); 3];
+    let mut count = 0;
+    for seed in seeds(8_500_401, 10) {
+        let mut c = Campaign::default();
+        c.seed = seed;
+        c.shared_unexplained = (2e-3, 24.0);
+        c.shared_episodes = (5e-3, 48.0, 0.2);
+        c.change = Some((45.0, 1, -0.01));
+        count += 1;
+        let mut nominal = TrackOptions::default();
+        nominal.calibrate = false;
+        let plain = charts(&c, &nominal);
+        let calibrated = charts(&c, &TrackOptions::default());
+        for (k, r) in [plain.modes, calibrated.modes, calibrated.joint]
+            .into_iter()
+            .enumerate()
+        {
+            totals[k].0 += r.0;
+            if let Some(d) = r.1 {
+                totals[k].1 += 1;
+                totals[k].2 = totals[k].2.max(d);
+            }
+        }
+        println!(
+            "shared effect, seed {seed}: modes (nominal limit) {:?}, modes (calibrated) {:?}, joint {:?}",
+            plain.modes, calibrated.modes, calibrated.joint
+        );
+    }
+    println!(
+        "shared effect over {count}: (false alarms, found, longest delay h) modes nominal {:?}, modes calibrated {:?}, joint {:?}",
+        totals[0], totals[1], totals[2]
+    );
+    assert!(totals[1].0 >= 1, "the scenario: {totals:?}");
+    let joint = totals[2];
+    assert!(
+        joint.0 <= 1 && joint.1 == count && joint.2 <= 24.0,
+        "{joint:?}"
+    );
 }

@@ -37,7 +37,7 @@ fn subspace_test_beside_the_modal_chart() {
                     covariates: vec![r.temperature],
                     outcome: identify_record(&views, c.fs, &opts).map_err(|e| e.to_string()),
                 };
-                (modes, Some(hankel(&views, 2)))
+                (modes, Some((hankel(&views, 2), Vec::new())))
             })
             .unzip();
         let mut track_opts = TrackOptions::default();
@@ -58,8 +58,55 @@ fn subspace_test_beside_the_modal_chart() {
         assert!(modal_delay <= 24.0, "seed {seed}: {modal_delay} h");
         let order = 2 * report.reference.len();
         let time: Vec<f64> = records.iter().map(|r| r.time).collect();
-        let chart =
-            subspace_chart(&hankels, &time, training, order, 0.01, &Cusum::default()).unwrap();
+        // Without an environmental model (the residual's mean alone), as before.
+        let chart = subspace_chart(
+            &hankels,
+            &time,
+            training,
+            order,
+            0.01,
+            &Cusum::default(),
+            true,
+        )
+        .unwrap();
+        // With it: `hyst track`'s own (its residual regressed on the modes' environmental
+        // terms).
+        let env = report
+            .subspace
+            .as_ref()
+            .expect("the records carry correlations");
+        let env_passed = env
+            .above_threshold
+            .iter()
+            .filter(|&&i| i < first_change)
+            .count();
+        let env_early = env.alarms.iter().filter(|&&i| i < first_change).count();
+        let env_delay = env
+            .alarms
+            .iter()
+            .find(|&&i| i >= first_change)
+            .map(|&i| (i - first_change) as f64 * 24.0 / c.per_day as f64);
+        let mean = |v: &[f64]| {
+            let f: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+            f.iter().sum::<f64>() / f.len().max(1) as f64
+        };
+        println!(
+            "seed {seed}: mean score before/after the change: environmental {:.2}/{:.2}, mean alone {:.2}/{:.2}; mean T² {:.1}/{:.1} and {:.1}/{:.1}",
+            mean(&env.score[training..first_change]),
+            mean(&env.score[first_change..]),
+            mean(&chart.score[training..first_change]),
+            mean(&chart.score[first_change..]),
+            mean(&env.t2[training..first_change]),
+            mean(&env.t2[first_change..]),
+            mean(&chart.t2[training..first_change]),
+            mean(&chart.t2[first_change..]),
+        );
+        println!(
+            "seed {seed}: subspace test with the environmental model ({} entries, limit {:.2}): {env_passed} of {} undamaged above its threshold, {env_early} alarms before the change, change found after {env_delay:?} h",
+            env.dof,
+            env.limit,
+            first_change - training
+        );
         let undamaged = first_change - training;
         let passed = chart
             .above_threshold

@@ -13,7 +13,7 @@ def track(records, fs, *, times=None, covariates=None, training=None, whiten=Tru
           environment_model=True, reference=None, block_rows=None, lag_seconds=None, lag_periods=None, decimate=None,
           max_order=None, order_step=1, references=None, df=None, dzeta=None, dmac=None,
           dreal=None, refine=True, joint=True, ssi_errors=None, max_damping=None, client=None,
-          level_covariate=False):
+          level_covariate=False, calibrate=True, joint_chart=True):
     """Track the modes of many records of one structure (``hyst track``).
 
     Each record is identified as :func:`ssi` does (in parallel), its modes matched to a
@@ -61,6 +61,15 @@ def track(records, fs, *, times=None, covariates=None, training=None, whiten=Tru
         Add each record's excitation level as a covariate after the given ones
         (``log_rms``: ln of its RMS response, in the record's units; ``hyst track
         --level-covariate``), for frequencies that drift with amplitude.
+    calibrate : bool
+        Calibrate each chart's limit on the training records' own charted values (default
+        True: their block bootstrap, never below the nominal limit; the report's
+        ``calibrations`` say the false-alarm rate measured on them), or keep the nominal
+        limit (``hyst track --nominal-limit``).
+    joint_chart : bool
+        Judge the modes together beside each alone (default True: the factors their
+        residuals share set apart, what is left charted as one statistic; the report's
+        ``joint``), or not (``hyst track --no-joint-chart``).
     client : dask.distributed.Client, or "local", optional
         Identify the records on a Dask cluster: each worker reads its records' files
         itself (only the paths travel; ``records`` must be paths the workers can read) and
@@ -83,7 +92,8 @@ def track(records, fs, *, times=None, covariates=None, training=None, whiten=Tru
             client, records, fs, times=times, covariates=covariates, reference=reference,
             tracking=_tracking(training=training, whiten=whiten,
                                environment_model=environment_model,
-                               level_covariate=level_covariate),
+                               level_covariate=level_covariate, calibrate=calibrate,
+                               joint_chart=joint_chart),
             settings=_settings(
                 block_rows=block_rows, lag_seconds=lag_seconds, lag_periods=lag_periods,
                 decimate=decimate, max_order=max_order, order_step=order_step,
@@ -122,7 +132,8 @@ def track(records, fs, *, times=None, covariates=None, training=None, whiten=Tru
         reference=ref,
         tracking=_tracking(training=training, whiten=whiten,
                            environment_model=environment_model,
-                           level_covariate=level_covariate),
+                           level_covariate=level_covariate, calibrate=calibrate,
+                           joint_chart=joint_chart),
         settings=_settings(
             block_rows=block_rows, lag_seconds=lag_seconds, lag_periods=lag_periods,
             decimate=decimate, max_order=max_order, order_step=order_step,
@@ -168,7 +179,8 @@ def _reference(reference):
                      f"ssi() result, got {type(reference).__name__}")
 
 
-def _tracking(*, training, whiten, environment_model, level_covariate=False):
+def _tracking(*, training, whiten, environment_model, level_covariate=False, calibrate=True,
+              joint_chart=True):
     """The tracking settings :func:`track` and :func:`track_estimates` share, written as the
     JSON object the library reads (``hyst::settings::TrackSettings``, whose fields are
     ``hyst track``'s flags too)."""
@@ -179,6 +191,8 @@ def _tracking(*, training, whiten, environment_model, level_covariate=False):
         "whiten": bool(whiten),
         "environment_model": bool(environment_model),
         "level_covariate": bool(level_covariate),
+        "calibrate": bool(calibrate),
+        "joint_chart": bool(joint_chart),
     })
 
 
@@ -263,7 +277,7 @@ def _track_on_dask(client, records, fs, *, times, covariates, reference, trackin
 
 
 def track_estimates(estimates, *, covariates=None, training=None, whiten=True,
-                    environment_model=True):
+                    environment_model=True, calibrate=True, joint_chart=True):
     """Track modal estimates made by another system (``hyst track --estimates``).
 
     Parameters
@@ -277,7 +291,7 @@ def track_estimates(estimates, *, covariates=None, training=None, whiten=True,
         ``time``, one column per covariate).
     training : int, optional
         The first this many records train the baselines (default 336, at most half).
-    whiten, environment_model : bool
+    whiten, environment_model, calibrate, joint_chart : bool
         As for :func:`track`.
 
     Returns
@@ -293,5 +307,6 @@ def track_estimates(estimates, *, covariates=None, training=None, whiten=True,
         os.fspath(estimates),
         covariates=None if covariates is None else os.fspath(covariates),
         tracking=_tracking(training=training, whiten=whiten,
-                           environment_model=environment_model),
+                           environment_model=environment_model, calibrate=calibrate,
+                           joint_chart=joint_chart),
     )
