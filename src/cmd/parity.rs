@@ -128,6 +128,11 @@ const PAIRS: &[Pair] = &[
             ),
             ("svg-dir", FILES),
             ("html", "Python: report.html()"),
+            (
+                "follow",
+                "records as they land in a folder, with the command's store: not yet in Python, which is given its records",
+            ),
+            ("poll", "the --follow run's looks at the folder"),
         ],
         python_only: &[
             (

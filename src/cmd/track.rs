@@ -66,6 +66,23 @@ pub(crate) struct TrackArgs {
     /// table, shapes and MAC.
     #[arg(help_heading = "Output files", long, value_name = "FILE")]
     pub(crate) html: Option<PathBuf>,
+    /// Keep going: take each record file as it lands in the --inputs folders (once its
+    /// size and time have held for one poll), or the --estimates table each time it
+    /// grows, track the campaign again over everything so far (the store keeps every
+    /// record identified) and print each new record and each new alarm as it comes. The
+    /// table and report in --out are after each pass those of a batch run over the same
+    /// records with the same --training (without it, 336 records train, whatever has
+    /// arrived). Safe to stop (Ctrl-C, kill) and start again.
+    #[arg(long, conflicts_with = "input")]
+    pub(crate) follow: bool,
+    /// Seconds between looks at the folders or the table with --follow.
+    #[arg(
+        long,
+        value_name = "SECONDS",
+        default_value_t = 10.0,
+        requires = "follow"
+    )]
+    pub(crate) poll: f64,
 }
 
 /// The records' names and how to load each.
@@ -121,7 +138,7 @@ fn sources(a: &TrackArgs, files: Vec<PathBuf>) -> Result<Sources, Error> {
 /// The record files of `--inputs`. With `--out` one of their folders, the files an earlier
 /// run wrote there (its store beside them) are its own, not records; without that store a
 /// record with one of their names is a record, and [`check_paths`] refuses to overwrite it.
-fn record_files(a: &TrackArgs) -> Result<Vec<PathBuf>, Error> {
+pub(super) fn record_files(a: &TrackArgs) -> Result<Vec<PathBuf>, Error> {
     let mut files = hyst::io::list_records(&a.inputs)?;
     if a.out.join(hyst::store::STORE_FILE).is_file() {
         files.retain(|f| !hyst::store::is_output(&a.out, f));
@@ -132,7 +149,7 @@ fn record_files(a: &TrackArgs) -> Result<Vec<PathBuf>, Error> {
 /// Every file the run writes (the store and tables in `--out`, the `--html` page) against
 /// every file it reads (the records, `--input`, `--estimates`, `--covariates`,
 /// `--reference`), before anything is read: a clash is refused, naming both flags.
-fn check_paths(a: &TrackArgs, records: &[PathBuf]) -> Result<(), Error> {
+pub(super) fn check_paths(a: &TrackArgs, records: &[PathBuf]) -> Result<(), Error> {
     let mut inputs: Vec<(&str, &Path)> =
         records.iter().map(|f| ("--inputs", f.as_path())).collect();
     for (flag, p) in [
@@ -173,20 +190,26 @@ fn reference_modes(path: &Path) -> Result<Vec<hyst::monitor::ModeEstimate>, Erro
 
 /// `--inputs`' files put in time order as the covariates file says, with the gaps among them
 /// ([`hyst::campaign::order_records`]), and the order said; the gaps.
-fn put_in_order(sources: &mut Sources, covariates: &hyst::io::Covariates) -> Vec<String> {
+fn put_in_order(
+    sources: &mut Sources,
+    covariates: &hyst::io::Covariates,
+    verbose: bool,
+) -> Vec<String> {
     let Sources::Files(files) = sources else {
         return Vec::new();
     };
     let ordered = hyst::campaign::order_records(std::mem::take(files), covariates);
-    println!(
-        "{} records, {}",
-        ordered.files.len(),
-        if ordered.by_time {
-            "in the order of their time in the covariates file"
-        } else {
-            "in natural order of their names (rec_2 before rec_10)"
-        }
-    );
+    if verbose {
+        println!(
+            "{} records, {}",
+            ordered.files.len(),
+            if ordered.by_time {
+                "in the order of their time in the covariates file"
+            } else {
+                "in natural order of their names (rec_2 before rec_10)"
+            }
+        );
+    }
     *files = ordered.files;
     ordered.gaps
 }
@@ -305,24 +328,61 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
     };
     check_paths(a, &records)?;
     if let Some(path) = &a.estimates {
-        return run_estimates(a, path);
+        return if a.follow {
+            super::follow::follow_estimates(a, path)
+        } else {
+            let (report, table) = estimates_pass(a, path, true)?;
+            print!("{report}");
+            write_outputs(a, &report, &table)
+        };
     }
     // Settings wrong whatever the record, before any is read (else each would be skipped
     // for the same reason).
     a.fs.map(check_fs).transpose()?;
     let asked = super::ssi::analysis_of(&a.ssi)?;
-    let mut sources = sources(a, records)?;
+    let mut store = hyst::store::CampaignStore::open(&a.out)?;
+    if a.follow {
+        return super::follow::follow_records(a, &asked, &mut store, records);
+    }
+    let (report, table) = records_pass(a, &asked, &mut store, records, true)?;
+    drop(store);
+    print!("{report}");
+    write_outputs(a, &report, &table)
+}
+
+/// The options of the tracking: `--training`, or with `--follow` 336 records whatever has
+/// arrived (the records a batch run over `records` would train on when given it), not half
+/// of those so far.
+pub(super) fn track_options(a: &TrackArgs, records: usize) -> hyst::monitor::TrackOptions {
+    let mut opts = a.tracking.options(records);
+    if a.follow && a.tracking.training.is_none() {
+        opts.training = hyst::monitor::TrackOptions::default().training;
+    }
+    opts
+}
+
+/// One pass over the record `files` (or `--input`'s windows): each record identified or
+/// served from `store`, the campaign tracked, the store left holding exactly these records
+/// and the table; what the records' order and the analysis read from them are said when
+/// `verbose`.
+pub(super) fn records_pass(
+    a: &TrackArgs,
+    asked: &hyst::covssi::AnalysisOptions,
+    store: &mut hyst::store::CampaignStore,
+    files: Vec<PathBuf>,
+    verbose: bool,
+) -> Result<(TrackReport, hyst::store::TrackTable), Error> {
+    let mut sources = sources(a, files)?;
     let (covs, cov_names) = match &a.covariates {
         Some(p) => hyst::io::read_covariates(p)?,
         None => Default::default(),
     };
     let covariates = (covs, cov_names);
-    let gaps = put_in_order(&mut sources, &covariates);
+    let gaps = put_in_order(&mut sources, &covariates, verbose);
     let names = sources.names();
     if let Some(r) = hyst::io::repeated(&names) {
         return Err(fail(format!("two records named {r}: each file once")));
     }
-    let store = hyst::store::CampaignStore::open(&a.out)?;
     let bar = steps_bar();
     bar.set_length(names.len() as u64);
     bar.set_message("records identified");
@@ -360,7 +420,7 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
     // the first record that loads, and kept for every record: each is analysed alike.
     // What makes each record's result: its source, the rate and channels asked for, and the
     // analysis options; a stored result made otherwise is identified again.
-    let analysis = resolved_analysis(&asked, &names, &load);
+    let analysis = resolved_analysis(asked, &names, &load, verbose);
     let settings = format!("{:?}|{:?}|{analysis:?}", a.fs, a.columns);
     let keys = sources.keys(a, &settings);
     let done: Vec<RecordModes> = names
@@ -394,20 +454,24 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
     if let Some(e) = store_error.into_inner().ok().flatten() {
         return Err(e.into());
     }
-    let opts = a.tracking.options(names.len());
+    let opts = track_options(a, names.len());
     let reference = a.reference.as_deref().map(reference_modes).transpose()?;
     let mut report = hyst::monitor::track(&records, reference.as_deref(), &opts)
         .map_err(|e| fail(e.to_string()))?;
     report.name_covariates(covariates.1);
     let table = hyst::store::TrackTable::of(&report);
     store.finish(&keys, &records, &table)?;
-    drop(store);
-    write_outputs(a, &report, &table)
+    Ok((report, table))
 }
 
 /// `hyst track --estimates`: another system's estimates tracked as records' are, the
-/// covariates joined by record name (a record without them is tracked, not charted).
-fn run_estimates(a: &TrackArgs, path: &Path) -> Result<(), Error> {
+/// covariates joined by record name (a record without them is tracked, not charted); what
+/// was read is said when `verbose`.
+pub(super) fn estimates_pass(
+    a: &TrackArgs,
+    path: &Path,
+    verbose: bool,
+) -> Result<(TrackReport, hyst::store::TrackTable), Error> {
     let table = hyst::io::read_estimates(path)?;
     let covariates = match &a.covariates {
         Some(p) => hyst::io::read_covariates(p)?,
@@ -420,27 +484,29 @@ fn run_estimates(a: &TrackArgs, path: &Path) -> Result<(), Error> {
         .filter(|r| r.covariates.iter().any(|v| !v.is_finite()))
         .map(|r| r.name.as_str())
         .collect();
-    println!(
-        "{} records of estimates, {} modes ({}), from {}",
-        records.len(),
-        table.modes.len(),
-        table.modes.join(", "),
-        path.display()
-    );
-    if !without.is_empty() && !cov_names.is_empty() {
+    if verbose {
         println!(
-            "{} record(s) without every covariate (tracked, not charted): {}",
-            without.len(),
-            without.join(", ")
+            "{} records of estimates, {} modes ({}), from {}",
+            records.len(),
+            table.modes.len(),
+            table.modes.join(", "),
+            path.display()
         );
+        if !without.is_empty() && !cov_names.is_empty() {
+            println!(
+                "{} record(s) without every covariate (tracked, not charted): {}",
+                without.len(),
+                without.join(", ")
+            );
+        }
     }
     std::fs::create_dir_all(&a.out).map_err(|e| fail(format!("{}: {e}", a.out.display())))?;
-    let opts = a.tracking.options(records.len());
+    let opts = track_options(a, records.len());
     let mut report = hyst::monitor::track_estimates(&records, &table.modes, &opts)
         .map_err(|e| fail(e.to_string()))?;
     report.name_covariates(cov_names);
     let table = hyst::store::TrackTable::of(&report);
-    write_outputs(a, &report, &table)
+    Ok((report, table))
 }
 
 /// `analysis` with what it leaves to the record read from the campaign's first readable
@@ -449,6 +515,7 @@ fn resolved_analysis(
     analysis: &hyst::covssi::AnalysisOptions,
     names: &[String],
     load: &dyn Fn(usize) -> Result<Loaded, String>,
+    verbose: bool,
 ) -> hyst::covssi::AnalysisOptions {
     let resolve = |i: usize| {
         let l = load(i).ok()?;
@@ -456,7 +523,7 @@ fn resolved_analysis(
         analysis.resolved_for(&views, l.fs).ok()
     };
     let (fixed, from) = hyst::monitor::campaign_analysis(analysis, names.len(), &resolve);
-    if let Some(i) = from.filter(|_| fixed != *analysis) {
+    if let Some(i) = from.filter(|_| verbose && fixed != *analysis) {
         let factor = match fixed.decimation {
             hyst::covssi::Decimation::Factor(r) => r,
             _ => 1,
@@ -473,14 +540,13 @@ fn resolved_analysis(
     fixed
 }
 
-/// The report printed, and written into `--out` (`table.csv`, `table.parquet`,
-/// `table.jsonl`, `report.json`) and `--svg-dir`.
-fn write_outputs(
+/// The report written into `--out` (`table.csv`, `table.parquet`, `table.jsonl`,
+/// `report.json`), `--svg-dir` and `--html`.
+pub(super) fn write_outputs(
     a: &TrackArgs,
     report: &TrackReport,
     table: &hyst::store::TrackTable,
 ) -> Result<(), Error> {
-    print!("{report}");
     table.write_csv(&a.out.join("table.csv"))?;
     table.write_parquet(&a.out.join("table.parquet"))?;
     write_rows(&a.out.join("table.jsonl"), report)?;

@@ -11,6 +11,10 @@ pub fn track_figures(dir: &std::path::Path, r: &TrackReport) -> Result<(), Strin
     let day = |t: f64| t / 86400.0;
     for (j, m) in r.reference.iter().enumerate() {
         let rows: Vec<_> = r.rows.iter().filter(|row| row.mode == j).collect();
+        // Named as the text names it (numbered from 1, or the estimates' column), the
+        // file's name keeping only what a file name safely holds.
+        let name = r.mode_name(j);
+        let file = file_safe(&name);
         let se = |v: Option<f64>| v.unwrap_or(f64::NAN);
         let series = |value: &dyn Fn(&crate::monitor::TrackRow) -> f64,
                       spread: &dyn Fn(&crate::monitor::TrackRow) -> f64| {
@@ -43,24 +47,24 @@ pub fn track_figures(dir: &std::path::Path, r: &TrackReport) -> Result<(), Strin
             ]
         };
         scatter(
-            &dir.join(format!("mode{j}_frequency.svg")),
-            &format!("Mode {j} ({:.3} Hz): frequency", m.frequency_hz),
+            &dir.join(format!("mode{file}_frequency.svg")),
+            &format!("Mode {name} ({:.3} Hz): frequency", m.frequency_hz),
             "time (days)",
             "frequency (Hz)",
             &series(&|w| w.frequency_hz, &|w| se(w.frequency_se_hz)),
         )?;
         scatter(
-            &dir.join(format!("mode{j}_damping.svg")),
-            &format!("Mode {j} ({:.3} Hz): damping", m.frequency_hz),
+            &dir.join(format!("mode{file}_damping.svg")),
+            &format!("Mode {name} ({:.3} Hz): damping", m.frequency_hz),
             "time (days)",
             "damping ratio",
             &series(&|w| w.damping_ratio, &|w| se(w.damping_se)),
         )?;
-        if let Some(name) = r.covariate_names.first() {
+        if let Some(covariate) = r.covariate_names.first() {
             scatter(
-                &dir.join(format!("mode{j}_vs_{name}.svg")),
-                &format!("Mode {j}: frequency against {name}"),
-                name,
+                &dir.join(format!("mode{file}_vs_{}.svg", file_safe(covariate))),
+                &format!("Mode {name}: frequency against {covariate}"),
+                covariate,
                 "frequency (Hz)",
                 &[
                     (
@@ -137,6 +141,20 @@ fn joint_figure(
             ),
         ],
     )
+}
+
+/// `name` as a part of a file's name: letters, digits and `-` kept, anything else `_` (a
+/// name is the user's: an estimates table's column, a covariate's).
+fn file_safe(name: &str) -> String {
+    name.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
 }
 
 /// The subspace test's T² against time: the training records, the later ones, those the

@@ -85,8 +85,9 @@ pub struct PolePoint {
 /// One row of the modes' table.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct ModeRow {
-    /// The mode's number as the command's text report gives it (`hyst track` counts from 0).
-    pub number: usize,
+    /// The mode's name as the command's text report gives it: its number counted from 1,
+    /// or the name an estimates table's columns give it.
+    pub name: String,
     /// Frequency (Hz) and its standard error.
     pub frequency_hz: f64,
     /// Standard error (Hz).
@@ -205,7 +206,7 @@ pub fn ssi_page_data(title: &str, a: &ModalAnalysis) -> PageData {
         .iter()
         .enumerate()
         .map(|(i, m)| ModeRow {
-            number: i + 1,
+            name: (i + 1).to_string(),
             frequency_hz: m.frequency_hz,
             frequency_se_hz: m.frequency_se_hz,
             damping_ratio: m.damping_ratio,
@@ -330,7 +331,7 @@ pub fn setups_page_data(title: &str, m: &MergedModes, geometry: Option<&Geometry
             .iter()
             .enumerate()
             .map(|(i, mode)| ModeRow {
-                number: i + 1,
+                name: (i + 1).to_string(),
                 frequency_hz: mode.frequency_hz,
                 frequency_se_hz: mode.frequency_se_hz,
                 damping_ratio: mode.damping_ratio,

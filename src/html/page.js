@@ -122,6 +122,9 @@
     document.getElementById("track-section").style.display = "none";
   }
 
+  // A mode's name is the user's (an estimates table's column): text, never markup.
+  const esc = (t) => String(t).replace(/[&<>"']/g, (c) => ({ "&": "&amp;", "<": "&lt;", ">": "&gt;", '"': "&quot;", "'": "&#39;" })[c]);
+
   // --- the modes' table ------------------------------------------------------------------
   const table = document.getElementById("modes");
   const efdd = D.modes.some((m) => m.efdd), seen = D.modes.some((m) => m.seen);
@@ -130,7 +133,7 @@
   D.modes.forEach((m, i) => {
     const tr = document.createElement("tr");
     tr.className = "mode";
-    tr.innerHTML = `<td>${m.number}</td><td>${fmt(m.frequency_hz, 4)}</td><td>${fmt(m.frequency_se_hz, 4)}</td>` +
+    tr.innerHTML = `<td>${esc(m.name)}</td><td>${fmt(m.frequency_hz, 4)}</td><td>${fmt(m.frequency_se_hz, 4)}</td>` +
       `<td>${fmt(100 * m.damping_ratio, 3)}</td><td>${m.damping_se === null ? "—" : fmt(100 * m.damping_se, 3)}</td><td>${fmt(m.mpc, 3)}</td>` +
       (efdd ? `<td>${m.efdd ? fmt(m.efdd[0], 4) : "—"}</td><td>${m.efdd ? fmt(100 * m.efdd[1], 3) : "—"}</td>` : "") +
       (seen ? `<td>${m.seen || ""}</td>` : "");
@@ -140,8 +143,8 @@
   // --- the MAC matrix --------------------------------------------------------------------
   const mac = document.getElementById("mac");
   if (D.mac.length) {
-    mac.innerHTML = "<tr><th></th>" + D.modes.map((m) => `<th>${m.number}</th>`).join("") + "</tr>" +
-      D.mac.map((row, i) => `<tr><th>${D.modes[i].number}: ${fmt(D.modes[i].frequency_hz, 3)} Hz</th>` + row.map((v) =>
+    mac.innerHTML = "<tr><th></th>" + D.modes.map((m) => `<th>${esc(m.name)}</th>`).join("") + "</tr>" +
+      D.mac.map((row, i) => `<tr><th>${esc(D.modes[i].name)}: ${fmt(D.modes[i].frequency_hz, 3)} Hz</th>` + row.map((v) =>
         `<td style="background: rgba(31,119,180,${v.toFixed(3)}); color: ${v > 0.5 ? "#fff" : "#222"}">${v.toFixed(2)}</td>`).join("") + "</tr>").join("");
   }
 
@@ -150,7 +153,7 @@
   D.modes.forEach((m, i) => {
     const o = document.createElement("option");
     o.value = String(i);
-    o.textContent = `${m.number}: ${m.frequency_hz.toFixed(3)} Hz`;
+    o.textContent = `${m.name}: ${m.frequency_hz.toFixed(3)} Hz`;
     pick.appendChild(o);
   });
   if (!S.xyz.length || !D.modes.length) { host.textContent = "no mode to draw"; return; }

@@ -66,7 +66,7 @@ pub fn track_page_data(title: &str, report: &TrackReport) -> PageData {
             .iter()
             .enumerate()
             .map(|(j, m)| ModeRow {
-                number: j,
+                name: report.mode_name(j),
                 frequency_hz: m.frequency_hz,
                 frequency_se_hz: m.frequency_se_hz,
                 damping_ratio: m.damping_ratio,

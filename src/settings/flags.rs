@@ -169,7 +169,7 @@ pub(super) struct TrackFlags {
     /// (their block bootstrap: their correlation from record to record and their tail), never
     /// below that, and the report says the false-alarm rate measured on them.
     #[arg(long)]
-    nominal_limit: bool,
+    no_calibrate: bool,
     /// Chart each mode alone only. By default the modes' residuals are also judged
     /// together: the factors they share (a slow effect of the environment common to all)
     /// set apart on the training records, and what they leave charted as one statistic,
@@ -186,7 +186,7 @@ impl From<TrackFlags> for TrackSettings {
             whiten: !f.no_whiten,
             environment_model: !f.no_environment_model,
             level_covariate: f.level_covariate,
-            calibrate: !f.nominal_limit,
+            calibrate: !f.no_calibrate,
             joint_chart: !f.no_joint_chart,
         }
     }

@@ -193,7 +193,7 @@ impl SsiSettings {
 
 /// How a campaign's modes are tracked, as a user gives it: `hyst track`'s flags
 /// (`--training`, `--no-whiten`, `--no-environment-model`, `--level-covariate`,
-/// `--nominal-limit`, `--no-joint-chart`) and the
+/// `--no-calibrate`, `--no-joint-chart`) and the
 /// keywords of `hyst.track` and `hyst.track_estimates`. [`TrackSettings::options`] makes
 /// hyst-monitor's [`TrackOptions`] of them, the one place that does.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -262,23 +262,32 @@ impl CampaignStore {
         insert(&*self.connection()?, key, record).map_err(sql_error(&self.path))
     }
 
-    /// End a run in one transaction: the store holds exactly `records`, each made with the
-    /// key beside it in `keys`, and `table` as its tracked table.
+    /// End a run (or a pass of `hyst track --follow`) in one transaction: the store holds
+    /// exactly `records`, each made with the key beside it in `keys`, and `table` as its
+    /// tracked table; what [`CampaignStore::cached`] serves is then these records.
     pub fn finish(
-        &self,
+        &mut self,
         keys: &[String],
         records: &[RecordModes],
         table: &TrackTable,
     ) -> Result<(), StoreError> {
         let err = sql_error(&self.path);
-        let mut conn = self.connection()?;
-        let tx = conn.transaction().map_err(&err)?;
-        tx.execute("DELETE FROM records", []).map_err(&err)?;
-        for (key, record) in keys.iter().zip(records) {
-            insert(&tx, key, record).map_err(&err)?;
+        {
+            let mut conn = self.connection()?;
+            let tx = conn.transaction().map_err(&err)?;
+            tx.execute("DELETE FROM records", []).map_err(&err)?;
+            for (key, record) in keys.iter().zip(records) {
+                insert(&tx, key, record).map_err(&err)?;
+            }
+            table.write_sql(&tx, "tracked").map_err(&err)?;
+            tx.commit().map_err(&err)?;
         }
-        table.write_sql(&tx, "tracked").map_err(&err)?;
-        tx.commit().map_err(&err)
+        self.stored = keys
+            .iter()
+            .zip(records)
+            .map(|(k, r)| (r.name.clone(), (k.clone(), r.clone())))
+            .collect();
+        Ok(())
     }
 }
 
@@ -350,13 +359,15 @@ mod tests {
             assert!(matches!(e, StoreError::Locked { .. }), "{e}");
             assert!(e.to_string().contains("another `hyst track`"), "{e}");
         }
-        let s = CampaignStore::open(&dir).unwrap();
+        let mut s = CampaignStore::open(&dir).unwrap();
         assert!(s.cached("a", "k1").is_some());
         assert!(s.cached("a", "k2").is_none(), "another key recomputes");
         assert!(s.cached("b", "k1").is_none(), "a failure is retried");
         assert!(s.cached("c", "k1").is_none());
         s.finish(&["k9".into()], &[record("d", true)], &TrackTable::default())
             .unwrap();
+        // What it serves is then what it holds (a --follow run's next pass).
+        assert!(s.cached("d", "k9").is_some() && s.cached("a", "k1").is_none());
         drop(s);
         let s = CampaignStore::open(&dir).unwrap();
         assert!(s.cached("d", "k9").is_some() && s.cached("a", "k1").is_none());

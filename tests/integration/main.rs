@@ -14,4 +14,5 @@ mod measured_defaults;
 mod mode_decision_corpus;
 mod screen_real_records;
 mod steelframe_setups;
+mod track_follow;
 mod track_store;

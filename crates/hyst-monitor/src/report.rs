@@ -251,6 +251,64 @@ fn fmt_calibration(f: &mut fmt::Formatter<'_>, c: &crate::calibration::Calibrati
 }
 
 impl TrackReport {
+    /// Every alarm as one line of text, in the order of the records that raised them: the
+    /// modes' own (`ALARM: mode 2 fell at record …`), the modes judged together's (with the
+    /// modes that drove it) and the subspace test's. A record's alarm reads the same in every
+    /// report that holds it (what `hyst track --follow` prints as it comes).
+    pub fn alarm_lines(&self) -> Vec<String> {
+        let mut lines: Vec<(usize, String)> = Vec::new();
+        for a in &self.alarms {
+            let way = match a.side {
+                Side::Up => "rose",
+                Side::Down => "fell",
+            };
+            lines.push((
+                a.record,
+                format!(
+                    "ALARM: mode {} {way} at record {} (time {} s)",
+                    self.mode_name(a.mode),
+                    self.record_name(a.record),
+                    a.time
+                ),
+            ));
+        }
+        if let Some(c) = &self.joint {
+            for a in &c.alarms {
+                let drivers: Vec<String> = a
+                    .drivers
+                    .iter()
+                    .filter(|d| d.1 >= 0.1)
+                    .map(|&(j, share)| {
+                        format!("mode {} ({:.0} %)", self.mode_name(j), 100.0 * share)
+                    })
+                    .collect();
+                lines.push((
+                    a.record,
+                    format!(
+                        "ALARM (modes judged together) at record {} (time {} s), driven by {}",
+                        self.record_name(a.record),
+                        a.time,
+                        drivers.join(", ")
+                    ),
+                ));
+            }
+        }
+        if let Some(c) = &self.subspace {
+            for &i in &c.alarms {
+                lines.push((
+                    i,
+                    format!(
+                        "ALARM (subspace test) at record {} (time {} s)",
+                        self.record_name(i),
+                        c.time.get(i).copied().unwrap_or(f64::NAN)
+                    ),
+                ));
+            }
+        }
+        lines.sort_by_key(|l| l.0);
+        lines.into_iter().map(|l| l.1).collect()
+    }
+
     /// Record `record`'s name, as its rows give it.
     fn record_name(&self, record: usize) -> &str {
         self.rows
@@ -345,18 +403,10 @@ impl fmt::Display for TrackReport {
         if self.alarms.is_empty() {
             writeln!(f, "no alarm")?;
         }
-        for a in &self.alarms {
-            let name = self.record_name(a.record);
-            let way = match a.side {
-                Side::Up => "rose",
-                Side::Down => "fell",
-            };
-            writeln!(
-                f,
-                "ALARM: mode {} {way} at record {name} (time {} s)",
-                self.mode_name(a.mode),
-                a.time
-            )?;
+        for line in self.alarm_lines() {
+            if line.starts_with("ALARM: mode") {
+                writeln!(f, "{line}")?;
+            }
         }
         Ok(())
     }

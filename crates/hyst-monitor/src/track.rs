@@ -217,9 +217,10 @@ pub struct TrackReport {
     pub training_outliers: Vec<TrainingOutlier>,
     /// The chart's in-control average run length (records per false alarm, per mode).
     pub in_control_run_length: f64,
-    /// The modes' names (an estimates table's columns); empty: each is called by its
-    /// number counted from 1 ([`TrackReport::mode_name`]). Rows and alarms refer to modes by
-    /// their index, from 0.
+    /// The modes' names, in the reference's order: an estimates table's columns, else each
+    /// mode's number counted from 1 ([`TrackReport::mode_name`]: what the text, the table,
+    /// the page and the figures call it). Rows and alarms refer to modes by their index
+    /// into this list and the reference, from 0.
     #[cfg_attr(feature = "serde", serde(default))]
     pub mode_names: Vec<String>,
     /// The covariates' names, in the order of each row's `covariates` (the caller's to
@@ -519,6 +520,7 @@ pub(crate) fn chart_modes(
     records: usize,
     opts: &TrackOptions,
 ) -> TrackReport {
+    let reference_len = reference.len();
     let mut baselines = Vec::with_capacity(reference.len());
     let mut baseline_errors = Vec::with_capacity(reference.len());
     let mut residual_models = Vec::with_capacity(reference.len());
@@ -594,7 +596,7 @@ pub(crate) fn chart_modes(
         joint_error,
         training_outliers,
         in_control_run_length: opts.chart.in_control_run_length(),
-        mode_names: Vec::new(),
+        mode_names: (1..=reference_len).map(|j| j.to_string()).collect(),
         covariate_names: Vec::new(),
         subspace: None,
         subspace_error: None,

@@ -142,6 +142,8 @@ def track(
     max_damping: Optional[float] = ...,
     client: Optional[Any] = ...,
     level_covariate: bool = ...,
+    calibrate: bool = ...,
+    joint_chart: bool = ...,
 ) -> Report: ...
 
 def track_estimates(
@@ -151,6 +153,8 @@ def track_estimates(
     training: Optional[int] = ...,
     whiten: bool = ...,
     environment_model: bool = ...,
+    calibrate: bool = ...,
+    joint_chart: bool = ...,
 ) -> Report: ...
 
 @dataclass(frozen=True)

@@ -65,7 +65,7 @@ def track(records, fs, *, times=None, covariates=None, training=None, whiten=Tru
         Calibrate each chart's limit on the training records' own charted values (default
         True: their block bootstrap, never below the nominal limit; the report's
         ``calibrations`` say the false-alarm rate measured on them), or keep the nominal
-        limit (``hyst track --nominal-limit``).
+        limit (``hyst track --no-calibrate``).
     joint_chart : bool
         Judge the modes together beside each alone (default True: the factors their
         residuals share set apart, what is left charted as one statistic; the report's

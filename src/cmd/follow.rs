@@ -1,0 +1,181 @@
+//! `hyst track --follow`: records (or rows of estimates) taken as they arrive, the campaign
+//! tracked again over all of them at each arrival, new records and new alarms printed as
+//! they come.
+//!
+//! Each pass is a batch run over what has arrived (the store serves every record already
+//! identified), so its table and report are a batch run's over the same records; the
+//! training is fixed (`--training`, else 336 records), so a record's chart never depends on
+//! records after it. A file is taken once its size and modification time held for one poll
+//! (one being written is left for the next look); the store makes a run killed at any moment
+//! resume where it stopped.
+
+use std::collections::{HashMap, HashSet};
+use std::path::{Path, PathBuf};
+use std::time::{Duration, SystemTime};
+
+use hyst::monitor::TrackReport;
+
+use super::track::{
+    TrackArgs, check_paths, estimates_pass, record_files, records_pass, write_outputs,
+};
+use super::{Error, fail};
+
+/// What identifies a file's content between two looks: its size and modification time.
+type Stamp = (u64, Option<SystemTime>);
+
+fn stamp(path: &Path) -> Option<Stamp> {
+    let m = std::fs::metadata(path).ok()?;
+    Some((m.len(), m.modified().ok()))
+}
+
+/// The wait between looks.
+fn poll(a: &TrackArgs) -> Result<Duration, Error> {
+    if a.poll.is_finite() && a.poll > 0.0 && a.poll <= 86_400.0 {
+        Ok(Duration::from_secs_f64(a.poll))
+    } else {
+        Err(fail(format!(
+            "--poll {}: give the seconds between looks, more than 0 and at most a day",
+            a.poll
+        )))
+    }
+}
+
+/// Print the records of `report` not in `said` (each with what it gave) and the alarms not
+/// in `alarms_said`, and remember both.
+fn say_new(report: &TrackReport, said: &mut HashSet<String>, alarms_said: &mut HashSet<String>) {
+    let mut modes: HashMap<&str, usize> = HashMap::new();
+    let mut order: Vec<&str> = Vec::new();
+    for r in &report.rows {
+        let n = modes.entry(r.name.as_str()).or_insert(0);
+        if *n == 0 {
+            order.push(r.name.as_str());
+        }
+        *n += 1;
+    }
+    for name in order {
+        if said.insert(name.to_string()) {
+            println!("{name}: {} mode(s) tracked", modes[name]);
+        }
+    }
+    for (name, why) in &report.skipped {
+        if said.insert(name.clone()) {
+            println!("{name}: skipped: {why}");
+        }
+    }
+    for line in report.alarm_lines() {
+        if alarms_said.insert(line.clone()) {
+            println!("{line}");
+        }
+    }
+}
+
+/// Follow the `--inputs` folders: a pass over `first` (the files there now), then one each
+/// time settled new files appear.
+pub(super) fn follow_records(
+    a: &TrackArgs,
+    asked: &hyst::covssi::AnalysisOptions,
+    store: &mut hyst::store::CampaignStore,
+    first: Vec<PathBuf>,
+) -> Result<(), Error> {
+    let wait = poll(a)?;
+    let mut taken: Vec<PathBuf> = first;
+    let mut pending: HashMap<PathBuf, Stamp> = HashMap::new();
+    let mut said = HashSet::new();
+    let mut alarms_said = HashSet::new();
+    let mut first_pass = true;
+    let mut covariates_stamp = a.covariates.as_deref().and_then(stamp);
+    loop {
+        if !taken.is_empty() {
+            match records_pass(a, asked, store, taken.clone(), first_pass) {
+                Ok((report, table)) => {
+                    if first_pass {
+                        print!("{report}");
+                        said.extend(report.rows.iter().map(|r| r.name.clone()));
+                        said.extend(report.skipped.iter().map(|s| s.0.clone()));
+                        alarms_said.extend(report.alarm_lines());
+                    } else {
+                        say_new(&report, &mut said, &mut alarms_said);
+                    }
+                    write_outputs(a, &report, &table)?;
+                    first_pass = false;
+                }
+                // Too few records for a reference or a baseline yet: wait for more.
+                Err(e) => println!("{} record(s) so far: {e}; waiting for more", taken.len()),
+            }
+        } else {
+            println!("no record yet in {}; waiting", folders(a));
+        }
+        // Look until something new has settled.
+        loop {
+            std::thread::sleep(wait);
+            let mut new = Vec::new();
+            for f in record_files(a)? {
+                if taken.contains(&f) {
+                    continue;
+                }
+                let now = stamp(&f);
+                if now.is_some() && pending.get(&f) == now.as_ref() {
+                    pending.remove(&f);
+                    new.push(f);
+                } else if let Some(now) = now {
+                    pending.insert(f, now);
+                }
+            }
+            let covariates_now = a.covariates.as_deref().and_then(stamp);
+            let covariates_changed = covariates_now != covariates_stamp;
+            covariates_stamp = covariates_now;
+            if !new.is_empty() || covariates_changed {
+                taken.extend(new);
+                check_paths(a, &taken)?;
+                break;
+            }
+        }
+    }
+}
+
+/// The folders followed, for the text.
+fn folders(a: &TrackArgs) -> String {
+    a.inputs
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Follow the `--estimates` table: a pass now, then one each time it changed and held for
+/// a poll.
+pub(super) fn follow_estimates(a: &TrackArgs, path: &Path) -> Result<(), Error> {
+    let wait = poll(a)?;
+    let mut said = HashSet::new();
+    let mut alarms_said = HashSet::new();
+    let mut first_pass = true;
+    let mut done: Option<Stamp> = None;
+    let mut pending: Option<Stamp> = stamp(path);
+    let mut covariates_done = a.covariates.as_deref().and_then(stamp);
+    loop {
+        let now = stamp(path);
+        let covariates_now = a.covariates.as_deref().and_then(stamp);
+        let settled = now.is_some() && now == pending;
+        if settled && (now != done || covariates_now != covariates_done) {
+            match estimates_pass(a, path, first_pass) {
+                Ok((report, table)) => {
+                    if first_pass {
+                        print!("{report}");
+                        said.extend(report.rows.iter().map(|r| r.name.clone()));
+                        alarms_said.extend(report.alarm_lines());
+                    } else {
+                        say_new(&report, &mut said, &mut alarms_said);
+                    }
+                    write_outputs(a, &report, &table)?;
+                    first_pass = false;
+                }
+                // A row being written, or too few rows yet: said, and looked at again.
+                Err(e) => println!("{}: {e}; waiting", path.display()),
+            }
+            done = now;
+            covariates_done = covariates_now;
+        }
+        pending = now;
+        std::thread::sleep(wait);
+    }
+}

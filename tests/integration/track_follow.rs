@@ -1,0 +1,254 @@
+//! `hyst track --follow`: records and rows of estimates taken as they land, the run killed
+//! and started again, against batch runs over the same records.
+
+use crate::common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use rand::SeedableRng;
+use rand_distr::{Distribution, Normal};
+
+/// A fresh scratch folder `name`.
+fn scratch(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join("track_follow")
+        .join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// `hyst` started with `args`, its standard output into `log`.
+fn start(args: &[&str], log: &Path) -> Child {
+    Command::new(env!("CARGO_BIN_EXE_hyst"))
+        .args(args)
+        .stdout(Stdio::from(std::fs::File::create(log).unwrap()))
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("the hyst binary runs")
+}
+
+/// `hyst` run to its end with `args`; its standard output.
+fn batch(args: &[&str]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_hyst"))
+        .args(args)
+        .output()
+        .expect("the hyst binary runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// The records `out`'s table.csv lists.
+fn tabled(out: &Path) -> usize {
+    let Ok(text) = std::fs::read_to_string(out.join("table.csv")) else {
+        return 0;
+    };
+    let mut names: Vec<&str> = text
+        .lines()
+        .skip(1)
+        .filter_map(|l| l.split(',').next())
+        .collect();
+    names.dedup();
+    names.len()
+}
+
+/// Wait (up to two minutes) until `out`'s table lists `records` records and its report is
+/// written after it.
+fn wait_for(out: &Path, records: usize, child: &mut Child) {
+    let start = Instant::now();
+    while tabled(out) != records {
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the --follow run ended by itself"
+        );
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "{} of {records} records tabled after two minutes",
+            tabled(out)
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    // The report is written after the table: let the pass finish writing.
+    std::thread::sleep(Duration::from_millis(500));
+}
+
+/// Kill `child` (SIGKILL) and reap it.
+fn kill(mut child: Child) {
+    child.kill().unwrap();
+    child.wait().unwrap();
+}
+
+/// Two outputs folders hold the same table and report, byte for byte.
+fn same_outputs(follow: &Path, batch: &Path) {
+    for name in ["table.csv", "report.json"] {
+        let a = std::fs::read_to_string(follow.join(name)).unwrap();
+        let b = std::fs::read_to_string(batch.join(name)).unwrap();
+        assert!(a == b, "{name} differs between --follow and the batch run");
+    }
+}
+
+/// Record files land one after another in a folder `hyst track --follow` watches: after
+/// each arrival its table and report are a batch run's over the files so far, byte for
+/// byte; killed (SIGKILL) and started again it takes up where it stopped and reaches the
+/// batch run's over all of them.
+#[test]
+fn follow_takes_record_files_as_a_batch_run_would() {
+    let Some(path) = common::data_file("oma/data_3dof.csv") else {
+        return;
+    };
+    let t = hyst::io::read_csv(&path).unwrap();
+    let col = |c: &str| t.column(c).unwrap().to_vec();
+    let (y1, y2, y3) = (col("y1"), col("y2"), col("y3"));
+    let inbox = scratch("inbox");
+    let land = |k: usize| {
+        let r = (k - 1) * 6000..k * 6000;
+        hyst::io::write_csv(
+            &inbox.join(format!("rec_{k}.csv")),
+            &["y1", "y2", "y3"],
+            &[&y1[r.clone()], &y2[r.clone()], &y3[r]],
+        )
+        .unwrap();
+    };
+    let out = scratch("out");
+    let log = scratch("logs").join("follow.txt");
+    let args = [
+        "track",
+        "--inputs",
+        s(&inbox),
+        "--fs",
+        "20",
+        "--training",
+        "4",
+        "--out",
+        s(&out),
+        "--follow",
+        "--poll",
+        "0.2",
+    ];
+    let batch_over = |k: usize, name: &str| {
+        let dir = scratch(name);
+        let files: Vec<String> = (1..=k)
+            .map(|i| inbox.join(format!("rec_{i}.csv")).display().to_string())
+            .collect();
+        let mut a = vec!["track", "--inputs"];
+        a.extend(files.iter().map(String::as_str));
+        a.extend(["--fs", "20", "--training", "4", "--out", s(&dir)]);
+        batch(&a);
+        dir
+    };
+    (1..=5).for_each(land);
+    let mut child = start(&args, &log);
+    wait_for(&out, 5, &mut child);
+    same_outputs(&out, &batch_over(5, "batch5"));
+    (6..=8).for_each(land);
+    wait_for(&out, 8, &mut child);
+    kill(child);
+    same_outputs(&out, &batch_over(8, "batch8"));
+    let said = std::fs::read_to_string(&log).unwrap();
+    for k in 6..=8 {
+        assert!(said.contains(&format!("rec_{k}.csv: ")), "{said}");
+    }
+    // Started again: what the store holds is served, the new files taken.
+    let mut child = start(&args, &scratch("logs2").join("follow.txt"));
+    (9..=10).for_each(land);
+    wait_for(&out, 10, &mut child);
+    kill(child);
+    same_outputs(&out, &batch_over(10, "batch10"));
+}
+
+/// An estimates table that grows row by row under `hyst track --follow --estimates`: the
+/// alarm of a 2 % drop of one mode is printed once, as it happens; after each growth the
+/// table and report are a batch run's over the rows so far; killed and started again, the
+/// same.
+#[test]
+fn follow_takes_rows_of_estimates_and_prints_alarms_as_they_come() {
+    let dir = scratch("estimates");
+    let mut rng = rand::rngs::StdRng::seed_from_u64(8_500_801);
+    let normal = Normal::new(0.0, 1.0).unwrap();
+    let rows: Vec<String> = (0..80)
+        .map(|i| {
+            let f1 = 1.0 * (1.0 + 1e-3 * normal.sample(&mut rng));
+            let drop = if i >= 60 { 0.98 } else { 1.0 };
+            let f2 = 3.0 * drop * (1.0 + 1e-3 * normal.sample(&mut rng));
+            format!("r{i},{},{f1},0.001,{f2},0.003\n", 3600 * i)
+        })
+        .collect();
+    let table = dir.join("estimates.csv");
+    let header = "record,time,f1_hz,f1_hz_se,f2_hz,f2_hz_se\n";
+    let write_rows = |n: usize, to: &Path| {
+        std::fs::write(to, format!("{header}{}", rows[..n].concat())).unwrap();
+    };
+    let out = dir.join("out");
+    let args = [
+        "track",
+        "--estimates",
+        s(&table),
+        "--training",
+        "40",
+        "--out",
+        s(&out),
+        "--follow",
+        "--poll",
+        "0.2",
+    ];
+    let batch_over = |n: usize| {
+        let copy = dir.join(format!("first_{n}.csv"));
+        write_rows(n, &copy);
+        let o = dir.join(format!("batch_{n}"));
+        let text = batch(&[
+            "track",
+            "--estimates",
+            s(&copy),
+            "--training",
+            "40",
+            "--out",
+            s(&o),
+        ]);
+        (o, text)
+    };
+    write_rows(50, &table);
+    let first_log = dir.join("follow1.txt");
+    let mut child = start(&args, &first_log);
+    wait_for(&out, 50, &mut child);
+    same_outputs(&out, &batch_over(50).0);
+    write_rows(65, &table);
+    wait_for(&out, 65, &mut child);
+    kill(child);
+    let (b65, text65) = batch_over(65);
+    same_outputs(&out, &b65);
+    let said = std::fs::read_to_string(&first_log).unwrap();
+    let alarms: Vec<&str> = text65
+        .lines()
+        .filter(|l| l.starts_with("ALARM: mode"))
+        .collect();
+    assert!(
+        !alarms.is_empty() && alarms.iter().all(|l| l.contains("mode f2 fell")),
+        "{text65}"
+    );
+    for a in &alarms {
+        assert_eq!(said.matches(a).count(), 1, "{a} in {said}");
+    }
+    let second_log = dir.join("follow2.txt");
+    let mut child = start(&args, &second_log);
+    write_rows(80, &table);
+    wait_for(&out, 80, &mut child);
+    kill(child);
+    let (b80, text80) = batch_over(80);
+    same_outputs(&out, &b80);
+    // Every alarm of the whole table printed by one of the two runs.
+    let said = std::fs::read_to_string(&first_log).unwrap()
+        + &std::fs::read_to_string(&second_log).unwrap();
+    for a in text80.lines().filter(|l| l.starts_with("ALARM: mode")) {
+        assert!(said.contains(a), "{a} not printed: {said}");
+    }
+}
