@@ -310,17 +310,7 @@ fn subspace_over(
     let Some(channels) = correlations.iter().flatten().map(|c| c.channels).next() else {
         return Ok(None);
     };
-    let mut terms: Vec<crate::environment::Term> = Vec::new();
-    for t in environments.iter().flatten().flat_map(|e| &e.terms) {
-        if !terms.contains(t) {
-            terms.push(*t);
-        }
-    }
-    let environment = (!terms.is_empty()).then(|| Environment {
-        terms,
-        bic_gain: 0.0,
-        ranges: Vec::new(),
-    });
+    let environment = union_environment(environments);
     let at: Vec<(f64, Vec<f64>)> = records
         .iter()
         .zip(covariates)
@@ -568,6 +558,26 @@ pub(crate) fn chart_modes(
                 time[r.record] = r.time;
             }
         }
+        // Every mode regressed on the same terms (the union of their environmental
+        // models), so that a term one mode's model took for an effect the modes share (a
+        // breakpoint fitted to an episode of it) is taken by every mode in its proportion,
+        // and stays along the shared direction after training.
+        if let Some(union) = union_environment(&environments) {
+            for (mode, zj) in z.iter_mut().enumerate() {
+                if baselines[mode].is_some() {
+                    let apart: Vec<usize> = training_outliers
+                        .iter()
+                        .filter(|o| o.mode == mode)
+                        .map(|o| o.record)
+                        .collect();
+                    if let Some(common) =
+                        residuals_on(&rows, mode, records, &union, &series, &apart, opts)
+                    {
+                        *zj = common;
+                    }
+                }
+            }
+        }
         match joint_chart(&z, &time, opts.training, &opts.chart, opts.calibrate) {
             Ok(j) => (Some(j), None),
             Err(e) => (None, Some(e.to_string())),
@@ -602,6 +612,75 @@ pub(crate) fn chart_modes(
         subspace_error: None,
         level_covariate: false,
     }
+}
+
+/// The union of the modes' environmental models' terms (`None` when none has a term): one
+/// term per covariate and lag, with the breakpoint or curvature any mode's model gave it
+/// (the first's, when two gave it different ones: one regressor per covariate and lag, so
+/// that the union is never collinear).
+fn union_environment(environments: &[Option<Environment>]) -> Option<Environment> {
+    let mut terms: Vec<crate::environment::Term> = Vec::new();
+    for t in environments.iter().flatten().flat_map(|e| &e.terms) {
+        match terms
+            .iter_mut()
+            .find(|u| u.covariate == t.covariate && u.lag_s == t.lag_s)
+        {
+            Some(u) => {
+                if u.breakpoint.is_none() && u.quadratic_about.is_none() {
+                    u.breakpoint = t.breakpoint;
+                    u.quadratic_about = t.quadratic_about;
+                }
+            }
+            None => terms.push(*t),
+        }
+    }
+    (!terms.is_empty()).then(|| Environment {
+        terms,
+        bic_gain: 0.0,
+        ranges: Vec::new(),
+    })
+}
+
+/// `mode`'s standardized residual at every record (NaN where it has none) from a baseline
+/// on the regressors of `environment`, fitted on its training rows but those set `apart`;
+/// `None` when that baseline cannot be fitted.
+fn residuals_on(
+    rows: &[TrackRow],
+    mode: usize,
+    records: usize,
+    environment: &Environment,
+    series: &Series,
+    apart: &[usize],
+    opts: &TrackOptions,
+) -> Option<Vec<f64>> {
+    let usable = |r: &&TrackRow| {
+        r.mode == mode
+            && r.record < records
+            && r.frequency_se_hz.is_some()
+            && r.covariates.iter().all(|v| v.is_finite())
+            && !apart.contains(&r.record)
+    };
+    let features = |r: &TrackRow| environment.features(series, r.time, &r.covariates);
+    let train: Vec<&TrackRow> = rows
+        .iter()
+        .filter(usable)
+        .filter(|r| r.record < opts.training)
+        .collect();
+    let f: Vec<f64> = train.iter().map(|r| r.frequency_hz).collect();
+    let se: Vec<f64> = train
+        .iter()
+        .map(|r| r.frequency_se_hz.unwrap_or(0.0))
+        .collect();
+    let x: Vec<Vec<f64>> = train.iter().map(|r| features(r)).collect();
+    let b = fit_baseline(&f, &se, &x).ok()?;
+    let mut z = vec![f64::NAN; records];
+    for r in rows.iter().filter(usable) {
+        let x = features(r);
+        z[r.record] = b
+            .residual(r.frequency_hz, r.frequency_se_hz.unwrap_or(0.0), &x)
+            .2;
+    }
+    Some(z)
 }
 
 /// Fit `mode`'s baseline on its training rows, standardize its later rows (setting their

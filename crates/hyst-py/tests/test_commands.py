@@ -396,6 +396,47 @@ def test_track_estimates_gives_the_commands_report(hyst_bin, tmp_path):
     assert all(x["record"] >= 60 for x in alarms), alarms
 
 
+def test_modes_judged_together_as_numpy_reads_their_correlations(hyst_bin, tmp_path):
+    """Three modes' estimates sharing a slow effect (no covariates, one standard error per
+    mode): each mode's standardized residual is then its frequency less a constant over a
+    constant, so the joint chart's eigenvalues are those of numpy's correlation matrix of
+    the training frequencies, and its shared factors those above (1 + sqrt(p/m))^2; a 1 %
+    drop of mode c is alarmed with c its first driver. With ``calibrate=False,
+    joint_chart=False`` the report is ``hyst track --no-calibrate --no-joint-chart``'s."""
+    rng = np.random.default_rng(8_500_901)
+    n, training = 120, 60
+    g = np.zeros(n)
+    for i in range(1, n):
+        g[i] = 0.95 * g[i - 1] + np.sqrt(1 - 0.95 ** 2) * rng.standard_normal()
+    base = {"a": 1.0, "b": 2.5, "c": 4.0}
+    f = {k: v * (1.0 + 3e-3 * g + 1e-3 * rng.standard_normal(n)) for k, v in base.items()}
+    f["c"][90:] *= 0.99
+    rows = ["record,time," + ",".join(f"{k}_hz,{k}_hz_se" for k in base)]
+    for i in range(n):
+        cells = ",".join(f"{float(f[k][i])!r},{1e-3 * base[k]!r}" for k in base)
+        rows.append(f"r{i},{3600.0 * i},{cells}")
+    (tmp_path / "est.csv").write_text("\n".join(rows) + "\n")
+    doc = hyst.track_estimates(tmp_path / "est.csv", training=training).to_dict()
+    joint = doc["joint"]
+    train = np.column_stack([f[k][:training] for k in base])
+    expected = np.sort(np.linalg.eigvalsh(np.corrcoef(train.T)))[::-1]
+    assert np.allclose(joint["eigenvalues"], expected, rtol=1e-9, atol=1e-12), (
+        joint["eigenvalues"], expected)
+    edge = (1 + np.sqrt(3 / training)) ** 2
+    assert joint["common_factors"] == int(np.sum(expected[:2] > edge)) == 1
+    first = [a for a in joint["alarms"] if a["record"] >= 90]
+    assert first and first[0]["drivers"][0][0] == 2, joint["alarms"]
+    assert all(a["record"] >= 90 for a in joint["alarms"]), joint["alarms"]
+    assert len(doc["calibrations"]) == 3
+    out = tmp_path / "plain"
+    run(hyst_bin, "track", "--estimates", tmp_path / "est.csv", "--training", training,
+        "--no-calibrate", "--no-joint-chart", "--out", out)
+    plain = hyst.track_estimates(tmp_path / "est.csv", training=training, calibrate=False,
+                                 joint_chart=False).to_dict()
+    assert plain["joint"] is None and all(c is None for c in plain["calibrations"])
+    assert comparable(plain) == document(out / "report.json")
+
+
 def shear_chain_accelerations(sigma, seconds, seed, fs=200.0):
     """A linear three-storey chain (masses 1000, 1000, 800 kg; storeys 1.2, 1.0, 0.8 MN/m;
     Rayleigh damping of 2 % at modes 1 and 3) under a white force on each floor held over

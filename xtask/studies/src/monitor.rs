@@ -76,7 +76,8 @@ pub fn run(a: &DemoArgs) -> Result<(), String> {
     );
     for (j, (m, share)) in report.reference.iter().zip(&report.tracked).enumerate() {
         println!(
-            "monitor_mode {j}: {:.4} Hz, tracked in {:.2} % of the records",
+            "monitor_mode {}: {:.4} Hz, tracked in {:.2} % of the records",
+            report.mode_name(j),
             m.frequency_hz,
             100.0 * share
         );
@@ -138,6 +139,7 @@ pub fn run(a: &DemoArgs) -> Result<(), String> {
         }
     }
     subspace_lines(&report, change.map(|(day, _, _)| day));
+    joint_lines(&report, change.map(|(day, _, _)| day));
     println!(
         "monitor_in_control_run_length {:.3e} records per mode",
         report.in_control_run_length
@@ -156,6 +158,35 @@ pub fn run(a: &DemoArgs) -> Result<(), String> {
     hyst::figures::track_figures(&dir, &report)?;
     println!("figures in {}", dir.display());
     Ok(())
+}
+
+/// The joint chart's figures beside the modes' own: its shared factors, false alarms before
+/// the change and delay after it (the first alarm at or after it).
+fn joint_lines(report: &hyst::monitor::TrackReport, change_day: Option<f64>) {
+    let Some(c) = &report.joint else {
+        println!(
+            "monitor_joint not drawn: {}",
+            report.joint_error.as_deref().unwrap_or("not asked")
+        );
+        return;
+    };
+    let change = change_day.map_or(f64::INFINITY, |d| d * 86400.0);
+    let early = c.alarms.iter().filter(|a| a.time < change).count();
+    println!(
+        "monitor_joint_shared_factors {} (eigenvalues {:?}, edge {:.2})",
+        c.common_factors, c.eigenvalues, c.noise_edge
+    );
+    println!("monitor_joint_false_alarms {early}");
+    match c.alarms.iter().find(|a| a.time >= change) {
+        Some(a) => println!(
+            "monitor_joint_detection_delay_h {:.1} (first driver mode {})",
+            (a.time - change) / 3600.0,
+            a.drivers
+                .first()
+                .map_or_else(String::new, |d| report.mode_name(d.0))
+        ),
+        None => println!("monitor_joint_detection_delay_h none (not detected)"),
+    }
 }
 
 /// The subspace test's figures beside the modal chart's: records above its single-record
