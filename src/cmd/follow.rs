@@ -69,6 +69,20 @@ fn say_new(report: &TrackReport, said: &mut HashSet<String>, alarms_said: &mut H
     }
 }
 
+/// The first pass's text: the whole report, then the alarms its text leaves out (it says a
+/// mode's first few), each once; every record and alarm remembered as said.
+fn say_first(report: &TrackReport, said: &mut HashSet<String>, alarms_said: &mut HashSet<String>) {
+    let text = report.to_string();
+    print!("{text}");
+    said.extend(report.rows.iter().map(|r| r.name.clone()));
+    for line in report.alarm_lines() {
+        if !text.contains(&line) {
+            println!("{line}");
+        }
+        alarms_said.insert(line);
+    }
+}
+
 /// Follow the `--inputs` folders: a pass over `first` (the files there now), then one each
 /// time settled new files appear.
 pub(super) fn follow_records(
@@ -89,10 +103,8 @@ pub(super) fn follow_records(
             match records_pass(a, asked, store, taken.clone(), first_pass) {
                 Ok((report, table)) => {
                     if first_pass {
-                        print!("{report}");
-                        said.extend(report.rows.iter().map(|r| r.name.clone()));
+                        say_first(&report, &mut said, &mut alarms_said);
                         said.extend(report.skipped.iter().map(|s| s.0.clone()));
-                        alarms_said.extend(report.alarm_lines());
                     } else {
                         say_new(&report, &mut said, &mut alarms_said);
                     }
@@ -160,9 +172,7 @@ pub(super) fn follow_estimates(a: &TrackArgs, path: &Path) -> Result<(), Error> 
             match estimates_pass(a, path, first_pass) {
                 Ok((report, table)) => {
                     if first_pass {
-                        print!("{report}");
-                        said.extend(report.rows.iter().map(|r| r.name.clone()));
-                        alarms_said.extend(report.alarm_lines());
+                        say_first(&report, &mut said, &mut alarms_said);
                     } else {
                         say_new(&report, &mut said, &mut alarms_said);
                     }

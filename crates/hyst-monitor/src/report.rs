@@ -258,19 +258,7 @@ impl TrackReport {
     pub fn alarm_lines(&self) -> Vec<String> {
         let mut lines: Vec<(usize, String)> = Vec::new();
         for a in &self.alarms {
-            let way = match a.side {
-                Side::Up => "rose",
-                Side::Down => "fell",
-            };
-            lines.push((
-                a.record,
-                format!(
-                    "ALARM: mode {} {way} at record {} (time {} s)",
-                    self.mode_name(a.mode),
-                    self.record_name(a.record),
-                    a.time
-                ),
-            ));
+            lines.push((a.record, self.mode_alarm_line(a)));
         }
         if let Some(c) = &self.joint {
             for a in &c.alarms {
@@ -307,6 +295,20 @@ impl TrackReport {
         }
         lines.sort_by_key(|l| l.0);
         lines.into_iter().map(|l| l.1).collect()
+    }
+
+    /// A mode's alarm as its line of text.
+    fn mode_alarm_line(&self, a: &crate::ModeAlarm) -> String {
+        let way = match a.side {
+            Side::Up => "rose",
+            Side::Down => "fell",
+        };
+        format!(
+            "ALARM: mode {} {way} at record {} (time {} s)",
+            self.mode_name(a.mode),
+            self.record_name(a.record),
+            a.time
+        )
     }
 
     /// Record `record`'s name, as its rows give it.
@@ -403,10 +405,27 @@ impl fmt::Display for TrackReport {
         if self.alarms.is_empty() {
             writeln!(f, "no alarm")?;
         }
-        for line in self.alarm_lines() {
-            if line.starts_with("ALARM: mode") {
-                writeln!(f, "{line}")?;
+        // Each mode's first few alarms: a lasting change raises one every few records after
+        // its first, for as long as the campaign lasts.
+        const SAID: usize = 5;
+        let mut per_mode = vec![0usize; self.reference.len()];
+        for a in &self.alarms {
+            if let Some(n) = per_mode.get_mut(a.mode) {
+                *n += 1;
+                if *n <= SAID {
+                    writeln!(f, "{}", self.mode_alarm_line(a))?;
+                }
             }
+        }
+        for (mode, &n) in per_mode.iter().enumerate().filter(|(_, n)| **n > SAID) {
+            let last = self.alarms.iter().rev().find(|a| a.mode == mode);
+            writeln!(
+                f,
+                "  and {} more alarm(s) of mode {}, the last at record {} (all in report.json's `alarms`)",
+                n - SAID,
+                self.mode_name(mode),
+                last.map_or("?", |a| self.record_name(a.record))
+            )?;
         }
         Ok(())
     }
