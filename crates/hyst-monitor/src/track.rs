@@ -317,7 +317,17 @@ fn subspace_over(
         .filter_map(|(r, x)| Some((r.time, x.clone()?)))
         .collect();
     let series = Series::new(&at);
-    let blocks = crate::subspace::blocks_for(order, channels);
+    let lags = correlations
+        .iter()
+        .flatten()
+        .map(|c| c.lags())
+        .next()
+        .unwrap_or(0);
+    let trained = correlations[..opts.training.min(correlations.len())]
+        .iter()
+        .flatten()
+        .count();
+    let blocks = crate::subspace::blocks_for(order, channels, trained, lags);
     let inputs: Vec<Option<crate::subspace::SubspaceRecord>> = correlations
         .iter()
         .zip(records.iter().zip(covariates))
