@@ -22,6 +22,7 @@ fn main() -> ExitCode {
         Command::Levels(a) => cmd::levels::run(a),
         Command::Amplitude(a) => cmd::amplitude::run(a),
         Command::Frf(a) => cmd::frf::run(a),
+        Command::Track(a) if a.follow => cmd::follow::run(a),
         Command::Track(a) => cmd::track::run(a),
     });
     match result {

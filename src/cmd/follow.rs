@@ -18,7 +18,25 @@ use hyst::monitor::TrackReport;
 use super::track::{
     TrackArgs, check_paths, estimates_pass, record_files, records_pass, write_outputs,
 };
-use super::{Error, fail};
+use super::{Error, check_fs, fail};
+
+/// `hyst track --follow`: what a batch run checks first (the outputs against the inputs,
+/// the rate, the settings), then the folders or the table followed.
+pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
+    let records = if a.inputs.is_empty() {
+        Vec::new()
+    } else {
+        record_files(a)?
+    };
+    check_paths(a, &records)?;
+    if let Some(path) = &a.estimates {
+        return follow_estimates(a, path);
+    }
+    a.fs.map(check_fs).transpose()?;
+    let asked = super::ssi::analysis_of(&a.ssi)?;
+    let mut store = hyst::store::CampaignStore::open(&a.out)?;
+    follow_records(a, &asked, &mut store, records)
+}
 
 /// What identifies a file's content between two looks: its size and modification time.
 type Stamp = (u64, Option<SystemTime>);
@@ -85,7 +103,7 @@ fn say_first(report: &TrackReport, said: &mut HashSet<String>, alarms_said: &mut
 
 /// Follow the `--inputs` folders: a pass over `first` (the files there now), then one each
 /// time settled new files appear.
-pub(super) fn follow_records(
+fn follow_records(
     a: &TrackArgs,
     asked: &hyst::covssi::AnalysisOptions,
     store: &mut hyst::store::CampaignStore,
@@ -156,7 +174,7 @@ fn folders(a: &TrackArgs) -> String {
 
 /// Follow the `--estimates` table: a pass now, then one each time it changed and held for
 /// a poll.
-pub(super) fn follow_estimates(a: &TrackArgs, path: &Path) -> Result<(), Error> {
+fn follow_estimates(a: &TrackArgs, path: &Path) -> Result<(), Error> {
     let wait = poll(a)?;
     let mut said = HashSet::new();
     let mut alarms_said = HashSet::new();

@@ -5,7 +5,7 @@ use clap::{Parser, Subcommand, ValueEnum};
 
 pub(crate) mod amplitude;
 pub(crate) mod args;
-mod follow;
+pub(crate) mod follow;
 pub(crate) mod frf;
 pub(crate) mod ident;
 pub(crate) mod levels;

@@ -328,22 +328,15 @@ pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
     };
     check_paths(a, &records)?;
     if let Some(path) = &a.estimates {
-        return if a.follow {
-            super::follow::follow_estimates(a, path)
-        } else {
-            let (report, table) = estimates_pass(a, path, true)?;
-            print!("{report}");
-            write_outputs(a, &report, &table)
-        };
+        let (report, table) = estimates_pass(a, path, true)?;
+        print!("{report}");
+        return write_outputs(a, &report, &table);
     }
     // Settings wrong whatever the record, before any is read (else each would be skipped
     // for the same reason).
     a.fs.map(check_fs).transpose()?;
     let asked = super::ssi::analysis_of(&a.ssi)?;
     let mut store = hyst::store::CampaignStore::open(&a.out)?;
-    if a.follow {
-        return super::follow::follow_records(a, &asked, &mut store, records);
-    }
     let (report, table) = records_pass(a, &asked, &mut store, records, true)?;
     drop(store);
     print!("{report}");

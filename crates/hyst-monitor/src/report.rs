@@ -112,21 +112,7 @@ impl TrackReport {
             // The first few: a lasting change raises one every few records after.
             const SAID: usize = 5;
             for a in c.alarms.iter().take(SAID) {
-                let drivers: Vec<String> = a
-                    .drivers
-                    .iter()
-                    .filter(|d| d.1 >= 0.1)
-                    .map(|&(j, share)| {
-                        format!("mode {} ({:.0} %)", self.mode_name(j), 100.0 * share)
-                    })
-                    .collect();
-                writeln!(
-                    f,
-                    "ALARM (modes judged together) at record {} (time {} s), driven by {}",
-                    self.record_name(a.record),
-                    a.time,
-                    drivers.join(", ")
-                )?;
+                writeln!(f, "{}", self.joint_alarm_line(a))?;
             }
             if c.alarms.len() > SAID {
                 let last = &c.alarms[c.alarms.len() - 1];
@@ -262,23 +248,7 @@ impl TrackReport {
         }
         if let Some(c) = &self.joint {
             for a in &c.alarms {
-                let drivers: Vec<String> = a
-                    .drivers
-                    .iter()
-                    .filter(|d| d.1 >= 0.1)
-                    .map(|&(j, share)| {
-                        format!("mode {} ({:.0} %)", self.mode_name(j), 100.0 * share)
-                    })
-                    .collect();
-                lines.push((
-                    a.record,
-                    format!(
-                        "ALARM (modes judged together) at record {} (time {} s), driven by {}",
-                        self.record_name(a.record),
-                        a.time,
-                        drivers.join(", ")
-                    ),
-                ));
+                lines.push((a.record, self.joint_alarm_line(a)));
             }
         }
         if let Some(c) = &self.subspace {
@@ -295,6 +265,23 @@ impl TrackReport {
         }
         lines.sort_by_key(|l| l.0);
         lines.into_iter().map(|l| l.1).collect()
+    }
+
+    /// The joint chart's alarm as its line of text, with the modes that drove it (those
+    /// with a tenth of it or more).
+    fn joint_alarm_line(&self, a: &crate::joint::JointAlarm) -> String {
+        let drivers: Vec<String> = a
+            .drivers
+            .iter()
+            .filter(|d| d.1 >= 0.1)
+            .map(|&(j, share)| format!("mode {} ({:.0} %)", self.mode_name(j), 100.0 * share))
+            .collect();
+        format!(
+            "ALARM (modes judged together) at record {} (time {} s), driven by {}",
+            self.record_name(a.record),
+            a.time,
+            drivers.join(", ")
+        )
     }
 
     /// A mode's alarm as its line of text.
