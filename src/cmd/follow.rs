@@ -16,25 +16,19 @@ use std::time::{Duration, SystemTime};
 use hyst::monitor::TrackReport;
 
 use super::track::{
-    TrackArgs, check_paths, estimates_pass, record_files, records_pass, write_outputs,
+    TrackArgs, check_paths, checked_inputs, estimates_pass, record_files, records_pass,
+    records_setup, write_outputs,
 };
-use super::{Error, check_fs, fail};
+use super::{Error, fail};
 
 /// `hyst track --follow`: what a batch run checks first (the outputs against the inputs,
 /// the rate, the settings), then the folders or the table followed.
 pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
-    let records = if a.inputs.is_empty() {
-        Vec::new()
-    } else {
-        record_files(a)?
-    };
-    check_paths(a, &records)?;
+    let records = checked_inputs(a)?;
     if let Some(path) = &a.estimates {
         return follow_estimates(a, path);
     }
-    a.fs.map(check_fs).transpose()?;
-    let asked = super::ssi::analysis_of(&a.ssi)?;
-    let mut store = hyst::store::CampaignStore::open(&a.out)?;
+    let (asked, mut store) = records_setup(a)?;
     follow_records(a, &asked, &mut store, records)
 }
 

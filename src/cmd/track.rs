@@ -321,26 +321,41 @@ impl Sources {
 }
 
 pub(crate) fn run(a: &TrackArgs) -> Result<(), Error> {
+    let records = checked_inputs(a)?;
+    if let Some(path) = &a.estimates {
+        let (report, table) = estimates_pass(a, path, true)?;
+        print!("{report}");
+        return write_outputs(a, &report, &table);
+    }
+    let (asked, mut store) = records_setup(a)?;
+    let (report, table) = records_pass(a, &asked, &mut store, records, true)?;
+    drop(store);
+    print!("{report}");
+    write_outputs(a, &report, &table)
+}
+
+/// The record files of `--inputs` (none without), every output checked against every input
+/// before anything is read ([`check_paths`]).
+pub(super) fn checked_inputs(a: &TrackArgs) -> Result<Vec<PathBuf>, Error> {
     let records = if a.inputs.is_empty() {
         Vec::new()
     } else {
         record_files(a)?
     };
     check_paths(a, &records)?;
-    if let Some(path) = &a.estimates {
-        let (report, table) = estimates_pass(a, path, true)?;
-        print!("{report}");
-        return write_outputs(a, &report, &table);
-    }
-    // Settings wrong whatever the record, before any is read (else each would be skipped
-    // for the same reason).
+    Ok(records)
+}
+
+/// What a run on records needs before the first is read: the rate and the settings checked
+/// (wrong whatever the record, else each would be skipped for the same reason), the
+/// analysis asked for, and the campaign's store taken.
+pub(super) fn records_setup(
+    a: &TrackArgs,
+) -> Result<(hyst::covssi::AnalysisOptions, hyst::store::CampaignStore), Error> {
     a.fs.map(check_fs).transpose()?;
     let asked = super::ssi::analysis_of(&a.ssi)?;
-    let mut store = hyst::store::CampaignStore::open(&a.out)?;
-    let (report, table) = records_pass(a, &asked, &mut store, records, true)?;
-    drop(store);
-    print!("{report}");
-    write_outputs(a, &report, &table)
+    let store = hyst::store::CampaignStore::open(&a.out)?;
+    Ok((asked, store))
 }
 
 /// The options of the tracking: `--training`, or with `--follow` 336 records whatever has

@@ -101,16 +101,8 @@ fn joint_figure(
     dir: &std::path::Path,
     c: &crate::monitor::joint::JointChart,
 ) -> Result<(), String> {
-    use crate::plot::{colors, scatter};
-    let day = |i: usize| c.time.get(i).copied().unwrap_or(i as f64) / 86400.0;
-    let n = c.statistic.len();
-    let points = |range: std::ops::Range<usize>| -> Vec<(f64, f64)> {
-        range
-            .filter(|&i| c.statistic[i].is_finite() && c.time[i].is_finite())
-            .map(|i| (day(i), c.statistic[i]))
-            .collect()
-    };
-    scatter(
+    let alarms: Vec<usize> = c.alarms.iter().map(|a| a.record).collect();
+    crate::plot::scatter(
         &dir.join("joint.svg"),
         &format!(
             "Modes judged together: what {} shared factor(s) leave of {} modes' residuals",
@@ -119,28 +111,44 @@ fn joint_figure(
         ),
         "time (days)",
         "statistic Q",
-        &[
-            (
-                "training".to_string(),
-                points(0..c.training.min(n)),
-                colors::GREY,
-            ),
-            (
-                "later records".to_string(),
-                points(c.training.min(n)..n),
-                colors::BLUE,
-            ),
-            (
-                "alarm".to_string(),
-                c.alarms
-                    .iter()
-                    .filter(|a| a.record < n)
-                    .map(|a| (a.time / 86400.0, c.statistic[a.record]))
-                    .collect(),
-                colors::RED,
-            ),
-        ],
+        &timeline(&c.time, &c.statistic, c.training, &alarms, "alarm"),
     )
+}
+
+/// A statistic of each record (`values`, at `time` in s) as the series of a figure against
+/// time in days: the first `training` records, the later ones, and the `alarms` (records)
+/// under `alarm`; a record without a value or a time is left out.
+fn timeline(
+    time: &[f64],
+    values: &[f64],
+    training: usize,
+    alarms: &[usize],
+    alarm: &str,
+) -> Vec<crate::plot::Series> {
+    use crate::plot::colors;
+    let point = |i: usize| {
+        let (t, v) = (*time.get(i)?, *values.get(i)?);
+        (t.is_finite() && v.is_finite()).then_some((t / 86400.0, v))
+    };
+    let n = values.len();
+    let points = |range: std::ops::Range<usize>| range.filter_map(point).collect();
+    vec![
+        (
+            "training".to_string(),
+            points(0..training.min(n)),
+            colors::GREY,
+        ),
+        (
+            "later records".to_string(),
+            points(training.min(n)..n),
+            colors::BLUE,
+        ),
+        (
+            alarm.to_string(),
+            alarms.iter().filter_map(|&i| point(i)).collect(),
+            colors::RED,
+        ),
+    ]
 }
 
 /// `name` as a part of a file's name: letters, digits and `-` kept, anything else `_` (a
@@ -163,20 +171,19 @@ fn subspace_figure(
     dir: &std::path::Path,
     c: &crate::monitor::subspace::SubspaceChart,
 ) -> Result<(), String> {
-    use crate::plot::{colors, scatter};
     let day = |i: usize| c.time.get(i).copied().unwrap_or(i as f64) / 86400.0;
-    let points = |range: std::ops::Range<usize>| -> Vec<(f64, f64)> {
-        range
-            .filter(|&i| c.t2[i].is_finite())
-            .map(|i| (day(i), c.t2[i]))
-            .collect()
-    };
     let n = c.t2.len();
     let (start, end) = (day(0), day(n.saturating_sub(1)));
     let threshold: Vec<(f64, f64)> = (0..=200)
         .map(|k| (start + (end - start) * k as f64 / 200.0, c.threshold))
         .collect();
-    scatter(
+    let mut series = timeline(&c.time, &c.t2, c.training, &c.alarms, "CUSUM alarm");
+    series.push((
+        "threshold".to_string(),
+        threshold,
+        crate::plot::colors::GREY,
+    ));
+    crate::plot::scatter(
         &dir.join("subspace.svg"),
         &format!(
             "Subspace damage test: T² of {} entries (threshold at {} % per record)",
@@ -185,23 +192,6 @@ fn subspace_figure(
         ),
         "time (days)",
         "T²",
-        &[
-            (
-                "training".to_string(),
-                points(0..c.training.min(n)),
-                colors::GREY,
-            ),
-            (
-                "later records".to_string(),
-                points(c.training.min(n)..n),
-                colors::BLUE,
-            ),
-            (
-                "CUSUM alarm".to_string(),
-                c.alarms.iter().map(|&i| (day(i), c.t2[i])).collect(),
-                colors::RED,
-            ),
-            ("threshold".to_string(), threshold, colors::GREY),
-        ],
+        &series,
     )
 }

@@ -528,11 +528,11 @@ pub(crate) fn chart_modes(
     let mut alarms = Vec::new();
     let mut training_outliers = Vec::new();
     // Each record's time and covariates once, for lagged values.
-    let mut seen = vec![false; records];
+    let mut time = vec![f64::NAN; records];
     let mut at = Vec::new();
     for r in &rows {
-        if r.record < records && !seen[r.record] {
-            seen[r.record] = true;
+        if r.record < records && time[r.record].is_nan() {
+            time[r.record] = r.time;
             at.push((r.time, r.covariates.clone()));
         }
     }
@@ -562,12 +562,6 @@ pub(crate) fn chart_modes(
         }
     }
     let (joint, joint_error) = if opts.joint && reference.len() > 1 {
-        let mut time = vec![f64::NAN; records];
-        for r in &rows {
-            if r.record < records {
-                time[r.record] = r.time;
-            }
-        }
         // Every mode regressed on the same terms (the union of their environmental
         // models), so that a term one mode's model took for an effect the modes share (a
         // breakpoint fitted to an episode of it) is taken by every mode in its proportion,
@@ -624,6 +618,37 @@ pub(crate) fn chart_modes(
     }
 }
 
+/// Whether row `r` is one of `mode`'s that a chart takes: of a record of the campaign, with
+/// a standard error and every covariate.
+fn chartable(r: &TrackRow, mode: usize, records: usize) -> bool {
+    r.mode == mode
+        && r.record < records
+        && r.frequency_se_hz.is_some()
+        && r.covariates.iter().all(|v| v.is_finite())
+}
+
+/// A baseline with the frequencies and regressors it was fitted on.
+type FittedBaseline = (Baseline, Vec<f64>, Vec<Vec<f64>>);
+
+/// The baseline of the frequencies of `rows` on `environment`'s regressors, with the
+/// frequencies and regressors it was fitted on.
+fn baseline_of(
+    rows: &[&TrackRow],
+    environment: &Environment,
+    series: &Series,
+) -> Result<FittedBaseline, MonitorError> {
+    let f: Vec<f64> = rows.iter().map(|r| r.frequency_hz).collect();
+    let se: Vec<f64> = rows
+        .iter()
+        .map(|r| r.frequency_se_hz.unwrap_or(0.0))
+        .collect();
+    let x: Vec<Vec<f64>> = rows
+        .iter()
+        .map(|r| environment.features(series, r.time, &r.covariates))
+        .collect();
+    fit_baseline(&f, &se, &x).map(|b| (b, f, x))
+}
+
 /// The union of the modes' environmental models' terms (`None` when none has a term): one
 /// term per covariate and lag, with the breakpoint or curvature any mode's model gave it
 /// (the first's, when two gave it different ones: one regressor per covariate and lag, so
@@ -663,29 +688,16 @@ fn residuals_on(
     apart: &[usize],
     opts: &TrackOptions,
 ) -> Option<Vec<f64>> {
-    let usable = |r: &&TrackRow| {
-        r.mode == mode
-            && r.record < records
-            && r.frequency_se_hz.is_some()
-            && r.covariates.iter().all(|v| v.is_finite())
-            && !apart.contains(&r.record)
-    };
-    let features = |r: &TrackRow| environment.features(series, r.time, &r.covariates);
+    let usable = |r: &&TrackRow| chartable(r, mode, records) && !apart.contains(&r.record);
     let train: Vec<&TrackRow> = rows
         .iter()
         .filter(usable)
         .filter(|r| r.record < opts.training)
         .collect();
-    let f: Vec<f64> = train.iter().map(|r| r.frequency_hz).collect();
-    let se: Vec<f64> = train
-        .iter()
-        .map(|r| r.frequency_se_hz.unwrap_or(0.0))
-        .collect();
-    let x: Vec<Vec<f64>> = train.iter().map(|r| features(r)).collect();
-    let b = fit_baseline(&f, &se, &x).ok()?;
+    let (b, _, _) = baseline_of(&train, environment, series).ok()?;
     let mut z = vec![f64::NAN; records];
     for r in rows.iter().filter(usable) {
-        let x = features(r);
+        let x = environment.features(series, r.time, &r.covariates);
         z[r.record] = b
             .residual(r.frequency_hz, r.frequency_se_hz.unwrap_or(0.0), &x)
             .2;
@@ -710,11 +722,7 @@ fn chart_mode(
     // error and every covariate).
     let mut row_of: Vec<Option<usize>> = vec![None; records];
     for (k, r) in rows.iter().enumerate() {
-        if r.mode == mode
-            && r.record < records
-            && r.frequency_se_hz.is_some()
-            && r.covariates.iter().all(|v| v.is_finite())
-        {
+        if chartable(r, mode, records) {
             row_of[r.record] = Some(k);
         }
     }
@@ -851,16 +859,8 @@ fn fit_training(
         Environment::linear(q)
     };
     let fit = |train: &[usize]| {
-        let f: Vec<f64> = train.iter().map(|&k| rows[k].frequency_hz).collect();
-        let se: Vec<f64> = train
-            .iter()
-            .map(|&k| rows[k].frequency_se_hz.unwrap_or(0.0))
-            .collect();
-        let x: Vec<Vec<f64>> = train
-            .iter()
-            .map(|&k| env.features(series, rows[k].time, &rows[k].covariates))
-            .collect();
-        fit_baseline(&f, &se, &x).map(|b| (b, f, x))
+        let picked: Vec<&TrackRow> = train.iter().map(|&k| &rows[k]).collect();
+        baseline_of(&picked, &env, series)
     };
     let (mut b, f, x) = fit(&train)?;
     let residuals: Vec<f64> = f.iter().zip(&x).map(|(f, x)| f - b.predict(x).0).collect();
