@@ -252,3 +252,33 @@ fn follow_takes_rows_of_estimates_and_prints_alarms_as_they_come() {
         assert!(said.contains(a), "{a} not printed: {said}");
     }
 }
+
+/// A `--poll` that is not a positive number of seconds up to a day is refused, named,
+/// before anything is followed (else `--follow` would spin, or sleep for ever).
+#[test]
+fn a_bad_poll_is_refused_naming_it() {
+    let dir = scratch("bad_poll");
+    let table = dir.join("estimates.csv");
+    std::fs::write(&table, "record,a_hz\nr0,1.0\n").unwrap();
+    for poll in ["0", "-1", "1e9", "NaN"] {
+        let out = Command::new(env!("CARGO_BIN_EXE_hyst"))
+            .args([
+                "track",
+                "--estimates",
+                s(&table),
+                "--out",
+                s(&dir.join("out")),
+                "--follow",
+                "--poll",
+                poll,
+            ])
+            .output()
+            .expect("the hyst binary runs");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "--poll {poll}: {err}");
+        assert!(
+            err.contains("--poll") && !err.contains("panicked"),
+            "--poll {poll}: {err}"
+        );
+    }
+}
