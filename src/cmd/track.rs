@@ -427,9 +427,15 @@ pub(super) fn records_pass(
     // What the options leave to the record (the decimation, the lag) is read once, from
     // the first record that loads, and kept for every record: each is analysed alike.
     // What makes each record's result: its source, the rate and channels asked for, and the
-    // analysis options; a stored result made otherwise is identified again.
+    // analysis options, and the version of what is kept of it; a stored result made
+    // otherwise is identified again.
     let analysis = resolved_analysis(asked, &names, &load, verbose);
-    let settings = format!("{:?}|{:?}|{analysis:?}", a.fs, a.columns);
+    let settings = format!(
+        "{:?}|{:?}|{analysis:?}|{}",
+        a.fs,
+        a.columns,
+        hyst_monitor::records::IDENTIFIED_VERSION
+    );
     let keys = sources.keys(a, &settings);
     let done: Vec<RecordModes> = names
         .iter()

@@ -39,6 +39,7 @@ pub mod matching;
 pub mod records;
 mod report;
 pub mod screen;
+mod sensitivity;
 pub mod subspace;
 pub mod track;
 pub mod training;

@@ -20,6 +20,10 @@ pub struct RecordModes {
     pub outcome: Result<Identified, String>,
 }
 
+/// The version of what [`identify_record`] keeps of a record (2: its correlations' parts
+/// too); a store keyed by it identifies a record kept by an earlier version again.
+pub const IDENTIFIED_VERSION: u32 = 2;
+
 /// The modes a record gave.
 #[derive(Debug, Clone, PartialEq, Default)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]

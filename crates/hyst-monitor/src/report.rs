@@ -175,6 +175,32 @@ impl TrackReport {
                     format!("alarmed at record(s) {:?}", c.alarms)
                 }
             )?;
+            if c.directions > 0 {
+                writeln!(
+                    f,
+                    "  charted: the residual's part along the {} reference modes' frequency sensitivities (a change of a mode's frequency moves it there; the full T² spreads it over all {} entries), limit h = {:.2}",
+                    c.directions, c.dof, c.limit
+                )?;
+            }
+            if let Some(m) = &c.scale_model {
+                writeln!(
+                    f,
+                    "  each record's residual covariance scaled by its own estimation noise (from its {} parts): c = {:.3} + {:.4e} × its scatter per entry (c from {:.2} to {:.2} over the records)",
+                    crate::subspace::PARTS,
+                    m.intercept,
+                    m.slope,
+                    c.scale
+                        .iter()
+                        .copied()
+                        .filter(|v| v.is_finite())
+                        .fold(f64::INFINITY, f64::min),
+                    c.scale
+                        .iter()
+                        .copied()
+                        .filter(|v| v.is_finite())
+                        .fold(f64::NEG_INFINITY, f64::max),
+                )?;
+            }
         }
         if let Some(e) = &self.subspace_error {
             writeln!(f, "subspace damage test not run: {e}")?;

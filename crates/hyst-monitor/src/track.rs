@@ -332,17 +332,15 @@ fn subspace_over(
         .iter()
         .zip(records.iter().zip(covariates))
         .map(|(c, (r, x))| {
-            let h = c
-                .filter(|c| c.channels == channels)
-                .and_then(|c| c.hankel(blocks))?;
+            let c = c.filter(|c| c.channels == channels)?;
             let features = match &environment {
                 Some(e) => e.features(&series, r.time, x.as_ref()?),
                 None => Vec::new(),
             };
-            features
-                .iter()
-                .all(|v| v.is_finite())
-                .then_some((h, features))
+            if !features.iter().all(|v| v.is_finite()) {
+                return None;
+            }
+            c.record(blocks, features)
         })
         .collect();
     let time: Vec<f64> = records.iter().map(|r| r.time).collect();

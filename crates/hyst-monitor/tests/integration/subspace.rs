@@ -7,7 +7,7 @@
 
 use crate::common;
 
-use hyst_monitor::subspace::{hankel, subspace_chart};
+use hyst_monitor::subspace::{SubspaceRecord, hankel, subspace_chart};
 use hyst_monitor::{Cusum, RecordModes, Side, TrackOptions, identify_record, track};
 use rayon::prelude::*;
 
@@ -37,7 +37,14 @@ fn subspace_test_beside_the_modal_chart() {
                     covariates: vec![r.temperature],
                     outcome: identify_record(&views, c.fs, &opts).map_err(|e| e.to_string()),
                 };
-                (modes, Some((hankel(&views, 2), Vec::new())))
+                (
+                    modes,
+                    Some(SubspaceRecord::new(
+                        hankel(&views, 2),
+                        views.len(),
+                        Vec::new(),
+                    )),
+                )
             })
             .unzip();
         let mut track_opts = TrackOptions::default();
