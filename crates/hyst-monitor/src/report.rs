@@ -176,11 +176,40 @@ impl TrackReport {
                 }
             )?;
             if c.directions > 0 {
+                let names = self.subspace_mode_names(c.directions);
                 writeln!(
                     f,
-                    "  charted: the residual's part along the {} reference modes' frequency sensitivities (a change of a mode's frequency moves it there; the full T² spreads it over all {} entries), limit h = {:.2}",
-                    c.directions, c.dof, c.limit
+                    "  charted: each of the {} reference modes' frequency change estimated from the residual (along its sensitivity; the full T² spreads it over all {} entries), two-sided, limits h = {}",
+                    c.directions,
+                    c.dof,
+                    c.mode_limits
+                        .iter()
+                        .map(|h| format!("{h:.2}"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
                 )?;
+                for a in c.mode_alarms.iter().take(5) {
+                    writeln!(
+                        f,
+                        "  ALARM (subspace test): mode {} {} at record {} (time {} s), its frequency estimated {:+.2} % from the reference's prediction",
+                        names[a.mode],
+                        if a.side == crate::Side::Up {
+                            "rose"
+                        } else {
+                            "fell"
+                        },
+                        a.record,
+                        c.time.get(a.record).copied().unwrap_or(f64::NAN),
+                        100.0 * a.shift
+                    )?;
+                }
+                if c.mode_alarms.len() > 5 {
+                    writeln!(
+                        f,
+                        "    and {} more alarm(s) of the subspace test (all in report.json's `subspace.mode_alarms`)",
+                        c.mode_alarms.len() - 5
+                    )?;
+                }
             }
             if let Some(m) = &c.scale_model {
                 writeln!(
@@ -206,6 +235,30 @@ impl TrackReport {
             writeln!(f, "subspace damage test not run: {e}")?;
         }
         Ok(())
+    }
+
+    /// The subspace test's `count` directions named as the reference's modes when they are
+    /// as many (both in ascending frequency), else "pole k" from 1.
+    fn subspace_mode_names(&self, count: usize) -> Vec<String> {
+        if self.reference.len() == count {
+            let mut by_frequency: Vec<usize> = (0..count).collect();
+            by_frequency.sort_by(|&a, &b| {
+                self.reference[a]
+                    .frequency_hz
+                    .total_cmp(&self.reference[b].frequency_hz)
+            });
+            by_frequency
+                .iter()
+                .map(|&j| {
+                    self.mode_names
+                        .get(j)
+                        .cloned()
+                        .unwrap_or_else(|| format!("{}", j + 1))
+                })
+                .collect()
+        } else {
+            (1..=count).map(|k| format!("(pole {k})")).collect()
+        }
     }
 
     /// The names of mode `j`'s `count` regressors: each covariate, lagged, and its hinge or

@@ -22,14 +22,15 @@ type C64 = Complex<f64>;
 /// relative change of each mode's frequency of the reference `h0` (its mean Hankel matrix,
 /// `channels` rows per block row) at model order `order`, for the left null space `null`
 /// and the column compression `columns`; `None` when the reference holds no oscillating pole
-/// or its eigenvectors cannot be found.
+/// or its eigenvectors cannot be found; beside it, each mode's pole frequency (cycles per
+/// sample, the damped frequency's).
 pub(crate) fn frequency_sensitivity(
     h0: &DMatrix<f64>,
     channels: usize,
     order: usize,
     null: &DMatrix<f64>,
     columns: &DMatrix<f64>,
-) -> Option<DMatrix<f64>> {
+) -> Option<(DMatrix<f64>, Vec<f64>)> {
     let rows = h0.nrows();
     if channels == 0 || !rows.is_multiple_of(channels) || order == 0 {
         return None;
@@ -74,7 +75,11 @@ pub(crate) fn frequency_sensitivity(
             DVector::from_column_slice(z.as_slice())
         })
         .collect();
-    (!sens.is_empty()).then(|| DMatrix::from_columns(&sens))
+    let frequencies = poles
+        .iter()
+        .map(|&j| values[j].arg() / (2.0 * std::f64::consts::PI))
+        .collect();
+    (!sens.is_empty()).then(|| (DMatrix::from_columns(&sens), frequencies))
 }
 
 /// O (rows × order) and 𝒞 (order × columns) of `h` by its SVD, the singular values split
@@ -172,7 +177,13 @@ mod tests {
         let order = 4;
         let null = eigenvectors(&h0 * h0.transpose(), 12 - order, false);
         let columns = eigenvectors(h0.transpose() * &h0, order, true);
-        let j = frequency_sensitivity(&h0, 3, order, &null, &columns).expect("sensitivity");
+        let (j, frequencies) =
+            frequency_sensitivity(&h0, 3, order, &null, &columns).expect("sensitivity");
+        // The poles' (damped) frequencies in cycles per sample: f√(1 − ζ²)·Δt.
+        for (f, (hz, z)) in frequencies.iter().zip(modes) {
+            let damped = hz * (1.0f64 - z * z).sqrt() * dt;
+            assert!((f - damped).abs() < 1e-9, "{f} against {damped}");
+        }
         assert_eq!(j.shape(), ((12 - order) * order, 2));
         let eps = 1e-5;
         for m in 0..2 {

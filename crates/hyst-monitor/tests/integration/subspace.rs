@@ -109,10 +109,12 @@ fn subspace_test_beside_the_modal_chart() {
             mean(&chart.t2[first_change..]),
         );
         println!(
-            "seed {seed}: subspace test with the environmental model ({} entries, limit {:.2}): {env_passed} of {} undamaged above its threshold, {env_early} alarms before the change, change found after {env_delay:?} h",
+            "seed {seed}: subspace test with the environmental model ({} entries; {} modes' frequency changes charted, limits {:?}): {env_passed} of {} undamaged above its threshold, {env_early} alarms before the change, change found after {env_delay:?} h (first alarms {:?})",
             env.dof,
-            env.limit,
-            first_change - training
+            env.directions,
+            env.mode_limits,
+            first_change - training,
+            env.mode_alarms.iter().take(3).collect::<Vec<_>>(),
         );
         let undamaged = first_change - training;
         let passed = chart
