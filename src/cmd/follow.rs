@@ -52,8 +52,9 @@ fn poll(a: &TrackArgs) -> Result<Duration, Error> {
     }
 }
 
-/// Print the records of `report` not in `said` (each with what it gave) and the alarms not
-/// in `alarms_said`, and remember both.
+/// Print the records of `report` whose outcome was not said (each with what it gave: a gap
+/// said as skipped is said again when its file lands) and the alarms not in `alarms_said`,
+/// and remember both.
 fn say_new(report: &TrackReport, said: &mut HashSet<String>, alarms_said: &mut HashSet<String>) {
     let mut modes: HashMap<&str, usize> = HashMap::new();
     let mut order: Vec<&str> = Vec::new();
@@ -65,12 +66,12 @@ fn say_new(report: &TrackReport, said: &mut HashSet<String>, alarms_said: &mut H
         *n += 1;
     }
     for name in order {
-        if said.insert(name.to_string()) {
+        if said.insert(format!("{name}: tracked")) {
             println!("{name}: {} mode(s) tracked", modes[name]);
         }
     }
     for (name, why) in &report.skipped {
-        if said.insert(name.clone()) {
+        if said.insert(format!("{name}: skipped: {why}")) {
             println!("{name}: skipped: {why}");
         }
     }
@@ -86,7 +87,13 @@ fn say_new(report: &TrackReport, said: &mut HashSet<String>, alarms_said: &mut H
 fn say_first(report: &TrackReport, said: &mut HashSet<String>, alarms_said: &mut HashSet<String>) {
     let text = report.to_string();
     print!("{text}");
-    said.extend(report.rows.iter().map(|r| r.name.clone()));
+    said.extend(report.rows.iter().map(|r| format!("{}: tracked", r.name)));
+    said.extend(
+        report
+            .skipped
+            .iter()
+            .map(|(name, why)| format!("{name}: skipped: {why}")),
+    );
     for line in report.alarm_lines() {
         if !text.contains(&line) {
             println!("{line}");
@@ -116,7 +123,6 @@ fn follow_records(
                 Ok((report, table)) => {
                     if first_pass {
                         say_first(&report, &mut said, &mut alarms_said);
-                        said.extend(report.skipped.iter().map(|s| s.0.clone()));
                     } else {
                         say_new(&report, &mut said, &mut alarms_said);
                     }

@@ -130,9 +130,9 @@ const PAIRS: &[Pair] = &[
             ("html", "Python: report.html()"),
             (
                 "follow",
-                "records as they land in a folder, with the command's store: not yet in Python, which is given its records",
+                "Python: hyst.follow(folders, ...), an iterator of the lines the command prints",
             ),
-            ("poll", "the --follow run's looks at the folder"),
+            ("poll", "Python: hyst.follow(poll=)"),
         ],
         python_only: &[
             (

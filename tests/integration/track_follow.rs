@@ -166,6 +166,86 @@ fn follow_takes_record_files_as_a_batch_run_would() {
     same_outputs(&out, &batch_over(10, "batch10"));
 }
 
+/// With a covariates file timing every record, the files not landed yet are gaps of the
+/// first pass (said as skipped); each is said once more, with its modes, when it lands (it
+/// was said as skipped alone before), and the table then is a batch run's.
+#[test]
+fn a_gap_is_said_again_when_its_file_lands() {
+    let Some(path) = common::data_file("oma/data_3dof.csv") else {
+        return;
+    };
+    let t = hyst::io::read_csv(&path).unwrap();
+    let col = |c: &str| t.column(c).unwrap().to_vec();
+    let (y1, y2, y3) = (col("y1"), col("y2"), col("y3"));
+    let inbox = scratch("gap_inbox");
+    let land = |k: usize| {
+        let r = (k - 1) * 6000..k * 6000;
+        hyst::io::write_csv(
+            &inbox.join(format!("rec_{k}.csv")),
+            &["y1", "y2", "y3"],
+            &[&y1[r.clone()], &y2[r.clone()], &y3[r]],
+        )
+        .unwrap();
+    };
+    let covariates = scratch("gap_covariates").join("covariates.csv");
+    let rows: String = (1..=8)
+        .map(|k| format!("rec_{k}.csv,{},{}\n", 300.0 * k as f64, 10.0 + k as f64))
+        .collect();
+    std::fs::write(&covariates, format!("record,time,temperature\n{rows}")).unwrap();
+    let out = scratch("gap_out");
+    let log = scratch("gap_logs").join("follow.txt");
+    let args = [
+        "track",
+        "--inputs",
+        s(&inbox),
+        "--fs",
+        "20",
+        "--covariates",
+        s(&covariates),
+        "--training",
+        "4",
+        "--out",
+        s(&out),
+        "--follow",
+        "--poll",
+        "0.2",
+    ];
+    (1..=5).for_each(land);
+    let mut child = start(&args, &log);
+    wait_for(&out, 5, &mut child);
+    (6..=8).for_each(land);
+    wait_for(&out, 8, &mut child);
+    kill(child);
+    let batch_dir = scratch("gap_batch");
+    batch(&[
+        "track",
+        "--inputs",
+        s(&inbox),
+        "--fs",
+        "20",
+        "--covariates",
+        s(&covariates),
+        "--training",
+        "4",
+        "--out",
+        s(&batch_dir),
+    ]);
+    same_outputs(&out, &batch_dir);
+    let said = std::fs::read_to_string(&log).unwrap();
+    for k in 6..=8 {
+        let name = format!("rec_{k}.csv");
+        assert!(
+            said.contains(&format!("skipped {name}: no such file")),
+            "{said}"
+        );
+        let tracked = said
+            .lines()
+            .filter(|l| l.starts_with(&format!("{name}: ")) && l.ends_with("mode(s) tracked"))
+            .count();
+        assert_eq!(tracked, 1, "{said}");
+    }
+}
+
 /// An estimates table that grows row by row under `hyst track --follow --estimates`: the
 /// alarm of a 2 % drop of one mode is printed once, as it happens; after each growth the
 /// table and report are a batch run's over the rows so far; killed and started again, the

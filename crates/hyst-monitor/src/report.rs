@@ -189,19 +189,7 @@ impl TrackReport {
                         .join(", ")
                 )?;
                 for a in c.mode_alarms.iter().take(5) {
-                    writeln!(
-                        f,
-                        "  ALARM (subspace test): mode {} {} at record {} (time {} s), its frequency estimated {:+.2} % from the reference's prediction",
-                        names[a.mode],
-                        if a.side == crate::Side::Up {
-                            "rose"
-                        } else {
-                            "fell"
-                        },
-                        a.record,
-                        c.time.get(a.record).copied().unwrap_or(f64::NAN),
-                        100.0 * a.shift
-                    )?;
+                    writeln!(f, "  {}", self.subspace_alarm_line(c, a, &names))?;
                 }
                 if c.mode_alarms.len() > 5 {
                     writeln!(
@@ -235,6 +223,28 @@ impl TrackReport {
             writeln!(f, "subspace damage test not run: {e}")?;
         }
         Ok(())
+    }
+
+    /// The line of an alarm of the subspace test's chart of one mode (`names`: the
+    /// directions' names).
+    fn subspace_alarm_line(
+        &self,
+        c: &crate::subspace::SubspaceChart,
+        a: &crate::subspace::SubspaceAlarm,
+        names: &[String],
+    ) -> String {
+        format!(
+            "ALARM (subspace test): mode {} {} at record {} (time {} s), its frequency estimated {:+.2} % from the reference's prediction",
+            names.get(a.mode).map_or("?", String::as_str),
+            if a.side == crate::Side::Up {
+                "rose"
+            } else {
+                "fell"
+            },
+            self.record_name(a.record),
+            c.time.get(a.record).copied().unwrap_or(f64::NAN),
+            100.0 * a.shift
+        )
     }
 
     /// The subspace test's `count` directions named as the reference's modes when they are
@@ -330,7 +340,12 @@ impl TrackReport {
                 lines.push((a.record, self.joint_alarm_line(a)));
             }
         }
-        if let Some(c) = &self.subspace {
+        if let Some(c) = self.subspace.as_ref().filter(|c| c.directions > 0) {
+            let names = self.subspace_mode_names(c.directions);
+            for a in &c.mode_alarms {
+                lines.push((a.record, self.subspace_alarm_line(c, a, &names)));
+            }
+        } else if let Some(c) = &self.subspace {
             for &i in &c.alarms {
                 lines.push((
                     i,

@@ -117,6 +117,47 @@ pub(crate) fn identify_record(
     serde_json::to_string(&r).map_err(value_error)
 }
 
+/// A campaign's record files as `hyst track --inputs … --covariates …` takes them: the files
+/// of `inputs` (files, or folders whose files are taken in name order) put in time order by
+/// the covariates file when it times every one ([`hyst::campaign::order_records`]), each as
+/// (path, name, time, covariates, why it has no record: a gap the covariates file times);
+/// and the covariates' names.
+#[pyfunction]
+#[pyo3(signature = (inputs, covariates=None))]
+#[allow(clippy::type_complexity)]
+pub(crate) fn campaign_records(
+    inputs: Vec<std::path::PathBuf>,
+    covariates: Option<std::path::PathBuf>,
+) -> PyResult<(
+    Vec<(String, String, f64, Vec<f64>, Option<String>)>,
+    Vec<String>,
+)> {
+    let files = hyst::io::list_records(&inputs).map_err(value_error)?;
+    let covariates = match covariates {
+        Some(p) => hyst::io::read_covariates(&p).map_err(value_error)?,
+        None => Default::default(),
+    };
+    let ordered = hyst::campaign::order_records(files, &covariates);
+    let rows = ordered
+        .files
+        .iter()
+        .enumerate()
+        .map(|(i, f)| {
+            let name = f.file_name().map_or_else(
+                || f.display().to_string(),
+                |n| n.to_string_lossy().into_owned(),
+            );
+            let (time, x) = hyst::campaign::covariates_of(&covariates, &name, i as f64);
+            let gap = ordered
+                .gaps
+                .contains(&name)
+                .then(|| hyst::campaign::GAP_REASON.to_string());
+            (f.display().to_string(), name, time, x, gap)
+        })
+        .collect();
+    Ok((rows, covariates.1))
+}
+
 /// Track records identified apart (each a `RecordModes` JSON document, in time order), as
 /// `hyst.track` tracks the records it identifies.
 #[pyfunction]

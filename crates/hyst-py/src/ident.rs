@@ -24,6 +24,8 @@ pub(crate) struct Report {
     json: String,
     /// The report's page, for reports that have one (merged setups).
     html: Option<String>,
+    /// Its alarms' lines, for a campaign's report.
+    alarm_lines: Vec<String>,
 }
 
 impl Report {
@@ -34,7 +36,14 @@ impl Report {
             text: report.to_string(),
             json: serde_json::to_string(&report).map_err(value_error)?,
             html: None,
+            alarm_lines: Vec::new(),
         })
+    }
+
+    /// This report with its alarms' lines.
+    pub(crate) fn with_alarm_lines(mut self, lines: Vec<String>) -> Report {
+        self.alarm_lines = lines;
+        self
     }
 
     /// This report with its page.
@@ -46,6 +55,12 @@ impl Report {
 
 #[pymethods]
 impl Report {
+    /// A campaign's alarms, one line each in record order, as `hyst track --follow` prints
+    /// them (empty for other reports).
+    fn alarm_lines(&self) -> Vec<String> {
+        self.alarm_lines.clone()
+    }
+
     /// The report as the JSON document the command's `--json` writes.
     fn to_json(&self) -> String {
         self.json.clone()

@@ -432,6 +432,7 @@ fn _hyst(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(distributed::campaign_analysis, m)?)?;
     m.add_function(wrap_pyfunction!(distributed::identify_record, m)?)?;
     m.add_function(wrap_pyfunction!(distributed::track_identified, m)?)?;
+    m.add_function(wrap_pyfunction!(distributed::campaign_records, m)?)?;
     m.add_class::<ident::Report>()?;
     m.add_class::<SsiResult>()?;
     Ok(())

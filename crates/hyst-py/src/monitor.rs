@@ -151,7 +151,8 @@ impl Campaign {
             .map_err(value_error)?;
         report.name_covariates(self.covariate_names);
         let page = hyst::html::track_page(&report);
-        Report::of("records", report).map(|r| r.with_html(page))
+        let lines = report.alarm_lines();
+        Report::of("records", report).map(|r| r.with_html(page).with_alarm_lines(lines))
     }
 }
 

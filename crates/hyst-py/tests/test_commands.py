@@ -3,6 +3,7 @@
 same JSON documents (the run time and the record's name aside)."""
 
 import json
+import os
 import subprocess
 
 import numpy as np
@@ -263,6 +264,70 @@ def test_track_on_a_local_dask_cluster_gives_the_commands_report(data_dir, hyst_
           f"({dask:.1f} s)")
     with pytest.raises(ValueError, match="give file paths"):
         hyst.track([y[:4000]], 20.0, client=client)
+
+
+def test_follow_gives_the_commands_report_as_records_land(data_dir, hyst_bin, tmp_path):
+    """`hyst.follow` on a folder where twelve windows of the 3-DOF record land one after
+    another (four there at the start, each later one written elsewhere and moved in), with a
+    covariates file timing them: once all have landed its report is `hyst track --inputs
+    <folder> --covariates` 's over the same files; the first pass says the files not landed
+    as gaps and each is said once when it lands; no alarm line twice. A new follow over the
+    whole folder (a stop and a start) gives the same report in one pass."""
+    import threading
+    import time
+
+    from test_ssi import read_record
+
+    y, _ = read_record(data_dir / "oma" / "data_3dof.csv")
+    staging, folder = tmp_path / "staging", tmp_path / "records"
+    staging.mkdir()
+    folder.mkdir()
+    cov = tmp_path / "covariates.csv"
+    cov.write_text("record,time,temperature\n" + "".join(
+        f"w{i:02d}.npy,{200.0 * i},{10.0 + 3.0 * np.sin(i)}\n" for i in range(12)))
+
+    def land(i):
+        np.save(staging / f"w{i:02d}.npy", y[i * 4000:(i + 1) * 4000])
+        os.replace(staging / f"w{i:02d}.npy", folder / f"w{i:02d}.npy")
+
+    for i in range(4):
+        land(i)
+    followed = hyst.follow(folder, 20.0, covariates=cov, training=6, poll=0.2)
+
+    def later():
+        for i in range(4, 12):
+            time.sleep(0.5)
+            land(i)
+
+    lander = threading.Thread(target=later)
+    lander.start()
+    lines, deadline = [], time.monotonic() + 600
+    for line in followed:
+        lines.append(line)
+        if len(followed.taken) == 12 and followed.waiting == 0:
+            break
+        assert time.monotonic() < deadline, lines
+    lander.join()
+    # The first pass's report: the files the covariates file times but that have not landed
+    # are gaps, said as skipped; each is said again, once, when it lands.
+    for i in range(4, 12):
+        assert any(f"skipped w{i:02d}.npy: no such file" in l for l in lines), i
+        assert lines.count(f"w{i:02d}.npy: 3 mode(s) tracked") == 1, (i, lines)
+    out = tmp_path / "track"
+    run(hyst_bin, "track", "--inputs", folder, "--fs", 20, "--covariates", cov, "--training",
+        6, "--out", out)
+    doc = comparable(followed.report.to_dict())
+    assert doc == document(out / "report.json")
+    alarms = [l.strip() for l in lines if l.strip().startswith("ALARM")]
+    assert len(alarms) == len(set(alarms)), alarms
+    for a in followed.report.alarm_lines():
+        assert any(a in l for l in lines), a
+    again = hyst.follow(folder, 20.0, covariates=cov, training=6, poll=0.2, passes=1)
+    text = "\n".join(again)
+    assert comparable(again.report.to_dict()) == doc
+    assert text.strip() == str(again.report).strip()
+    with pytest.raises(ValueError, match="poll"):
+        hyst.follow(folder, 20.0, poll=0.0)
 
 
 def test_track_with_the_level_covariate_gives_the_commands_report(data_dir, hyst_bin, tmp_path):

@@ -18,11 +18,11 @@ dicts in the JSON schema ``--params`` reads, reports are :class:`Report` objects
 
 from ._hyst import Report, SsiResult
 from ._modal import amplitude, ssi
-from ._monitor import track, track_estimates
+from ._monitor import Follow, follow, track, track_estimates
 from ._oscillator import excite, identify, levels, refine, simulate
 from ._read import Record, read
 
 __all__ = [
     "amplitude", "excite", "identify", "levels", "read", "Record", "refine", "Report",
-    "simulate", "ssi", "SsiResult", "track", "track_estimates",
+    "simulate", "ssi", "SsiResult", "track", "track_estimates", "follow", "Follow",
 ]

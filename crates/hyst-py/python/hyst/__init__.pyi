@@ -1,6 +1,6 @@
 import os
 from dataclasses import dataclass
-from typing import Any, Literal, Mapping, Optional, Sequence, Union, overload
+from typing import Any, Iterator, Literal, Mapping, Optional, Sequence, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -43,6 +43,7 @@ class SsiResult:
     ) -> None: ...
 
 class Report:
+    def alarm_lines(self) -> list[str]: ...
     def html(self) -> str: ...
     def to_json(self) -> str: ...
     def to_dict(self) -> dict[str, Any]: ...
@@ -145,6 +146,45 @@ def track(
     calibrate: bool = ...,
     joint_chart: bool = ...,
 ) -> Report: ...
+
+class Follow:
+    report: Optional[Report]
+    taken: list[str]
+    @property
+    def waiting(self) -> int: ...
+    def __iter__(self) -> Iterator[str]: ...
+    def __next__(self) -> str: ...
+
+def follow(
+    inputs: Union[str, os.PathLike[str], Sequence[Union[str, os.PathLike[str]]]],
+    fs: Optional[float] = ...,
+    *,
+    covariates: Optional[Union[str, os.PathLike[str]]] = ...,
+    training: Optional[int] = ...,
+    poll: float = ...,
+    passes: Optional[int] = ...,
+    whiten: bool = ...,
+    environment_model: bool = ...,
+    reference: Optional[Union[str, os.PathLike[str], SsiResult]] = ...,
+    block_rows: Optional[int] = ...,
+    lag_seconds: Optional[float] = ...,
+    lag_periods: Optional[tuple[float, float]] = ...,
+    decimate: Optional[int] = ...,
+    max_order: Optional[int] = ...,
+    order_step: int = ...,
+    references: Optional[Sequence[int]] = ...,
+    df: Optional[float] = ...,
+    dzeta: Optional[float] = ...,
+    dmac: Optional[float] = ...,
+    dreal: Optional[float] = ...,
+    refine: bool = ...,
+    joint: bool = ...,
+    ssi_errors: Optional[int] = ...,
+    max_damping: Optional[float] = ...,
+    level_covariate: bool = ...,
+    calibrate: bool = ...,
+    joint_chart: bool = ...,
+) -> Follow: ...
 
 def track_estimates(
     estimates: Union[str, os.PathLike[str]],

@@ -1,5 +1,6 @@
-"""Monitoring: :func:`track` (``hyst track``; on a Dask cluster with ``client=``) and
-:func:`track_estimates` (``hyst track --estimates``)."""
+"""Monitoring: :func:`track` (``hyst track``; on a Dask cluster with ``client=``),
+:func:`follow` (``hyst track --follow``) and :func:`track_estimates` (``hyst track
+--estimates``)."""
 
 import numpy as _np
 
@@ -274,6 +275,231 @@ def _track_on_dask(client, records, fs, *, times, covariates, reference, trackin
     return _hyst.track_identified(
         identified, covariate_names=cov_names, tracking=tracking, reference=ref,
     )
+
+
+def follow(inputs, fs=None, *, covariates=None, training=None, poll=10.0, passes=None,
+           whiten=True, environment_model=True, reference=None, block_rows=None,
+           lag_seconds=None, lag_periods=None, decimate=None, max_order=None, order_step=1,
+           references=None, df=None, dzeta=None, dmac=None, dreal=None, refine=True,
+           joint=True, ssi_errors=None, max_damping=None, level_covariate=False,
+           calibrate=True, joint_chart=True):
+    """Records as they arrive (``hyst track --follow``): an iterator of the lines the
+    command prints.
+
+    Each pass tracks the campaign over every record file taken so far, as ``hyst track
+    --inputs <the files> --covariates <covariates>`` would (the files put in time order by
+    the covariates file, each identified once and kept, the analysis read from the first
+    record); the iterator then gives the lines of what is new: the first pass's whole
+    report, later each new record (``name: k mode(s) tracked`` or ``name: skipped: why``)
+    and each new alarm, once. A file is taken once its size and modification time have held
+    for one ``poll``; the covariates file is read again at each pass, and a pass also
+    follows its change. The training is fixed (``training``, else 336 records), so that a
+    record's chart does not depend on the records after it. Stop iterating at any time; a
+    new ``follow`` over the same folders gives the same report (each record is identified
+    again: the identified records are kept in memory, where ``hyst track --follow`` keeps
+    them in its store).
+
+    Parameters
+    ----------
+    inputs : path or list of paths
+        Folders whose files are the records (in name order), or files.
+    fs : float or None
+        Sampling rate (Hz); None when the files state it.
+    covariates : path, optional
+        The covariates file ``hyst track --covariates`` takes (a ``record`` column, an
+        optional ``time`` and one column per covariate), read again at each pass.
+    training : int, optional
+        The first this many records train (default 336, whatever has arrived).
+    poll : float
+        Seconds between looks at the folders (default 10).
+    passes : int, optional
+        Stop after this many passes (default: never).
+    whiten, environment_model, reference, block_rows, ... joint_chart
+        As for :func:`track`.
+
+    Returns
+    -------
+    Follow
+        An iterator of lines (str); its ``report`` is the last pass's report (None before
+        the first), ``taken`` the files taken, ``waiting`` the lines not yet given.
+    """
+    import os
+
+    if isinstance(inputs, (str, os.PathLike)):
+        inputs = [inputs]
+    if fs is not None:
+        _check_rate(fs)
+    poll = _real(poll, "poll")
+    if not (poll.ndim == 0 and 0.0 < float(poll) <= 86400.0):
+        raise ValueError(f"poll {poll}: give the seconds between looks, more than 0 and at "
+                         "most a day")
+    settings = _settings(
+        block_rows=block_rows, lag_seconds=lag_seconds, lag_periods=lag_periods,
+        decimate=decimate, max_order=max_order, order_step=order_step,
+        references=references, df=df, dzeta=dzeta, dmac=dmac, dreal=dreal, refine=refine,
+        joint=joint, ssi_errors=ssi_errors, max_damping=max_damping,
+    )
+    _hyst.resolve_analysis(None, 1.0, settings)  # bad settings said before any work
+    tracking = _tracking(training=336 if training is None else training, whiten=whiten,
+                         environment_model=environment_model,
+                         level_covariate=level_covariate, calibrate=calibrate,
+                         joint_chart=joint_chart)
+    return Follow([os.fspath(p) for p in inputs], fs, covariates, float(poll),
+                  _count(passes, "passes", 1), settings, tracking, _reference(reference))
+
+
+class Follow:
+    """The iterator :func:`follow` returns."""
+
+    def __init__(self, inputs, fs, covariates, poll, passes, settings, tracking, reference):
+        self._inputs, self._fs, self._covariates = inputs, fs, covariates
+        self._poll, self._passes = poll, passes
+        self._settings, self._tracking, self._reference = settings, tracking, reference
+        self.report = None
+        self.taken = []
+        self._pending = {}
+        self._identified = {}
+        self._resolved = {}
+        self._lines = []
+        self._said, self._alarms_said = set(), set()
+        self._done = 0
+        self._covariates_stamp = self._stamp(covariates) if covariates is not None else None
+
+    @property
+    def waiting(self):
+        """Lines of the last pass not yet given."""
+        return len(self._lines)
+
+    def __iter__(self):
+        return self
+
+    def __next__(self):
+        import time
+
+        while not self._lines:
+            if self._passes is not None and self._done >= self._passes:
+                raise StopIteration
+            if self._done == 0:
+                self.taken = self._listed()
+            else:
+                while not self._settled():
+                    time.sleep(self._poll)
+            self._pass()
+        return self._lines.pop(0)
+
+    @staticmethod
+    def _stamp(path):
+        import os
+
+        try:
+            st = os.stat(path)
+        except OSError:
+            return None
+        return (st.st_size, st.st_mtime_ns)
+
+    def _listed(self):
+        """The record files in the folders now, in name order."""
+        rows, _ = _hyst.campaign_records(self._inputs, None)
+        return [r[0] for r in rows]
+
+    def _settled(self):
+        """Take the files whose size and time held since the last look; whether anything
+        (a file, the covariates file) is new."""
+        new = []
+        for path in self._listed():
+            if path in self.taken:
+                continue
+            now = self._stamp(path)
+            if now is not None and self._pending.get(path) == now:
+                del self._pending[path]
+                new.append(path)
+            elif now is not None:
+                self._pending[path] = now
+        covs = self._stamp(self._covariates) if self._covariates is not None else None
+        changed = covs != self._covariates_stamp
+        self._covariates_stamp = covs
+        self.taken.extend(new)
+        return bool(new) or changed
+
+    def _analysis(self, rows):
+        """The campaign's analysis, read from its first records as ``hyst track`` reads it."""
+
+        def resolve(i):
+            path, _, _, _, gap = rows[i]
+            if gap is not None:
+                return None
+            key = (path, self._stamp(path))
+            if key not in self._resolved:
+                try:
+                    a, rate = _read_on_worker(path, self._fs)
+                    self._resolved[key] = _hyst.resolve_analysis(a, rate, self._settings)
+                except (OSError, ValueError):
+                    self._resolved[key] = None
+            return self._resolved[key]
+
+        return _hyst.campaign_analysis(self._settings, len(rows), resolve)
+
+    def _pass(self):
+        """Track every record taken so far; the lines of what is new."""
+        import json
+
+        self._done += 1
+        if not self.taken:
+            self._lines.append(f"no record yet in {', '.join(self._inputs)}; waiting")
+            return
+        rows, names = _hyst.campaign_records(self.taken, self._covariates)
+        analysis = self._analysis(rows)
+        identified = []
+        for path, name, time, covs, gap in rows:
+            key = (path, self._stamp(path), analysis)
+            if gap is not None:
+                doc = _hyst.identify_record(None, 0.0, time, covs, name, analysis, why=gap)
+            else:
+                if key not in self._identified:
+                    self._identified[key] = _identify_on_worker(path, self._fs, time, covs,
+                                                                name, analysis)
+                # Its time and covariates are this pass's (the file may have changed).
+                record = json.loads(self._identified[key])
+                record["time"], record["covariates"] = time, covs
+                doc = json.dumps(record)
+            identified.append(doc)
+        try:
+            report = _hyst.track_identified(identified, covariate_names=names,
+                                            tracking=self._tracking,
+                                            reference=self._reference)
+        except ValueError as e:
+            self._lines.append(f"{len(rows)} record(s) so far: {e}; waiting for more")
+            return
+        first = self.report is None
+        self.report = report
+        doc = report.to_dict()
+        if first:
+            text = str(report)
+            self._lines.extend(text.rstrip("\n").split("\n"))
+            # What each record gave, said once: a gap said as skipped is said again when
+            # its file lands.
+            self._said.update((r["name"], "tracked") for r in doc["rows"])
+            self._said.update((name, why) for name, why in doc["skipped"])
+            for line in report.alarm_lines():
+                if line not in text:
+                    self._lines.append(line)
+                self._alarms_said.add(line)
+            return
+        modes = {}
+        for r in doc["rows"]:
+            modes[r["name"]] = modes.get(r["name"], 0) + 1
+        for name, k in modes.items():
+            if (name, "tracked") not in self._said:
+                self._said.add((name, "tracked"))
+                self._lines.append(f"{name}: {k} mode(s) tracked")
+        for name, why in doc["skipped"]:
+            if (name, why) not in self._said:
+                self._said.add((name, why))
+                self._lines.append(f"{name}: skipped: {why}")
+        for line in report.alarm_lines():
+            if line not in self._alarms_said:
+                self._alarms_said.add(line)
+                self._lines.append(line)
 
 
 def track_estimates(estimates, *, covariates=None, training=None, whiten=True,
