@@ -82,6 +82,24 @@ fn wait_for(out: &Path, records: usize, child: &mut Child) {
     std::thread::sleep(Duration::from_millis(500));
 }
 
+/// What lands record k (from 1) in `inbox`: the k-th 300 s window of the 3-DOF record at
+/// `path`, as `rec_k.csv`.
+fn lander(path: &Path, inbox: &Path) -> impl Fn(usize) {
+    let t = hyst::io::read_csv(path).unwrap();
+    let col = |c: &str| t.column(c).unwrap().to_vec();
+    let (y1, y2, y3) = (col("y1"), col("y2"), col("y3"));
+    let inbox = inbox.to_path_buf();
+    move |k: usize| {
+        let r = (k - 1) * 6000..k * 6000;
+        hyst::io::write_csv(
+            &inbox.join(format!("rec_{k}.csv")),
+            &["y1", "y2", "y3"],
+            &[&y1[r.clone()], &y2[r.clone()], &y3[r]],
+        )
+        .unwrap();
+    }
+}
+
 /// Kill `child` (SIGKILL) and reap it.
 fn kill(mut child: Child) {
     child.kill().unwrap();
@@ -106,19 +124,8 @@ fn follow_takes_record_files_as_a_batch_run_would() {
     let Some(path) = common::data_file("oma/data_3dof.csv") else {
         return;
     };
-    let t = hyst::io::read_csv(&path).unwrap();
-    let col = |c: &str| t.column(c).unwrap().to_vec();
-    let (y1, y2, y3) = (col("y1"), col("y2"), col("y3"));
     let inbox = scratch("inbox");
-    let land = |k: usize| {
-        let r = (k - 1) * 6000..k * 6000;
-        hyst::io::write_csv(
-            &inbox.join(format!("rec_{k}.csv")),
-            &["y1", "y2", "y3"],
-            &[&y1[r.clone()], &y2[r.clone()], &y3[r]],
-        )
-        .unwrap();
-    };
+    let land = lander(&path, &inbox);
     let out = scratch("out");
     let log = scratch("logs").join("follow.txt");
     let args = [
@@ -146,11 +153,11 @@ fn follow_takes_record_files_as_a_batch_run_would() {
         batch(&a);
         dir
     };
-    (1..=5).for_each(land);
+    (1..=5).for_each(&land);
     let mut child = start(&args, &log);
     wait_for(&out, 5, &mut child);
     same_outputs(&out, &batch_over(5, "batch5"));
-    (6..=8).for_each(land);
+    (6..=8).for_each(&land);
     wait_for(&out, 8, &mut child);
     kill(child);
     same_outputs(&out, &batch_over(8, "batch8"));
@@ -160,7 +167,7 @@ fn follow_takes_record_files_as_a_batch_run_would() {
     }
     // Started again: what the store holds is served, the new files taken.
     let mut child = start(&args, &scratch("logs2").join("follow.txt"));
-    (9..=10).for_each(land);
+    (9..=10).for_each(&land);
     wait_for(&out, 10, &mut child);
     kill(child);
     same_outputs(&out, &batch_over(10, "batch10"));
@@ -174,19 +181,8 @@ fn a_gap_is_said_again_when_its_file_lands() {
     let Some(path) = common::data_file("oma/data_3dof.csv") else {
         return;
     };
-    let t = hyst::io::read_csv(&path).unwrap();
-    let col = |c: &str| t.column(c).unwrap().to_vec();
-    let (y1, y2, y3) = (col("y1"), col("y2"), col("y3"));
     let inbox = scratch("gap_inbox");
-    let land = |k: usize| {
-        let r = (k - 1) * 6000..k * 6000;
-        hyst::io::write_csv(
-            &inbox.join(format!("rec_{k}.csv")),
-            &["y1", "y2", "y3"],
-            &[&y1[r.clone()], &y2[r.clone()], &y3[r]],
-        )
-        .unwrap();
-    };
+    let land = lander(&path, &inbox);
     let covariates = scratch("gap_covariates").join("covariates.csv");
     let rows: String = (1..=8)
         .map(|k| format!("rec_{k}.csv,{},{}\n", 300.0 * k as f64, 10.0 + k as f64))
@@ -210,10 +206,10 @@ fn a_gap_is_said_again_when_its_file_lands() {
         "--poll",
         "0.2",
     ];
-    (1..=5).for_each(land);
+    (1..=5).for_each(&land);
     let mut child = start(&args, &log);
     wait_for(&out, 5, &mut child);
-    (6..=8).for_each(land);
+    (6..=8).for_each(&land);
     wait_for(&out, 8, &mut child);
     kill(child);
     let batch_dir = scratch("gap_batch");
