@@ -176,14 +176,19 @@ def test_the_type_stubs_name_what_the_package_has():
 
     stubs = (Path(hyst.__file__).parent / "__init__.pyi").read_text()
     stubbed = set(re.findall(r"def (\w+)\(", stubs))
-    functions = {"ssi", "read", "excite", "simulate", "identify", "refine", "levels", "track", "track_estimates", "amplitude"}
+    functions = {"ssi", "read", "excite", "simulate", "identify", "refine", "levels", "track",
+                 "track_estimates", "amplitude", "follow"}
     assert functions <= stubbed and all(hasattr(hyst, f) for f in functions)
     assert "class Record" in stubs and set(hyst.Record.__dataclass_fields__) == set(
         re.findall(r"^    (\w+): ", stubs.split("class Record")[1].split("def ")[0], re.M)
     )
-    public = {n for n in dir(hyst.SsiResult) if not n.startswith("_")}
-    assert public == stubbed - functions, (public ^ (stubbed - functions))
-    assert {n for n in dir(hyst.Report) if not n.startswith("_")} <= stubbed
+    methods = stubbed - functions
+    classes = (hyst.SsiResult, hyst.Report, hyst.Follow)
+    assert all(any(hasattr(c, m) for c in classes) for m in methods), (
+        {m for m in methods if not any(hasattr(c, m) for c in classes)})
+    for c in classes:
+        public = {n for n in dir(c) if not n.startswith("_")}
+        assert public <= methods, (c.__name__, public - methods)
 
 
 def test_a_long_ssi_shows_its_steps_on_a_terminal_only():
