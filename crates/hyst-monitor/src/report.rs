@@ -171,6 +171,12 @@ impl TrackReport {
                 c.nominal_threshold,
                 if c.alarms.is_empty() {
                     "raised no alarm".to_string()
+                } else if c.directions > 0 {
+                    format!(
+                        "alarmed {} time(s), the first at record {} (below)",
+                        c.mode_alarms.len(),
+                        self.record_name(c.alarms[0])
+                    )
                 } else {
                     format!("alarmed at record(s) {:?}", c.alarms)
                 }
