@@ -351,10 +351,9 @@ impl SubspaceTest {
         // so by Sherman–Morrison T²ᵢ = (ν − 1) g / ((1 − hᵢ) − g), as a new record's.
         let leave_one_out: Vec<f64> = (0..m)
             .map(|i| {
-                let ci = fit.scale[i];
-                let g = mahalanobis(&sums_cholesky, fit.errors.column(i).into_owned()) / ci;
-                let xi = x.row(i).transpose();
-                let h = (xi.transpose() * &fit.gram_inverse * &xi)[(0, 0)] / ci;
+                let g =
+                    mahalanobis(&sums_cholesky, fit.errors.column(i).into_owned()) / fit.scale[i];
+                let h = fit.leverage(&x, i);
                 (nu - 1.0) * g / ((1.0 - h) - g)
             })
             .collect();
@@ -401,17 +400,24 @@ impl SubspaceTest {
     /// A record's estimated relative frequency change of each mode and its standardized
     /// value (`None` when not focused or without regressors).
     pub fn shifts(&self, record: &SubspaceRecord) -> Option<(Vec<f64>, Vec<f64>)> {
-        let focus = self.focus.as_ref()?;
-        let (e, leverage) = self.error(record)?;
-        let theta = &focus.projector * e;
-        let scale = self.scale_of(record) + leverage;
-        let scores = (0..theta.len())
-            .map(|j| {
-                let z = theta[j] / (focus.covariance[(j, j)] * scale).sqrt();
-                (z - focus.center[j]) / focus.spread[j]
-            })
-            .collect();
-        Some((theta.iter().copied().collect(), scores))
+        self.assess(record).shifts
+    }
+
+    /// A record's T², scale and shifts, its residual and own scatter computed once.
+    fn assess(&self, record: &SubspaceRecord) -> Assessed {
+        let scale = self.scale_of(record);
+        match self.error(record) {
+            Some((e, leverage)) => Assessed {
+                shifts: self.focus.as_ref().map(|f| f.shifts(&e, scale + leverage)),
+                t2: mahalanobis(&self.cholesky, e) / (scale + leverage),
+                scale,
+            },
+            None => Assessed {
+                t2: f64::NAN,
+                scale,
+                shifts: None,
+            },
+        }
     }
 
     /// A record's residual from the regression's prediction and its leverage; `None`
@@ -436,12 +442,7 @@ impl SubspaceTest {
     /// A record's T² (as in training): eᵀΣ⁻¹e / (c + x̃ᵀ(X̃ᵀC⁻¹X̃)⁻¹x̃), c its own noise's
     /// scale (1 without a scale model or without its parts).
     pub fn statistic(&self, record: &SubspaceRecord) -> f64 {
-        match self.error(record) {
-            Some((e, leverage)) => {
-                mahalanobis(&self.cholesky, e) / (self.scale_of(record) + leverage)
-            }
-            None => f64::NAN,
-        }
+        self.assess(record).t2
     }
 
     /// The scale c of a record's residual covariance (1 without a scale model or without
@@ -465,7 +466,29 @@ impl SubspaceTest {
     }
 }
 
+/// What the test makes of one record.
+struct Assessed {
+    t2: f64,
+    scale: f64,
+    /// Each mode's estimated change and its standardized value (`None`: not focused, or
+    /// no regressors).
+    shifts: Option<(Vec<f64>, Vec<f64>)>,
+}
+
 impl Focus {
+    /// θ̂ = L e of a residual `e` whose covariance is Σ times `scale` (its own scale plus its
+    /// leverage), and each mode's standardized value.
+    fn shifts(&self, e: &DVector<f64>, scale: f64) -> (Vec<f64>, Vec<f64>) {
+        let theta = &self.projector * e;
+        let scores = (0..theta.len())
+            .map(|j| {
+                let z = theta[j] / (self.covariance[(j, j)] * scale).sqrt();
+                (z - self.center[j]) / self.spread[j]
+            })
+            .collect();
+        (theta.iter().copied().collect(), scores)
+    }
+
     /// The shifts' test on the sensitivity `j` (poles at `frequencies`), from the training fit
     /// (Σ = A/ν, A = Σ ẽẽᵀ = `fit.sums`). Each training record's standardized shift against
     /// the others: with w = ẽᵢ/√(1 − hᵢ), deleting it leaves A − wwᵀ and its prediction
@@ -484,10 +507,8 @@ impl Focus {
         let modes = j.ncols();
         let mut leave_one_out = vec![Vec::with_capacity(x.nrows()); modes];
         for i in 0..x.nrows() {
-            let c = fit.scale[i];
-            let xi = x.row(i).transpose();
-            let h = (xi.transpose() * &fit.gram_inverse * &xi)[(0, 0)] / c;
-            let lw = &projector * fit.errors.column(i) / (c * (1.0 - h)).sqrt();
+            let h = fit.leverage(x, i);
+            let lw = &projector * fit.errors.column(i) / (fit.scale[i] * (1.0 - h)).sqrt();
             for (k, series) in leave_one_out.iter_mut().enumerate() {
                 series.push(lw[k] * (nu - 1.0).sqrt() / (lal[(k, k)] - lw[k] * lw[k]).sqrt());
             }
@@ -589,6 +610,15 @@ struct ScaledFit {
     scale: Vec<f64>,
 }
 
+impl ScaledFit {
+    /// Training record i's leverage on the records scaled by their own noise:
+    /// x̃ᵢᵀ(X̃ᵀX̃)⁻¹x̃ᵢ = xᵢᵀ(Σ xxᵀ/c)⁻¹xᵢ / cᵢ (`x`: the regressors, one record per row).
+    fn leverage(&self, x: &DMatrix<f64>, i: usize) -> f64 {
+        let xi = x.row(i).transpose();
+        (xi.transpose() * &self.gram_inverse * &xi)[(0, 0)] / self.scale[i]
+    }
+}
+
 /// The regression ζ = B[1; x] + e by weighted least squares, each record's weight 1/cᵢ; with
 /// the records' own scatter `scatter`, cᵢ = a + b·vᵢ found by alternating: the regression with
 /// the current c, then a and b by least squares of each record's gᵢ = eᵢᵀΣ⁻¹eᵢ/(d(1 − hᵢ))
@@ -612,8 +642,7 @@ fn fit_scaled(
         let d = z.nrows() as f64;
         let g: Vec<f64> = (0..m)
             .map(|i| {
-                let xi = x.row(i).transpose();
-                let h = (xi.transpose() * &fit.gram_inverse * &xi)[(0, 0)] / scale[i];
+                let h = fit.leverage(x, i);
                 mahalanobis(&chol, fit.errors.column(i).into_owned()) / (d * (1.0 - h).max(0.05))
             })
             .collect();
@@ -816,13 +845,17 @@ pub fn subspace_chart(
         .cloned()
         .collect();
     let test = SubspaceTest::train(&train, order, alpha)?;
-    let t2: Vec<f64> = records
+    let assessed: Vec<Option<Assessed>> = records
         .iter()
-        .map(|r| r.as_ref().map_or(f64::NAN, |r| test.statistic(r)))
+        .map(|r| r.as_ref().map(|r| test.assess(r)))
         .collect();
-    let scale: Vec<f64> = records
+    let t2: Vec<f64> = assessed
         .iter()
-        .map(|r| r.as_ref().map_or(f64::NAN, |r| test.scale_of(r)))
+        .map(|a| a.as_ref().map_or(f64::NAN, |a| a.t2))
+        .collect();
+    let scale: Vec<f64> = assessed
+        .iter()
+        .map(|a| a.as_ref().map_or(f64::NAN, |a| a.scale))
         .collect();
     let directions = test.directions();
     let score: Vec<f64> = t2
@@ -830,7 +863,7 @@ pub fn subspace_chart(
         .map(|&t| if t.is_nan() { t } else { test.score(t) })
         .collect();
     let modes = if directions > 0 {
-        Some(mode_charts(&test, records, training, chart, calibrate))
+        Some(mode_charts(&test, assessed, training, chart, calibrate))
     } else {
         None
     };
@@ -901,14 +934,14 @@ struct ModeCharts {
 /// calibrated on the training records' leave-one-out values when `calibrate`.
 fn mode_charts(
     test: &SubspaceTest,
-    records: &[Option<SubspaceRecord>],
+    assessed: Vec<Option<Assessed>>,
     training: usize,
     chart: &Cusum,
     calibrate: bool,
 ) -> ModeCharts {
-    let (shifts, scores): (Vec<Vec<f64>>, Vec<Vec<f64>>) = records
-        .iter()
-        .map(|r| r.as_ref().and_then(|r| test.shifts(r)).unwrap_or_default())
+    let (shifts, scores): (Vec<Vec<f64>>, Vec<Vec<f64>>) = assessed
+        .into_iter()
+        .map(|a| a.and_then(|a| a.shifts).unwrap_or_default())
         .unzip();
     let mut out = ModeCharts {
         shifts,
