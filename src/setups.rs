@@ -136,8 +136,7 @@ pub fn analyze_setups_with_progress(
         None,
         "the global estimation (SSI on every setup's correlations)",
     );
-    let global = global(setups, &analysed, &records, opts);
-    drop(records);
+    let global = global(setups, &analysed, records, (fs, read), opts);
     tell(all, None, "merging the setups on their references");
     let mut report = merge_analysed(setups, analysed, merge_opts)?;
     match global {
@@ -147,12 +146,15 @@ pub fn analyze_setups_with_progress(
     Ok(report)
 }
 
-/// The global estimation of `setups` from their `records`, at the first setup's decimation
-/// and the setups' largest block rows.
+/// The global estimation of `setups` at the first setup's decimation and the setups' largest
+/// block rows, from their `records` as each setup's analysis decimated them; a setup
+/// decimated by another factor is read again (`fs`, `read` as for its analysis) and decimated
+/// by the first's.
 fn global(
     setups: &[SetupSpec],
     analysed: &[SetupAnalysis],
-    records: &[Vec<Vec<f64>>],
+    mut records: Vec<Vec<Vec<f64>>>,
+    (fs, read): (Option<f64>, &ReadOptions),
     opts: &AnalysisOptions,
 ) -> Result<MergedModes, String> {
     let first = analysed.first().ok_or("no setup")?;
@@ -163,14 +165,13 @@ fn global(
         ));
     }
     let factor = first.analysis.decimation.factor.max(1);
-    // Decimated when the first setup was; else the records as read, not copied.
-    let decimated: Vec<Vec<Vec<f64>>> = records
-        .iter()
-        .map(|r| {
-            let views: Vec<&[f64]> = r.iter().map(Vec::as_slice).collect();
-            covssi::decimate::decimate_channels(&views, factor)
-        })
-        .collect();
+    for ((s, a), record) in setups.iter().zip(analysed).zip(records.iter_mut()) {
+        if a.analysis.decimation.factor.max(1) != factor {
+            let (data, _) = read_channels(s, fs, read).map_err(|e| e.to_string())?;
+            let views: Vec<&[f64]> = data.iter().map(Vec::as_slice).collect();
+            *record = covssi::decimate::decimate_channels(&views, factor);
+        }
+    }
     let block_rows = analysed
         .iter()
         .map(|a| a.analysis.ssi.block_rows)
@@ -178,14 +179,11 @@ fn global(
         .unwrap_or(2);
     let input: Vec<SetupRecord<'_>> = setups
         .iter()
-        .zip(records.iter().zip(&decimated))
-        .map(|(s, (read, decimated))| SetupRecord {
+        .zip(&records)
+        .map(|(s, record)| SetupRecord {
             name: s.name.clone(),
             channels: s.channels.clone(),
-            y: if factor > 1 { decimated } else { read }
-                .iter()
-                .map(Vec::as_slice)
-                .collect(),
+            y: record.iter().map(Vec::as_slice).collect(),
         })
         .collect();
     merge_global(&input, first.fs_hz / factor as f64, block_rows, &opts.ssi)
@@ -218,7 +216,9 @@ pub fn merge_analysed(
     })
 }
 
-/// One setup's analysis, and its channels as read (for the global estimation).
+/// One setup's analysis, and its channels as the analysis decimated them (for the global
+/// estimation: a quarter of the record at the usual factor, rather than all of it kept
+/// while the other setups are identified).
 fn analyze_one(
     s: &SetupSpec,
     fs: Option<f64>,
@@ -226,13 +226,7 @@ fn analyze_one(
     opts: &AnalysisOptions,
     progress: &(dyn Fn(covssi::Progress<'_>) + Sync),
 ) -> Result<(SetupAnalysis, Vec<Vec<f64>>), SetupsError> {
-    let mut table = crate::io::read_record(&s.file, read)?;
-    let fs = table.rate(fs.or(s.fs_hz))?;
-    let data = s
-        .columns
-        .iter()
-        .map(|c| table.take_column(c))
-        .collect::<Result<Vec<Vec<f64>>, IoError>>()?;
+    let (data, fs) = read_channels(s, fs, read)?;
     let views: Vec<&[f64]> = data.iter().map(Vec::as_slice).collect();
     let file = s.file.display().to_string();
     let mut analysis =
@@ -244,14 +238,38 @@ fn analyze_one(
             }
         })?;
     analysis.channels = s.columns.clone();
+    let samples = data.first().map_or(0, Vec::len);
+    let factor = analysis.decimation.factor;
+    let kept = if factor > 1 {
+        covssi::decimate::decimate_channels(&views, factor)
+    } else {
+        data
+    };
     let setup = SetupAnalysis {
         name: s.name.clone(),
         file,
         fs_hz: fs,
-        samples: data.first().map_or(0, Vec::len),
+        samples,
         analysis,
     };
-    Ok((setup, data))
+    Ok((setup, kept))
+}
+
+/// Setup `s`'s channels read from its record, and the record's rate (`fs`, else the setup's,
+/// else the file's).
+fn read_channels(
+    s: &SetupSpec,
+    fs: Option<f64>,
+    read: &ReadOptions,
+) -> Result<(Vec<Vec<f64>>, f64), IoError> {
+    let mut table = crate::io::read_record(&s.file, read)?;
+    let fs = table.rate(fs.or(s.fs_hz))?;
+    let data = s
+        .columns
+        .iter()
+        .map(|c| table.take_column(c))
+        .collect::<Result<Vec<Vec<f64>>, IoError>>()?;
+    Ok((data, fs))
 }
 
 /// A complex entry as magnitude∠phase°.

@@ -60,8 +60,23 @@ fn record_csv(dir: &Path) -> Result<PathBuf, String> {
     Ok(path)
 }
 
+/// `hyst` built in release (the benches time the command as a user runs it): its path.
+pub(crate) fn release_hyst() -> Result<PathBuf, String> {
+    let root = hyst_testkit::workspace_root();
+    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+    let built = Command::new(cargo)
+        .args(["build", "--release", "--quiet", "--bin", "hyst"])
+        .current_dir(&root)
+        .status()
+        .map_err(|e| format!("cargo build: {e}"))?;
+    if !built.success() {
+        return Err("cargo build --release --bin hyst failed".into());
+    }
+    Ok(root.join("target").join("release").join("hyst"))
+}
+
 /// Wall time (s) and peak resident memory (MB) of `cmd`, by `/usr/bin/time`.
-fn timed(cmd: &mut Command) -> Result<(f64, f64), String> {
+pub(crate) fn timed(cmd: &mut Command) -> Result<(f64, f64), String> {
     let out = cmd.output().map_err(|e| format!("could not start: {e}"))?;
     if !out.status.success() {
         return Err(format!(
@@ -92,16 +107,7 @@ pub fn run() -> Result<(), String> {
     let root = hyst_testkit::workspace_root();
     let target = root.join("target");
     let csv = record_csv(&target.join("bench"))?;
-    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
-    let built = Command::new(cargo)
-        .args(["build", "--release", "--quiet", "--bin", "hyst"])
-        .current_dir(&root)
-        .status()
-        .map_err(|e| format!("cargo build: {e}"))?;
-    if !built.success() {
-        return Err("cargo build --release --bin hyst failed".into());
-    }
-    let hyst = target.join("release").join("hyst");
+    let hyst = release_hyst()?;
     let json = target.join("bench").join("ssi_1e6_10ch.json");
     let run = |extra: &[&str]| {
         timed(

@@ -22,6 +22,7 @@
 mod acquisition;
 mod bench_command;
 mod bench_refine;
+mod bench_setups;
 mod bench_storeys;
 mod compare;
 mod compare_roving;
@@ -693,6 +694,9 @@ enum BenchGroup {
     Progress,
     /// The storey fit of a three-storey chain from three levels (`bench_storeys.rs`).
     Storeys,
+    /// `hyst ssi --setups` on the steel frame's 15 setups beside pyOMA2's PoSER
+    /// (`bench_setups.rs`).
+    Setups,
 }
 
 #[derive(clap::Subcommand)]
@@ -740,7 +744,7 @@ fn main() {
     use clap::Parser;
     match Cli::parse().task {
         Task::Bench { groups } => {
-            let all: [(BenchGroup, fn()); 10] = [
+            let all: [(BenchGroup, fn()); 11] = [
                 (BenchGroup::Rk4, bench),
                 (BenchGroup::Covssi, bench_covssi),
                 (BenchGroup::Ident, bench_ident),
@@ -751,6 +755,7 @@ fn main() {
                 (BenchGroup::Amplitude, bench_amplitude),
                 (BenchGroup::Progress, bench_progress),
                 (BenchGroup::Storeys, bench_storeys::run),
+                (BenchGroup::Setups, || or_exit(bench_setups::run())),
             ];
             for (group, run) in all {
                 if groups.is_empty() || groups.contains(&group) {
