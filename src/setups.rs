@@ -42,6 +42,25 @@ pub struct SetupsReport {
     /// Why there is no global estimation.
     #[serde(default)]
     pub global_error: Option<String>,
+    /// Whether each setup's stabilization diagram and singular values were left out
+    /// ([`SetupsReport::without_diagrams`]): the setup's modes, errors and decision stay.
+    #[serde(default)]
+    pub diagrams_left_out: bool,
+}
+
+impl SetupsReport {
+    /// The report without each setup's stabilization diagram and singular values (nine
+    /// tenths of a test's JSON; the page draws them): what `hyst ssi --setups --json`
+    /// writes unless asked for the diagrams.
+    pub fn without_diagrams(&self) -> SetupsReport {
+        let mut compact = self.clone();
+        for s in &mut compact.setups {
+            s.analysis.ssi.diagram = covssi::StabilizationDiagram::default();
+            s.analysis.ssi.singular_values = Vec::new();
+        }
+        compact.diagrams_left_out = true;
+        compact
+    }
 }
 
 /// Why a multi-setup analysis stopped.
@@ -213,6 +232,7 @@ pub fn merge_analysed(
         merged,
         global: None,
         global_error: None,
+        diagrams_left_out: false,
     })
 }
 

@@ -84,6 +84,10 @@ const PAIRS: &[Pair] = &[
             ),
             ("shapes-uff", "Python: result.write_shapes_uff(path)"),
             ("html", "Python: result.html() (report.html() for setups)"),
+            (
+                "json-diagrams",
+                "the command's --json file only: Python's report of setups keeps every setup's diagram in report.to_dict()",
+            ),
         ],
         python_only: &[
             (

@@ -79,6 +79,10 @@ pub(crate) struct SsiArgs {
     /// the MAC matrix.
     #[arg(help_heading = "Output files", long, value_name = "FILE")]
     pub(crate) html: Option<PathBuf>,
+    /// With --setups: keep each setup's stabilization diagram and singular values in the
+    /// --json report (left out by default: they are nine tenths of it).
+    #[arg(long, requires = "setups")]
+    pub(crate) json_diagrams: bool,
     /// With --setups: let the setup file name records outside its own folder (absolute
     /// paths, `..`); by default each record is named by its path from that folder.
     #[arg(long, requires = "setups")]
@@ -365,7 +369,12 @@ fn run_setups(a: &SsiArgs, path: &Path, opts: &hyst::covssi::AnalysisOptions) ->
     let report = hyst::report::FileReport::new(path.display().to_string(), report?);
     print!("{report}");
     if let Some(json) = &a.json {
-        report.write_json(json)?;
+        if a.json_diagrams {
+            report.write_json(json)?;
+        } else {
+            let compact = report.report.without_diagrams();
+            hyst::report::FileReport::new(report.record.clone(), compact).write_json(json)?;
+        }
     }
     // The nodes' positions, for the outputs that draw or place the shapes.
     let geometry = if a.html.is_some() || a.shapes_uff.is_some() {

@@ -949,6 +949,35 @@ fn ssi_merges_setups_on_their_references() {
         );
         assert_eq!(m["seen_in"].as_array().unwrap().len(), 2);
     }
+    // Each setup's diagram and singular values are left out of the file, and said; asked
+    // for, they are there, beside the same merge.
+    assert_eq!(doc["diagrams_left_out"], true);
+    let first = &doc["setups"][0]["analysis"];
+    assert!(first["diagram"]["orders"].as_array().unwrap().is_empty());
+    assert!(first["singular_values"].as_array().unwrap().is_empty());
+    assert!(!first["modes"].as_array().unwrap().is_empty());
+    let full_json = tmp("setups_diagrams.json");
+    let (ok, _, err) = hyst(&[
+        "ssi",
+        "--setups",
+        s(&setups),
+        "--fs",
+        "20",
+        "--json",
+        s(&full_json),
+        "--json-diagrams",
+    ]);
+    assert!(ok, "{err}");
+    let full: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&full_json).unwrap()).unwrap();
+    assert_eq!(full["diagrams_left_out"], false);
+    assert!(
+        !full["setups"][0]["analysis"]["diagram"]["orders"]
+            .as_array()
+            .unwrap()
+            .is_empty()
+    );
+    assert_eq!(full["merged"], doc["merged"]);
     // A reference that moved between setups is said, and the other carries the merge.
     let moved = write("setups_moved.csv", &rows("6", "7"));
     let (ok, out, err) = hyst(&["ssi", "--setups", s(&moved), "--fs", "20"]);
