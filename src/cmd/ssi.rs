@@ -142,6 +142,9 @@ pub(crate) struct Channels {
     pub(crate) fs: f64,
     /// Where each channel was measured, if the file says.
     pub(crate) points: Option<Vec<hyst::io::MeasurementPoint>>,
+    /// What was read, in one line: the channels by name, the samples, the rate and where it
+    /// came from, rows skipped and gains (the first thing a user checks on a new record).
+    pub(crate) read: String,
 }
 
 /// The channels to analyse, after `--skip`, with their names.
@@ -161,6 +164,7 @@ pub(crate) fn channels(input: &Path, a: &ChannelArgs) -> Result<Channels, Error>
         )));
     }
     let rows = t.len();
+    let read = read_line(input, &t, &names, a, fs);
     if a.skip >= rows {
         return Err(fail(format!(
             "--skip {} leaves no rows of the {} in {}",
@@ -191,7 +195,49 @@ pub(crate) fn channels(input: &Path, a: &ChannelArgs) -> Result<Channels, Error>
         data: channels,
         fs,
         points,
+        read,
     })
+}
+
+/// The line that says what `channels` read from `t` at `fs` Hz: the channels by name (the
+/// first and last four of a long list), the samples, the rate and where it came from, rows
+/// skipped and gains.
+fn read_line(
+    input: &Path,
+    t: &hyst::io::Table,
+    names: &[String],
+    a: &ChannelArgs,
+    fs: f64,
+) -> String {
+    let listed = if names.len() > 8 {
+        format!(
+            "{}, …, {}",
+            names[..4].join(", "),
+            names[names.len() - 4..].join(", ")
+        )
+    } else {
+        names.join(", ")
+    };
+    let time = t.time_column().map(|i| t.names[i].as_str());
+    let rate = match (t.rate_hz, time) {
+        (Some(_), _) => "as the file states".to_string(),
+        (None, Some(name)) => format!("from the time column `{name}`"),
+        (None, None) => "as --fs gives".to_string(),
+    };
+    let skipped = match a.skip {
+        0 => String::new(),
+        k => format!(", the first {k} rows skipped"),
+    };
+    let gains = a.gains.as_ref().map_or(String::new(), |g| {
+        let g: Vec<String> = g.iter().map(|v| format!("{v}")).collect();
+        format!("; divided by the gains {}", g.join(", "))
+    });
+    format!(
+        "read {}: {} channel(s) {listed}; {} samples at {fs} Hz ({rate}){skipped}{gains}",
+        input.display(),
+        names.len(),
+        t.len().saturating_sub(a.skip),
+    )
 }
 
 /// An option out of range (covssi's [`SsiError::InvalidOption`](hyst::covssi::SsiError))
@@ -291,6 +337,7 @@ pub(crate) fn run(a: &SsiArgs) -> Result<(), Error> {
         data,
         fs,
         points,
+        read,
     } = channels(input, &a.record)?;
     let views: Vec<&[f64]> = data.iter().map(|c| c.as_slice()).collect();
     // The page draws the record's FDD: computed with the analysis, on its decimated record.
@@ -302,6 +349,7 @@ pub(crate) fn run(a: &SsiArgs) -> Result<(), Error> {
     let mut analysis = analysis.map_err(|e| flag_error(input, &a.ssi, e, &names, fs_used))?;
     analysis.channels = names;
     let report = hyst::report::FileReport::new(input.display().to_string(), analysis);
+    println!("{read}");
     print!("{}", report.report);
     if let Some(json) = &a.json {
         report.write_json(json)?;

@@ -555,6 +555,31 @@ fn ssi_gains_divide_their_channels() {
         // The real parts' ratio (real modes, MPC 1.000), to the rounding of SSI's SVD.
         assert!((g + p).abs() < 1e-8 * p.abs().max(1.0), "{p} {g}");
     }
+    // The first line says what was read: channels, samples, rate and its source, rows
+    // skipped, gains (the record: 65536 rows of t, y1, y2, y3 at 20 Hz).
+    let (ok, out, err) = hyst(
+        &[
+            ssi_3dof_args(&path),
+            vec![
+                "--no-refine",
+                "--ssi-errors",
+                "0",
+                "--skip",
+                "36",
+                "--gains",
+                "-1,1,1",
+            ],
+        ]
+        .concat(),
+    );
+    assert!(ok, "{err}");
+    assert_eq!(
+        out.lines().next().unwrap(),
+        format!(
+            "read {}: 3 channel(s) y1, y2, y3; 65500 samples at 20 Hz (from the time column `t`), the first 36 rows skipped; divided by the gains -1, 1, 1",
+            path.display()
+        )
+    );
     let (ok, _, err) = hyst(&[ssi_3dof_args(&path), vec!["--gains", "1,2"]].concat());
     assert!(!ok);
     assert!(
