@@ -52,31 +52,99 @@ impl Dense {
 
 /// Thin SVD `a = U diag(s) Vᵀ`, singular values in non-increasing order. Returns (U, s).
 pub(crate) fn thin_svd_u(a: &Dense) -> Result<(Dense, Vec<f64>), String> {
-    let (m, n) = (a.rows, a.cols);
+    let (u, s, _) = svd_parts(a.view(), false)?;
+    Ok((Dense::from_faer(u.as_ref()), s))
+}
+
+/// The leading `k` singular triplets of `a` by subspace iteration from `start` (orthonormal
+/// columns, more than `k`, close to `a`'s leading left singular vectors: those of a matrix
+/// `a` differs little from), with Rayleigh–Ritz on the subspace after each sweep:
+/// Q ← orth(a aᵀ Q), then the SVD of Qᵀa gives U = Q·U_B, s, V. Accepted when every one of the
+/// first `k` triplets has ‖a v − σ u‖ ≤ `tol`·σ₁ (the triplets are then exact for a matrix
+/// within about √k·`tol`·‖a‖ of `a`); `Ok(None)` when `max_sweeps` do not get there, for the
+/// caller to take the full SVD. Returns U's `start.cols` columns and their singular values.
+pub(crate) fn leading_svd_near(
+    a: &Dense,
+    start: &Dense,
+    k: usize,
+    (tol, max_sweeps): (f64, usize),
+) -> Result<Option<(Dense, Vec<f64>)>, String> {
+    let width = start.cols;
+    if start.rows != a.rows || k == 0 || width <= k || width > a.rows.min(a.cols) {
+        return Ok(None);
+    }
+    let m = a.view();
+    let product = |lhs: MatRef<'_, f64>, rhs: MatRef<'_, f64>| {
+        let mut out = Mat::<f64>::zeros(lhs.nrows(), rhs.ncols());
+        faer::linalg::matmul::matmul(out.as_mut(), Accum::Replace, lhs, rhs, 1.0, Par::Seq);
+        out
+    };
+    let mut q = start.view().to_owned();
+    for _ in 0..max_sweeps {
+        // Q ← an orthonormal basis of a aᵀ Q (its left singular vectors).
+        let y = product(m, product(m.transpose(), q.as_ref()).as_ref());
+        q = svd_parts(y.as_ref(), false)?.0;
+        // Rayleigh–Ritz: Qᵀa = U_B diag(s) Vᵀ.
+        let (ub, values, v) = svd_parts(product(q.transpose(), m).as_ref(), true)?;
+        let u = product(q.as_ref(), ub.as_ref());
+        let av = product(m, v.subcols(0, k));
+        let converged = (0..k).all(|j| {
+            let r2: f64 = (0..a.rows)
+                .map(|row| (av[(row, j)] - values[j] * u[(row, j)]).powi(2))
+                .sum();
+            r2.sqrt() <= tol * values[0]
+        });
+        if converged {
+            return Ok(Some((Dense::from_faer(u.as_ref()), values)));
+        }
+    }
+    Ok(None)
+}
+
+/// A thin SVD's U, singular values and V (empty when not asked for).
+type SvdParts = (Mat<f64>, Vec<f64>, Mat<f64>);
+
+/// Thin SVD of `a` (single-threaded): U, the singular values and, when asked, V.
+fn svd_parts(a: MatRef<'_, f64>, with_v: bool) -> Result<SvdParts, String> {
+    let (m, n) = (a.nrows(), a.ncols());
     let size = m.min(n);
     let mut u = Mat::<f64>::zeros(m, size);
+    let mut v = Mat::<f64>::zeros(n, if with_v { size } else { 0 });
     let mut s = Diag::<f64>::zeros(size);
-    let par = Par::Seq;
+    let v_kind = if with_v {
+        ComputeSvdVectors::Thin
+    } else {
+        ComputeSvdVectors::No
+    };
     let mut buf = MemBuffer::new(svd::svd_scratch::<f64>(
         m,
         n,
         ComputeSvdVectors::Thin,
-        ComputeSvdVectors::No,
-        par,
+        v_kind,
+        Par::Seq,
         Default::default(),
     ));
     svd::svd(
-        a.view(),
+        a,
         s.as_mut(),
         Some(u.as_mut()),
-        None,
-        par,
+        with_v.then(|| v.as_mut()),
+        Par::Seq,
         MemStack::new(&mut buf),
         Default::default(),
     )
     .map_err(|e| format!("SVD did not converge: {e:?}"))?;
-    let sv: Vec<f64> = (0..size).map(|i| s[i]).collect();
-    Ok((Dense::from_faer(u.as_ref()), sv))
+    Ok((u, (0..size).map(|i| s[i]).collect(), v))
+}
+
+/// The first `cols` columns of `a`.
+pub(crate) fn leading_columns(a: &Dense, cols: usize) -> Dense {
+    let cols = cols.min(a.cols);
+    Dense {
+        rows: a.rows,
+        cols,
+        data: a.data[..a.rows * cols].to_vec(),
+    }
 }
 
 /// faer's real eigen-decomposition: real and imaginary parts of the eigenvalues and, when
@@ -261,6 +329,72 @@ pub(crate) fn spd_inverse(a: &Dense) -> Option<Dense> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A deterministic, irregular `rows × cols` matrix.
+    fn irregular(rows: usize, cols: usize, seed: usize) -> Dense {
+        let mut a = Dense::zeros(rows, cols);
+        for c in 0..cols {
+            for r in 0..rows {
+                let t = (r * 31 + c * 17 + seed * 7) as f64;
+                a.set(
+                    r,
+                    c,
+                    (t * 0.618).sin() + ((r * c + seed) % 13) as f64 * 0.05,
+                );
+            }
+        }
+        a
+    }
+
+    #[test]
+    fn leading_svd_near_a_close_matrix_is_its_svd() {
+        let a = irregular(60, 45, 1);
+        let e = irregular(60, 45, 2);
+        let mut b = a.clone();
+        b.data
+            .iter_mut()
+            .zip(&e.data)
+            .for_each(|(v, d)| *v += 1e-3 * d);
+        let (ua, _) = thin_svd_u(&a).unwrap();
+        let (ub, sb) = thin_svd_u(&b).unwrap();
+        let (k, width) = (8, 20);
+        let (u, s) = leading_svd_near(&b, &leading_columns(&ua, width), k, (1e-12, 30))
+            .unwrap()
+            .expect("converges from a close basis");
+        assert_eq!((u.rows, u.cols, s.len()), (60, width, width));
+        for j in 0..k {
+            // A residual of 1e-12 σ₁ moves a singular value by as much at most.
+            assert!(
+                (s[j] - sb[j]).abs() <= 2e-12 * sb[0],
+                "{j}: {} {}",
+                s[j],
+                sb[j]
+            );
+            // And a singular vector by that over its gap to the others (≥ 1e-2 σ₁ here).
+            let dot: f64 = (0..60).map(|r| u.at(r, j) * ub.at(r, j)).sum();
+            assert!((dot.abs() - 1.0).abs() < 1e-9, "{j}: {dot}");
+        }
+        // From a basis far from b's leading vectors (its trailing ones) one sweep does not
+        // get there: the caller is told to take the full SVD.
+        let far = Dense {
+            rows: 60,
+            cols: width,
+            data: ua.data[ua.rows * 20..ua.rows * 40].to_vec(),
+        };
+        assert!(leading_svd_near(&b, &far, k, (1e-12, 1)).unwrap().is_none());
+        // A basis no wider than k, or of other rows, is refused the same way.
+        assert!(
+            leading_svd_near(&b, &leading_columns(&ua, k), k, (1e-12, 30))
+                .unwrap()
+                .is_none()
+        );
+        let other = irregular(50, width, 3);
+        assert!(
+            leading_svd_near(&b, &other, k, (1e-12, 30))
+                .unwrap()
+                .is_none()
+        );
+    }
 
     #[test]
     fn eigen_of_a_rotation_block() {

@@ -672,9 +672,14 @@ fn ssi_lags_as_a_time_or_as_periods() {
         args.extend_from_slice(&["--json", s(&json)]);
         let (ok, out, err) = hyst(&args);
         assert!(ok, "{lag:?}: {err}");
-        // After the line on the decimation (none: the record's band reaches 62 % of Nyquist).
+        // After the line on what was read, the one on the decimation (none: the record's
+        // band reaches 62 % of Nyquist).
         assert!(
-            out.starts_with("not decimated: ")
+            out.starts_with("read ")
+                && out
+                    .lines()
+                    .nth(1)
+                    .is_some_and(|l| l.starts_with("not decimated: "))
                 && out.contains(
                     "\n101 block rows: correlations up to lag 201 (20.1000 s at 10 Hz)\n"
                 ),

@@ -103,6 +103,9 @@ fn progress_gap(frame: &std::path::Path) -> Result<(), String> {
         &covssi::multisetup::MergeOptions::default(),
         &|p| {
             let now = t0.elapsed().as_secs_f64();
+            if std::env::var_os("HYST_BENCH_TIMELINE").is_some() && p.setup.is_none() {
+                eprintln!("{now:.2} s: {}", p.what);
+            }
             if let Ok(mut l) = last.lock() {
                 if now - l.0 > l.2 {
                     l.2 = now - l.0;

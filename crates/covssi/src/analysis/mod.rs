@@ -291,7 +291,8 @@ pub fn analyze_with_progress(
     // The survey that chose the factor is the one SSI's lag is read from, restated at the
     // new rate: not made twice, and not at a coarser resolution.
     let known = survey.as_ref().map(|s| s.decimated(factor));
-    let mut ssi = crate::identify::identify_surveyed(y, fs, &opts.ssi, known, progress)?;
+    let (mut ssi, basis) =
+        crate::identify::identify_surveyed_with_basis(y, fs, &opts.ssi, known, progress)?;
     if let Decimation::Factor(r) = opts.decimation
         && r > 1
     {
@@ -338,7 +339,7 @@ pub fn analyze_with_progress(
         Some(blocks) => {
             let refs = crate::identify::references(&opts.ssi, y.len())?;
             let (_, means) = crate::checks::check_channels(y)?;
-            crate::jackknife::ssi_errors(y, fs, (&refs, &means), &ssi, &opts.ssi, blocks)?
+            crate::jackknife::ssi_errors(y, fs, (&refs, &means), (&ssi, &basis), &opts.ssi, blocks)?
         }
         None => None,
     };
