@@ -11,7 +11,8 @@
 //!
 //! chosen by the file's extension or by [`Format`] ([`read_record`]). The identified mode
 //! shapes can be written as dataset 55 ([`write_shapes_uff`]; a test's merged modes with its
-//! nodes' positions as dataset 15, [`write_merged_shapes_uff`]). Every error names the file,
+//! nodes' positions as dataset 15, [`write_merged_shapes_uff`]), and read back with the
+//! nodes' positions ([`read_shapes_uff`]). Every error names the file,
 //! and where it applies the column, the row (1-based, counting the header as row 1, as a
 //! spreadsheet does), the dataset or variable, and the offending text.
 
@@ -317,6 +318,7 @@ mod setups;
 mod setups_pyoma;
 mod shapes_uff;
 mod uff;
+mod uff_shapes;
 pub use covariates::{Covariates, list_records, read_covariates};
 pub use delimited::{Delimiter, read_csv, read_csv_with, write_csv};
 pub use estimates::{EstimatesTable, read_estimates};
@@ -328,6 +330,7 @@ pub use setups::{RecordPaths, SetupSpec, read_setups, read_setups_with};
 pub use setups_pyoma::read_pyoma_setups;
 pub use shapes_uff::{ShapeMode, write_merged_shapes_uff, write_shapes_uff};
 pub use uff::read_uff;
+pub use uff_shapes::{UffMode, UffShapes, read_shapes_uff};
 
 /// A record file's format.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

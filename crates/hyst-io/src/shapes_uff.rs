@@ -430,6 +430,28 @@ mod tests {
         assert_eq!(lines[17], "         4");
         assert_eq!(lines[18], e13(&[0.0, 0.0, 0.125, 0.0, 0.0, 0.0]).trim_end());
         assert_eq!(lines[19], "    -1");
+        // Read back: the nodes where the geometry puts them, the mode's frequency and damping
+        // from its eigenvalue and each node's motion, to E13.5's six significant digits.
+        let back = crate::read_shapes_uff(&p).unwrap();
+        assert_eq!(
+            back.nodes,
+            vec![(4, [0.0, 1.0, 2.0]), (12, [3.5, -1.0, 0.0])]
+        );
+        let m = &back.modes[0];
+        assert_eq!((back.modes.len(), m.number), (1, 1));
+        assert!((m.frequency_hz - 3.0).abs() < 1e-5 * 3.0, "{m:?}");
+        assert!((m.damping_ratio - 0.02).abs() < 1e-5 * 0.02, "{m:?}");
+        let zero = Complex64::new(0.0, 0.0);
+        assert_eq!(
+            m.motions,
+            vec![
+                (
+                    12,
+                    [Complex64::new(1.0, 0.0), zero, Complex64::new(-0.5, 0.25)]
+                ),
+                (4, [zero, Complex64::new(0.125, 0.0), zero]),
+            ]
+        );
         // A node a Universal File cannot number, in the modes or the geometry: refused by name.
         let mut named = merged.clone();
         named.modes[0].nodes[1].node = "roof".into();

@@ -20,7 +20,7 @@ use std::path::Path;
 use super::{IoError, MeasurementPoint, Table};
 
 /// The error of a file that is not a record this reader takes.
-fn bad(path: &Path, what: impl Into<String>) -> IoError {
+pub(crate) fn bad(path: &Path, what: impl Into<String>) -> IoError {
     IoError::Uff {
         path: path.to_path_buf(),
         what: what.into(),
@@ -29,7 +29,7 @@ fn bad(path: &Path, what: impl Into<String>) -> IoError {
 
 /// The lines of a byte buffer, with their 1-based numbers, read one at a time; a binary
 /// block of a known length can be taken between them.
-struct Lines<'a> {
+pub(crate) struct Lines<'a> {
     bytes: &'a [u8],
     at: usize,
     line: usize,
@@ -37,7 +37,7 @@ struct Lines<'a> {
 
 impl<'a> Lines<'a> {
     /// The next line without its line end (LF or CRLF), and its number.
-    fn next_line(&mut self) -> Option<(usize, &'a [u8])> {
+    pub(crate) fn next_line(&mut self) -> Option<(usize, &'a [u8])> {
         if self.at >= self.bytes.len() {
             return None;
         }
@@ -59,19 +59,19 @@ impl<'a> Lines<'a> {
 }
 
 /// Whether a line is a dataset's delimiter, `    -1`.
-fn is_delimiter(line: &[u8]) -> bool {
+pub(crate) fn is_delimiter(line: &[u8]) -> bool {
     line.trim_ascii() == b"-1"
 }
 
 /// Columns `from..to` (0-based) of a line, blank where the line is shorter.
-fn field(line: &[u8], from: usize, to: usize) -> &str {
+pub(crate) fn field(line: &[u8], from: usize, to: usize) -> &str {
     let end = to.min(line.len());
     let start = from.min(end);
     std::str::from_utf8(&line[start..end]).map_or("", str::trim)
 }
 
 /// A Fortran integer field (blank is 0).
-fn int(text: &str) -> Option<i64> {
+pub(crate) fn int(text: &str) -> Option<i64> {
     if text.is_empty() {
         Some(0)
     } else {
@@ -80,7 +80,7 @@ fn int(text: &str) -> Option<i64> {
 }
 
 /// A Fortran real field: `E` or `D` exponents, blank is 0.
-fn real(text: &str) -> Option<f64> {
+pub(crate) fn real(text: &str) -> Option<f64> {
     if text.is_empty() {
         return Some(0.0);
     }
@@ -114,7 +114,8 @@ impl Function {
 }
 
 /// What a 58b dataset's first line says of its binary block.
-struct Binary {
+#[derive(Clone, Copy)]
+pub(crate) struct Binary {
     little_endian: bool,
     ascii_lines: usize,
     bytes: usize,
@@ -132,14 +133,67 @@ pub fn read_uff(path: &Path) -> Result<Table, IoError> {
 
 /// Every dataset 58 of the file, in order; other datasets passed over.
 fn functions(path: &Path, bytes: &[u8]) -> Result<Vec<Function>, IoError> {
+    let mut functions = Vec::new();
+    let others = walk_datasets(path, bytes, |start, lines| {
+        if start.number != 58 {
+            return Ok(false);
+        }
+        functions.push(function(
+            path,
+            lines,
+            start.index,
+            start.id_line,
+            start.binary,
+        )?);
+        Ok(true)
+    })?;
+    if functions.is_empty() {
+        return Err(bad(
+            path,
+            format!(
+                "no dataset 58 (a function at a node) to read as a record; the file holds {}",
+                holds(&others)
+            ),
+        ));
+    }
+    Ok(functions)
+}
+
+/// How an error says which datasets a file holds.
+pub(crate) fn holds(numbers: &[u32]) -> String {
+    if numbers.is_empty() {
+        "no datasets".to_string()
+    } else {
+        let n: Vec<String> = numbers.iter().map(u32::to_string).collect();
+        format!("datasets {}", n.join(", "))
+    }
+}
+
+/// Where a dataset starts: its number, its place among the file's datasets (1-based), the
+/// line of its number, and a binary dataset's layout.
+pub(crate) struct DatasetStart {
+    pub number: u32,
+    pub index: usize,
+    pub id_line: usize,
+    pub binary: Option<Binary>,
+}
+
+/// Walk the datasets of the Universal File `bytes` (read from `path`): `visit` is given
+/// each dataset's start with the lines after its number, reads it up to and with its closing
+/// delimiter and returns `true`, or returns `false` to have it passed over. Returns the
+/// numbers of the datasets passed over.
+pub(crate) fn walk_datasets(
+    path: &Path,
+    bytes: &[u8],
+    mut visit: impl FnMut(DatasetStart, &mut Lines<'_>) -> Result<bool, IoError>,
+) -> Result<Vec<u32>, IoError> {
     let mut lines = Lines {
         bytes,
         at: 0,
         line: 0,
     };
-    let mut functions = Vec::new();
-    let mut others: Vec<String> = Vec::new();
-    let mut dataset = 0;
+    let mut others: Vec<u32> = Vec::new();
+    let mut index = 0;
     while let Some((n, line)) = lines.next_line() {
         if line.trim_ascii().is_empty() {
             continue;
@@ -159,7 +213,7 @@ fn functions(path: &Path, bytes: &[u8]) -> Result<Vec<Function>, IoError> {
                 format!("line {n}: a dataset opens at the end of the file"),
             ));
         };
-        dataset += 1;
+        index += 1;
         let number_text = field(id, 0, 6);
         let number = number_text.parse::<u32>().map_err(|_| {
             bad(
@@ -174,27 +228,18 @@ fn functions(path: &Path, bytes: &[u8]) -> Result<Vec<Function>, IoError> {
             Some(b'b' | b'B') => Some(binary_header(path, id_line, id)?),
             _ => None,
         };
-        if number == 58 {
-            functions.push(function(path, &mut lines, dataset, id_line, binary)?);
-        } else {
-            others.push(number.to_string());
+        let start = DatasetStart {
+            number,
+            index,
+            id_line,
+            binary,
+        };
+        if !visit(start, &mut lines)? {
+            others.push(number);
             skip_dataset(path, &mut lines, id_line, number, binary)?;
         }
     }
-    if functions.is_empty() {
-        let holds = if others.is_empty() {
-            "no datasets".to_string()
-        } else {
-            format!("datasets {}", others.join(", "))
-        };
-        return Err(bad(
-            path,
-            format!(
-                "no dataset 58 (a function at a node) to read as a record; the file holds {holds}"
-            ),
-        ));
-    }
-    Ok(functions)
+    Ok(others)
 }
 
 /// The binary layout a `58b`-style first line gives: `Format(I6,1A1,I6,I6,I12,I12,…)`.

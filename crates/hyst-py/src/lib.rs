@@ -412,12 +412,52 @@ fn read_record<'py>(
     Ok((data, table.names, fs, points))
 }
 
+/// What `read_shapes_uff` gives: the nodes (number, x, y, z) and each mode (number,
+/// frequency, damping ratio, node numbers, each node's x, y, z motion as a complex array).
+type ShapesParts<'py> = (
+    Vec<(i64, [f64; 3])>,
+    Vec<(
+        i64,
+        f64,
+        f64,
+        Vec<i64>,
+        Bound<'py, PyArray2<hyst::covssi::Complex64>>,
+    )>,
+);
+
+/// The mode shapes and nodes of a Universal File (datasets 55, and 15 or 2411); see the
+/// Python wrapper `hyst.read_shapes`.
+#[pyfunction]
+fn read_shapes_uff<'py>(py: Python<'py>, path: std::path::PathBuf) -> PyResult<ShapesParts<'py>> {
+    let shapes = py
+        .detach(|| hyst::io::read_shapes_uff(&path))
+        .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let modes = shapes
+        .modes
+        .into_iter()
+        .map(|m| {
+            let nodes = m.motions.iter().map(|(n, _)| *n).collect();
+            let flat: Vec<hyst::covssi::Complex64> = m
+                .motions
+                .iter()
+                .flat_map(|(_, v)| v.iter().copied())
+                .collect();
+            let motion = Array2::from_shape_vec((m.motions.len(), 3), flat)
+                .map_err(|e| PyValueError::new_err(e.to_string()))?
+                .into_pyarray(py);
+            Ok((m.number, m.frequency_hz, m.damping_ratio, nodes, motion))
+        })
+        .collect::<PyResult<_>>()?;
+    Ok((shapes.nodes, modes))
+}
+
 /// The extension module: `hyst._hyst`.
 #[pymodule]
 fn _hyst(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ssi, m)?)?;
     m.add_function(wrap_pyfunction!(ssi_setups, m)?)?;
     m.add_function(wrap_pyfunction!(read_record, m)?)?;
+    m.add_function(wrap_pyfunction!(read_shapes_uff, m)?)?;
     m.add_function(wrap_pyfunction!(ident::simulate, m)?)?;
     m.add_function(wrap_pyfunction!(ident::simulate_structure, m)?)?;
     m.add_function(wrap_pyfunction!(ident::excite, m)?)?;

@@ -96,6 +96,61 @@ def test_merged_shapes_go_to_a_universal_file_that_pyuff_reads_with_the_nodes(hy
             want = np.array([complex(*n["motion"][axis]) if n["motion"][axis] else 0 for n in m["nodes"]])
             # E13.5 keeps six significant digits of each part.
             assert np.allclose(s[r], want, rtol=1e-5, atol=1e-5 * np.abs(want).max())
+    # hyst reads its own file back as pyuff does: the same nodes, eigenvalues and motions.
+    back = hyst.read_shapes(uff)
+    assert back.nodes == {n: tuple(x) for n, x in zip(sets[0]["node_nums"], np.c_[sets[0]["x"], sets[0]["y"], sets[0]["z"]])}
+    for s, m in zip(sets[1:], back.modes):
+        assert m.number == s["mode_n"] and m.nodes == list(s["node_nums"])
+        assert m.frequency_hz == pytest.approx(abs(s["eig"]) / (2 * np.pi), rel=1e-12)
+        assert m.damping_ratio == pytest.approx(-s["eig"].real / abs(s["eig"]), rel=1e-12)
+        assert np.array_equal(m.motion, np.c_[s["r1"], s["r2"], s["r3"]])
+
+
+def test_shapes_pyuff_writes_are_read_by_hyst(tmp_path):
+    """A Universal File written by pyuff, as another program's export: a dataset 2411 of the
+    nodes, a real normal mode (analysis type 2) with 6 values per node and a complex mode
+    (type 3) with 3; hyst.read_shapes gives the nodes, each mode's frequency and damping and
+    each node's translation as pyuff wrote them (to the file's E13.5 digits)."""
+    pyuff = need("pyuff")
+    from pyuff.datasets import dataset_55, dataset_2411
+    path = tmp_path / "other.uff"
+    nodes = np.array([3, 7, 11])
+    xyz = np.array([[1.0, 2.5, -3.0], [0.0, 0.0, 12.5], [4.0, -1.0, 0.5]])
+    normal = np.array([[1.0, -0.5, 0.25], [0.0, 0.0, 0.125], [0.3, 0.2, -0.1]])
+    lam = 2 * np.pi * 5.5 * (-0.04 + 1j * np.sqrt(1 - 0.04 ** 2))
+    complex_shape = np.array([[1 + 0.1j, 0, -0.2j], [0.5, 0.25 - 0.25j, 0], [0, 0, 1e-3 + 2e-3j]])
+    uff = pyuff.UFF(str(path))
+    uff.write_sets(dataset_2411.prepare_2411(node_nums=nodes, def_cs=np.ones(3, dtype=int), disp_cs=np.ones(3, dtype=int),
+                                             color=np.ones(3, dtype=int), x=xyz[:, 0], y=xyz[:, 1], z=xyz[:, 2],
+                                             return_full_dict=True), mode="overwrite")
+    uff.write_sets(dataset_55.prepare_55(
+        model_type=1, analysis_type=2, data_ch=3, spec_data_type=8, data_type=2, n_data_per_node=6,
+        r1=normal[:, 0], r2=normal[:, 1], r3=normal[:, 2], r4=np.full(3, 9.0), r5=np.full(3, 9.0),
+        r6=np.full(3, 9.0), load_case=1, mode_n=4, freq=3.25, modal_m=1.0, modal_damp_vis=0.015,
+        modal_damp_his=0.0, node_nums=nodes, return_full_dict=True), mode="add")
+    uff.write_sets(dataset_55.prepare_55(
+        model_type=1, analysis_type=3, data_ch=2, spec_data_type=8, data_type=5, n_data_per_node=3,
+        r1=complex_shape[:, 0], r2=complex_shape[:, 1], r3=complex_shape[:, 2], load_case=1, mode_n=5,
+        eig=lam, modal_a=0j, modal_b=0j, node_nums=nodes), mode="add")
+    shapes = hyst.read_shapes(path)
+    assert list(shapes.nodes) == [3, 7, 11]
+    assert np.allclose(list(shapes.nodes.values()), xyz, rtol=1e-15)
+    first, second = shapes.modes
+    assert (first.number, first.nodes, second.number) == (4, [3, 7, 11], 5)
+    assert first.frequency_hz == pytest.approx(3.25, rel=1e-5)
+    assert first.damping_ratio == pytest.approx(0.015, rel=1e-5)
+    # E13.5 keeps six significant digits of each part.
+    assert np.allclose(first.motion, normal, rtol=1e-5, atol=1e-6)
+    assert second.frequency_hz == pytest.approx(5.5, rel=1e-5)
+    assert second.damping_ratio == pytest.approx(0.04, rel=1e-5)
+    assert np.allclose(second.motion, complex_shape, rtol=1e-5, atol=1e-6)
+    # Nodes alone are no shapes: refused, naming what the file holds.
+    other = tmp_path / "nodes_only.uff"
+    pyuff.UFF(str(other)).write_sets(dataset_2411.prepare_2411(
+        node_nums=nodes, def_cs=np.ones(3, dtype=int), disp_cs=np.ones(3, dtype=int), color=np.ones(3, dtype=int),
+        x=xyz[:, 0], y=xyz[:, 1], z=xyz[:, 2], return_full_dict=True), mode="overwrite")
+    with pytest.raises(ValueError, match="no dataset 55"):
+        hyst.read_shapes(other)
 
 
 def test_setups_refuse_a_record_beside_them(setups):

@@ -176,8 +176,8 @@ def test_the_type_stubs_name_what_the_package_has():
 
     stubs = (Path(hyst.__file__).parent / "__init__.pyi").read_text()
     stubbed = set(re.findall(r"def (\w+)\(", stubs))
-    functions = {"ssi", "read", "excite", "simulate", "identify", "refine", "levels", "track",
-                 "track_estimates", "amplitude", "follow"}
+    functions = {"ssi", "read", "read_shapes", "excite", "simulate", "identify", "refine", "levels",
+                 "track", "track_estimates", "amplitude", "follow"}
     assert functions <= stubbed and all(hasattr(hyst, f) for f in functions)
     assert "class Record" in stubs and set(hyst.Record.__dataclass_fields__) == set(
         re.findall(r"^    (\w+): ", stubs.split("class Record")[1].split("def ")[0], re.M)

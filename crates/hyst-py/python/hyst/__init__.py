@@ -8,7 +8,8 @@ the JSON document ``hyst ssi --json`` writes.
 
 ``hyst.read(path)`` reads a record as the command line does: CSV, NumPy ``.npy``/``.npz``,
 MATLAB ``.mat`` (level 5), Universal File datasets 58 (ASCII or 58b, with their sampling
-rate); ``result.write_shapes_uff(path)`` writes the mode shapes as dataset 55.
+rate); ``result.write_shapes_uff(path)`` writes the mode shapes as dataset 55, and
+``hyst.read_shapes(path)`` reads such shapes back.
 
 ``hyst.simulate``, ``hyst.identify``, ``hyst.refine`` and ``hyst.levels`` are the commands of
 the same names (``hyst simulate``, ``ident``, ``refine``, ``levels``) on arrays: models are
@@ -20,9 +21,10 @@ from ._hyst import Report, SsiResult
 from ._modal import amplitude, ssi
 from ._monitor import Follow, follow, track, track_estimates
 from ._oscillator import excite, identify, levels, refine, simulate
-from ._read import Record, read
+from ._read import ModeShape, Record, Shapes, read, read_shapes
 
 __all__ = [
-    "amplitude", "excite", "identify", "levels", "read", "Record", "refine", "Report",
+    "amplitude", "excite", "identify", "levels", "read", "read_shapes", "Record", "refine",
+    "Report", "ModeShape", "Shapes",
     "simulate", "ssi", "SsiResult", "track", "track_estimates", "follow", "Follow",
 ]

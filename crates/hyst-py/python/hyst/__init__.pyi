@@ -213,6 +213,21 @@ def read(
     delimiter: Optional[Literal[",", ";", "\t"]] = ...,
 ) -> Record: ...
 
+@dataclass(frozen=True)
+class ModeShape:
+    number: int
+    frequency_hz: float
+    damping_ratio: float
+    nodes: list[int]
+    motion: npt.NDArray[np.complex128]
+
+@dataclass(frozen=True)
+class Shapes:
+    nodes: dict[int, tuple[float, float, float]]
+    modes: list[ModeShape]
+
+def read_shapes(path: Union[str, os.PathLike[str]]) -> Shapes: ...
+
 @overload
 def ssi(
     y: npt.ArrayLike,

@@ -75,6 +75,61 @@ def read(path, *, format=None, variable=None, delimiter=None):
     return Record(data=data, names=list(names), fs=fs, points=points, path=os.fspath(path))
 
 
+@_dataclass(frozen=True)
+class ModeShape:
+    """One mode of a Universal File read by :func:`hyst.read_shapes` (a dataset 55).
+
+    Attributes
+    ----------
+    number : int
+        The mode's number in the file.
+    frequency_hz : float
+        Natural frequency (from a complex mode's eigenvalue λ: |λ|/2π).
+    damping_ratio : float
+        Damping ratio (a complex mode's −Re λ/|λ|, a normal mode's viscous one).
+    nodes : list of int
+        The nodes, in the file's order.
+    motion : numpy.ndarray, shape (nodes, 3), complex
+        Each node's x, y, z translation (a real mode's with zero imaginary parts).
+    """
+
+    number: int
+    frequency_hz: float
+    damping_ratio: float
+    nodes: _List[int]
+    motion: _np.ndarray
+
+
+@_dataclass(frozen=True)
+class Shapes:
+    """What :func:`hyst.read_shapes` reads: ``nodes`` maps each node of datasets 15 or 2411
+    to its (x, y, z); ``modes`` lists each dataset 55's :class:`ModeShape`."""
+
+    nodes: dict
+    modes: _List[ModeShape]
+
+
+def read_shapes(path):
+    """Read mode shapes from a Universal File, as ``hyst ssi --shapes-uff`` (and
+    ``--setups``) write them or another program does: each dataset 55 (normal or complex
+    modes, each node's translation) and the nodes' positions of datasets 15 and 2411.
+
+    Raises
+    ------
+    ValueError
+        Naming the file, the dataset and what is wrong (no dataset 55, a field that does
+        not read, a data type or analysis type that is not a mode shape, ...).
+    """
+    import os
+
+    nodes, modes = _hyst.read_shapes_uff(os.fspath(path))
+    return Shapes(
+        nodes={n: tuple(x) for n, x in nodes},
+        modes=[ModeShape(number=k, frequency_hz=f, damping_ratio=z, nodes=list(n), motion=m)
+               for k, f, z, n, m in modes],
+    )
+
+
 def _rate_of(path, rec, fs):
     """The rate of the record ``rec`` read from ``path``: ``fs`` when given (a file that
     states another is refused), else the file's own (None when it states none)."""
