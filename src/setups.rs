@@ -325,15 +325,24 @@ impl fmt::Display for SetupsReport {
         )?;
         writeln!(
             f,
-            "  mode  frequency (Hz)         damping (%)         setups  scatter"
+            "  mode  frequency (Hz)         damping (%)         setups  scatter  MPC    MPD (°)"
         )?;
         for (i, mode) in m.modes.iter().enumerate() {
             let se = |v: Option<f64>, k: f64, d: usize| {
                 v.map_or("—".to_string(), |e| format!("{:.*}", d, e * k))
             };
+            let seen: Vec<covssi::Complex64> = mode.shape.iter().flatten().copied().collect();
+            let (mpc, mpd) = if seen.is_empty() {
+                ("—".to_string(), "—".to_string())
+            } else {
+                (
+                    format!("{:.3}", covssi::mpc(&seen)),
+                    format!("{:.1}", covssi::mpd(&seen)),
+                )
+            };
             writeln!(
                 f,
-                "  {:>4}  {:>9.4} ± {:<8}  {:>6.3} ± {:<8}  {:>3}/{:<3} {}",
+                "  {:>4}  {:>9.4} ± {:<8}  {:>6.3} ± {:<8}  {:>3}/{:<3} {:<8} {mpc:<6} {mpd}",
                 i + 1,
                 mode.frequency_hz,
                 se(mode.frequency_se_hz, 1.0, 4),

@@ -446,10 +446,7 @@ fn run_setups(a: &SsiArgs, path: &Path, opts: &hyst::covssi::AnalysisOptions) ->
     if let Some(html) = &a.html {
         let title = format!("hyst ssi --setups {}", path.display());
         let g = geometry.as_ref().map(|(g, p)| (g, p.as_path()));
-        write_text(
-            html,
-            &hyst::html::setups_page(&title, &report.report.merged, g)?,
-        )?;
+        write_text(html, &hyst::html::setups_page(&title, &report.report, g)?)?;
     }
     Ok(())
 }

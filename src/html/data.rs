@@ -1,11 +1,11 @@
 //! What a report page shows, as serializable types, and how an analysis becomes one.
 
 use covssi::fdd::efdd;
-use covssi::multisetup::MergedModes;
-use covssi::{Complex64 as C64, ModalAnalysis, PoleStatus, Rejection, Stability, mac, mpc};
+use covssi::{Complex64 as C64, ModalAnalysis, PoleStatus, Rejection, Stability, mac, mpc, mpd};
 use serde::Serialize;
 
 use crate::io::Geometry;
+use crate::setups::SetupsReport;
 
 /// Everything one page draws.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
@@ -16,6 +16,8 @@ pub struct PageData {
     pub summary: Vec<String>,
     /// The stabilization diagram, when there is one (a single record).
     pub diagram: Option<Diagram>,
+    /// Each setup's stabilization diagram, to choose from (merged setups).
+    pub setup_diagrams: Vec<SetupDiagram>,
     /// The modes' table.
     pub modes: Vec<ModeRow>,
     /// MAC between the modes' shapes.
@@ -66,6 +68,15 @@ pub struct Diagram {
     pub singular_values: Vec<Vec<f64>>,
 }
 
+/// One setup's stabilization diagram, by the setup's name.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct SetupDiagram {
+    /// The setup.
+    pub name: String,
+    /// Its diagram (the spectrum behind it: the first singular value of SSI's survey).
+    pub diagram: Diagram,
+}
+
 /// One pole as the diagram shows it.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PolePoint {
@@ -98,6 +109,8 @@ pub struct ModeRow {
     pub damping_se: Option<f64>,
     /// Modal phase collinearity of its shape.
     pub mpc: Option<f64>,
+    /// Mean phase deviation of its shape (degrees).
+    pub mpd: Option<f64>,
     /// EFDD's frequency (Hz) and damping ratio for the same mode.
     pub efdd: Option<(f64, f64)>,
     /// Where it was seen (merged setups: "12/15 setups").
@@ -161,9 +174,10 @@ pub(super) fn pair(v: C64) -> [f64; 2] {
     [v.re, v.im]
 }
 
-/// The page of one record's analysis `a` (its FDD, when computed, behind the diagram and
-/// EFDD's opinion on each mode).
-pub fn ssi_page_data(title: &str, a: &ModalAnalysis) -> PageData {
+/// The stabilization diagram of analysis `a`: every pole with why it was kept or rejected,
+/// over the FDD's first singular values when it was computed, else the first singular value
+/// of SSI's survey.
+pub fn diagram_of(a: &ModalAnalysis) -> Diagram {
     let fdd = a.fdd.as_ref().map(|(f, _)| f);
     let poles = a
         .ssi
@@ -201,6 +215,17 @@ pub fn ssi_page_data(title: &str, a: &ModalAnalysis) -> PageData {
             vec![a.ssi.diagram.spectrum.first_singular_value.clone()],
         ),
     };
+    Diagram {
+        poles,
+        spectrum_hz,
+        singular_values,
+    }
+}
+
+/// The page of one record's analysis `a` (its FDD, when computed, behind the diagram and
+/// EFDD's opinion on each mode).
+pub fn ssi_page_data(title: &str, a: &ModalAnalysis) -> PageData {
+    let fdd = a.fdd.as_ref().map(|(f, _)| f);
     let reported = a.reported_modes();
     let modes: Vec<ModeRow> = reported
         .iter()
@@ -212,6 +237,7 @@ pub fn ssi_page_data(title: &str, a: &ModalAnalysis) -> PageData {
             damping_ratio: m.damping_ratio,
             damping_se: m.damping_se,
             mpc: m.shape.as_deref().map(mpc),
+            mpd: m.shape.as_deref().map(mpd),
             efdd: a
                 .fdd
                 .as_ref()
@@ -249,11 +275,8 @@ pub fn ssi_page_data(title: &str, a: &ModalAnalysis) -> PageData {
                 .to_string()
         }))
         .collect(),
-        diagram: Some(Diagram {
-            poles,
-            spectrum_hz,
-            singular_values,
-        }),
+        diagram: Some(diagram_of(a)),
+        setup_diagrams: Vec::new(),
         mac: mac_matrix(&shapes),
         modes,
         shapes: Shapes {
@@ -276,8 +299,14 @@ pub(super) fn mac_matrix(shapes: &[Vec<C64>]) -> Vec<Vec<f64>> {
         .collect()
 }
 
-/// The page of merged setups `m`, drawn on `geometry` (else the nodes along a line).
-pub fn setups_page_data(title: &str, m: &MergedModes, geometry: Option<&Geometry>) -> PageData {
+/// The page of a test's setups `report`: its merged modes drawn on `geometry` (else the
+/// nodes along a line), each setup's stabilization diagram to choose from.
+pub fn setups_page_data(
+    title: &str,
+    report: &SetupsReport,
+    geometry: Option<&Geometry>,
+) -> PageData {
+    let m = &report.merged;
     let (names, xyz, lines) = match geometry {
         Some(g) => (
             g.nodes.iter().map(|n| n.0.clone()).collect::<Vec<_>>(),
@@ -326,6 +355,14 @@ pub fn setups_page_data(title: &str, m: &MergedModes, geometry: Option<&Geometry
         .chain(m.notes.iter().cloned())
         .collect(),
         diagram: None,
+        setup_diagrams: report
+            .setups
+            .iter()
+            .map(|s| SetupDiagram {
+                name: s.name.clone(),
+                diagram: diagram_of(&s.analysis),
+            })
+            .collect(),
         modes: m
             .modes
             .iter()
@@ -336,7 +373,8 @@ pub fn setups_page_data(title: &str, m: &MergedModes, geometry: Option<&Geometry
                 frequency_se_hz: mode.frequency_se_hz,
                 damping_ratio: mode.damping_ratio,
                 damping_se: mode.damping_se,
-                mpc: None,
+                mpc: measured(mode).map(|v| mpc(&v)),
+                mpd: measured(mode).map(|v| mpd(&v)),
                 efdd: None,
                 seen: Some(format!("{}/{} setups", mode.seen_in.len(), m.setups.len())),
             })
@@ -350,4 +388,10 @@ pub fn setups_page_data(title: &str, m: &MergedModes, geometry: Option<&Geometry
         },
         track: None,
     }
+}
+
+/// A merged mode's shape at the DOFs some setup saw it at (`None` when none did).
+fn measured(mode: &covssi::multisetup::MergedMode) -> Option<Vec<C64>> {
+    let v: Vec<C64> = mode.shape.iter().flatten().copied().collect();
+    (!v.is_empty()).then_some(v)
 }

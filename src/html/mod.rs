@@ -8,7 +8,10 @@
 mod data;
 mod track;
 
-pub use data::{Diagram, ModeRow, PageData, PolePoint, Shapes, setups_page_data, ssi_page_data};
+pub use data::{
+    Diagram, ModeRow, PageData, PolePoint, SetupDiagram, Shapes, diagram_of, setups_page_data,
+    ssi_page_data,
+};
 pub use data::{ModeSeries, TrackSeries};
 pub use track::track_page_data;
 
@@ -31,10 +34,11 @@ pub fn ssi_page(title: &str, analysis: &covssi::ModalAnalysis) -> String {
 /// and drawn at rest.
 pub fn setups_page(
     title: &str,
-    merged: &covssi::multisetup::MergedModes,
+    report: &crate::setups::SetupsReport,
     geometry: Option<(&crate::io::Geometry, &std::path::Path)>,
 ) -> Result<String, crate::io::IoError> {
-    let mut data = setups_page_data(title, merged, geometry.map(|g| g.0));
+    let merged = &report.merged;
+    let mut data = setups_page_data(title, report, geometry.map(|g| g.0));
     if let Some((g, grid)) = geometry {
         let still = g.unmeasured(grid, merged.dofs.iter().map(|d| d.node.as_str()))?;
         if !still.is_empty() {
@@ -75,7 +79,9 @@ pub fn page(data: &PageData) -> String {
          <section id=\"diagram-section\"><h2>Stabilization diagram</h2>\
          <p class=\"help\">Poles of every model order over the singular values of the output \
          spectral matrix (FDD); hover over a pole for its numbers and why it was kept or \
-         rejected; drag to zoom, double-click to zoom out.</p><div id=\"diagram\"></div>\
+         rejected; drag to zoom, double-click to zoom out.</p>\
+         <label id=\"diagram-pick-label\" hidden>Setup <select id=\"diagram-pick\"></select></label>\
+         <div id=\"diagram\"></div>\
          <div id=\"tip\" class=\"tip\"></div></section>\
          <section id=\"track-section\"><h2>Each mode against time</h2>\
          <p class=\"help\">Frequency and damping ratio of every record ± one standard error; \

@@ -69,7 +69,22 @@
     tip.style.top = (box.top - host.top + top + 14) + "px";
     tip.style.display = "block";
   }
-  if (D.diagram) { diagram(D.diagram); } else {
+  if (D.diagram) { diagram(D.diagram); } else if (D.setup_diagrams.length) {
+    // Merged setups: each setup's diagram, one at a time, chosen by name.
+    const pickDiagram = document.getElementById("diagram-pick");
+    D.setup_diagrams.forEach((s, i) => {
+      const o = document.createElement("option");
+      o.value = String(i);
+      o.textContent = s.name;
+      pickDiagram.appendChild(o);
+    });
+    document.getElementById("diagram-pick-label").hidden = false;
+    let shown = diagram(D.setup_diagrams[0].diagram);
+    pickDiagram.addEventListener("change", () => {
+      shown.destroy();
+      shown = diagram(D.setup_diagrams[Number(pickDiagram.value)].diagram);
+    });
+  } else {
     document.getElementById("diagram-section").style.display = "none";
   }
 
@@ -128,13 +143,13 @@
   // --- the modes' table ------------------------------------------------------------------
   const table = document.getElementById("modes");
   const efdd = D.modes.some((m) => m.efdd), seen = D.modes.some((m) => m.seen);
-  table.innerHTML = "<tr><th>mode</th><th>frequency (Hz)</th><th>± (Hz)</th><th>damping ratio (%)</th><th>± (%)</th><th>MPC</th>" +
+  table.innerHTML = "<tr><th>mode</th><th>frequency (Hz)</th><th>± (Hz)</th><th>damping ratio (%)</th><th>± (%)</th><th>MPC</th><th>MPD (°)</th>" +
     (efdd ? "<th>EFDD frequency (Hz)</th><th>EFDD damping (%)</th>" : "") + (seen ? "<th>seen in</th>" : "") + "</tr>";
   D.modes.forEach((m, i) => {
     const tr = document.createElement("tr");
     tr.className = "mode";
     tr.innerHTML = `<td>${esc(m.name)}</td><td>${fmt(m.frequency_hz, 4)}</td><td>${fmt(m.frequency_se_hz, 4)}</td>` +
-      `<td>${fmt(100 * m.damping_ratio, 3)}</td><td>${m.damping_se === null ? "—" : fmt(100 * m.damping_se, 3)}</td><td>${fmt(m.mpc, 3)}</td>` +
+      `<td>${fmt(100 * m.damping_ratio, 3)}</td><td>${m.damping_se === null ? "—" : fmt(100 * m.damping_se, 3)}</td><td>${fmt(m.mpc, 3)}</td><td>${fmt(m.mpd, 1)}</td>` +
       (efdd ? `<td>${m.efdd ? fmt(m.efdd[0], 4) : "—"}</td><td>${m.efdd ? fmt(100 * m.efdd[1], 3) : "—"}</td>` : "") +
       (seen ? `<td>${m.seen || ""}</td>` : "");
     table.appendChild(tr);

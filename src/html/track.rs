@@ -61,6 +61,7 @@ pub fn track_page_data(title: &str, report: &TrackReport) -> PageData {
         title: title.to_string(),
         summary: summary(report, records, t0),
         diagram: None,
+        setup_diagrams: Vec::new(),
         modes: report
             .reference
             .iter()
@@ -72,6 +73,7 @@ pub fn track_page_data(title: &str, report: &TrackReport) -> PageData {
                 damping_ratio: m.damping_ratio,
                 damping_se: m.damping_se,
                 mpc: m.shape.as_deref().map(covssi::mpc),
+                mpd: m.shape.as_deref().map(covssi::mpd),
                 efdd: None,
                 seen: Some(format!(
                     "tracked in {:.1} % of records",

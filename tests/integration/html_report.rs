@@ -213,10 +213,28 @@ fn merged_setups_open_on_the_steel_frames_geometry() {
     let geometry = hyst::io::setups_geometry(folder, None, None).unwrap();
     let g = geometry.as_ref().map(|(g, p)| (g, p.as_path()));
     let title = format!("hyst ssi --setups {}", folder.display());
-    let html = hyst::html::setups_page(&title, &report.merged, g).unwrap();
+    let html = hyst::html::setups_page(&title, report, g).unwrap();
     std::fs::write(&page, html).unwrap();
     let opened = check_page(&browser, &page, 11, 1500);
-    // The setups' page has no diagram; the nodes no channel measures are said.
+    // Each setup's diagram to choose from, the first drawn with all its poles.
+    let first = &report.setups[0].analysis.ssi.diagram;
+    let poles: usize = first.orders.iter().map(|o| o.poles.len()).sum();
+    assert_eq!(
+        opened.attribute("diagram", "data-poles"),
+        Some(poles.to_string())
+    );
+    assert_eq!(
+        opened.count("<option value="),
+        15 + 11,
+        "15 setups, 11 modes"
+    );
+    // Every merged mode's MPC and MPD are in its row (none left as "—").
+    let rows: Vec<&str> = opened.dom.split("class=\"mode\"").skip(1).collect();
+    assert!(
+        rows.iter()
+            .all(|r| !r.split("</tr>").next().unwrap().contains('—'))
+    );
+    // The nodes no channel measures are said.
     assert!(
         opened
             .dom

@@ -93,5 +93,5 @@ pub use refine::{
     DroppedMode, DroppedRealPole, FittedPole, MISFIT_LIMIT, RefineOptions, RefinedMode,
     RefinedRealPole, Refinement, refine, refine_with_real_poles,
 };
-pub use stabilize::{Pole, PoleStatus, Rejection, Stability, mac, mpc};
+pub use stabilize::{Pole, PoleStatus, Rejection, Stability, mac, mpc, mpd};
 pub use survey::{AutoLag, LagLimit, RecordSurvey, survey};

@@ -357,7 +357,7 @@ fn ssi_setups(
             // The command's title: the same page as `hyst ssi --setups --html`.
             let title = format!("hyst ssi --setups {}", path.display());
             let g = g.as_ref().map(|(g, p)| (g, p.as_path()));
-            let page = hyst::html::setups_page(&title, &report.merged, g)?;
+            let page = hyst::html::setups_page(&title, &report, g)?;
             Ok::<_, hyst::setups::SetupsError>((report, page))
         })
         .map_err(|e| PyValueError::new_err(e.to_string()))?;

@@ -52,8 +52,9 @@ def setups(tmp_path_factory):
 
 def test_setups_give_the_commands_report_and_the_resonators_modes(hyst_bin, setups, tmp_path):
     out = tmp_path / "merged.json"
-    subprocess.run([str(hyst_bin), "ssi", "--setups", str(setups), "--fs", str(FS), "--json", str(out)],
-                   check=True, capture_output=True)
+    # The command's file with the setups' diagrams (left out by default) is Python's report.
+    subprocess.run([str(hyst_bin), "ssi", "--setups", str(setups), "--fs", str(FS), "--json", str(out),
+                    "--json-diagrams"], check=True, capture_output=True)
     report = hyst.ssi(setups=setups, fs=FS)
     assert report.to_dict() == json.loads(out.read_text())
     assert "2 setups, each identified alone" in str(report)
@@ -67,6 +68,23 @@ def test_setups_give_the_commands_report_and_the_resonators_modes(hyst_bin, setu
         mac = abs(np.vdot(v, truth)) ** 2 / (np.vdot(v, v).real * (truth @ truth))
         # 2 % noise on 400 s records of modes 60–160 decay times long: MAC above 0.99.
         assert mac > 0.99, (j, mac, v)
+    # The merged table's MPC and MPD, against numpy's: MPC from the eigenvalues of the
+    # real and imaginary parts' 2x2 covariance, MPD by Reynders et al.'s formula through the
+    # SVD of [Re, Im] (the shape's entries some setup saw).
+    lines = str(report).splitlines()
+    head = lines.index(next(l for l in lines if "MPC    MPD" in l))
+    for m, line in zip(merged["modes"], lines[head + 1:]):
+        v = np.array([complex(*e) for e in m["shape"] if e is not None])
+        x = np.c_[v.real, v.imag]
+        s2 = np.linalg.eigvalsh(x.T @ x)
+        mpc = ((s2[1] - s2[0]) / (s2[1] + s2[0])) ** 2
+        vt = np.linalg.svd(x)[2]
+        v12, v22 = vt[1, 0], vt[1, 1]
+        cos = np.abs(v.real * v22 - v.imag * v12) / (np.hypot(v12, v22) * np.abs(v))
+        mpd = np.degrees(np.sum(np.abs(v) * np.arccos(np.clip(cos, 0, 1))) / np.sum(np.abs(v)))
+        cells = line.split()
+        assert float(cells[-2]) == pytest.approx(mpc, abs=5e-4), line
+        assert float(cells[-1]) == pytest.approx(mpd, abs=0.05 + 1e-6), line
 
 
 def test_merged_shapes_go_to_a_universal_file_that_pyuff_reads_with_the_nodes(hyst_bin, setups, tmp_path):
