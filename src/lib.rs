@@ -19,6 +19,7 @@ pub use hyst_sim as sim;
 pub mod campaign;
 pub mod html;
 pub mod report;
+pub mod rigid_floors;
 pub mod settings;
 pub mod setups;
 

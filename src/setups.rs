@@ -42,6 +42,10 @@ pub struct SetupsReport {
     /// Why there is no global estimation.
     #[serde(default)]
     pub global_error: Option<String>,
+    /// What each floor stated rigid says of the channels' factor against the references
+    /// ([`crate::rigid_floors`]); empty unless asked for.
+    #[serde(default)]
+    pub floor_factors: Vec<crate::rigid_floors::FloorFactor>,
     /// Whether each setup's stabilization diagram and singular values were left out
     /// ([`SetupsReport::without_diagrams`]): the setup's modes, errors and decision stay.
     #[serde(default)]
@@ -232,6 +236,7 @@ pub fn merge_analysed(
         merged,
         global: None,
         global_error: None,
+        floor_factors: Vec::new(),
         diagrams_left_out: false,
     })
 }
@@ -352,6 +357,9 @@ impl fmt::Display for SetupsReport {
                 self.setups.len(),
                 mode.scatter_ratio.map_or("—".into(), |r| format!("{r:.2}"))
             )?;
+        }
+        for floor in &self.floor_factors {
+            writeln!(f, "sensors: {}", floor.sentence(&m.setups))?;
         }
         for (i, mode) in m.modes.iter().enumerate() {
             writeln!(

@@ -79,6 +79,12 @@ pub(crate) struct SsiArgs {
     /// the MAC matrix.
     #[arg(help_heading = "Output files", long, value_name = "FILE")]
     pub(crate) html: Option<PathBuf>,
+    /// With --setups: take each floor (the geometry's nodes at one height, z up) that holds a
+    /// reference node as rigid in its plane, and say what factor the other channels on it
+    /// read against the references (1 when gains, signs and units are as the setups state).
+    /// Needs the nodes' positions (a pyOMA folder's grid.txt, or --geometry)
+    #[arg(long, requires = "setups")]
+    pub(crate) rigid_floors: bool,
     /// With --setups: keep each setup's stabilization diagram and singular values in the
     /// --json report (left out by default: they are nine tenths of it).
     #[arg(long, requires = "setups")]
@@ -414,7 +420,23 @@ fn run_setups(a: &SsiArgs, path: &Path, opts: &hyst::covssi::AnalysisOptions) ->
         },
     );
     bar.finish_and_clear();
-    let report = hyst::report::FileReport::new(path.display().to_string(), report?);
+    let mut report = hyst::report::FileReport::new(path.display().to_string(), report?);
+    // The nodes' positions, for the outputs that draw or place the shapes and the floors'
+    // check.
+    let geometry = if a.html.is_some() || a.shapes_uff.is_some() || a.rigid_floors {
+        hyst::io::setups_geometry(path, a.geometry.as_deref(), a.lines.as_deref())?
+    } else {
+        None
+    };
+    if a.rigid_floors {
+        let Some((g, _)) = &geometry else {
+            return Err(fail(
+                "--rigid-floors needs the nodes' positions: a pyOMA folder's grid.txt, or --geometry"
+                    .to_string(),
+            ));
+        };
+        report.report.floor_factors = hyst::rigid_floors::floor_factors(&report.report.merged, g);
+    }
     print!("{report}");
     if let Some(json) = &a.json {
         if a.json_diagrams {
@@ -424,12 +446,6 @@ fn run_setups(a: &SsiArgs, path: &Path, opts: &hyst::covssi::AnalysisOptions) ->
             hyst::report::FileReport::new(report.record.clone(), compact).write_json(json)?;
         }
     }
-    // The nodes' positions, for the outputs that draw or place the shapes.
-    let geometry = if a.html.is_some() || a.shapes_uff.is_some() {
-        hyst::io::setups_geometry(path, a.geometry.as_deref(), a.lines.as_deref())?
-    } else {
-        None
-    };
     if let Some(uff) = &a.shapes_uff {
         hyst::io::write_merged_shapes_uff(
             uff,

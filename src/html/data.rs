@@ -352,6 +352,12 @@ pub fn setups_page_data(
             names.len()
         )]
         .into_iter()
+        .chain(
+            report
+                .floor_factors
+                .iter()
+                .map(|f| format!("Sensors: {}.", f.sentence(&m.setups))),
+        )
         .chain(m.notes.iter().cloned())
         .collect(),
         diagram: None,

@@ -103,6 +103,37 @@ fn the_steel_frames_setups_merge_into_its_modes_and_find_the_sensors_factor() {
     }
     assert!(ratios.len() >= 8, "{ratios:?}");
     assert!(z.iter().all(|z| *z < 3.5), "{ratios:?} {z:?}");
+    // The command's check (hyst ssi --setups --rigid-floors: the top floor's rigid motion
+    // fitted to the lasers' nodes 21–23, against the references at node 24) finds the same
+    // factor: within 3.5 of its standard error of −0.5 and of these ratios' weighted mean
+    // (a second estimate from two of the floor's nodes alone), and says it is one to check.
+    let folder = common::data_file("steelframe/grid.txt").unwrap();
+    let (geometry, _) = hyst::io::setups_geometry(folder.parent().unwrap(), None, None)
+        .unwrap()
+        .unwrap();
+    let check = |r: &SetupsReport, expected: f64| {
+        let floors = hyst::rigid_floors::floor_factors(&r.merged, &geometry);
+        let [f] = &floors[..] else {
+            panic!("one floor holds the references: {floors:?}")
+        };
+        assert_eq!(
+            (f.reference_node.as_str(), f.nodes.len()),
+            ("24", 3),
+            "{f:?}"
+        );
+        let z = (f.factor - C64::new(expected, 0.0)).norm() / f.factor_se;
+        assert!(z < 3.5 && f.factor_se < 0.02, "{f:?}");
+        f.clone()
+    };
+    let found = check(report, -0.5);
+    assert!(found.to_check);
+    let w: f64 = ratios.iter().map(|(_, se)| se.powi(-2)).sum();
+    let mean = ratios.iter().map(|(r, se)| r / (se * se)).sum::<C64>() / w;
+    let se_mean = w.sqrt().recip();
+    assert!(
+        (found.factor - mean).norm() < 3.5 * found.factor_se.hypot(se_mean),
+        "{found:?} against {mean} ± {se_mean}"
+    );
     // Told the factor (the laser channels read −0.5 times the motion), the floor is rigid.
     for ch in setups.iter_mut().flat_map(|s| s.channels.iter_mut()) {
         if ch.quantity == Quantity::Velocity {
@@ -114,6 +145,8 @@ fn the_steel_frames_setups_merge_into_its_modes_and_find_the_sensors_factor() {
     let z = ratio_z(&ratios, 1.0);
     println!("told the factor, node/reference on the top floor: {ratios:.4?}, z {z:.2?}");
     assert!(z.iter().all(|z| *z < 3.5), "{ratios:?} {z:?}");
+    // And the command's check then finds the channels read as the setups state.
+    assert!(!check(&told, 1.0).to_check);
 }
 
 #[test]

@@ -325,7 +325,8 @@ fn ssi(
 /// identified with `settings` at `fs` Hz (or each record's or setup's stated rate) and merged:
 /// `hyst ssi --setups`; see the Python wrapper `hyst.ssi`.
 #[pyfunction]
-#[pyo3(signature = (path, fs, *, settings, geometry = None, lines = None, records_anywhere = false))]
+#[pyo3(signature = (path, fs, *, settings, geometry = None, lines = None, records_anywhere = false, rigid_floors = false))]
+#[allow(clippy::too_many_arguments)]
 fn ssi_setups(
     py: Python<'_>,
     path: std::path::PathBuf,
@@ -334,6 +335,7 @@ fn ssi_setups(
     geometry: Option<std::path::PathBuf>,
     lines: Option<std::path::PathBuf>,
     records_anywhere: bool,
+    rigid_floors: bool,
 ) -> PyResult<ident::Report> {
     let opts = SsiSettings::from_json(settings)
         .and_then(|s| s.analysis())
@@ -346,7 +348,7 @@ fn ssi_setups(
                 hyst::io::RecordPaths::InsideFolder
             };
             let setups = hyst::io::read_setups_with(&path, paths)?;
-            let report = hyst::setups::analyze_setups(
+            let mut report = hyst::setups::analyze_setups(
                 &setups,
                 fs,
                 &hyst::io::ReadOptions::default(),
@@ -354,13 +356,23 @@ fn ssi_setups(
                 &covssi::multisetup::MergeOptions::default(),
             )?;
             let g = hyst::io::setups_geometry(&path, geometry.as_deref(), lines.as_deref())?;
+            if rigid_floors {
+                let Some((positions, _)) = &g else {
+                    return Ok(Err(
+                        "rigid_floors needs the nodes' positions: a pyOMA folder's grid.txt, or geometry=",
+                    ));
+                };
+                report.floor_factors =
+                    hyst::rigid_floors::floor_factors(&report.merged, positions);
+            }
             // The command's title: the same page as `hyst ssi --setups --html`.
             let title = format!("hyst ssi --setups {}", path.display());
             let g = g.as_ref().map(|(g, p)| (g, p.as_path()));
             let page = hyst::html::setups_page(&title, &report, g)?;
-            Ok::<_, hyst::setups::SetupsError>((report, page))
+            Ok::<_, hyst::setups::SetupsError>(Ok((report, page)))
         })
-        .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        .map_err(|e| PyValueError::new_err(e.to_string()))?
+        .map_err(PyValueError::new_err)?;
     ident::Report::of(&path.display().to_string(), report).map(|r| r.with_html(page))
 }
 

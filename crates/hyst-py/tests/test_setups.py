@@ -193,7 +193,7 @@ def test_records_outside_the_setup_folder_need_leave(setups, tmp_path):
     elsewhere.write_text(text)
     with pytest.raises(ValueError, match="not inside the setup file's folder"):
         hyst.ssi(setups=elsewhere, fs=FS)
-    with pytest.raises(ValueError, match="records_anywhere go with setups"):
+    with pytest.raises(ValueError, match="rigid_floors go with setups"):
         hyst.ssi(np.zeros((10, 2)), FS, records_anywhere=True)
     anywhere = hyst.ssi(setups=elsewhere, fs=FS, records_anywhere=True).to_dict()["merged"]
     beside = hyst.ssi(setups=setups, fs=FS).to_dict()["merged"]

@@ -1008,6 +1008,20 @@ fn ssi_merges_setups_on_their_references() {
             .is_empty()
     );
     assert_eq!(full["merged"], doc["merged"]);
+    // The floors' check needs the nodes' positions: a setup file without a geometry is
+    // refused, saying where they come from.
+    let (ok, _, err) = hyst(&[
+        "ssi",
+        "--setups",
+        s(&setups),
+        "--fs",
+        "20",
+        "--rigid-floors",
+    ]);
+    assert!(
+        !ok && err.contains("--rigid-floors needs the nodes' positions"),
+        "{err}"
+    );
     // A reference that moved between setups is said, and the other carries the merge.
     let moved = write("setups_moved.csv", &rows("6", "7"));
     let (ok, out, err) = hyst(&["ssi", "--setups", s(&moved), "--fs", "20"]);

@@ -255,6 +255,7 @@ def ssi(
     geometry: None = ...,
     lines: None = ...,
     records_anywhere: Literal[False] = ...,
+    rigid_floors: Literal[False] = ...,
 ) -> SsiResult: ...
 @overload
 def ssi(
@@ -283,6 +284,7 @@ def ssi(
     geometry: Optional[Union[str, os.PathLike[str]]] = ...,
     lines: Optional[Union[str, os.PathLike[str]]] = ...,
     records_anywhere: bool = ...,
+    rigid_floors: bool = ...,
 ) -> Report: ...
 
 def amplitude(

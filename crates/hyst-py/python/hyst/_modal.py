@@ -35,6 +35,7 @@ def ssi(
     geometry=None,
     lines=None,
     records_anywhere=False,
+    rigid_floors=False,
 ):
     """Modes of a structure from its response alone: SSI-COV, then maximum likelihood.
 
@@ -113,6 +114,11 @@ def ssi(
     records_anywhere : bool
         With ``setups``: let the setup file name records outside its own folder (absolute
         paths, ``..``); by default each is named by its path from that folder.
+    rigid_floors : bool
+        With ``setups``: take each floor (the geometry's nodes at one height, z up) holding a
+        reference node as rigid in its plane, and say what factor the other channels on it
+        read against the references (``hyst ssi --setups --rigid-floors``; the report's
+        ``floor_factors``). Needs the nodes' positions.
 
     Returns
     -------
@@ -156,9 +162,10 @@ def ssi(
             geometry=None if geometry is None else _os.fspath(geometry),
             lines=None if lines is None else _os.fspath(lines),
             records_anywhere=bool(records_anywhere),
+            rigid_floors=bool(rigid_floors),
         )
-    if geometry is not None or lines is not None or records_anywhere:
-        raise ValueError("geometry, lines and records_anywhere go with setups")
+    if geometry is not None or lines is not None or records_anywhere or rigid_floors:
+        raise ValueError("geometry, lines, records_anywhere and rigid_floors go with setups")
     if y is None or fs is None:
         raise ValueError("give y and fs (or setups)")
     a = _real(y, "y")
