@@ -297,6 +297,13 @@ fn read_channels(
     Ok((data, fs))
 }
 
+/// A merged mode's MPC and MPD (degrees) over the entries some setup saw; `None` when none
+/// did. The text report's table and the page's give these.
+pub(crate) fn phase_quality(mode: &covssi::multisetup::MergedMode) -> Option<(f64, f64)> {
+    let seen: Vec<covssi::Complex64> = mode.shape.iter().flatten().copied().collect();
+    (!seen.is_empty()).then(|| (covssi::mpc(&seen), covssi::mpd(&seen)))
+}
+
 /// A complex entry as magnitude∠phase°.
 fn polar(v: covssi::Complex64) -> String {
     format!("{:.3}∠{:.0}°", v.norm(), v.arg().to_degrees() + 0.0)
@@ -336,14 +343,9 @@ impl fmt::Display for SetupsReport {
             let se = |v: Option<f64>, k: f64, d: usize| {
                 v.map_or("—".to_string(), |e| format!("{:.*}", d, e * k))
             };
-            let seen: Vec<covssi::Complex64> = mode.shape.iter().flatten().copied().collect();
-            let (mpc, mpd) = if seen.is_empty() {
-                ("—".to_string(), "—".to_string())
-            } else {
-                (
-                    format!("{:.3}", covssi::mpc(&seen)),
-                    format!("{:.1}", covssi::mpd(&seen)),
-                )
+            let (mpc, mpd) = match phase_quality(mode) {
+                Some((mpc, mpd)) => (format!("{mpc:.3}"), format!("{mpd:.1}")),
+                None => ("—".to_string(), "—".to_string()),
             };
             writeln!(
                 f,

@@ -5,7 +5,7 @@ use covssi::{Complex64 as C64, ModalAnalysis, PoleStatus, Rejection, Stability, 
 use serde::Serialize;
 
 use crate::io::Geometry;
-use crate::setups::SetupsReport;
+use crate::setups::{SetupsReport, phase_quality};
 
 /// Everything one page draws.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
@@ -373,16 +373,19 @@ pub fn setups_page_data(
             .modes
             .iter()
             .enumerate()
-            .map(|(i, mode)| ModeRow {
-                name: (i + 1).to_string(),
-                frequency_hz: mode.frequency_hz,
-                frequency_se_hz: mode.frequency_se_hz,
-                damping_ratio: mode.damping_ratio,
-                damping_se: mode.damping_se,
-                mpc: measured(mode).map(|v| mpc(&v)),
-                mpd: measured(mode).map(|v| mpd(&v)),
-                efdd: None,
-                seen: Some(format!("{}/{} setups", mode.seen_in.len(), m.setups.len())),
+            .map(|(i, mode)| {
+                let quality = phase_quality(mode);
+                ModeRow {
+                    name: (i + 1).to_string(),
+                    frequency_hz: mode.frequency_hz,
+                    frequency_se_hz: mode.frequency_se_hz,
+                    damping_ratio: mode.damping_ratio,
+                    damping_se: mode.damping_se,
+                    mpc: quality.map(|q| q.0),
+                    mpd: quality.map(|q| q.1),
+                    efdd: None,
+                    seen: Some(format!("{}/{} setups", mode.seen_in.len(), m.setups.len())),
+                }
             })
             .collect(),
         mac: mac_matrix(&shapes),
@@ -394,10 +397,4 @@ pub fn setups_page_data(
         },
         track: None,
     }
-}
-
-/// A merged mode's shape at the DOFs some setup saw it at (`None` when none did).
-fn measured(mode: &covssi::multisetup::MergedMode) -> Option<Vec<C64>> {
-    let v: Vec<C64> = mode.shape.iter().flatten().copied().collect();
-    (!v.is_empty()).then_some(v)
 }

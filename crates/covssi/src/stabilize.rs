@@ -251,9 +251,7 @@ pub fn mac(a: &[C64], b: &[C64]) -> f64 {
 /// entries spread evenly in phase (e.g. $(1, \mathrm i)$). A shape of one channel always has
 /// MPC 1, so it tells nothing there; 0 for a zero shape.
 pub fn mpc(shape: &[C64]) -> f64 {
-    let (sxx, syy, sxy) = shape.iter().fold((0.0, 0.0, 0.0), |(xx, yy, xy), v| {
-        (xx + v.re * v.re, yy + v.im * v.im, xy + v.re * v.im)
-    });
+    let (sxx, syy, sxy) = phase_moments(shape);
     let total = sxx + syy;
     if total == 0.0 {
         return 0.0;
@@ -269,9 +267,7 @@ pub fn mpc(shape: &[C64]) -> f64 {
 /// (Reynders, Houbrechts and De Roeck 2012). 0 for a normal mode; entries of equal
 /// magnitude at phases $\alpha \pm \delta$ give $\delta$; 0 for a zero shape.
 pub fn mpd(shape: &[C64]) -> f64 {
-    let (sxx, syy, sxy) = shape.iter().fold((0.0, 0.0, 0.0), |(xx, yy, xy), v| {
-        (xx + v.re * v.re, yy + v.im * v.im, xy + v.re * v.im)
-    });
+    let (sxx, syy, sxy) = phase_moments(shape);
     let theta = 0.5 * (2.0 * sxy).atan2(sxx - syy);
     let (c, s) = (theta.cos(), theta.sin());
     let (weighted, total) = shape.iter().fold((0.0, 0.0), |(w, t), v| {
@@ -290,6 +286,14 @@ pub fn mpd(shape: &[C64]) -> f64 {
     } else {
         (weighted / total).to_degrees()
     }
+}
+
+/// The sums $S_{xx} = x^\top x$, $S_{yy} = y^\top y$, $S_{xy} = x^\top y$ of a shape
+/// $x + \mathrm i y$ that [`mpc`] and [`mpd`] read.
+fn phase_moments(shape: &[C64]) -> (f64, f64, f64) {
+    shape.iter().fold((0.0, 0.0, 0.0), |(xx, yy, xy), v| {
+        (xx + v.re * v.re, yy + v.im * v.im, xy + v.re * v.im)
+    })
 }
 
 fn hard_rejection(p: &Pole, opts: &SsiOptions) -> Option<Rejection> {
