@@ -177,6 +177,8 @@ fn mode_ratios(
     };
     // Rows (1, 0, −Δy) for x and (0, 1, Δx) for y, each with its value and weight.
     let mut rows: Vec<([f64; 3], C64, f64)> = Vec::new();
+    // Whether every entry has its standard error (its weight 1/σ²), else all weigh 1.
+    let mut with_se = true;
     for (name, p) in floor {
         let Some(n) = m.nodes.iter().find(|n| n.node == *name) else {
             continue;
@@ -184,8 +186,9 @@ fn mode_ratios(
         let (dx, dy) = (p[0] - pr[0], p[1] - pr[1]);
         for (k, row) in [(0, [1.0, 0.0, -dy]), (1, [0.0, 1.0, dx])] {
             if let Some(v) = n.motion[k] {
-                let w = n.se[k].filter(|e| *e > 0.0).map_or(1.0, |e| 1.0 / (e * e));
-                rows.push((row, v, w));
+                let se = n.se[k].filter(|e| *e > 0.0);
+                with_se &= se.is_some();
+                rows.push((row, v, se.map_or(1.0, |e| 1.0 / (e * e))));
             }
         }
     }
@@ -210,7 +213,6 @@ fn mode_ratios(
         .map(|i| (0..3).map(|j| rhs[j] * inv[i][j]).sum())
         .collect();
     // Without the entries' errors the weights are 1: the fit's variance from its residual.
-    let with_se = rows.iter().all(|(_, _, w)| *w != 1.0);
     let scale = if with_se || rows.len() <= 3 {
         1.0
     } else {
