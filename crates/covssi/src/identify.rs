@@ -253,9 +253,9 @@ pub(crate) fn identify_with_order_cap(
 }
 
 /// Sweeps of subspace iteration a replicate's SVD may take from the record's basis before
-/// the full SVD is taken instead (six or seven reached [`NEAR_TOLERANCE`] on replicates of
-/// a synthetic record shaped as the steel frame's setups: five channels, 224 block rows,
-/// order 40 from 80 vectors).
+/// the full SVD is taken instead (a few reach [`NEAR_TOLERANCE`] on the replicates of
+/// `jackknife::tests::replicates_from_the_records_basis_give_the_full_svds_errors`, a
+/// record shaped as the steel frame's setups).
 const NEAR_SWEEPS: usize = 16;
 
 /// Each of a replicate's leading singular triplets is accepted from the record's basis when
