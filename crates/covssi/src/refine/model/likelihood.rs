@@ -129,7 +129,8 @@ impl Model {
         };
         let mut dp = Dense::zeros(if pole_derivs { hi - lo } else { 0 }, p);
         let mut da = vec![0.0; p];
-        let mut pw = vec![C64::new(0.0, 0.0); q + 1];
+        // z̄ᵏ, k = 0..=q, as real and imaginary parts (contiguous for the loops over k).
+        let (mut pw_re, mut pw_im) = (vec![0.0; q + 1], vec![0.0; q + 1]);
         // S_c = e^{θ_c} |B_c|² / |A|²: each channel's level once per call and 1/|A|² once per
         // frequency, and Σ_c ln S_c through one logarithm of Π_c |B_c|² (a logarithm and an
         // exponential per channel and frequency were a fifth of the refinement's time).
@@ -141,9 +142,10 @@ impl Model {
             let log_a2 = den.at(z, pole_derivs, &mut da);
             let inv_a2 = (-log_a2).exp();
             let zc = z.conj();
-            pw[0] = C64::new(1.0, 0.0);
-            for k in 1..=q {
-                pw[k] = pw[k - 1] * zc;
+            let mut power = C64::new(1.0, 0.0);
+            for (re, im) in pw_re.iter_mut().zip(pw_im.iter_mut()) {
+                (*re, *im) = (power.re, power.im);
+                power *= zc;
             }
             // Σ_c n_b r_c, by which the poles' score grows.
             let mut r_sum = 0.0;
@@ -151,13 +153,9 @@ impl Model {
             let mut ratio_sum = 0.0;
             for (c, level) in levels.iter().enumerate() {
                 let off = p + c * (q + 1);
-                let b = pw[0]
-                    + pw[1..]
-                        .iter()
-                        .zip(&th[off + 1..=off + q])
-                        .map(|(p, bk)| p * bk)
-                        .sum::<C64>();
-                let b2 = b.norm_sqr();
+                let (b_re, b_im) = powers_dot(&pw_re[1..], &pw_im[1..], &th[off + 1..=off + q]);
+                let (b_re, b_im) = (1.0 + b_re, b_im);
+                let b2 = b_re * b_re + b_im * b_im;
                 b2_product.times(b2);
                 // Where the product leaves the doubles (a factor beyond e^±700), the
                 // exponential of the logarithm, as before.
@@ -181,13 +179,22 @@ impl Model {
                 if let Some(dc) = d.get_mut(c) {
                     let r = w * (ic / s - 1.0);
                     r_sum += r;
-                    dc.set(row, 0, sw);
-                    acc.u[off] += r;
-                    let bc = b.conj();
-                    for (k, pk) in pw.iter().enumerate().skip(1) {
-                        let v = 2.0 * (pk * bc).re / b2;
-                        dc.set(row, k, v * sw);
-                        acc.u[off + k] += v * r;
+                    // ∂ln|B|²/∂b_k = 2 Re(z̄ᵏ B̄)/|B|² = (Re z̄ᵏ·Re B + Im z̄ᵏ·Im B)·2/|B|²;
+                    // D_c is column-major, so its row is every `rows`-th entry from `row`.
+                    let g = 2.0 / b2;
+                    let (g_re, g_im) = (b_re * g, b_im * g);
+                    let rows = dc.rows;
+                    let u = &mut acc.u[off..=off + q];
+                    u[0] += r;
+                    let entries = dc.data[row..].iter_mut().step_by(rows);
+                    for (k, entry) in entries.enumerate() {
+                        if k == 0 {
+                            *entry = sw;
+                            continue;
+                        }
+                        let v = pw_re[k] * g_re + pw_im[k] * g_im;
+                        *entry = v * sw;
+                        u[k] += v * r;
                     }
                 }
             }
@@ -202,4 +209,31 @@ impl Model {
         }
         (acc, dp, d)
     }
+}
+
+/// (Σ_k re_k b_k, Σ_k im_k b_k): B(z̄) − 1 from the powers z̄ᵏ (k from 1) and the
+/// coefficients b_k, in four interleaved sums (independent chains the processor overlaps).
+#[inline]
+fn powers_dot(re: &[f64], im: &[f64], b: &[f64]) -> (f64, f64) {
+    let (mut sr, mut si) = ([0.0; 4], [0.0; 4]);
+    let n = b.len() / 4 * 4;
+    for ((r4, i4), b4) in re[..n]
+        .chunks_exact(4)
+        .zip(im[..n].chunks_exact(4))
+        .zip(b[..n].chunks_exact(4))
+    {
+        for j in 0..4 {
+            sr[j] += r4[j] * b4[j];
+            si[j] += i4[j] * b4[j];
+        }
+    }
+    let (mut tr, mut ti) = (
+        (sr[0] + sr[1]) + (sr[2] + sr[3]),
+        (si[0] + si[1]) + (si[2] + si[3]),
+    );
+    for k in n..b.len() {
+        tr += re[k] * b[k];
+        ti += im[k] * b[k];
+    }
+    (tr, ti)
 }
