@@ -212,10 +212,18 @@ pub(crate) fn identify_surveyed_with_basis(
     });
     let corr = corr::estimate_centred(y, &refs, lags, &means);
     match auto {
-        None => identify_with_basis(&corr, fs, i, opts, (DEFAULT_ORDER_CAP, None), progress),
+        None => identify_with_basis(
+            &corr,
+            fs,
+            i,
+            opts,
+            (DEFAULT_ORDER_CAP, None, Run::Record),
+            progress,
+        ),
         Some((survey, lag)) => {
             let cap = survey.max_order();
-            let (mut res, basis) = identify_with_basis(&corr, fs, i, opts, (cap, None), progress)?;
+            let (mut res, basis) =
+                identify_with_basis(&corr, fs, i, opts, (cap, None, Run::Record), progress)?;
             res.auto_lag = Some(lag);
             res.survey = Some(survey);
             Ok((res, basis))
@@ -239,6 +247,14 @@ const DEFAULT_ORDER_CAP: usize = 40;
 /// Steps of SSI before its model orders: the correlations and the SVD.
 pub(crate) const SSI_STEPS_BEFORE_ORDERS: usize = 2;
 
+/// What [`identify_with_basis`] runs on: a record, whose result is reported, or a jackknife
+/// replicate of one, of which only the modes are used.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Run {
+    Record,
+    Replicate,
+}
+
 /// [`identify_from_correlations`], the largest order at most `order_cap` when the options
 /// leave it open, telling `progress` of the SVD and of each order done.
 pub(crate) fn identify_with_order_cap(
@@ -249,7 +265,15 @@ pub(crate) fn identify_with_order_cap(
     order_cap: usize,
     progress: &(dyn Fn(Progress) + Sync),
 ) -> Result<SsiResult, SsiError> {
-    identify_with_basis(corr, fs, block_rows, opts, (order_cap, None), progress).map(|(r, _)| r)
+    identify_with_basis(
+        corr,
+        fs,
+        block_rows,
+        opts,
+        (order_cap, None, Run::Record),
+        progress,
+    )
+    .map(|(r, _)| r)
 }
 
 /// Sweeps of subspace iteration a replicate's SVD may take from the record's basis before
@@ -276,7 +300,7 @@ pub(crate) fn identify_with_basis(
     fs: f64,
     block_rows: usize,
     opts: &SsiOptions,
-    (order_cap, near): (usize, Option<&Dense>),
+    (order_cap, near, run): (usize, Option<&Dense>, Run),
     progress: &(dyn Fn(Progress) + Sync),
 ) -> Result<(SsiResult, Dense), SsiError> {
     check_fs(fs)?;
@@ -350,7 +374,12 @@ pub(crate) fn identify_with_basis(
         })
         .collect::<Result<Vec<OrderPoles>, SsiError>>()?;
     let basis = linalg::leading_columns(&u, basis_width(max_order));
-    let spectrum = spectrum_from_correlations(corr, fs);
+    // A replicate's modes alone are used (for their errors): the spectrum behind its
+    // diagram would be drawn for no one (it was a twelfth of a setup's analysis).
+    let spectrum = match run {
+        Run::Record => spectrum_from_correlations(corr, fs),
+        Run::Replicate => Spectrum::default(),
+    };
     let mut diagram = StabilizationDiagram {
         orders,
         spectrum,

@@ -30,7 +30,7 @@
 //! than [`MIN_FOUND`] of the replicates gets no error.
 
 use crate::corr::Correlations;
-use crate::identify::{SsiResult, identify_with_basis};
+use crate::identify::{Run, SsiResult, identify_with_basis};
 use crate::linalg::{C64, Dense};
 use crate::{SsiError, SsiOptions, mac};
 
@@ -112,7 +112,7 @@ pub(crate) fn ssi_errors(
         .into_par_iter()
         .filter_map(|b| {
             let corr = leave_out(&sums, b);
-            let near = (max_order, Some(basis));
+            let near = (max_order, Some(basis), Run::Replicate);
             identify_with_basis(&corr, fs, ssi.block_rows, &opts, near, &|_| {})
                 .ok()
                 .map(|(r, _)| r)
@@ -397,7 +397,7 @@ mod tests {
             64.0,
             ssi.block_rows,
             &fixed,
-            (order, Some(&basis)),
+            (order, Some(&basis), Run::Replicate),
             &|_| {},
         )
         .unwrap();
