@@ -100,16 +100,29 @@ pub(super) fn per_channel_estimates(
     misfit: f64,
 ) -> Estimates {
     let mk = fit.lambdas.len();
-    let cov = linalg::spd_inverse(&fit.fisher).and_then(|fi| {
+    // A mode whose damping has saturated sits on the parameter space's edge, where the
+    // likelihood no longer depends on its logit ζ: that row of F is 0 and F has no inverse,
+    // which took every estimate's standard error with it. Its logit ζ is held (F's and J's
+    // rows and columns for it left out); that mode has no standard error.
+    let saturated = |j: usize| fit.theta[mk + j] > SATURATED_LOGIT;
+    let free: Vec<usize> = (0..fit.theta.len())
+        .filter(|&t| !(mk..2 * mk).contains(&t) || !saturated(t - mk))
+        .collect();
+    let cov = linalg::spd_inverse(&restricted(&fit.fisher, &free)).and_then(|fi| {
         if l == 1 {
             return Some(fi);
         }
         let j = fitted_model.eval(&fit.theta, mk, What::Sandwich)?.f;
-        Some(linalg::sandwich(&fi, &j))
+        Some(linalg::sandwich(&fi, &restricted(&j, &free)))
     });
+    let cov = cov.map(|c| embedded(&c, &free, fit.theta.len()));
     Estimates {
         se: (0..mk)
-            .map(|j| cov.as_ref().map(|c| pole_se(c, j, mk, fit.lambdas[j])))
+            .map(|j| {
+                cov.as_ref()
+                    .filter(|_| !saturated(j))
+                    .map(|c| pole_se(c, j, mk, fit.lambdas[j]))
+            })
             .collect(),
         reals: fit
             .reals
@@ -128,6 +141,32 @@ pub(super) fn per_channel_estimates(
         combinations: None,
         bands: 1,
     }
+}
+
+/// Beyond this logit ζ a mode's damping has saturated: ζ(1 − ζ) < 10⁻¹³, so L moves by less
+/// than rounding when it changes, and ζ reads as 1 to twelve digits.
+const SATURATED_LOGIT: f64 = 30.0;
+
+/// The rows and columns `keep` of the square `d`.
+fn restricted(d: &Dense, keep: &[usize]) -> Dense {
+    let mut r = Dense::zeros(keep.len(), keep.len());
+    for (a, &i) in keep.iter().enumerate() {
+        for (b, &j) in keep.iter().enumerate() {
+            r.set(a, b, d.at(i, j));
+        }
+    }
+    r
+}
+
+/// The `n × n` matrix holding `d` at the rows and columns `at`, 0 elsewhere.
+fn embedded(d: &Dense, at: &[usize], n: usize) -> Dense {
+    let mut e = Dense::zeros(n, n);
+    for (a, &i) in at.iter().enumerate() {
+        for (b, &j) in at.iter().enumerate() {
+            e.set(i, j, d.at(a, b));
+        }
+    }
+    e
 }
 
 /// The refined modes of `est` with their `evidence`, named after the SSI `modes` they are,

@@ -607,3 +607,64 @@ fn misfit_counts_bound_the_exact_distance_closely() {
         assert!(d >= exact - 1e-12 && d <= exact + 5e-4, "{d} {exact}");
     }
 }
+
+/// A mode whose damping has saturated (logit ζ = 10⁵ as on the Bouc-Wen multisine record,
+/// a pole at Nyquist: its derivative e^(−s/2) underflows to 0) leaves the Fisher information
+/// without an inverse (its row is 0), and took every mode's standard error with it. Its
+/// logit ζ is now held: the other mode keeps finite errors, the same as when the saturated
+/// one's logit ζ is simply not a parameter (F's rows and columns for it struck out, here
+/// computed by hand), and the saturated mode has none.
+#[test]
+fn a_saturated_mode_does_not_take_the_others_errors_with_it() {
+    let y = two_modes_two_channels(4096, 1);
+    let v = views(&y);
+    let means = vec![0.0; 2];
+    let model = Model::unbinned(&v, &means, FS);
+    let mut th = two_mode_theta();
+    th[3] = 1e5;
+    let f = model.eval(&th, 2, What::Fisher).unwrap().f;
+    assert!(crate::linalg::spd_inverse(&f).is_none());
+    let fit = Fit {
+        theta: th.to_vec(),
+        lambdas: parametrization::unpack(&th, 2),
+        reals: Vec::new(),
+        l: model.eval(&th, 2, What::Value).unwrap().l,
+        fisher: f.clone(),
+        iterations: 0,
+    };
+    let est = standard_errors::per_channel_estimates(&model, fit, 2, 0.0);
+    assert!(est.se[1].is_none());
+    let (f_se, z_se) = est.se[0].expect("the unsaturated mode's errors");
+    // By hand: F and J without row and column 3, the sandwich F⁻¹JF⁻¹, mode 0's entries.
+    let keep = [0usize, 1, 2, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13];
+    let j = model.eval(&th, 2, What::Sandwich).unwrap().f;
+    let cut = |d: &crate::linalg::Dense| {
+        let mut r = crate::linalg::Dense::zeros(keep.len(), keep.len());
+        for (a, &i) in keep.iter().enumerate() {
+            for (b, &k) in keep.iter().enumerate() {
+                r.set(a, b, d.at(i, k));
+            }
+        }
+        r
+    };
+    let fi = crate::linalg::spd_inverse(&cut(&f)).expect("F less the saturated row");
+    let cov = crate::linalg::sandwich(&fi, &cut(&j));
+    let lam = parametrization::unpack(&th, 2)[0];
+    let zeta = -lam.re / lam.norm();
+    let by_hand = (
+        cov.at(0, 0).sqrt() * lam.norm() / (2.0 * PI),
+        cov.at(2, 2).sqrt() * zeta * (1.0 - zeta),
+    );
+    // The same arithmetic in another order: equal to rounding.
+    assert!(
+        (f_se - by_hand.0).abs() <= 1e-9 * by_hand.0,
+        "{f_se} {}",
+        by_hand.0
+    );
+    assert!(
+        (z_se - by_hand.1).abs() <= 1e-9 * by_hand.1,
+        "{z_se} {}",
+        by_hand.1
+    );
+    assert!(f_se > 0.0 && z_se > 0.0);
+}
