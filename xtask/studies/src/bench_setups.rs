@@ -1,7 +1,7 @@
 //! `cargo xtask bench setups`: `hyst ssi --setups` on the steel frame's 15 setups (each
 //! identified with the jackknife's errors, then merged), as a user runs it, with its wall time,
 //! peak memory and JSON's size, beside pyOMA2's PoSER and PreGER merging the same files in the
-//! same run; and how often the analysis tells its progress (the longest time between two
+//! same run, and its time with `--no-refine`; and how often the analysis tells its progress (the longest time between two
 //! reports of `hyst::setups::analyze_setups_with_progress`, run in this process).
 //!
 //! PoSER's and PreGER's times leave out loading the records (`setups_timing.py`, through
@@ -25,15 +25,18 @@ pub fn run() -> Result<(), String> {
     let out = root.join("target/bench");
     std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
     let json = out.join("steelframe_setups.json");
-    let (s, mb) = timed(
-        Command::new("/usr/bin/time")
-            .args(["-f", "TIMED %e %M"])
-            .arg(&hyst)
-            .args(["ssi", "--setups"])
-            .arg(&frame)
-            .arg("--json")
-            .arg(&json),
-    )?;
+    // `hyst ssi --setups FRAME …` under /usr/bin/time: its wall time and peak memory.
+    let setups_timed = |more: &[&std::ffi::OsStr]| {
+        timed(
+            Command::new("/usr/bin/time")
+                .args(["-f", "TIMED %e %M"])
+                .arg(&hyst)
+                .args(["ssi", "--setups"])
+                .arg(&frame)
+                .args(more),
+        )
+    };
+    let (s, mb) = setups_timed(&["--json".as_ref(), json.as_os_str()])?;
     let text = std::fs::read_to_string(&json).map_err(|e| format!("{}: {e}", json.display()))?;
     let report: serde_json::Value =
         serde_json::from_str(&text).map_err(|e| format!("{}: {e}", json.display()))?;
@@ -46,6 +49,10 @@ pub fn run() -> Result<(), String> {
         "hyst_setups_json_mb_steelframe {:.2} MB",
         text.len() as f64 / 1e6
     );
+    // The same without the refinement (each setup SSI's modes with the jackknife's errors):
+    // the refinement's share, and the work PoSER's own compares with.
+    let (plain, _) = setups_timed(&["--no-refine".as_ref()])?;
+    println!("hyst_setups_no_refine_s_steelframe {plain:.2} s (the same, --no-refine)");
     progress_gap(&frame)?;
     let python = root.join("target/compare-venv/bin/python");
     if !python.is_file() {
@@ -81,6 +88,10 @@ pub fn run() -> Result<(), String> {
     println!(
         "hyst_setups_over_poser_steelframe {:.2} (target at most 2)",
         s / poser
+    );
+    println!(
+        "hyst_setups_no_refine_over_poser_steelframe {:.2}",
+        plain / poser
     );
     Ok(())
 }
