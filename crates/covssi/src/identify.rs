@@ -375,7 +375,8 @@ pub(crate) fn identify_with_basis(
         .collect::<Result<Vec<OrderPoles>, SsiError>>()?;
     let basis = linalg::leading_columns(&u, basis_width(max_order));
     // A replicate's modes alone are used (for their errors): the spectrum behind its
-    // diagram would be drawn for no one (it was a twelfth of a setup's analysis).
+    // diagram would be drawn for no one (5 % of the steel frame's setups' time without the
+    // refinement: 4.65 → 4.42 s).
     let spectrum = match run {
         Run::Record => spectrum_from_correlations(corr, fs),
         Run::Replicate => Spectrum::default(),
