@@ -93,9 +93,10 @@ pub struct RefinedMode {
     /// Damping ratio −Re λ/|λ|.
     pub damping_ratio: f64,
     /// Standard error of the frequency (Hz) from the Fisher information; `None` if that is
-    /// singular.
+    /// singular, or if this mode's damping has saturated (ζ = 1 to twelve digits: the
+    /// likelihood no longer depends on it, and the other modes' errors are taken with it held).
     pub frequency_se_hz: Option<f64>,
-    /// Standard error of the damping ratio; `None` if the Fisher information is singular.
+    /// Standard error of the damping ratio; `None` as the frequency's.
     pub damping_se: Option<f64>,
     /// Continuous-time pole (rad/s).
     pub lambda: C64,
