@@ -180,7 +180,7 @@ pub(super) fn joint_by_bands(
 
         for (i, &j) in group.iter().enumerate() {
             est.lambdas[j] = jf.lambdas[i];
-            est.se[j] = Some(pole_se(&cov, i, mf, jf.lambdas[i]));
+            est.se[j] = Some(pole_se(&cov, i, mf, &jf.theta));
             est.shapes[j] = shapes
                 .as_ref()
                 .map(|sh| shape_se(&sh[i].0, &sh[i].1, scales));

@@ -28,7 +28,7 @@ pub(super) fn logistic(s: f64) -> f64 {
 /// ζ = logistic(s) and 1 − ζ = logistic(−s), the latter computed itself: as 1 − ζ it is 0
 /// once ζ rounds to 1 (s above 37), and the pole's imaginary part √((1 − ζ)(1 + ζ)) and its
 /// derivative by s (which tends to 0) would be 0 and 0·∞.
-fn damping_and_gap(s: f64) -> (f64, f64) {
+pub(super) fn damping_and_gap(s: f64) -> (f64, f64) {
     (logistic(s), logistic(-s))
 }
 

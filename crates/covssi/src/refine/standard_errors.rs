@@ -4,6 +4,7 @@ use crate::cluster::Mode;
 use crate::linalg::{self, C64, Dense};
 use crate::refine::model::{Fit, Model, What};
 use crate::refine::pairing::pair_with_ssi_modes;
+use crate::refine::parametrization::damping_and_gap;
 use crate::refine::results::{RefinedMode, RefinedRealPole};
 
 /// The modes' estimates and standard errors (frequency Hz, damping ratio), in the order of
@@ -80,13 +81,14 @@ pub(super) fn shape_se(c: &[C64], cov: &Dense, scales: &[f64]) -> (Vec<C64>, Vec
 }
 
 /// Standard errors of mode j's frequency (Hz) and damping ratio from the covariance `cov` of
-/// θ (ln ω of the m modes, then their logit ζ, first), its pole being `lam`.
-pub(super) fn pole_se(cov: &Dense, j: usize, m: usize, lam: C64) -> (f64, f64) {
-    let w = lam.norm();
-    let zeta = -lam.re / w;
+/// `theta` (ln ω of the m modes, then their logit ζ, first): dω = ω d ln ω and
+/// dζ = ζ(1 − ζ) d logit ζ, 1 − ζ as the poles' derivatives take it.
+pub(super) fn pole_se(cov: &Dense, j: usize, m: usize, theta: &[f64]) -> (f64, f64) {
+    let w = theta[j].exp();
+    let (zeta, gap) = damping_and_gap(theta[m + j]);
     (
         cov.at(j, j).max(0.0).sqrt() * w / (2.0 * std::f64::consts::PI),
-        cov.at(m + j, m + j).max(0.0).sqrt() * zeta * (1.0 - zeta),
+        cov.at(m + j, m + j).max(0.0).sqrt() * zeta * gap,
     )
 }
 
@@ -121,7 +123,7 @@ pub(super) fn per_channel_estimates(
             .map(|j| {
                 cov.as_ref()
                     .filter(|_| !saturated(j))
-                    .map(|c| pole_se(c, j, mk, fit.lambdas[j]))
+                    .map(|c| pole_se(c, j, mk, &fit.theta))
             })
             .collect(),
         reals: fit
