@@ -213,6 +213,9 @@ impl Model {
 
 /// (Σ_k re_k b_k, Σ_k im_k b_k): B(z̄) − 1 from the powers z̄ᵏ (k from 1) and the
 /// coefficients b_k, in four interleaved sums (independent chains the processor overlaps).
+/// Both sums in one pass over a numerator's ~20 coefficients: `corr`'s dot product (sixteen
+/// sums) called twice instead made `hyst ssi --setups` on the steel frame 10 % slower
+/// (12.4–12.6 s against 11.2 s, one run after the other).
 #[inline]
 fn powers_dot(re: &[f64], im: &[f64], b: &[f64]) -> (f64, f64) {
     let (mut sr, mut si) = ([0.0; 4], [0.0; 4]);
