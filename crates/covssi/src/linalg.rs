@@ -268,6 +268,15 @@ pub(crate) fn hermitian_eigen(h: &[C64], l: usize) -> Result<(Vec<f64>, Vec<Vec<
     Ok((values, vectors))
 }
 
+/// Eigenvalues (non-decreasing) and unit eigenvectors (the columns, in the same order) of
+/// the real symmetric `a`; `None` if the decomposition does not converge.
+pub(crate) fn symmetric_eigen(a: &Dense) -> Option<(Vec<f64>, Dense)> {
+    let evd = a.view().self_adjoint_eigen(Side::Lower).ok()?;
+    let s = evd.S().column_vector();
+    let values: Vec<f64> = (0..a.rows).map(|k| s[k]).collect();
+    Some((values, Dense::from_faer(evd.U())))
+}
+
 /// `out += dᵀ d` (a Gram matrix update), single-threaded.
 pub(crate) fn gram_add(d: &Dense, out: &mut Dense) {
     debug_assert_eq!((out.rows, out.cols), (d.cols, d.cols));

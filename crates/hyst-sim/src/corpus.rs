@@ -363,6 +363,9 @@ pub struct Score {
     pub z_frequency: Vec<f64>,
     /// The same for damping ratios.
     pub z_damping: Vec<f64>,
+    /// Each in-band true mode found, by its index in [`CorpusCase::truth`], with the index
+    /// of the reported mode paired with it.
+    pub matched: Vec<(usize, usize)>,
 }
 
 /// A reported mode as the score reads it: frequency (Hz) and its standard error, damping
@@ -417,6 +420,7 @@ impl CorpusCase {
                 Some(r) => {
                     let (f, sf, z, sz) = reported[r];
                     s.found += 1;
+                    s.matched.push((j, r));
                     if !self.hysteretic {
                         if let Some(sf) = sf.filter(|v| *v > 0.0) {
                             s.z_frequency.push((f - t.frequency_hz) / sf);

@@ -34,6 +34,7 @@ mod json_values;
 mod loop_battery;
 mod monitor;
 mod random_sweep;
+mod refine_corpus;
 mod report_pages;
 mod sweep;
 
@@ -730,6 +731,9 @@ enum Task {
     /// The modal analysis's defaults over the corpus of realistic building records
     /// (`corpus.rs`): true modes found, modes reported that are not structural, z-scores.
     Corpus(corpus::CorpusArgs),
+    /// Where the refinement holds on the corpus and what it gains there over SSI's answer
+    /// on the same records, with the time it costs (`refine_corpus.rs`).
+    RefineCorpus(refine_corpus::RefineCorpusArgs),
     /// hyst's multi-setup merge and EFDD beside pyOMA2's PoSER, PreGER, FDD and EFDD on the
     /// same files (`compare_setups.rs`).
     CompareSetups,
@@ -789,6 +793,7 @@ fn main() {
         Task::LoopBattery(a) => or_exit(loop_battery::run(&a)),
         Task::MonitorDemo(a) => or_exit(monitor::run(&a)),
         Task::Corpus(a) => or_exit(corpus::run(&a)),
+        Task::RefineCorpus(a) => or_exit(refine_corpus::run(&a)),
         Task::VendorJs => or_exit(report_pages::vendor_js()),
         Task::CompareSetups => or_exit(compare_setups::run()),
         Task::ReportScreenshots => or_exit(report_pages::screenshots()),

@@ -110,19 +110,30 @@ pub(super) fn per_channel_estimates(
     let free: Vec<usize> = (0..fit.theta.len())
         .filter(|&t| !(mk..2 * mk).contains(&t) || !saturated(t - mk))
         .collect();
-    let cov = linalg::spd_inverse(&restricted(&fit.fisher, &free)).and_then(|fi| {
-        if l == 1 {
-            return Some(fi);
+    let f = restricted(&fit.fisher, &free);
+    let j = (l > 1)
+        .then(|| fitted_model.eval(&fit.theta, mk, What::Sandwich))
+        .flatten()
+        .map(|e| restricted(&e.f, &free));
+    // Without the score's covariance (it could not be evaluated) no error is known.
+    let (cov, estimable) = if l > 1 && j.is_none() {
+        (None, vec![false; free.len()])
+    } else {
+        covariance_of(&f, j.as_ref())
+    };
+    let known: Vec<bool> = {
+        let mut k = vec![false; fit.theta.len()];
+        for (a, &t) in free.iter().enumerate() {
+            k[t] = estimable[a];
         }
-        let j = fitted_model.eval(&fit.theta, mk, What::Sandwich)?.f;
-        Some(linalg::sandwich(&fi, &restricted(&j, &free)))
-    });
+        k
+    };
     let cov = cov.map(|c| embedded(&c, &free, fit.theta.len()));
     Estimates {
         se: (0..mk)
             .map(|j| {
                 cov.as_ref()
-                    .filter(|_| !saturated(j))
+                    .filter(|_| !saturated(j) && known[j] && known[mk + j])
                     .map(|c| pole_se(c, j, mk, &fit.theta))
             })
             .collect(),
@@ -132,7 +143,8 @@ pub(super) fn per_channel_estimates(
             .enumerate()
             .map(|(i, &lam)| {
                 let t = 2 * mk + i;
-                (lam, cov.as_ref().map(|c| -lam * c.at(t, t).max(0.0).sqrt()))
+                let se = cov.as_ref().filter(|_| known[t]);
+                (lam, se.map(|c| -lam * c.at(t, t).max(0.0).sqrt()))
             })
             .collect(),
         shapes: vec![None; fit.lambdas.len()],
@@ -143,6 +155,113 @@ pub(super) fn per_channel_estimates(
         combinations: None,
         bands: 1,
     }
+}
+
+/// The covariance of θ from the Fisher information `f` (and for a composite likelihood the
+/// score's covariance `j`: the sandwich F⁻¹JF⁻¹), and whether each parameter's variance is
+/// known. Where F has an inverse, every one is. Where it has none, the estimable
+/// parameters' covariance comes from its pseudo-inverse ([`identified`]), and a parameter's
+/// variance is known only where its direction lies outside F's null space and its variance
+/// does not depend on where that space is cut: a
+/// numerator zero pressed onto the unit circle, or a real pole that does not decay (drift),
+/// makes F singular in directions no mode's pole takes part in (seen on the corpus's
+/// coloured-load records: every mode's standard error had been lost with them).
+fn covariance_of(f: &Dense, j: Option<&Dense>) -> (Option<Dense>, Vec<bool>) {
+    let n = f.rows;
+    let covariance = |fi: &Dense| match j {
+        None => fi.clone(),
+        Some(j) => linalg::sandwich(fi, j),
+    };
+    if let Some(fi) = linalg::spd_inverse(f) {
+        return (Some(covariance(&fi)), vec![true; n]);
+    }
+    let Some((tight, loose, null)) = identified(f) else {
+        return (None, vec![false; n]);
+    };
+    let (a, b) = (covariance(&tight), covariance(&loose));
+    let known = (0..n)
+        .map(|t| {
+            let (va, vb) = (a.at(t, t), b.at(t, t));
+            let agree = va.is_finite() && va > 0.0 && (va - vb).abs() <= CUT_AGREEMENT * va;
+            agree && null[t] <= NULL_SHARE
+        })
+        .collect();
+    (Some(a), known)
+}
+
+/// The two cuts of a singular F's spectrum ([`identified`]): directions whose eigenvalue is
+/// below this share of the largest (F scaled to a unit diagonal) are its null space. The
+/// first is near the rounding of F's entries, summed over ~10⁵ bins (an eigenvalue there is
+/// rounding, not information); the second a hundred times above it.
+const NULL_CUTS: [f64; 2] = [1e-11, 1e-9];
+
+/// A parameter's variance is known when the two cuts give it within this share of each
+/// other: it then hardly depends on where the null space is cut. A parameter tied to a
+/// direction whose eigenvalue lies between the cuts gets variances up to their ratio apart,
+/// a hundredfold; the modes' poles of corpus records whose numerators have zeros on the
+/// unit circle moved by 0.1–30 % (their standard errors by half that).
+const CUT_AGREEMENT: f64 = 0.5;
+
+/// A parameter is estimable when at most this share of its direction (F scaled to a unit
+/// diagonal) lies in F's null space: its variance is then that of an estimable function.
+/// On the corpus records whose F is singular the poles' shares were 10⁻¹⁷–10⁻⁸, the tied
+/// numerator coefficients' 0.02–0.6.
+const NULL_SHARE: f64 = 1e-6;
+
+/// The pseudo-inverses of the symmetric positive semi-definite `f` at the cuts
+/// [`NULL_CUTS`] (scaled to a unit diagonal first, so that parameters in different units
+/// weigh alike; a parameter with no information gets a variance of 0, which reads as unknown): the covariance of
+/// the estimable functions of θ, cᵀF⁺c, whatever generalised inverse; and the share of
+/// each parameter's direction in the null space of the looser cut (1 for a parameter with
+/// no information). `None` if the eigen-decomposition fails.
+fn identified(f: &Dense) -> Option<(Dense, Dense, Vec<f64>)> {
+    let n = f.rows;
+    let d: Vec<f64> = (0..n).map(|i| f.at(i, i).max(0.0).sqrt()).collect();
+    let mut g = Dense::zeros(n, n);
+    for i in 0..n {
+        for k in 0..n {
+            if d[i] > 0.0 && d[k] > 0.0 {
+                g.set(i, k, f.at(i, k) / (d[i] * d[k]));
+            }
+        }
+    }
+    let (values, vectors) = linalg::symmetric_eigen(&g)?;
+    let top = values.iter().copied().fold(0.0f64, f64::max);
+    let inverse = |cut: f64| {
+        let mut out = Dense::zeros(n, n);
+        for (e, &v) in values.iter().enumerate() {
+            if v <= cut * top {
+                continue;
+            }
+            for i in 0..n {
+                let a = vectors.at(i, e) / v;
+                for k in 0..n {
+                    let cur = out.at(i, k);
+                    out.set(i, k, cur + a * vectors.at(k, e));
+                }
+            }
+        }
+        for i in 0..n {
+            for k in 0..n {
+                let s = d[i] * d[k];
+                let v = if s > 0.0 { out.at(i, k) / s } else { 0.0 };
+                out.set(i, k, v);
+            }
+        }
+        out
+    };
+    let null = (0..n)
+        .map(|i| {
+            if d[i] == 0.0 {
+                return 1.0;
+            }
+            (0..n)
+                .filter(|&e| values[e] <= NULL_CUTS[1] * top)
+                .map(|e| vectors.at(i, e).powi(2))
+                .sum()
+        })
+        .collect();
+    Some((inverse(NULL_CUTS[0]), inverse(NULL_CUTS[1]), null))
 }
 
 /// Beyond this logit ζ a mode's damping has saturated: ζ(1 − ζ) < 10⁻¹³, so L moves by less
@@ -223,4 +342,66 @@ pub(super) fn refined_real_poles(
         .collect();
     real_kept.sort_by(|a, b| b.lambda.total_cmp(&a.lambda));
     real_kept
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// JᵀJ for the columns `cols` (each of the same length).
+    fn gram(cols: &[Vec<f64>]) -> Dense {
+        let n = cols.len();
+        let mut f = Dense::zeros(n, n);
+        for a in 0..n {
+            for b in 0..n {
+                f.set(a, b, cols[a].iter().zip(&cols[b]).map(|(x, y)| x * y).sum());
+            }
+        }
+        f
+    }
+
+    /// Columns of a Jacobian: a pole's, a coupled numerator coefficient's, and two more whose
+    /// sum is the second's (a numerator direction that moves nothing: F singular there).
+    fn singular_columns() -> Vec<Vec<f64>> {
+        let k = 400;
+        let pole: Vec<f64> = (0..k).map(|i| (i as f64 * 0.37).sin() * 3.0).collect();
+        let b1: Vec<f64> = (0..k)
+            .map(|i| (i as f64 * 0.11).cos() + 0.2 * pole[i])
+            .collect();
+        let b2: Vec<f64> = (0..k)
+            .map(|i| 0.5 * b1[i] + (i as f64 * 0.05).sin())
+            .collect();
+        let b3: Vec<f64> = (0..k)
+            .map(|i| 0.5 * b1[i] - (i as f64 * 0.05).sin())
+            .collect();
+        vec![pole, b1, b2, b3]
+    }
+
+    #[test]
+    fn a_singular_information_keeps_the_errors_of_what_it_determines() {
+        let cols = singular_columns();
+        let f = gram(&cols);
+        // F has no inverse: b1 − b2 − b3 moves nothing.
+        assert!(linalg::spd_inverse(&f).is_none());
+        let (cov, known) = covariance_of(&f, None);
+        let cov = cov.expect("a covariance of what is estimable");
+        // The pole is estimable; the three numerator coefficients, tied, are not.
+        assert_eq!(known, vec![true, false, false, false]);
+        // Its variance is that of the model without b3, whose span is the same (b1 and b2
+        // give b3): F of the three other columns has an inverse, and its (0, 0) is the
+        // pole's variance whatever generalised inverse. Rounding of F's ~10⁵-sized entries,
+        // amplified by its condition, stays far below 1e-8 of it.
+        let reduced = linalg::spd_inverse(&gram(&cols[..3])).expect("invertible");
+        let (a, b) = (cov.at(0, 0), reduced.at(0, 0));
+        assert!((a - b).abs() <= 1e-8 * b, "{a} against {b}");
+    }
+
+    #[test]
+    fn an_invertible_information_gives_its_inverse() {
+        let cols = singular_columns();
+        let f = gram(&cols[..3]);
+        let (cov, known) = covariance_of(&f, None);
+        assert_eq!(known, vec![true; 3]);
+        assert_eq!(cov, linalg::spd_inverse(&f));
+    }
 }
