@@ -127,6 +127,36 @@ pub fn read_csv(path: &Path) -> Result<Table, IoError> {
 pub fn read_csv_with(path: &Path, delimiter: Delimiter) -> Result<Table, IoError> {
     let rows = DelimitedRows::open_record(path, delimiter)?;
     let (names, sep, headerless) = (rows.names.clone(), rows.sep, rows.pending.is_some());
+    // A plain record (no quotes, LF or CRLF line ends, every cell a number) is read in
+    // parallel blocks; anything else, and every error, by the `csv` reader below.
+    let (columns, non_finite) = match super::bulk::read(path, names.len(), sep, headerless) {
+        Some(c) => (c.values, c.non_finite),
+        None => streamed(path, rows)?,
+    };
+    if columns.first().is_none_or(Vec::is_empty) {
+        return Err(IoError::Empty {
+            path: path.to_path_buf(),
+        });
+    }
+    let mut table = Table::with_non_finite(path, names, columns, non_finite);
+    if headerless {
+        table.notes.push(format!(
+            "{}: no header line (the first line is numbers): the columns are named 0 to {} as an array's are; --names names them",
+            path.display(),
+            table.names.len() - 1
+        ));
+    }
+    Ok(table)
+}
+
+/// The columns of a delimited record's `rows` (opened from `path`), read by the `csv`
+/// crate, with each column's first cell that is not finite.
+#[allow(clippy::type_complexity)]
+pub(super) fn streamed(
+    path: &Path,
+    rows: DelimitedRows,
+) -> Result<(Vec<Vec<f64>>, Vec<Option<super::NonFiniteCell>>), IoError> {
+    let (names, sep) = (rows.names.clone(), rows.sep);
     let mut columns: Vec<Vec<f64>> = vec![Vec::new(); names.len()];
     // Each column's first cell that is not finite, by its line: refused only if the column
     // is taken (a NaN in a column no one analyses does not make the file unreadable).
@@ -146,20 +176,7 @@ pub fn read_csv_with(path: &Path, delimiter: Delimiter) -> Result<Table, IoError
             columns[c].push(v);
         }
     }
-    if columns.first().is_none_or(Vec::is_empty) {
-        return Err(IoError::Empty {
-            path: path.to_path_buf(),
-        });
-    }
-    let mut table = Table::with_non_finite(path, names, columns, non_finite);
-    if headerless {
-        table.notes.push(format!(
-            "{}: no header line (the first line is numbers): the columns are named 0 to {} as an array's are; --names names them",
-            path.display(),
-            table.names.len() - 1
-        ));
-    }
-    Ok(table)
+    Ok((columns, non_finite))
 }
 
 /// A delimited file opened for reading (see [`read_csv_with`] for what is read): its header's
@@ -174,7 +191,9 @@ pub(super) struct DelimitedRows {
     path: std::path::PathBuf,
     records: csv::StringRecordsIntoIter<std::io::BufReader<LineBounded<std::fs::File>>>,
     /// A headerless record's first line, the first row.
-    pending: Option<csv::StringRecord>,
+    pub(super) pending: Option<csv::StringRecord>,
+    /// Each record's line in the file, from its byte offset.
+    lines: LineCounter,
 }
 
 impl DelimitedRows {
@@ -186,7 +205,7 @@ impl DelimitedRows {
 
     /// [`open`](Self::open) for a record: a first line of numbers only is its first row,
     /// its columns named `0`, `1`, ….
-    fn open_record(path: &Path, delimiter: Delimiter) -> Result<Self, IoError> {
+    pub(super) fn open_record(path: &Path, delimiter: Delimiter) -> Result<Self, IoError> {
         Self::opened(path, delimiter, true)
     }
 
@@ -203,11 +222,11 @@ impl DelimitedRows {
         let first_line = first_line(&mut file, path)?;
         file.rewind().map_err(file_error)?;
         // A byte-order mark (spreadsheets write one) would become part of the first name.
-        if file
+        let bom = file
             .fill_buf()
             .map_err(file_error)?
-            .starts_with(b"\xEF\xBB\xBF")
-        {
+            .starts_with(b"\xEF\xBB\xBF");
+        if bom {
             file.consume(3);
         }
         let sep = delimiter
@@ -225,6 +244,7 @@ impl DelimitedRows {
                 .from_reader(file)
                 .into_records(),
             pending: None,
+            lines: LineCounter::open(path, if bom { 3 } else { 0 })?,
         };
         let header = rows.next_cells().ok_or_else(|| IoError::NoHeader {
             path: path.to_path_buf(),
@@ -268,9 +288,10 @@ impl DelimitedRows {
         loop {
             match self.records.next()? {
                 Err(e) => {
+                    let row = e.position().map_or(0, |p| self.lines.line_at(p.byte()));
                     return Some(Err(IoError::Malformed {
                         path: self.path.clone(),
-                        row: e.position().map_or(0, |p| p.line() as usize),
+                        row,
                         what: e.to_string(),
                     }));
                 }
@@ -303,7 +324,7 @@ impl Iterator for DelimitedRows {
             None => self.next_cells()?,
         };
         Some(next.and_then(|r| {
-            let row = r.position().map_or(0, |p| p.line() as usize);
+            let row = r.position().map_or(0, |p| self.lines.line_at(p.byte()));
             if r.len() != self.names.len() {
                 return Err(IoError::CellCount {
                     path: self.path.clone(),
@@ -314,6 +335,78 @@ impl Iterator for DelimitedRows {
             }
             Ok((row, r))
         }))
+    }
+}
+
+/// The line (1-based) of each record of a file, from its byte offset: the `csv` crate's own
+/// count is of records, not lines (a blank line skipped, or a CRLF line end, made a cell on
+/// line 3 read as on line 2). The file is read a second time, forwards, counting line ends
+/// (LF, CRLF, or a CR alone) as the records' offsets advance.
+struct LineCounter {
+    reader: std::io::BufReader<std::fs::File>,
+    /// Bytes before the offsets the `csv` reader counts from (a byte-order mark).
+    skip: u64,
+    /// Bytes read, and line ends among them.
+    at: u64,
+    ends: usize,
+    /// Whether the last byte read is a CR (an LF next ends the same line).
+    after_cr: bool,
+}
+
+impl LineCounter {
+    fn open(path: &Path, skip: u64) -> Result<Self, IoError> {
+        let file = std::fs::File::open(path).map_err(|source| IoError::File {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Ok(LineCounter {
+            reader: std::io::BufReader::with_capacity(1 << 16, file),
+            skip,
+            at: 0,
+            ends: 0,
+            after_cr: false,
+        })
+    }
+
+    /// The line of the record the `csv` reader puts at byte `offset`; offsets asked for
+    /// must not decrease. A file that cannot be read again gives the lines counted so
+    /// far.
+    fn line_at(&mut self, offset: u64) -> usize {
+        let target = offset + self.skip;
+        while self.at < target {
+            let Ok(buf) = self.reader.fill_buf() else {
+                break;
+            };
+            if buf.is_empty() {
+                break;
+            }
+            let take = buf.len().min((target - self.at) as usize);
+            for &b in &buf[..take] {
+                match b {
+                    b'\n' if self.after_cr => {}
+                    b'\n' | b'\r' => self.ends += 1,
+                    _ => {}
+                }
+                self.after_cr = b == b'\r';
+            }
+            self.reader.consume(take);
+            self.at += take as u64;
+        }
+        // The `csv` reader's offset of a record after blank lines is where they begin: the
+        // record's line is that of its first byte past them.
+        while let Ok(buf) = self.reader.fill_buf() {
+            let Some(&b) = buf.first() else { break };
+            if b != b'\n' && b != b'\r' {
+                break;
+            }
+            if !(b == b'\n' && self.after_cr) {
+                self.ends += 1;
+            }
+            self.after_cr = b == b'\r';
+            self.reader.consume(1);
+            self.at += 1;
+        }
+        self.ends + 1
     }
 }
 
@@ -594,6 +687,36 @@ mod tests {
             "{e}"
         );
         assert_eq!(t.column("z").unwrap(), [2.0, 3.0, 4.0]);
+        // The row is the file's line, whatever the line ends and blank lines before it
+        // (the `csv` crate counted records: CRLF files' rows read one short, and so did
+        // every row after a blank line), on the streamed path and the fast one alike.
+        for (name, text) in [
+            ("crlf_short.csv", "t,y\r\n0,1\r\n2\r\n"),
+            ("blank_short.csv", "t,y\n\n0,1\n2\n"),
+            ("crlf_quoted_short.csv", "t,y\r\n\"0\",1\r\n2\r\n"),
+        ] {
+            let want = if name.starts_with("blank") { 4 } else { 3 };
+            let e = read_csv(&file(name, text)).unwrap_err();
+            assert!(
+                e.to_string().contains(&format!("row {want} has 1 cells")),
+                "{e}"
+            );
+        }
+        for (name, text) in [
+            ("crlf_nan.csv", "t,y\r\n0,1\r\n1,NaN\r\n"),
+            ("crlf_nan_quoted.csv", "t,y\r\n\"0\",1\r\n1,NaN\r\n"),
+            ("blank_nan.csv", "t,y\n0,1\n\n\n1,NaN\n"),
+        ] {
+            let want = if name.starts_with("blank") { 5 } else { 3 };
+            let e = read_csv(&file(name, text))
+                .unwrap()
+                .column("y")
+                .unwrap_err();
+            assert!(
+                e.to_string().contains(&format!("row {want}, column `y`")),
+                "{e}"
+            );
+        }
         let e = read_csv(&file("bytes.csv", "t,y\n0,1\n")).map(|_| ());
         assert!(e.is_ok());
         std::fs::write(file("latin1.csv", ""), b"t,y\n0,\xff\n").unwrap();

@@ -2,7 +2,8 @@
 //!
 //! A record is a table of channels sampled together. It is read from
 //! - delimited text: a header line of column names, then rows of numbers separated by `,`,
-//!   `;` or tabs (detected from the header, or given), read by the `csv` crate;
+//!   `;` or tabs (detected from the header, or given), read in parallel blocks when plain
+//!   (no quotes, LF or CRLF line ends), else by the `csv` crate;
 //! - a NumPy `.npy` array, or one array of a `.npz` archive (samples × channels);
 //! - one numeric variable of a MATLAB `.mat` file (level 5, the format of `save -v7` and
 //!   `scipy.io.savemat`; `-v7.3` files are HDF5 and are refused with that advice);
@@ -307,6 +308,7 @@ fn variable_message(asked: Option<&str>, available: &str) -> String {
     }
 }
 
+mod bulk;
 mod covariates;
 mod delimited;
 mod estimates;
@@ -583,8 +585,8 @@ pub struct Table {
 /// A cell that is not finite: its row as the file counts it, and its value.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct NonFiniteCell {
-    row: usize,
-    value: f64,
+    pub(crate) row: usize,
+    pub(crate) value: f64,
 }
 
 impl Table {
