@@ -179,6 +179,18 @@ fn run_storeys(a: &LevelsArgs, fs: f64) -> Result<(), Error> {
             "--masses fits a structure by simulation: --validate, --svg-dir, --by-simulation and --fit-exponent are the one-oscillator route's",
         ));
     }
+    if let Some(given) = &a.channels
+        && let Some((i, c)) = given
+            .iter()
+            .enumerate()
+            .find(|(i, c)| given[..*i].contains(c))
+    {
+        return Err(fail(format!(
+            "--channels names `{c}` twice (entries {} and {}): each channel is one sensor on its own floor",
+            given.iter().position(|g| g == c).map_or(0, |j| j + 1),
+            i + 1
+        )));
+    }
     let mut records = Vec::new();
     let mut names: Option<Vec<String>> = None;
     for p in &a.data {

@@ -130,6 +130,16 @@ pub enum SimError {
         /// The offending value.
         value: f64,
     },
+    /// A building's field holds a value no building has.
+    #[error("building: `{field}` = {value}: {why}")]
+    InvalidBuilding {
+        /// The field, as its document names it (`hysteresis.storey`, `masses[2]`).
+        field: String,
+        /// Its value.
+        value: f64,
+        /// What it must be.
+        why: &'static str,
+    },
     /// More samples were asked for than memory can hold.
     #[error("{samples} samples do not fit in memory")]
     TooLong {

@@ -28,6 +28,16 @@ pub enum StoreyError {
         /// Floors of the structure.
         floors: usize,
     },
+    /// A loaded floor not in the structure, or named twice.
+    #[error("load floor {floor}: {why} (the structure has {floors} floors, counted from 1)")]
+    BadLoadFloor {
+        /// The floor (1-based).
+        floor: usize,
+        /// Floors of the structure.
+        floors: usize,
+        /// What is wrong with it.
+        why: &'static str,
+    },
     /// A level's record has another number of channels than the sensors named.
     #[error(
         "level {level}'s record has {channels} channel(s); {sensors} sensor floor(s) were named"

@@ -33,6 +33,7 @@
 //! choice is fitted again on the whole records and reported with the others' scores, the
 //! runner-up first among them.
 
+mod document;
 mod error;
 mod fitting;
 mod locate;

@@ -95,6 +95,7 @@ fn inconsistent(what: String) -> IdentError {
 }
 
 fn rebuild(fit: &StoreyFit, seed: u64) -> Result<Rebuilt, IdentError> {
+    fit.validate()?;
     let b = &fit.building;
     let floors = b.masses.len();
     let channels = b.sensors.len();
@@ -104,35 +105,7 @@ fn rebuild(fit: &StoreyFit, seed: u64) -> Result<Rebuilt, IdentError> {
         storey: fit.storey,
         folded: b.reading == Quantity::Acceleration,
     };
-    let names = layout.names();
-    let given: Vec<&str> = fit.parameters.iter().map(|p| p.name.as_str()).collect();
-    if given != names {
-        return Err(inconsistent(format!(
-            "its parameters are {given:?}; its structure and levels make {names:?}"
-        )));
-    }
-    let np = names.len();
-    if fit.covariance.len() != np || fit.covariance.iter().any(|r| r.len() != np) {
-        return Err(inconsistent(format!(
-            "its covariance is not {np} × {np} (one row per parameter)"
-        )));
-    }
     let r = &fit.reading;
-    if r.bands_hz.len() != floors + 1 || r.segment < 4 || r.steps_per_sample == 0 {
-        return Err(inconsistent(format!(
-            "its reading has {} band edges (want {}), a segment of {} and {} steps per sample",
-            r.bands_hz.len(),
-            floors + 1,
-            r.segment,
-            r.steps_per_sample
-        )));
-    }
-    if let Some(&bad) = fit.load_floors.iter().find(|&&f| f >= floors) {
-        return Err(inconsistent(format!(
-            "load floor {} is above its {floors} floors",
-            bad + 1
-        )));
-    }
     let template = model::template(&b.masses, &b.sensors, b.reading, b.fs, &fit.load_floors);
     let nu = b.hysteresis.as_ref().map_or(1.0, |h| h.nu);
     Ok(Rebuilt {

@@ -19,6 +19,7 @@ pub fn simulate_structure(
     fit: &StoreyFit,
     forces: &[Vec<f64>],
 ) -> Result<Vec<Vec<f64>>, IdentError> {
+    fit.validate()?;
     let b: &ShearBuilding = &fit.building;
     let floors = b.masses.len();
     if forces.len() != fit.load_floors.len() {
@@ -44,12 +45,6 @@ pub fn simulate_structure(
             }
             .into());
         }
-    }
-    if let Some(&bad) = fit.load_floors.iter().find(|&&f| f >= floors) {
-        return Err(StoreyError::InconsistentFit {
-            what: format!("load floor {} is above its {floors} floors", bad + 1),
-        }
-        .into());
     }
     let steps = fit.reading.steps_per_sample.max(1);
     // A zero before the first sample (rest), then every sample: n intervals of `steps`.

@@ -76,10 +76,28 @@ pub(super) fn check(
             floors,
         })
     };
-    let named = structure.sensors.iter().enumerate();
-    let loaded = opts.load_floors.iter().flatten().enumerate();
-    if let Some(e) = named.chain(loaded).find_map(|(c, f)| beyond(c, f)) {
+    if let Some(e) = structure
+        .sensors
+        .iter()
+        .enumerate()
+        .find_map(|(c, f)| beyond(c, f))
+    {
         return Err(e);
+    }
+    let loaded = opts.load_floors.as_deref().unwrap_or(&[]);
+    for (i, &f) in loaded.iter().enumerate() {
+        let why = if f >= floors {
+            "not a floor of the structure"
+        } else if loaded[..i].contains(&f) {
+            "named twice (each loaded floor carries its own force)"
+        } else {
+            continue;
+        };
+        return Err(StoreyError::BadLoadFloor {
+            floor: f + 1,
+            floors,
+            why,
+        });
     }
     if let Some(&s) = opts.candidates.iter().flatten().find(|&&s| s >= floors) {
         return Err(StoreyError::NoSuchStorey {

@@ -25,6 +25,8 @@ use rand_distr::StandardNormal;
 
 use crate::SimError;
 
+mod validate;
+
 /// A storey's Bouc-Wen element (in parallel with the rest of its stiffness).
 #[derive(Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -174,21 +176,8 @@ impl ShearBuilding {
     /// The linear structure's modes, lowest first, and the mass-normalized shapes at every
     /// floor (columns).
     fn eigen(&self) -> Result<(Vec<f64>, DMatrix<f64>), SimError> {
+        self.validate()?;
         let n = self.masses.len();
-        if n == 0 || self.stiffnesses.len() != n || self.damping_ratios.len() != n {
-            return Err(SimError::InvalidSignal {
-                what: "building: masses, stiffnesses and damping ratios, one per floor",
-                value: n as f64,
-            });
-        }
-        for &v in self.masses.iter().chain(&self.stiffnesses) {
-            if !(v > 0.0 && v.is_finite()) {
-                return Err(SimError::InvalidSignal {
-                    what: "building: a mass or stiffness",
-                    value: v,
-                });
-            }
-        }
         let k = self.stiffness_matrix();
         // M^{-1/2} K M^{-1/2}: symmetric, its eigenvectors give Φ = M^{-1/2} V.
         let inv_sqrt: Vec<f64> = self.masses.iter().map(|m| 1.0 / m.sqrt()).collect();
@@ -259,21 +248,6 @@ impl ShearBuilding {
     /// A record of `samples` samples (one vector per sensor), from noise seeded by `seed`.
     pub fn generate(&self, samples: usize, seed: u64) -> Result<Vec<Vec<f64>>, SimError> {
         let (omegas, phi) = self.eigen()?;
-        let n = self.masses.len();
-        if !(self.fs > 0.0 && self.fs.is_finite()) {
-            return Err(SimError::NonPositiveRate { fs: self.fs });
-        }
-        if let Some(&bad) = self
-            .sensors
-            .iter()
-            .chain(&self.load.floors)
-            .find(|&&f| f >= n)
-        {
-            return Err(SimError::InvalidSignal {
-                what: "building: a sensor or loaded floor beyond the top",
-                value: bad as f64,
-            });
-        }
         let oversample = oversample(&omegas, self.fs);
         let h = 1.0 / (self.fs * oversample as f64);
         let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
@@ -314,12 +288,6 @@ impl ShearBuilding {
             return Err(SimError::InvalidSignal {
                 what: "building: load columns of a multiple of the steps per sample plus one",
                 value: fine as f64,
-            });
-        }
-        if let Some(&bad) = self.sensors.iter().find(|&&f| f >= n) {
-            return Err(SimError::InvalidSignal {
-                what: "building: a sensor beyond the top",
-                value: bad as f64,
             });
         }
         self.respond_checked(loads, oversample, skip, (&omegas, &phi))
