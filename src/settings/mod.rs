@@ -80,7 +80,8 @@ pub struct SsiSettings {
     pub dmac: f64,
     /// Stabilization threshold of eq. (31) for real poles.
     pub dreal: f64,
-    /// Refine the modes and real poles by maximum likelihood.
+    /// Refine the modes and real poles by maximum likelihood (default: no, SSI's modes with
+    /// the jackknife's errors; see [`covssi::AnalysisOptions::refine`]).
     pub refine: bool,
     /// Refine on the channels' joint likelihood (their cross-spectra), not each alone.
     pub joint: bool,
@@ -109,7 +110,7 @@ impl Default for SsiSettings {
             dzeta: c.damping,
             dmac: c.mac,
             dreal: c.real,
-            refine: true,
+            refine: false,
             joint: true,
             ssi_errors: None,
             max_damping: None,

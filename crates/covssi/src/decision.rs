@@ -1222,7 +1222,8 @@ mod tests {
     fn a_clean_record_keeps_the_refinement_and_every_mode() {
         let y = record(30_000, 5_700_001);
         let views: Vec<&[f64]> = y.iter().map(|c| c.as_slice()).collect();
-        let a = analyze(&views, 50.0, &AnalysisOptions::default()).unwrap();
+        let opts = AnalysisOptions::default().with_refine(Some(Default::default()));
+        let a = analyze(&views, 50.0, &opts).unwrap();
         let d = &a.decision;
         assert_eq!(d.source, ModeSource::Refined, "{a}");
         assert_eq!(d.refinement, RefinementVerdict::Holds);

@@ -39,8 +39,8 @@ def test_amplitude_gives_the_commands_report(data_dir, hyst_bin, tmp_path, keywo
 
 def test_the_3dof_chains_modes_are_linear_at_their_truth(data_dir):
     """The shared 3-DOF chain (linear, modal damping 1, 2 and 5 %, made outside the project):
-    every mode called linear, and ≥ 90 % of the points within 2 standard errors of the
-    published frequency and damping ratio."""
+    every mode called linear, the points within their standard errors of the published
+    frequency and damping ratio: their z-scores' RMS near 1 and at most 6 of the 48 beyond 2."""
     truth = json.loads((data_dir / "oma" / "truth_3dof.json").read_text())
     y, _ = read_record(data_dir / "oma" / "data_3dof.csv")
     doc = hyst.amplitude(y, truth["fs"]).to_dict()
@@ -53,7 +53,13 @@ def test_the_3dof_chains_modes_are_linear_at_their_truth(data_dir):
             z.append((p["frequency_hz"] - f) / p["frequency_se_hz"])
             z.append((p["damping_ratio"] - zeta) / p["damping_se"])
     z = np.array(z)
-    assert np.mean(np.abs(z) < 2.0) >= 0.9, z
+    assert len(z) == 48, len(z)
+    # Calibrated errors: 48 z-scores' RMS has a spread of about 1/sqrt(2·48) = 0.10 around 1
+    # (2.5 of it either side); a calibrated |z| exceeds 2 with probability 0.0455, so 7 or more
+    # of 48 beyond it happen once in 170 records (binomial), while 5 or more happen once in 15 —
+    # the 90 % rule this test had failed a calibrated answer that often.
+    assert 0.75 <= np.sqrt(np.mean(z**2)) <= 1.25, z
+    assert np.sum(np.abs(z) >= 2.0) <= 6, z
 
 
 def test_bad_options_are_refused():

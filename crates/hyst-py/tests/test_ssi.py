@@ -193,7 +193,7 @@ def test_the_type_stubs_name_what_the_package_has():
 
 def test_a_long_ssi_shows_its_steps_on_a_terminal_only():
     """On a terminal, hyst.ssi tells its steps on one stderr line (each model order, then the
-    refinement's steps) and wipes it; in a pipe (a notebook, a log) it writes nothing."""
+    refinement's steps, asked for) and wipes it; in a pipe (a notebook, a log) it writes nothing."""
     import os
     import pty
     import sys
@@ -201,7 +201,8 @@ def test_a_long_ssi_shows_its_steps_on_a_terminal_only():
     code = (
         "import hyst; "
         "u = hyst.excite(750.0, excitation='white', rms=30.0, samples=2**14, seed=5); "
-        "hyst.ssi(hyst.simulate('benchmark', u, 750.0, input_interpolation='linear'), 750.0)"
+        "hyst.ssi(hyst.simulate('benchmark', u, 750.0, input_interpolation='linear'), 750.0, "
+        "refine=True)"
     )
     leader, follower = pty.openpty()
     subprocess.run([sys.executable, "-c", code], stderr=follower, stdout=subprocess.DEVNULL,

@@ -52,6 +52,7 @@ fn ssi_writes_modes_json_and_svg() {
         s(&json),
         "--svg",
         s(&svg),
+        "--refine",
     ]);
     assert!(ok, "{err}");
     assert!(out.contains("mode"), "{out}");
@@ -98,7 +99,7 @@ fn ssi_writes_modes_json_and_svg() {
         max_relative = 1e-12
     );
     assert!(v["real_poles"].is_array());
-    // The maximum-likelihood refinement (on by default): one mode, the 1.5 Hz oscillator;
+    // The maximum-likelihood refinement (`--refine`): one mode, the 1.5 Hz oscillator;
     // every other SSI mode dropped; the truth (1.5 Hz, 2 %) within 4 standard errors; the
     // record follows the model.
     let r = &v["refined"];
@@ -237,7 +238,7 @@ fn ssi_reports_shapes_mpc_and_mac() {
     }
 }
 
-/// Three channels are refined jointly by default and each alone with `--no-joint`; the JSON
+/// Three channels are refined (`--refine`) jointly by default and each alone with `--no-joint`; the JSON
 /// and the printed header say which, and both find the three modes (with their shapes when
 /// joint).
 #[test]
@@ -262,6 +263,7 @@ fn ssi_joint_and_per_channel_refinement() {
             "20",
             "--json",
             s(&json),
+            "--refine",
         ];
         args.extend(flag);
         let (ok, out, err) = hyst(&args);
@@ -298,7 +300,7 @@ fn ssi_joint_and_per_channel_refinement() {
     }
 }
 
-/// `hyst ssi` at 20 Hz with 20 block rows on the channels `columns`, written to `name`.csv,
+/// `hyst ssi --refine` at 20 Hz with 20 block rows on the channels `columns`, written to `name`.csv,
 /// expecting the joint fit through 4 combinations in `bands` bands, as the printed header and
 /// the JSON say; returns the JSON's `refined`.
 fn ssi_through_combinations(
@@ -320,6 +322,7 @@ fn ssi_through_combinations(
         "20",
         "--json",
         s(&json),
+        "--refine",
     ]);
     assert!(ok, "{err}");
     let header = match bands {
@@ -744,6 +747,7 @@ fn ssi_refinement_drops_the_real_poles_of_white_noise() {
             "40",
             "--json",
             s(&json),
+            "--refine",
         ]);
         assert!(ok, "{err}");
         let v: serde_json::Value =
@@ -846,7 +850,9 @@ fn format_flag_rate_and_shapes_uff() {
     assert!(ok, "{err}");
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-    let reported = v["refined"]["modes"].as_array().unwrap().len();
+    // One dataset per mode of the answer (SSI's by default, with their shapes).
+    let reported = v["decision"]["modes"].as_array().unwrap().len();
+    assert_eq!(v["decision"]["source"], "ssi", "{v}");
     let text = std::fs::read_to_string(&uff).unwrap();
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(lines.iter().filter(|l| **l == "    55").count(), reported);

@@ -3,8 +3,10 @@
 Reads the record (not timed), then runs pyOMA2's cov_R SSI and koma's covssi with the settings
 `cargo xtask bench command` gives `hyst ssi` (20 block rows, orders up to 40, no decimation;
 its defaults read a longer lag from this record) and prints the median wall time of
-three runs of each in seconds, one line per tool: `pyoma2 S` and `koma S`.
-Usage: ssi_timing.py RECORD.csv [FS]
+three runs of each in seconds, one line per tool: `pyoma2 S` and `koma S`; then pandas' C
+reader's median time to read the CSV (`pandas_read_csv S`), the peer of hyst's reader. With
+NPY, the record is also saved there as a NumPy array (hyst's other input).
+Usage: ssi_timing.py RECORD.csv [FS] [NPY]
 """
 import sys
 import time
@@ -21,6 +23,8 @@ def main():
     path = sys.argv[1]
     fs = float(sys.argv[2]) if len(sys.argv) > 2 else 100.0
     y = np.loadtxt(path, delimiter=",", skiprows=1)
+    if len(sys.argv) > 3:
+        np.save(sys.argv[3], y)
     from koma import oma
     from pyoma2.algorithms import SSI
 
@@ -40,6 +44,13 @@ def main():
             run()
             times.append(time.perf_counter() - t0)
         print(f"{name} {float(np.median(times)):.4f}")
+    import pandas as pd
+    times = []
+    for _ in range(3):
+        t0 = time.perf_counter()
+        pd.read_csv(path, engine="c")
+        times.append(time.perf_counter() - t0)
+    print(f"pandas_read_csv {float(np.median(times)):.4f}")
 
 
 if __name__ == "__main__":

@@ -102,38 +102,62 @@ pub(crate) fn timed(cmd: &mut Command) -> Result<(f64, f64), String> {
     }
 }
 
-/// The bench: `hyst ssi` refined and not, and pyOMA2 and koma when their environment exists.
+/// The median of three in-process reads of `csv` by hyst's reader (seconds).
+fn read_seconds(csv: &Path) -> Result<f64, String> {
+    let mut times = Vec::new();
+    for _ in 0..3 {
+        let t0 = std::time::Instant::now();
+        let t = hyst_io::read_csv(csv).map_err(|e| e.to_string())?;
+        times.push(t0.elapsed().as_secs_f64());
+        if t.len() != SAMPLES {
+            return Err(format!(
+                "{}: read {} rows, not {SAMPLES}",
+                csv.display(),
+                t.len()
+            ));
+        }
+    }
+    times.sort_by(f64::total_cmp);
+    Ok(times[1])
+}
+
+/// The bench: `hyst ssi` with its defaults (SSI's modes with the jackknife's errors) and
+/// with `--refine`, from the CSV and from the `.npy` copy, and pyOMA2 and koma when their
+/// environment exists; hyst's CSV reader beside pandas'.
 pub fn run() -> Result<(), String> {
     let root = hyst_testkit::workspace_root();
     let target = root.join("target");
     let csv = record_csv(&target.join("bench"))?;
+    let npy = target.join("bench").join("ssi_1e6_10ch.npy");
     let hyst = release_hyst()?;
     let json = target.join("bench").join("ssi_1e6_10ch.json");
-    let run = |extra: &[&str]| {
+    let run = |input: &Path, extra: &[&str]| {
         timed(
             Command::new("/usr/bin/time")
                 .args(["-f", "TIMED %e %M"])
                 .arg(&hyst)
                 .args(["ssi", "--fs", "100", "--input"])
-                .arg(&csv)
+                .arg(input)
                 .arg("--json")
                 .arg(&json)
                 .args(extra),
         )
     };
+    let reader = read_seconds(&csv)?;
+    println!("hyst_read_csv_s_1e6_10ch {reader:.3} s (hyst_io::read_csv, median of three)");
     // The peers' settings (20 block rows, no decimation), so that the ratios compare like
     // with like; the defaults read from this record (a lag of ten periods of 1.3 Hz, cut to
     // the Toeplitz budget of 120 block rows here) are timed on their own line.
     let same = ["--block-rows", "20", "--decimate", "1"];
-    let (s, mb) = run(&same)?;
-    println!("hyst_ssi_s_1e6_10ch {s:.2} s (20 block rows, as the peers)");
+    let (s, mb) = run(&csv, &same)?;
+    println!("hyst_ssi_s_1e6_10ch {s:.2} s (from CSV, 20 block rows, as the peers)");
     println!("hyst_ssi_peak_mb_1e6_10ch {mb:.0} MB (the record as f64: 80 MB)");
-    let (sd, mbd) = run(&[])?;
+    let (sd, mbd) = run(&csv, &[])?;
     println!(
         "hyst_ssi_defaults_s_1e6_10ch {sd:.2} s (peak {mbd:.0} MB; lag and decimation read from the record)"
     );
-    let (s0, mb0) = run(&[&same[..], &["--no-refine"]].concat())?;
-    println!("hyst_ssi_no_refine_s_1e6_10ch {s0:.2} s (peak {mb0:.0} MB)");
+    let (sr, mbr) = run(&csv, &[&same[..], &["--refine"]].concat())?;
+    println!("hyst_ssi_refine_s_1e6_10ch {sr:.2} s (peak {mbr:.0} MB; with --refine)");
     let python = target.join("compare-venv").join("bin").join("python");
     if !python.is_file() {
         println!(
@@ -145,6 +169,8 @@ pub fn run() -> Result<(), String> {
     let out = Command::new(&python)
         .arg(root.join("xtask/studies/compare/ssi_timing.py"))
         .arg(&csv)
+        .arg("100")
+        .arg(&npy)
         .env("OMP_NUM_THREADS", "1")
         .env("OPENBLAS_NUM_THREADS", "1")
         .env("MKL_NUM_THREADS", "1")
@@ -162,18 +188,31 @@ pub fn run() -> Result<(), String> {
             .find_map(|l| l.strip_prefix(name)?.trim().parse().ok())
             .ok_or_else(|| format!("ssi_timing.py printed no {name} time: {text:?}"))
     };
-    let (py, koma) = (tool("pyoma2 ")?, tool("koma ")?);
+    let (py, koma, pandas) = (tool("pyoma2 ")?, tool("koma ")?, tool("pandas_read_csv ")?);
+    let (sn, _) = run(&npy, &same)?;
+    println!("hyst_ssi_npy_s_1e6_10ch {sn:.2} s (from .npy, 20 block rows)");
+    let (srn, _) = run(&npy, &[&same[..], &["--refine"]].concat())?;
+    println!("hyst_ssi_npy_refine_s_1e6_10ch {srn:.2} s (from .npy, with --refine)");
     println!("pyoma2_ssi_cov_s_1e6_10ch {py:.2} s (identification only, one BLAS thread)");
     println!("koma_ssi_cov_s_1e6_10ch {koma:.2} s (identification only, one BLAS thread)");
+    println!("pandas_read_csv_s_1e6_10ch {pandas:.3} s (pandas' C reader, median of three)");
     println!(
-        "hyst_ssi_over_pyoma2_1e6_10ch {:.2} (target at most 4); without refinement {:.2}",
-        s / py,
-        s0 / py
+        "hyst_read_csv_over_pandas_1e6_10ch {:.2} (target at most 1)",
+        reader / pandas
     );
     println!(
-        "hyst_ssi_over_koma_1e6_10ch {:.2}; without refinement {:.2}",
+        "hyst_ssi_over_pyoma2_1e6_10ch {:.2} from CSV, {:.2} from .npy (target at most 1); with --refine {:.2} and {:.2}",
+        s / py,
+        sn / py,
+        sr / py,
+        srn / py
+    );
+    println!(
+        "hyst_ssi_over_koma_1e6_10ch {:.2} from CSV, {:.2} from .npy; with --refine {:.2} and {:.2}",
         s / koma,
-        s0 / koma
+        sn / koma,
+        sr / koma,
+        srn / koma
     );
     Ok(())
 }

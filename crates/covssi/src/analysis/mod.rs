@@ -37,7 +37,12 @@ pub struct AnalysisOptions {
     pub decimation: Decimation,
     /// SSI's options.
     pub ssi: SsiOptions,
-    /// The refinement's options; `None` skips it. Default: on, with its defaults.
+    /// The refinement's options; `None` skips it. Default: `None`, SSI's modes with the
+    /// jackknife's errors: on the loads users have (coloured, band-limited, modulated) the
+    /// refinement's model (a white load) rarely holds, the answer is then SSI's anyway, and
+    /// the refinement's fits cost half as much again as the rest (docs/covssi.md, "Where the
+    /// refinement gains"). Ask for it (`Some(RefineOptions::default())`) on records under a
+    /// broadband white load, where it gains most.
     pub refine: Option<RefineOptions>,
     /// Standard errors for SSI's modes: the jackknife over at most this many blocks of the
     /// record ([`crate::jackknife`]). They are the reported errors where SSI's modes are the
@@ -62,7 +67,7 @@ impl Default for AnalysisOptions {
         AnalysisOptions {
             decimation: Decimation::Auto,
             ssi: SsiOptions::default(),
-            refine: Some(RefineOptions::default()),
+            refine: None,
             ssi_errors: Some(JACKKNIFE_BLOCKS),
             modes: ModeCriteria::default(),
             fdd: None,
@@ -431,6 +436,19 @@ mod tests {
 
     /// A decaying 3 Hz oscillation at 50 Hz with a little deterministic noise, and options
     /// of at most 10 model orders.
+    /// The default options with the refinement asked for.
+    fn refined() -> AnalysisOptions {
+        AnalysisOptions::default().with_refine(Some(RefineOptions::default()))
+    }
+
+    /// By default the answer is SSI's with the jackknife's errors: no refinement is run.
+    #[test]
+    fn the_default_is_ssi_with_its_errors_not_the_refinement() {
+        let d = AnalysisOptions::default();
+        assert!(d.refine.is_none());
+        assert_eq!(d.ssi_errors, Some(JACKKNIFE_BLOCKS));
+    }
+
     fn decay_record() -> (f64, Vec<f64>, AnalysisOptions) {
         let fs = 50.0;
         let y: Vec<f64> = (0..6000)
@@ -440,7 +458,7 @@ mod tests {
                     + 0.01 * ((n * 7919) % 97) as f64 / 97.0
             })
             .collect();
-        let opts = AnalysisOptions::default().with_ssi(SsiOptions {
+        let opts = refined().with_ssi(SsiOptions {
             max_order: Some(10),
             ..SsiOptions::default()
         });
@@ -628,7 +646,7 @@ mod tests {
                     + (-0.3 * t).exp() * (2.0 * std::f64::consts::PI * 7.0 * t).sin()
             })
             .collect();
-        let opts = AnalysisOptions::default().with_ssi(SsiOptions {
+        let opts = refined().with_ssi(SsiOptions {
             max_order: Some(10),
             min_cluster_size: Some(2),
             ..SsiOptions::default()

@@ -16,11 +16,13 @@ fn analysis() -> ModalAnalysis {
     let v: Vec<&[f64]> = y.iter().map(Vec::as_slice).collect();
     // Fixed block rows: the JSON's form is the subject here, not the defaults (with those
     // read from the record SSI also keeps a third, weak mode, and the indices move).
-    let opts = AnalysisOptions::default().with_ssi(SsiOptions {
-        block_rows: BlockRows::Count(20),
-        max_order: Some(20),
-        ..SsiOptions::default()
-    });
+    let opts = AnalysisOptions::default()
+        .with_ssi(SsiOptions {
+            block_rows: BlockRows::Count(20),
+            max_order: Some(20),
+            ..SsiOptions::default()
+        })
+        .with_refine(Some(covssi::RefineOptions::default()));
     analyze(&v, 20.0, &opts).unwrap()
 }
 

@@ -24,7 +24,7 @@ def ssi(
     dzeta=None,
     dmac=None,
     dreal=None,
-    refine=True,
+    refine=False,
     joint=True,
     ssi_errors=None,
     max_damping=None,
@@ -75,8 +75,10 @@ def ssi(
         Stabilization thresholds: relative frequency change (default 0.01), relative damping
         change (0.05), 1 - MAC (0.02), relative change of a real pole (1.5).
     refine : bool
-        Refine SSI's modes by maximum likelihood (default True): the modes the record
-        supports, each with standard errors, and every channel's shape.
+        Refine SSI's modes by maximum likelihood (default False: SSI's modes with the
+        jackknife's errors): the modes the record supports, each with standard errors, and
+        every channel's shape. Its model is a white load: it gains most under a broadband
+        random load (errors up to half SSI's) and rarely holds under coloured ones.
     joint : bool
         Fit the channels jointly, cross-spectra included (default True); False fits each
         channel's spectrum alone.
@@ -193,7 +195,7 @@ def amplitude(y, fs, *, modes=None, measured="displacement", amplitude_of=None, 
               cycles=3.0, groups=20, min_triggers=50, band=None, method="envelope",
               period=None, block_rows=None, lag_seconds=None, lag_periods=None, decimate=None,
               max_order=None, order_step=1, references=None, df=None, dzeta=None, dmac=None,
-              dreal=None, refine=True, joint=True, ssi_errors=None, max_damping=None,
+              dreal=None, refine=False, joint=True, ssi_errors=None, max_damping=None,
               floors=None, record="array"):
     """Each mode's natural frequency and damping ratio against its amplitude (``hyst
     amplitude``): the modes as :func:`ssi` finds them, each mode's response filtered out

@@ -13,7 +13,7 @@ from ._read import _rate_of, read
 def track(records, fs, *, times=None, covariates=None, training=None, whiten=True,
           environment_model=True, reference=None, block_rows=None, lag_seconds=None, lag_periods=None, decimate=None,
           max_order=None, order_step=1, references=None, df=None, dzeta=None, dmac=None,
-          dreal=None, refine=True, joint=True, ssi_errors=None, max_damping=None, client=None,
+          dreal=None, refine=False, joint=True, ssi_errors=None, max_damping=None, client=None,
           level_covariate=False, calibrate=True, joint_chart=True):
     """Track the modes of many records of one structure (``hyst track``).
 
@@ -43,8 +43,9 @@ def track(records, fs, *, times=None, covariates=None, training=None, whiten=Tru
         same names); what is left to the record (the lag, the decimation) is read from the
         first record and kept for every record, as ``hyst track`` does.
     refine : bool
-        The maximum-likelihood refinement (default True; without it there are no standard
-        errors and no chart).
+        The maximum-likelihood refinement of each record's modes (default False: SSI's
+        modes with the jackknife's errors, which the charts read as they read the refined
+        ones').
     whiten : bool
         Where the training records show a slow effect the covariates leave unexplained,
         chart its model's filter's innovations (default True: the effect is then not taken
@@ -280,7 +281,7 @@ def _track_on_dask(client, records, fs, *, times, covariates, reference, trackin
 def follow(inputs, fs=None, *, covariates=None, training=None, poll=10.0, passes=None,
            whiten=True, environment_model=True, reference=None, block_rows=None,
            lag_seconds=None, lag_periods=None, decimate=None, max_order=None, order_step=1,
-           references=None, df=None, dzeta=None, dmac=None, dreal=None, refine=True,
+           references=None, df=None, dzeta=None, dmac=None, dreal=None, refine=False,
            joint=True, ssi_errors=None, max_damping=None, level_covariate=False,
            calibrate=True, joint_chart=True):
     """Records as they arrive (``hyst track --follow``): an iterator of the lines the
