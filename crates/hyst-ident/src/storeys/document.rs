@@ -8,6 +8,7 @@
 
 use super::error::StoreyError;
 use super::model::Layout;
+use super::setup::{WARM_UP_LEAST_DAMPING, stepping};
 use super::types::StoreyFit;
 use crate::IdentError;
 use hyst_sim::building::Reading as Quantity;
@@ -17,12 +18,12 @@ use hyst_sim::building::Reading as Quantity;
 /// it back exactly, so anything beyond rounding is an edit.
 const SAME: f64 = 1e-9;
 
-/// How far the reading may go beyond the rule a fit uses (`setup.rs`: ω_max h ≤ 0.1 with a
-/// 30 % margin, at least 4 steps; 20 time constants of the lowest mode at a damping ratio no
-/// lower than 0.005): ten times either.
+/// How far the reading may go beyond the steps a fit of the structure takes
+/// ([`super::setup::stepping`], its warm-up at the least damping it allows): ten times either.
 const READING_MARGIN: f64 = 10.0;
 
-fn inconsistent(what: String) -> IdentError {
+/// The failure of a fit whose parts disagree.
+pub(super) fn inconsistent(what: String) -> IdentError {
     StoreyError::InconsistentFit { what }.into()
 }
 
@@ -163,23 +164,19 @@ impl StoreyFit {
         }
         let modes = b.modes()?;
         let (f1, f_max) = (modes[0].frequency_hz, modes[floors - 1].frequency_hz);
-        let rule_steps = (13.0 * 2.0 * std::f64::consts::PI * f_max / b.fs)
-            .ceil()
-            .max(4.0);
-        let most_steps = READING_MARGIN * rule_steps;
+        let (rule_steps, rule_warm) = stepping(f1, f_max, WARM_UP_LEAST_DAMPING, b.fs);
+        let most_steps = READING_MARGIN * rule_steps as f64;
         if r.steps_per_sample as f64 > most_steps {
             return Err(inconsistent(format!(
                 "`reading.steps_per_sample` = {}: a fit of this structure takes {rule_steps}; more than {most_steps} only costs time",
                 r.steps_per_sample
             )));
         }
-        let rule_warm = 20.0 / (2.0 * std::f64::consts::PI * f1 * 0.005) * b.fs;
-        let most_warm = (READING_MARGIN * rule_warm).ceil();
+        let most_warm = READING_MARGIN * rule_warm as f64;
         if r.warm_up as f64 > most_warm {
             return Err(inconsistent(format!(
-                "`reading.warm_up` = {} samples: 20 time constants of the lowest mode ({f1:.4} Hz) at a damping ratio of 0.005 are {:.0}; more than {most_warm} only costs time and memory",
-                r.warm_up,
-                rule_warm.ceil()
+                "`reading.warm_up` = {} samples: 20 time constants of the lowest mode ({f1:.4} Hz) at a damping ratio of {WARM_UP_LEAST_DAMPING} are {rule_warm}; more than {most_warm} only costs time and memory",
+                r.warm_up
             )));
         }
         Ok(())

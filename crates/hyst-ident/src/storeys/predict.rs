@@ -14,6 +14,7 @@ use rayon::prelude::*;
 
 use hyst_sim::building::{Reading as Quantity, ShearBuilding};
 
+use super::document::inconsistent;
 use super::error::StoreyError;
 use super::model::{self, Layout};
 use super::statistics::{self, Reading, Simulator};
@@ -88,10 +89,6 @@ struct Rebuilt {
     theta: Vec<f64>,
     nu: f64,
     channels: usize,
-}
-
-fn inconsistent(what: String) -> IdentError {
-    StoreyError::InconsistentFit { what }.into()
 }
 
 fn rebuild(fit: &StoreyFit, seed: u64) -> Result<Rebuilt, IdentError> {

@@ -182,12 +182,8 @@ pub(super) fn setup(
         fs,
         &load_floors,
     );
-    // Fixed steps for the whole fit: ω_max h ≤ 0.1 with a margin of 30 % for a stiffer
-    // model; a warm-up of 20 time constants of the start's lowest mode.
-    let w_max = 2.0 * std::f64::consts::PI * hz[floors - 1];
-    let oversample = ((13.0 * w_max / fs).ceil() as usize).max(4);
-    let zeta1 = modes[0].1.max(0.005);
-    let warm_up = (20.0 / (2.0 * std::f64::consts::PI * hz[0] * zeta1) * fs).ceil() as usize;
+    // Fixed steps for the whole fit, from the start's modes.
+    let (oversample, warm_up) = stepping(hz[0], hz[floors - 1], modes[0].1, fs);
     let mut start: Vec<f64> = k;
     start.extend(modes.iter().map(|m| m.1.clamp(1e-3, 0.5)));
     // Each level's density: the linear start's band powers at unit density against the
@@ -318,4 +314,20 @@ fn structure_modes(
     modes.truncate(floors);
     modes.sort_by(|a, b| a.0.total_cmp(&b.0));
     Ok(modes)
+}
+
+/// The damping ratio below which the warm-up no longer grows.
+pub(super) const WARM_UP_LEAST_DAMPING: f64 = 0.005;
+
+/// A fit's fixed steps (integration steps per sample, samples of warm-up) for a structure
+/// whose lowest mode is at `f1_hz` damped `zeta1` and whose highest is at `f_max_hz`, at
+/// `fs`: ω_max h ≤ 0.1 with a margin of 30 % for a stiffer model, at least 4 steps; a
+/// warm-up of 20 time constants of the lowest mode, its damping ratio taken no lower than
+/// [`WARM_UP_LEAST_DAMPING`].
+pub(super) fn stepping(f1_hz: f64, f_max_hz: f64, zeta1: f64, fs: f64) -> (usize, usize) {
+    let two_pi = 2.0 * std::f64::consts::PI;
+    let oversample = ((13.0 * two_pi * f_max_hz / fs).ceil() as usize).max(4);
+    let zeta1 = zeta1.max(WARM_UP_LEAST_DAMPING);
+    let warm_up = (20.0 / (two_pi * f1_hz * zeta1) * fs).ceil() as usize;
+    (oversample, warm_up)
 }
