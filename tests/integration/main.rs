@@ -10,6 +10,7 @@ mod cli;
 mod covssi_data;
 mod fdd_oma;
 mod html_report;
+mod many_channels;
 mod measured_defaults;
 mod mode_decision_corpus;
 mod screen_real_records;

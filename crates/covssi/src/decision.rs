@@ -1071,6 +1071,8 @@ mod tests {
             notes: vec![],
             auto_lag: None,
             survey: None,
+            references: vec![0],
+            chosen_references: None,
         };
         let errors = SsiErrors {
             blocks: 7,
@@ -1111,6 +1113,8 @@ mod tests {
             notes: vec![],
             auto_lag: None,
             survey: None,
+            references: vec![0],
+            chosen_references: None,
         };
         let errors = SsiErrors {
             blocks: 10,

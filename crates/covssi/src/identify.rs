@@ -63,7 +63,9 @@ impl StabilizationDiagram {
 pub struct SsiResult {
     /// Block rows used.
     pub block_rows: usize,
-    /// Singular values of the Toeplitz matrix.
+    /// Singular values of the Toeplitz matrix: all of them when it is stored, the leading
+    /// ones (as many as the largest order asks for, and as many again) when it is large
+    /// enough to be applied by FFT.
     pub singular_values: Vec<f64>,
     /// The stabilization diagram.
     pub diagram: StabilizationDiagram,
@@ -78,6 +80,13 @@ pub struct SsiResult {
     pub auto_lag: Option<AutoLag>,
     /// The record's survey, when the options left anything to it.
     pub survey: Option<RecordSurvey>,
+    /// The reference channels the correlations were taken against (indices).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub references: Vec<usize>,
+    /// When the options named none and the record has many channels: the references chosen
+    /// from it ([`crate::references`]).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub chosen_references: Option<crate::references::ChosenReferences>,
 }
 
 pub(crate) fn references(opts: &SsiOptions, l: usize) -> Result<Vec<usize>, SsiError> {
@@ -128,7 +137,17 @@ pub(crate) struct LagChoice {
     pub(crate) references: Vec<usize>,
     /// With [`crate::BlockRows::Auto`]: the survey and the lag it gave.
     pub(crate) auto: Option<(RecordSurvey, AutoLag)>,
+    /// The references, when chosen from the record.
+    pub(crate) chosen: Option<crate::references::ChosenReferences>,
 }
+
+/// Most correlation values (channels × references × lags) SSI takes against every channel
+/// when the options name no references: 2²⁰ (8 MB), past which a record with more than
+/// [`crate::references::MAX_REFERENCES`] channels has its references chosen from it
+/// ([`crate::references`]). The FFT-applied Toeplitz matrix costs that many complex
+/// products per vector; 24 channels at 250 block rows (a bridge's 0.2 Hz mode at 10 Hz)
+/// stay within it, 66 at 500 do not.
+pub const MAX_ALL_REFERENCE_ENTRIES: usize = 1 << 20;
 
 /// The block rows `opts` give for the checked channels `y` (`n` samples each, of means
 /// `means`) at `fs` Hz, with the reference channels; read from the record
@@ -141,22 +160,39 @@ pub(crate) fn block_rows_for(
     opts: &SsiOptions,
     known: Option<RecordSurvey>,
 ) -> Result<LagChoice, SsiError> {
-    let references = references(opts, y.len())?;
-    Ok(match opts.block_rows.resolve(fs)? {
-        Some(block_rows) => LagChoice {
-            block_rows,
-            references,
-            auto: None,
-        },
+    let mut references = references(opts, y.len())?;
+    let mut survey = known;
+    let mut surveyed = || {
+        survey
+            .get_or_insert_with(|| crate::survey::surveyed(y, fs, means, n))
+            .clone()
+    };
+    let (block_rows, lag) = match opts.block_rows.resolve(fs)? {
+        Some(block_rows) => (block_rows, None),
         None => {
-            let s = known.unwrap_or_else(|| crate::survey::surveyed(y, fs, means, n));
-            let (block_rows, lag) = s.block_rows(n, y.len(), references.len());
-            LagChoice {
-                block_rows,
-                references,
-                auto: Some((s, lag)),
-            }
+            let (block_rows, lag) = surveyed().block_rows(n, y.len(), references.len());
+            (block_rows, Some(lag))
         }
+    };
+    let l = y.len();
+    let many = l > crate::references::MAX_REFERENCES
+        && l.saturating_mul(l).saturating_mul(2 * block_rows) > MAX_ALL_REFERENCE_ENTRIES;
+    let chosen = (opts.references.is_none() && many).then(|| {
+        let s = surveyed();
+        crate::references::choose(y, means, fs, &s.peaks_hz)
+    });
+    if let Some(c) = &chosen {
+        references = c.channels.clone();
+    }
+    let auto = match (lag, survey) {
+        (Some(lag), Some(s)) => Some((s, lag)),
+        _ => None,
+    };
+    Ok(LagChoice {
+        block_rows,
+        references,
+        auto,
+        chosen,
     })
 }
 
@@ -188,6 +224,7 @@ pub(crate) fn identify_surveyed_with_basis(
         block_rows: i,
         references: refs,
         auto,
+        chosen,
     } = block_rows_for(y, fs, (n, &means), opts, known)?;
     // 2i lags (0 … 2i − 1) need 2i + 1 samples; saturating, so that a count too large for
     // any record (a lag time of years) is reported as too short rather than wrapping round.
@@ -211,24 +248,24 @@ pub(crate) fn identify_surveyed_with_basis(
         what: &what,
     });
     let corr = corr::estimate_centred(y, &refs, lags, &means);
-    match auto {
-        None => identify_with_basis(
-            &corr,
-            fs,
-            i,
-            opts,
-            (DEFAULT_ORDER_CAP, None, Run::Record),
-            progress,
-        ),
-        Some((survey, lag)) => {
-            let cap = survey.max_order();
-            let (mut res, basis) =
-                identify_with_basis(&corr, fs, i, opts, (cap, None, Run::Record), progress)?;
-            res.auto_lag = Some(lag);
-            res.survey = Some(survey);
-            Ok((res, basis))
-        }
+    let cap = auto
+        .as_ref()
+        .map_or(DEFAULT_ORDER_CAP, |(survey, _)| survey.max_order());
+    let (mut res, basis) = identify_with_basis(
+        &corr,
+        fs,
+        i,
+        opts,
+        (cap, None, Run::Record(&refs)),
+        progress,
+    )?;
+    if let Some((survey, lag)) = auto {
+        res.auto_lag = Some(lag);
+        res.survey = Some(survey);
     }
+    res.references = refs;
+    res.chosen_references = chosen;
+    Ok((res, basis))
 }
 
 /// Identify from given correlations (at least `2·block_rows` lags), e.g. exact ones.
@@ -250,8 +287,9 @@ pub(crate) const SSI_STEPS_BEFORE_ORDERS: usize = 2;
 /// What [`identify_with_basis`] runs on: a record, whose result is reported, or a jackknife
 /// replicate of one, of which only the modes are used.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) enum Run {
-    Record,
+pub(crate) enum Run<'a> {
+    /// A record whose correlations are against these channels (for its spectrum).
+    Record(&'a [usize]),
     Replicate,
 }
 
@@ -265,12 +303,14 @@ pub(crate) fn identify_with_order_cap(
     order_cap: usize,
     progress: &(dyn Fn(Progress) + Sync),
 ) -> Result<SsiResult, SsiError> {
+    // The references' rows are not known here: the first channels stand in.
+    let rows: Vec<usize> = (0..corr.channels.min(corr.references)).collect();
     identify_with_basis(
         corr,
         fs,
         block_rows,
         opts,
-        (order_cap, None, Run::Record),
+        (order_cap, None, Run::Record(&rows)),
         progress,
     )
     .map(|(r, _)| r)
@@ -300,7 +340,7 @@ pub(crate) fn identify_with_basis(
     fs: f64,
     block_rows: usize,
     opts: &SsiOptions,
-    (order_cap, near, run): (usize, Option<&Dense>, Run),
+    (order_cap, near, run): (usize, Option<&Dense>, Run<'_>),
     progress: &(dyn Fn(Progress) + Sync),
 ) -> Result<(SsiResult, Dense), SsiError> {
     check_fs(fs)?;
@@ -314,7 +354,18 @@ pub(crate) fn identify_with_basis(
         total: SSI_STEPS_BEFORE_ORDERS,
         what: &what,
     });
-    let (u, s) = toeplitz_svd(corr, i, near.zip(opts.max_order))?;
+    let wanted = opts.max_order.unwrap_or(order_cap);
+    let sweep_what = |sweep: usize| {
+        let what = format!(
+            "SSI: leading singular triplets of the {rows}×{cols} block Toeplitz matrix, sweep {sweep}"
+        );
+        progress(Progress {
+            done: 1,
+            total: SSI_STEPS_BEFORE_ORDERS,
+            what: &what,
+        })
+    };
+    let (u, s, svd_note) = toeplitz_svd(corr, i, (near.zip(opts.max_order), wanted), &sweep_what)?;
     let s0 = s.first().copied().unwrap_or(0.0);
     let rank = s.iter().filter(|&&v| v > s0 * 1e-12).count();
     let max_order = match opts.max_order {
@@ -378,7 +429,7 @@ pub(crate) fn identify_with_basis(
     // diagram would be drawn for no one (5 % of the steel frame's setups' time without the
     // refinement: 4.65 → 4.42 s).
     let spectrum = match run {
-        Run::Record => spectrum_from_correlations(corr, fs),
+        Run::Record(rows) => spectrum_from_correlations(corr, fs, rows),
         Run::Replicate => Spectrum::default(),
     };
     let mut diagram = StabilizationDiagram {
@@ -389,6 +440,7 @@ pub(crate) fn identify_with_basis(
     };
     stabilize::label(&mut diagram, opts);
     let (modes, real_poles, mut notes) = crate::cluster::cluster(&diagram, opts);
+    notes.extend(svd_note);
     notes.extend(lag_notes(&modes, i, fs));
     let result = SsiResult {
         block_rows: i,
@@ -399,6 +451,8 @@ pub(crate) fn identify_with_basis(
         notes,
         auto_lag: None,
         survey: None,
+        references: (0..r).collect(),
+        chosen_references: None,
     };
     Ok((result, basis))
 }
@@ -465,49 +519,86 @@ fn check_correlations(corr: &Correlations, i: usize) -> Result<(usize, usize), S
     Ok((l, r))
 }
 
+/// Residual of the iterated SVD's triplets (a share of σ₁) at which they are taken:
+/// far below the correlations' estimation error (1/√N, 10⁻³ to 10⁻² for records of 10⁴ to
+/// 10⁶ samples); a matrix that does not reach it in [`ITERATED_SWEEPS`] is said in a note.
+const ITERATED_TOLERANCE: f64 = 1e-9;
+
+/// Most sweeps of the iterated SVD; past them its triplets are used with a note.
+const ITERATED_SWEEPS: usize = 200;
+
 /// The left singular vectors and singular values of the block Toeplitz matrix of `i`
-/// block rows; with `near` (a basis and the order), the leading ones found from that basis
-/// when they converge ([`linalg::leading_svd_near`]), else all of them.
+/// block rows, and a note when they are approximate. A stored matrix
+/// ([`crate::toeplitz::MAX_STORED_ENTRIES`]) has its full SVD, or with `near` (a basis
+/// and the order) its leading triplets from that basis when they converge
+/// ([`linalg::leading_svd_near`]); a larger one is applied by FFT and only its leading
+/// triplets are found, by subspace iteration from `near`'s basis or from a random block as
+/// wide as [`basis_width`] asks for the `wanted` order ([`linalg::leading_svd_iterated`]),
+/// `on_sweep` hearing each sweep.
 fn toeplitz_svd(
     corr: &Correlations,
     i: usize,
-    near: Option<(&Dense, usize)>,
-) -> Result<(Dense, Vec<f64>), SsiError> {
+    (near, wanted): (Option<(&Dense, usize)>, usize),
+    on_sweep: &dyn Fn(usize),
+) -> Result<(Dense, Vec<f64>, Option<String>), SsiError> {
     // The SVD loses accuracy, or fails, on entries near the ends of the double range (a record
     // in units that make its values 1e100 or 1e-100), so T is built from the correlations
     // times the power of two that brings their largest lag-0 value near 1: exact in floating
     // point, so the poles and shapes are those of the correlations as given.
-    let (l, r) = (corr.channels, corr.references);
     let peak = corr.r[0].iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let scale = 2f64.powi(-(peak.log2().round() as i32));
-    // Block Toeplitz T (l·i × r·i), block (p, q) = R_{i+p−q}.
-    let (rows, cols) = (l * i, r * i);
-    let mut t = Dense::zeros(rows, cols);
-    for p in 0..i {
-        for q in 0..i {
-            let rk = &corr.r[i + p - q];
-            for b in 0..r {
-                for a in 0..l {
-                    t.set(p * l + a, q * r + b, scale * rk[a + b * l]);
+    let (u, mut s, note) = match crate::toeplitz::Toeplitz::new(corr, i, scale) {
+        crate::toeplitz::Toeplitz::Stored(t) => {
+            let warm = match near {
+                Some((start, order)) => {
+                    linalg::leading_svd_near(&t, start, order, (NEAR_TOLERANCE, NEAR_SWEEPS))
+                        .map_err(SsiError::LinearAlgebra)?
                 }
-            }
+                None => None,
+            };
+            let (u, s) = match warm {
+                Some(found) => found,
+                None => linalg::thin_svd_u(&t).map_err(SsiError::LinearAlgebra)?,
+            };
+            (u, s, None)
         }
-    }
-    let warm = match near {
-        Some((start, order)) => {
-            linalg::leading_svd_near(&t, start, order, (NEAR_TOLERANCE, NEAR_SWEEPS))
-                .map_err(SsiError::LinearAlgebra)?
+        crate::toeplitz::Toeplitz::Applied(t) => {
+            use linalg::Operator;
+            let (start, k) = match near {
+                Some((basis, order)) => (basis.clone(), order),
+                None => {
+                    let width = basis_width(wanted).min(t.rows().min(t.cols()));
+                    (
+                        crate::toeplitz::gaussian_start(t.rows(), width, 0x5551),
+                        wanted,
+                    )
+                }
+            };
+            let k = k.min(start.cols.saturating_sub(1)).max(1);
+            let found = linalg::leading_svd_iterated(
+                &t,
+                start,
+                k,
+                (ITERATED_TOLERANCE, ITERATED_SWEEPS),
+                on_sweep,
+            )
+            .map_err(SsiError::LinearAlgebra)?;
+            let note = (!found.converged).then(|| {
+                format!(
+                    "the leading {k} singular triplets of the {}×{} block Toeplitz matrix did not converge in {} sweeps (residual {:.1e} of σ₁): its poles are those of a nearby matrix",
+                    t.rows(),
+                    t.cols(),
+                    found.sweeps,
+                    found.residual
+                )
+            });
+            (found.u, found.values, note)
         }
-        None => None,
-    };
-    let (u, mut s) = match warm {
-        Some(found) => found,
-        None => linalg::thin_svd_u(&t).map_err(SsiError::LinearAlgebra)?,
     };
     for v in &mut s {
         *v /= scale;
     }
-    Ok((u, s))
+    Ok((u, s, note))
 }
 
 /// QR of the first `up_rows` rows of `u`'s first `max_order` columns by modified
@@ -583,14 +674,13 @@ fn order_poles(
     Ok(OrderPoles { order, poles })
 }
 
-/// First singular value of the spectral matrix of the reference channels, from the
-/// correlations with a Hann lag window, at 256 frequencies from 0 to fs/2.
-fn spectrum_from_correlations(corr: &Correlations, fs: f64) -> Spectrum {
+/// First singular value of the spectral matrix of the reference channels (`rows`, the
+/// channels the references are, in the references' order), from the correlations with a
+/// Hann lag window, at 256 frequencies from 0 to fs/2.
+fn spectrum_from_correlations(corr: &Correlations, fs: f64, rows: &[usize]) -> Spectrum {
     use std::f64::consts::PI;
-    let (l, r) = (corr.channels, corr.references);
-    // Use the square part: rows of the reference channels are not known here, so the
-    // auto/cross block of the first min(l, r) channels stands in when r < l.
-    let d = l.min(r);
+    let l = corr.channels;
+    let d = rows.len().min(corr.references);
     let k_max = corr.r.len() - 1;
     let window: Vec<f64> = (0..=k_max)
         .map(|k| 0.5 * (1.0 + (PI * k as f64 / (k_max + 1) as f64).cos()))
@@ -608,9 +698,9 @@ fn spectrum_from_correlations(corr: &Correlations, fs: f64) -> Spectrum {
         let step = C64::from_polar(1.0, -w);
         let mut e = C64::new(1.0, 0.0);
         for (k, rk) in corr.r.iter().enumerate() {
-            for a in 0..d {
+            for (a, &row) in rows.iter().enumerate().take(d) {
                 for b in 0..d {
-                    let v = rk[a + b * l];
+                    let v = rk[row + b * l];
                     if k == 0 {
                         s[a + b * d] += v;
                     } else {
@@ -669,7 +759,7 @@ mod tests {
     fn spectrum_of_white_noise_is_flat() {
         let mut r = vec![vec![0.0]; 40];
         r[0][0] = 2.0;
-        let sp = spectrum_from_correlations(&correlations(1, r), 50.0);
+        let sp = spectrum_from_correlations(&correlations(1, r), 50.0, &[0]);
         assert_eq!(sp.frequencies_hz.len(), 256);
         approx::assert_relative_eq!(sp.frequencies_hz[255], 25.0);
         for v in &sp.first_singular_value {
@@ -685,7 +775,7 @@ mod tests {
         let mut r = vec![vec![0.0; 4]; 20];
         r[0][0] = 1.0;
         r[0][3] = 3.0;
-        let sp = spectrum_from_correlations(&correlations(2, r), 10.0);
+        let sp = spectrum_from_correlations(&correlations(2, r), 10.0, &[0, 1]);
         for v in &sp.first_singular_value {
             // Power iteration from (1, 1): the error falls as (1/3)^30, about 5e-15.
             approx::assert_relative_eq!(*v, 0.3, max_relative = 1e-12);
@@ -699,7 +789,7 @@ mod tests {
         let r: Vec<Vec<f64>> = (0..120)
             .map(|k| vec![(2.0 * std::f64::consts::PI * f0 * k as f64 / fs).cos()])
             .collect();
-        let sp = spectrum_from_correlations(&correlations(1, r), fs);
+        let sp = spectrum_from_correlations(&correlations(1, r), fs, &[0]);
         let (imax, _) = sp
             .first_singular_value
             .iter()

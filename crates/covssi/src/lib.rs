@@ -65,6 +65,7 @@ pub mod multisetup;
 mod options;
 pub mod plausibility;
 pub mod progress;
+pub mod references;
 pub mod refine;
 mod stabilize;
 pub mod survey;
@@ -72,6 +73,7 @@ pub mod survey;
 pub mod svg;
 #[cfg(feature = "synth")]
 pub mod synth;
+mod toeplitz;
 
 pub use analysis::{
     AnalysisOptions, Decimation, DecimationReport, JACKKNIFE_BLOCKS, ModalAnalysis, analyze,

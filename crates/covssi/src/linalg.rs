@@ -101,6 +101,153 @@ pub(crate) fn leading_svd_near(
     Ok(None)
 }
 
+/// A linear map that can be applied to blocks of vectors and transposed: a stored matrix,
+/// or one applied without being stored (the block Toeplitz matrix by FFT).
+pub(crate) trait Operator: Sync {
+    /// Rows of the map.
+    fn rows(&self) -> usize;
+    /// Columns of the map.
+    fn cols(&self) -> usize;
+    /// `A x` for each column of `x` (`cols × k`).
+    fn apply(&self, x: &Dense) -> Dense;
+    /// `Aᵀ y` for each column of `y` (`rows × k`).
+    fn apply_t(&self, y: &Dense) -> Dense;
+}
+
+impl Operator for Dense {
+    fn rows(&self) -> usize {
+        self.rows
+    }
+    fn cols(&self) -> usize {
+        self.cols
+    }
+    fn apply(&self, x: &Dense) -> Dense {
+        product(self.view(), x.view())
+    }
+    fn apply_t(&self, y: &Dense) -> Dense {
+        product(self.view().transpose(), y.view())
+    }
+}
+
+/// `lhs · rhs`, single-threaded.
+fn product(lhs: MatRef<'_, f64>, rhs: MatRef<'_, f64>) -> Dense {
+    let mut out = Dense::zeros(lhs.nrows(), rhs.ncols());
+    let o = MatMut::from_column_major_slice_mut(&mut out.data, lhs.nrows(), rhs.ncols());
+    faer::linalg::matmul::matmul(o, Accum::Replace, lhs, rhs, 1.0, Par::Seq);
+    out
+}
+
+/// What [`leading_svd_iterated`] found: the leading left singular vectors and values of
+/// the subspace it ended on, the sweeps it took, and whether the asked triplets converged.
+#[derive(Debug, Clone)]
+pub(crate) struct Iterated {
+    /// Left singular vectors (the subspace's width of them).
+    pub u: Dense,
+    /// Their singular values, non-increasing.
+    pub values: Vec<f64>,
+    /// Sweeps taken.
+    pub sweeps: usize,
+    /// Largest residual ‖Aᵀu − σv‖ of the asked triplets, as a share of σ₁.
+    pub residual: f64,
+    /// Whether that residual is within the tolerance.
+    pub converged: bool,
+}
+
+/// The leading `k` singular triplets of `a` by subspace iteration from `start` (`a.rows() ×
+/// p`, `p > k` columns: a random block, or the leading left singular vectors of a matrix near
+/// `a`), one application of `a` and one of `aᵀ` per sweep: W = orth(aᵀQ); a W = U_B S V_Bᵀ;
+/// Q ← U_B. The triplets (U_B, S, W V_B) satisfy a v = σ u exactly, so each sweep checks
+/// the other half, ‖aᵀ u − σ v‖ ≤ `tol`·σ₁, on the product it makes anyway; the triplets are
+/// then exact for a matrix within about √k·`tol`·‖a‖ of `a`. Stops there or after
+/// `max_sweeps`, saying which; `on_sweep` hears each sweep's number.
+pub(crate) fn leading_svd_iterated(
+    a: &dyn Operator,
+    start: Dense,
+    k: usize,
+    (tol, max_sweeps): (f64, usize),
+    on_sweep: &dyn Fn(usize),
+) -> Result<Iterated, String> {
+    let mut q = start;
+    let mut last: Option<(Dense, Vec<f64>)> = None; // (V, values) of the previous sweep
+    let mut residual = f64::INFINITY;
+    for sweep in 1..=max_sweeps.max(1) {
+        on_sweep(sweep);
+        let z = a.apply_t(&q);
+        if let Some((v, values)) = &last {
+            residual = (0..k.min(values.len()))
+                .map(|j| {
+                    (0..z.rows)
+                        .map(|row| (z.at(row, j) - values[j] * v.at(row, j)).powi(2))
+                        .sum::<f64>()
+                        .sqrt()
+                })
+                .fold(0.0, f64::max)
+                / values[0].max(f64::MIN_POSITIVE);
+            if residual <= tol {
+                return Ok(Iterated {
+                    u: q,
+                    values: values.clone(),
+                    sweeps: sweep - 1,
+                    residual,
+                    converged: true,
+                });
+            }
+        }
+        let w = thin_q(&z);
+        let y = a.apply(&w);
+        let (ub, values, vb) = svd_parts(y.view(), true)?;
+        let v = product(w.view(), vb.as_ref());
+        q = Dense::from_faer(ub.as_ref());
+        last = Some((v, values));
+    }
+    let (_, values) = last.ok_or("no sweep was made")?;
+    Ok(Iterated {
+        u: q,
+        values,
+        sweeps: max_sweeps.max(1),
+        residual,
+        converged: false,
+    })
+}
+
+/// An orthonormal basis of the columns of `a` (rows ≥ cols): the thin Q of its Householder
+/// QR, single-threaded.
+pub(crate) fn thin_q(a: &Dense) -> Dense {
+    use faer::linalg::{householder, qr::no_pivoting::factor};
+    let (m, n) = (a.rows, a.cols);
+    let size = m.min(n);
+    let mut qr = a.view().to_owned();
+    let block = factor::recommended_block_size::<f64>(m, n);
+    let mut coeff = Mat::<f64>::zeros(block, size);
+    factor::qr_in_place(
+        qr.as_mut(),
+        coeff.as_mut(),
+        Par::Seq,
+        MemStack::new(&mut MemBuffer::new(factor::qr_in_place_scratch::<f64>(
+            m,
+            n,
+            block,
+            Par::Seq,
+            Default::default(),
+        ))),
+        Default::default(),
+    );
+    let mut q = Mat::<f64>::identity(m, size);
+    householder::apply_block_householder_sequence_on_the_left_in_place_with_conj(
+        qr.as_ref().subcols(0, size),
+        coeff.as_ref(),
+        faer::Conj::No,
+        q.as_mut(),
+        Par::Seq,
+        MemStack::new(&mut MemBuffer::new(
+            householder::apply_block_householder_sequence_on_the_left_in_place_scratch::<f64>(
+                m, block, size,
+            ),
+        )),
+    );
+    Dense::from_faer(q.as_ref())
+}
+
 /// A thin SVD's U, singular values and V (empty when not asked for).
 type SvdParts = (Mat<f64>, Vec<f64>, Mat<f64>);
 

@@ -265,7 +265,7 @@ fn averaged_spectrum(y: &[&[f64]], means: &[f64], n: usize) -> Vec<f64> {
 }
 
 /// The segment length: the largest power of two at most n/8, at least 16 (and at most n).
-fn segment_length(n: usize) -> usize {
+pub(crate) fn segment_length(n: usize) -> usize {
     let target = (n / 8).max(16).min(n.max(2));
     1 << (usize::BITS - 1 - target.leading_zeros())
 }

@@ -23,6 +23,7 @@ pub mod batch;
 pub mod building;
 mod chain;
 pub mod corpus;
+pub mod deck;
 mod drift;
 pub mod excitation;
 mod kernel;

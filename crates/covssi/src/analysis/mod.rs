@@ -172,6 +172,9 @@ impl AnalysisOptions {
                 crate::identify::block_rows_for(y, fs, (*n, means), &self.ssi, survey)?
             };
             opts.ssi.block_rows = crate::BlockRows::Count(choice.block_rows);
+            if choice.chosen.is_some() {
+                opts.ssi.references = Some(choice.references);
+            }
         }
         Ok(opts)
     }
@@ -342,7 +345,7 @@ pub fn analyze_with_progress(
     });
     let ssi_errors = match opts.ssi_errors {
         Some(blocks) => {
-            let refs = crate::identify::references(&opts.ssi, y.len())?;
+            let refs = ssi.references.clone();
             let (_, means) = crate::checks::check_channels(y)?;
             crate::jackknife::ssi_errors(y, fs, (&refs, &means), (&ssi, &basis), &opts.ssi, blocks)?
         }

@@ -78,6 +78,18 @@ impl ModalAnalysis {
                 )?,
             },
         }
+        if let Some(chosen) = &res.chosen_references {
+            let names: Vec<String> = chosen.channels.iter().map(|c| c.to_string()).collect();
+            writeln!(
+                f,
+                "references: {} of the {} channels ({}), those that see the {} mode shape(s) at the record's {} spectral peak(s) best (give --references to name them)",
+                chosen.channels.len(),
+                res.diagram.channels,
+                names.join(", "),
+                chosen.modes_seen,
+                chosen.peaks_hz.len()
+            )?;
+        }
         if !res.modes.is_empty() || !res.real_poles.is_empty() {
             writeln!(
                 f,
