@@ -7,7 +7,7 @@
 //! of the channels and the controllability of the references), so with many channels a few
 //! references keep the cost near that of a few channels without losing a mode.
 //!
-//! At each of the record's spectral peaks (the [survey](crate::survey)'s), the cross-spectral
+//! At each of the record's spectral peaks (the [survey](mod@crate::survey)'s), the cross-spectral
 //! matrix of the channels, each divided by its standard deviation, is averaged over the peak's
 //! bin and its two neighbours (Welch's segments, Hann window). Its leading eigenvectors are
 //! the shapes of the modes there: the first, and up to three more whose eigenvalues are at
