@@ -397,33 +397,7 @@ pub(crate) fn identify_with_basis(
             m.set(a, b, d);
         }
     }
-    // Orders are independent: in parallel (rayon; faer single-threaded inside), collected
-    // in order, so the result does not depend on the thread count.
-    let order_list: Vec<usize> = (1..=max_order / opts.order_step)
-        .map(|k| k * opts.order_step)
-        .collect();
-    let total = SSI_STEPS_BEFORE_ORDERS + order_list.len();
-    let what = format!("SSI: poles of 0 of {} model orders", order_list.len());
-    progress(Progress {
-        done: SSI_STEPS_BEFORE_ORDERS,
-        total,
-        what: &what,
-    });
-    let finished = std::sync::atomic::AtomicUsize::new(0);
-    let orders = order_list
-        .par_iter()
-        .map(|&order| {
-            let poles = order_poles(order, &m, &rr, &u, l, fs);
-            let done = 1 + finished.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-            let what = format!("SSI: poles of {done} of {} model orders", order_list.len());
-            progress(Progress {
-                done: SSI_STEPS_BEFORE_ORDERS + done,
-                total,
-                what: &what,
-            });
-            poles
-        })
-        .collect::<Result<Vec<OrderPoles>, SsiError>>()?;
+    let orders = poles_by_order(max_order, (&m, &rr, &u), l, fs, opts.order_step, progress)?;
     let basis = linalg::leading_columns(&u, basis_width(max_order));
     // A replicate's modes alone are used (for their errors): the spectrum behind its
     // diagram would be drawn for no one (5 % of the steel frame's setups' time without the
@@ -455,6 +429,45 @@ pub(crate) fn identify_with_basis(
         chosen_references: None,
     };
     Ok((result, basis))
+}
+
+/// The poles of every order `order_step, 2·order_step, …, max_order` from the shift
+/// equation's `(M, R, U)`. Orders are independent: in parallel (rayon; faer
+/// single-threaded inside), collected in order, so the result does not depend on the
+/// thread count.
+fn poles_by_order(
+    max_order: usize,
+    (m, rr, u): (&Dense, &Dense, &Dense),
+    l: usize,
+    fs: f64,
+    order_step: usize,
+    progress: &(dyn Fn(Progress) + Sync),
+) -> Result<Vec<OrderPoles>, SsiError> {
+    let order_list: Vec<usize> = (1..=max_order / order_step)
+        .map(|k| k * order_step)
+        .collect();
+    let total = SSI_STEPS_BEFORE_ORDERS + order_list.len();
+    let what = format!("SSI: poles of 0 of {} model orders", order_list.len());
+    progress(Progress {
+        done: SSI_STEPS_BEFORE_ORDERS,
+        total,
+        what: &what,
+    });
+    let finished = std::sync::atomic::AtomicUsize::new(0);
+    order_list
+        .par_iter()
+        .map(|&order| {
+            let poles = order_poles(order, m, rr, u, l, fs);
+            let done = 1 + finished.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            let what = format!("SSI: poles of {done} of {} model orders", order_list.len());
+            progress(Progress {
+                done: SSI_STEPS_BEFORE_ORDERS + done,
+                total,
+                what: &what,
+            });
+            poles
+        })
+        .collect::<Result<Vec<OrderPoles>, SsiError>>()
 }
 
 /// How many leading left singular vectors start a replicate's SVD whose largest order is
