@@ -76,7 +76,7 @@ pub fn run(a: &FrfArgs) -> Result<(), Error> {
         )));
     }
     let t = read_record(&a.input)?;
-    let names = channel_names(&t, a.columns.as_deref(), &[a.force.as_str()]);
+    let names = channel_names(&t, a.columns.as_deref(), &[a.force.as_str()])?;
     if names.is_empty() {
         return Err(fail(format!(
             "{}: no output column besides the force `{}`",

@@ -197,7 +197,7 @@ fn run_storeys(a: &LevelsArgs, fs: f64) -> Result<(), Error> {
         let t = read_record(p)?;
         // The file's own rate or time column, when it has one, must agree with --fs.
         t.rate(Some(fs))?;
-        let cols = super::channel_names(&t, a.channels.as_deref(), &[]);
+        let cols = super::channel_names(&t, a.channels.as_deref(), &[])?;
         let skip = a.columns.skip;
         let channels = cols
             .iter()

@@ -190,24 +190,34 @@ pub(crate) fn fail(msg: impl Into<String>) -> Error {
 }
 
 /// The channels to analyse: those given, else every column but the time column
-/// ([`hyst::io::Table::time_column`]) and those in `besides`.
+/// ([`hyst::io::Table::time_column`]), those in `besides` and those that carry no signal
+/// ([`hyst::io::default_channels`]), which are named in one line on stderr.
 pub(crate) fn channel_names(
     t: &hyst::io::Table,
     given: Option<&[String]>,
     besides: &[&str],
-) -> Vec<String> {
-    match given {
-        Some(c) => c.to_vec(),
-        None => {
-            let time = t.time_column();
-            t.names
-                .iter()
-                .enumerate()
-                .filter(|&(i, n)| !besides.contains(&n.as_str()) && Some(i) != time)
-                .map(|(_, n)| n.clone())
-                .collect()
-        }
+) -> Result<Vec<String>, Error> {
+    if let Some(c) = given {
+        return Ok(c.to_vec());
     }
+    let (names, dropped) = hyst::io::default_channels(t, besides);
+    let list: Vec<String> = dropped.iter().map(ToString::to_string).collect();
+    if names.is_empty() && !dropped.is_empty() {
+        return Err(fail(format!(
+            "{}: no channel carries a signal: {}",
+            t.path.display(),
+            list.join(", ")
+        )));
+    }
+    if !dropped.is_empty() {
+        eprintln!(
+            "note: {}: {} channel(s) carry no signal and are left out: {} (name the channels to analyse to choose otherwise)",
+            t.path.display(),
+            dropped.len(),
+            list.join(", ")
+        );
+    }
+    Ok(names)
 }
 
 /// Output only means responses only: a default channel list that takes in the force is a

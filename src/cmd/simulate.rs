@@ -339,7 +339,7 @@ fn run_structure(a: &SimulateArgs, structure: &std::path::Path) -> Result<(), Er
     let m = read_record(measured)?;
     m.rate(Some(fs))?;
     let besides: Vec<&str> = a.forces.iter().map(String::as_str).collect();
-    let channels = super::channel_names(&m, a.channels.as_deref(), &besides);
+    let channels = super::channel_names(&m, a.channels.as_deref(), &besides)?;
     let record = channels
         .iter()
         .map(|c| Ok(m.column(c)?.to_vec()))

@@ -160,7 +160,7 @@ pub(crate) fn channels(input: &Path, a: &ChannelArgs) -> Result<Channels, Error>
     }
     let mut t = read_record(input)?;
     let fs = check_fs(t.rate(a.fs)?)?;
-    let names = channel_names(&t, a.columns.as_deref(), &[]);
+    let names = channel_names(&t, a.columns.as_deref(), &[])?;
     if a.columns.is_none() {
         warn_on_force_like(&names);
     }

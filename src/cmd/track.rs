@@ -274,7 +274,8 @@ impl Sources {
             Sources::Files(files) => {
                 let mut t = read_record(&files[i]).map_err(|e| e.to_string())?;
                 let fs = t.rate(a.fs).map_err(|e| e.to_string())?;
-                let mut cols = channel_names(&t, a.columns.as_deref(), &[]);
+                let mut cols =
+                    channel_names(&t, a.columns.as_deref(), &[]).map_err(|e| e.to_string())?;
                 if let Some(first) = first
                     && cols != first
                 {
@@ -303,7 +304,8 @@ impl Sources {
                 step,
                 ..
             } => {
-                let cols = channel_names(table, a.columns.as_deref(), &[]);
+                let cols =
+                    channel_names(table, a.columns.as_deref(), &[]).map_err(|e| e.to_string())?;
                 let from = i * step;
                 let data = cols
                     .iter()
@@ -408,7 +410,7 @@ pub(super) fn records_pass(
             .iter()
             .filter(|f| !gaps.iter().any(|g| f.as_os_str() == g.as_str()))
             .find_map(|f| read_record(f).ok())
-            .map(|t| channel_names(&t, None, &[])),
+            .and_then(|t| channel_names(&t, None, &[]).ok()),
         _ => None,
     };
     let load = |i: usize| -> Result<Loaded, String> {

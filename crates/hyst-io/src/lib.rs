@@ -310,6 +310,7 @@ fn variable_message(asked: Option<&str>, available: &str) -> String {
 
 mod bulk;
 mod covariates;
+mod dead;
 mod delimited;
 mod estimates;
 mod geometry;
@@ -322,6 +323,7 @@ mod shapes_uff;
 mod uff;
 mod uff_shapes;
 pub use covariates::{Covariates, list_records, read_covariates};
+pub use dead::{Dead, DeadChannel, default_channels};
 pub use delimited::{Delimiter, read_csv, read_csv_with, write_csv};
 pub use estimates::{EstimatesTable, read_estimates};
 pub use geometry::{Geometry, read_geometry, setups_geometry};

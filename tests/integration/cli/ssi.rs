@@ -32,6 +32,50 @@ fn a_nan_in_a_column_not_analysed_is_no_error() {
     );
 }
 
+/// A record with two dead sensors reads as given (issue 76): without --columns the channel
+/// that is all NaN and the constant one are left out and named in one line, and the analysis
+/// is the one of the live channels named by hand; with no live channel, the error names the
+/// dead ones.
+#[test]
+fn dead_channels_are_left_out_and_named() {
+    let mut out = String::from("y,dead,z,flat\n");
+    for k in 0..400 {
+        let t = k as f64;
+        let y = (0.7 * t).sin() + 0.3 * (1.9 * t).cos();
+        let z = 0.5 * (0.7 * t).sin() - 0.8 * (1.9 * t).cos();
+        out += &format!("{y},NaN,{z},0\n");
+    }
+    let p = write("dead_sensors.csv", &out);
+    let run = |extra: &[&str]| {
+        let mut args = vec!["ssi", "--input", s(&p), "--fs", "10", "--no-refine"];
+        args.extend_from_slice(extra);
+        hyst(&args)
+    };
+    let (ok, by_default, err) = run(&[]);
+    assert!(ok, "{err}");
+    assert_eq!(
+        err.lines()
+            .filter(|l| l.contains("carry no signal"))
+            .count(),
+        1,
+        "{err}"
+    );
+    assert!(
+        err.contains("2 channel(s) carry no signal and are left out: `dead` (no finite value), `flat` (constant 0)"),
+        "{err}"
+    );
+    let (ok, by_hand, err) = run(&["--columns", "y,z"]);
+    assert!(ok, "{err}");
+    assert!(!err.contains("carry no signal"), "{err}");
+    assert_eq!(by_default, by_hand);
+    let dead = write("all_dead.csv", "a,b\nNaN,1\nNaN,1\nNaN,1\n");
+    let err = ssi_fails(&dead, &[]);
+    assert!(
+        err.contains("no channel carries a signal: `a` (no finite value), `b` (constant 1)"),
+        "{err}"
+    );
+}
+
 #[test]
 fn ssi_writes_modes_json_and_svg() {
     let Some(path) = common::data_file("oma/data_sdof.csv") else {

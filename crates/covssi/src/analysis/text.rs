@@ -239,9 +239,9 @@ impl ModalAnalysis {
         if r.misfit > MISFIT_LIMIT {
             writeln!(
                 f,
-                "warning: the record does not follow the refinement's model (misfit {:.3} > {}): \
-                 the excitation may not be broadband random (e.g. a multisine), or the record \
-                 holds what the model lacks",
+                "warning: the record does not follow the refinement's model (misfit {:.3} > {}: \
+                 its periodogram departs from the modes' spectrum by more than a random \
+                 record's scatter): the answer is SSI's estimates, not the refined ones",
                 r.misfit, MISFIT_LIMIT
             )
         } else if !self.not_reported.is_empty() {
