@@ -54,7 +54,8 @@ pub(crate) struct Cli {
     #[arg(long, global = true, help_heading = "Reading records (every command)", default_value = "auto", value_parser = named(hyst::io::Delimiter::NAMES, hyst::io::Delimiter::description))]
     pub(crate) delimiter: hyst::io::Delimiter,
     /// The variable of a `.mat` file or the array of a `.npz` archive to read (needed when it
-    /// holds more than one array of more than one element).
+    /// holds more than one array of more than one element); a dotted path (`rec.p1`) reaches
+    /// into a `.mat` struct.
     #[arg(
         long,
         global = true,

@@ -1,22 +1,34 @@
-//! MATLAB records: one numeric variable of a level 5 MAT-file, the format of MATLAB's
-//! `save` (`-v6`, and `-v7`, whose variables are zlib-compressed) and of `scipy.io.savemat`.
+//! MATLAB records: a numeric variable, or a struct of channels, of a level 5 MAT-file, the
+//! format of MATLAB's `save` (`-v6`, and `-v7`, whose variables are zlib-compressed) and of
+//! `scipy.io.savemat`.
 //!
 //! The file is a 128-byte header (text, then the version and an endian mark, `IM` for a
 //! little-endian file) and a sequence of data elements, each a tag (type, byte count; the
 //! small form packs both into 4 bytes with the data in the next 4) and its data padded to 8
 //! bytes. A variable is an element of type miMATRIX, whose sub-elements are its flags (class,
 //! complex), its dimensions, its name and its real (then imaginary) part, stored in whatever
-//! integer or float type holds it; type miCOMPRESSED wraps such an element in zlib.
+//! integer or float type holds it; type miCOMPRESSED wraps such an element in zlib. Structs
+//! and cells nest further miMATRIX elements ([`tree`]).
 //!
-//! The record is the variable named by the caller, else the file's only numeric variable of
-//! more than one element. It must be real and 2-D: rows are samples and columns channels,
-//! named `0`, `1`, … (a 1 × N row vector is one channel; a matrix of more columns than rows
-//! is refused as transposed). Version 7.3 files are HDF5, and are refused with that advice.
+//! The record is the variable named by the caller (a dotted path, `rec.p1`, reaches into a
+//! struct), else the file's only numeric variable of more than one element, else its only
+//! struct or cell that holds channels. A numeric record must be real and 2-D: rows are
+//! samples and columns channels, named `0`, `1`, … (a 1 × N row vector is one channel; a
+//! matrix of more columns than rows is refused as transposed). A struct's channels are found
+//! as [`gather`] describes, named by the sensors. A scalar named `fs` (at the top, or in the
+//! struct) states the sampling rate. Version 7.3 files are HDF5, and are refused with that
+//! advice.
 
 use std::io::Read;
 use std::path::Path;
 
 use super::{IoError, Table};
+
+mod gather;
+mod tree;
+
+use gather::Gathered;
+use tree::Node;
 
 /// The error of a file that is not a record this reader takes.
 fn bad(path: &Path, what: impl Into<String>) -> IoError {
@@ -166,64 +178,6 @@ const CLASSES: [&str; 10] = [
     "double", "single", "int8", "uint8", "int16", "uint16", "int32", "uint32", "int64", "uint64",
 ];
 
-/// The variable in a miMATRIX element's data, if it is a numeric array; `Err` says what is
-/// malformed.
-fn variable(data: &[u8], endian: Endian) -> Result<Option<Variable>, String> {
-    let parts = elements(data, endian)?;
-    let [flags, dims, name, rest @ ..] = parts.as_slice() else {
-        return Err("a variable without its flags, dimensions and name".into());
-    };
-    if flags.data.len() < 8 || dims.data.len() < 8 || dims.data.len() % 4 != 0 {
-        return Err("a variable whose flags or dimensions are cut short".into());
-    }
-    let f = endian.u32(flags.data);
-    let class = (f & 0xff) as usize;
-    let name = String::from_utf8_lossy(name.data).into_owned();
-    // Logical arrays are stored as uint8 with a flag; neither they nor cells, structs,
-    // characters or sparse matrices are records.
-    if !(6..=15).contains(&class) || f & 0x0200 != 0 {
-        return Ok(None);
-    }
-    let shape: Vec<i32> = dims.data.chunks_exact(4).map(|c| endian.i32(c)).collect();
-    if shape.iter().any(|&d| d < 0) {
-        return Err(format!("variable `{name}` has dimensions {shape:?}"));
-    }
-    let Some(real) = rest.first() else {
-        return Err(format!("variable `{name}` has no data"));
-    };
-    let width = element_width(real.code)
-        .ok_or_else(|| format!("variable `{name}` is stored as element type {}", real.code))?;
-    let elements: Option<usize> = shape
-        .iter()
-        .try_fold(1usize, |a, &d| a.checked_mul(d as usize));
-    // Trailing dimensions of 1 do not count (MATLAB drops them).
-    let ndims = if shape[2..].iter().any(|&d| d != 1) {
-        shape.len()
-    } else {
-        2
-    };
-    let (rows, columns) = (shape[0] as usize, shape[1] as usize);
-    match elements.and_then(|e| e.checked_mul(width)) {
-        Some(b) if b <= real.data.len() => {}
-        _ => {
-            return Err(format!(
-                "variable `{name}` is {shape:?} values of {width} bytes, more than its {} bytes of data",
-                real.data.len()
-            ));
-        }
-    }
-    Ok(Some(Variable {
-        name,
-        class: CLASSES[class - 6],
-        rows,
-        columns,
-        code: real.code,
-        data: real.data.to_vec(),
-        complex: f & 0x0800 != 0,
-        ndims,
-    }))
-}
-
 /// Read one variable of the MAT-file at `path` as a table of its columns: the one named
 /// `variable`, else the only numeric variable of more than one element (see the module's
 /// documentation).
@@ -255,7 +209,7 @@ pub fn read_mat(path: &Path, variable_name: Option<&str>) -> Result<Table, IoErr
         }
     };
     let top = elements(&bytes[128..], endian).map_err(|e| bad(path, e))?;
-    let mut variables = Vec::new();
+    let mut variables: Vec<(String, Node)> = Vec::new();
     for (k, e) in top.iter().enumerate() {
         let inflated;
         let matrix = match e.code {
@@ -275,37 +229,177 @@ pub fn read_mat(path: &Path, variable_name: Option<&str>) -> Result<Table, IoErr
             }
             _ => continue,
         };
-        if let Some(v) =
-            variable(matrix, endian).map_err(|x| bad(path, format!("element {}: {x}", k + 1)))?
-        {
-            variables.push(v);
-        }
+        let v = tree::node(matrix, endian, 0)
+            .map_err(|x| bad(path, format!("element {}: {x}", k + 1)))?;
+        variables.push(v);
     }
-    let listing = variables
+    let (name, chosen) = choose(path, &variables, variable_name, endian)?;
+    let mut rates = Gathered::default();
+    for (n, v) in &variables {
+        rates.gather_rate(n, v, endian);
+    }
+    let mut t = match chosen {
+        Node::Numeric(v) => table(path, v, endian)?,
+        group => gathered(path, &name, group, endian, &mut rates)?,
+    };
+    t.rate_hz = rate(path, &rates.rates)?;
+    Ok(t)
+}
+
+/// The variable that is the record: the one `asked` for (a dotted path reaches into
+/// structs), else the only numeric array of more than one element or, if there is none, the
+/// only struct or cell holding channels. Returns its name and value.
+fn choose<'a>(
+    path: &Path,
+    variables: &'a [(String, Node)],
+    asked: Option<&str>,
+    endian: Endian,
+) -> Result<(String, &'a Node), IoError> {
+    let listing = || {
+        variables
+            .iter()
+            .map(|(n, v)| format!("{n} ({})", v.describe()))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let missing = || IoError::Variable {
+        path: path.to_path_buf(),
+        asked: asked.map(str::to_string),
+        available: listing(),
+    };
+    if let Some(asked) = asked {
+        let mut steps = asked.split('.');
+        let first = steps.next().unwrap_or_default();
+        let mut at = variables
+            .iter()
+            .find(|(n, _)| n == first)
+            .map(|(_, v)| v)
+            .ok_or_else(missing)?;
+        for step in steps {
+            at = at.field(step).ok_or_else(|| {
+                bad(
+                    path,
+                    format!(
+                        "`{asked}`: `{step}` is not a field of a 1×1 struct there (it is {})",
+                        at.describe()
+                    ),
+                )
+            })?;
+        }
+        return Ok((asked.to_string(), at));
+    }
+    let arrays: Vec<&(String, Node)> = variables
         .iter()
-        .map(Variable::describe)
-        .collect::<Vec<_>>()
-        .join(", ");
-    let mut chosen: Vec<Variable> = variables
-        .into_iter()
-        .filter(|v| match variable_name {
-            Some(n) => v.name == n,
-            None => v.rows.saturating_mul(v.columns) > 1,
+        .filter(|(_, v)| matches!(v, Node::Numeric(a) if a.rows.saturating_mul(a.columns) > 1))
+        .collect();
+    let groups: Vec<&(String, Node)> = variables
+        .iter()
+        .filter(|(n, v)| {
+            let mut g = Gathered::default();
+            matches!(v, Node::Struct { .. } | Node::Cell { .. })
+                && g.gather(n, v, endian)
+                    .is_ok_and(|()| !g.channels.is_empty())
         })
         .collect();
-    if chosen.len() != 1 {
-        return Err(IoError::Variable {
-            path: path.to_path_buf(),
-            asked: variable_name.map(str::to_string),
-            available: listing,
-        });
+    match (arrays.as_slice(), groups.as_slice()) {
+        ([(n, v)], []) | ([], [(n, v)]) => Ok((n.clone(), v)),
+        ([], []) if !variables.is_empty() => Err(bad(
+            path,
+            format!(
+                "no numeric array, and no struct or cell of channels, in the file (it holds: {})",
+                listing()
+            ),
+        )),
+        _ => Err(missing()),
     }
-    let v = chosen.remove(0);
-    table(path, v, endian)
+}
+
+/// The table of the channels a struct or cell gathers.
+fn gathered(
+    path: &Path,
+    name: &str,
+    group: &Node,
+    endian: Endian,
+    found: &mut Gathered,
+) -> Result<Table, IoError> {
+    // A 1×1 struct's fields are named by themselves; an array's elements by their index.
+    let place = match group {
+        Node::Struct { values, .. } if values.len() == 1 => "",
+        _ => name,
+    };
+    let mut g = Gathered {
+        root: name.to_string(),
+        ..Gathered::default()
+    };
+    g.gather(place, group, endian)
+        .map_err(|e| bad(path, format!("`{name}`: {e}")))?;
+    let Some(first) = g.channels.first() else {
+        return Err(bad(
+            path,
+            format!(
+                "`{name}` ({}) holds no numeric array of more than {} values",
+                group.describe(),
+                gather::SHORTEST
+            ),
+        ));
+    };
+    if let Some(c) = g
+        .channels
+        .iter()
+        .find(|c| c.values.len() != first.values.len())
+    {
+        return Err(bad(
+            path,
+            format!(
+                "`{name}`: channel `{}` holds {} samples and `{}` {}; a record's channels are as long as each other",
+                first.place,
+                first.values.len(),
+                c.place,
+                c.values.len()
+            ),
+        ));
+    }
+    let (names, note) = gather::names(&g.channels);
+    found.rates.extend(g.rates);
+    let mut t = Table::new(
+        path,
+        names,
+        g.channels.into_iter().map(|c| c.values).collect(),
+    );
+    t.notes.push(format!(
+        "{}: {} channel(s) read from `{name}` ({})",
+        path.display(),
+        t.names.len(),
+        group.describe()
+    ));
+    t.notes
+        .extend(note.map(|n| format!("{}: {n}", path.display())));
+    Ok(t)
+}
+
+/// The sampling rate the file states, if its fields state one rate.
+fn rate(path: &Path, rates: &[(String, f64)]) -> Result<Option<f64>, IoError> {
+    let Some((at, first)) = rates.first() else {
+        return Ok(None);
+    };
+    if let Some((p, r)) = rates
+        .iter()
+        .find(|(_, r)| !(r.is_finite() && *r > 0.0) || (r - first).abs() > 1e-9 * first)
+    {
+        return Err(bad(
+            path,
+            if r.is_finite() && *r > 0.0 {
+                format!("`{at}` states a sampling rate of {first} Hz and `{p}` of {r} Hz")
+            } else {
+                format!("`{p}` states a sampling rate of {r}, not a positive number of Hz")
+            },
+        ));
+    }
+    Ok(Some(*first))
 }
 
 /// The table of the chosen variable.
-fn table(path: &Path, v: Variable, endian: Endian) -> Result<Table, IoError> {
+fn table(path: &Path, v: &Variable, endian: Endian) -> Result<Table, IoError> {
     if v.complex {
         return Err(bad(
             path,
