@@ -1,5 +1,11 @@
 //! Which modes of different setups are one mode: frequencies within a tolerance and, with two
-//! or more references, reference parts alike.
+//! or more references the mode moves beyond their errors, reference parts alike.
+//!
+//! A reference part can only tell modes apart where the mode moves the references: an entry
+//! within twice its standard error of zero is noise, and the MAC of parts made of such
+//! entries is noise too (two halves of a bridge sharing two references at a mode's nodes
+//! split one mode in two on it). Where fewer than two references are determined in both,
+//! the frequency tolerance decides, as it does with a single reference.
 
 use super::{MergeOptions, SetupModes, scale::Shape};
 use crate::Complex64 as C64;
@@ -9,8 +15,23 @@ use crate::Complex64 as C64;
 struct Group {
     members: Vec<(usize, usize)>,
     frequency_sum: f64,
-    references: Vec<Option<C64>>,
+    references: Part,
 }
+
+/// A mode's entries at the references, each with its standard error if known.
+type Part = Vec<Option<(C64, Option<f64>)>>;
+
+/// The reference part of `shape`.
+fn part(shape: &Shape, references: &[usize]) -> Part {
+    references
+        .iter()
+        .map(|&r| shape.values[r].map(|v| (v, shape.se[r])))
+        .collect()
+}
+
+/// A standard error's multiple within which an entry is not told from zero (about 95 %
+/// two-sided).
+const WITHIN: f64 = 2.0;
 
 impl Group {
     fn frequency(&self) -> f64 {
@@ -33,8 +54,7 @@ pub(super) fn group(
     for s in order {
         let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
         for (i, m) in setups[s].modes.iter().enumerate() {
-            let refs: Vec<Option<C64>> =
-                references.iter().map(|&r| shapes[s][i].values[r]).collect();
+            let refs = part(&shapes[s][i], references);
             for (g, group) in groups.iter().enumerate() {
                 let f = group.frequency();
                 let distance = (m.frequency_hz - f).abs() / f;
@@ -61,7 +81,7 @@ pub(super) fn group(
                 groups.push(Group {
                     members: vec![(s, i)],
                     frequency_sum: m.frequency_hz,
-                    references: references.iter().map(|&r| shapes[s][i].values[r]).collect(),
+                    references: part(&shapes[s][i], references),
                 });
             }
         }
@@ -75,13 +95,19 @@ pub(super) fn group(
         .collect()
 }
 
-/// Whether two reference parts are one mode's: always with fewer than two references in
-/// common, else their MAC is at least `min_mac`.
-fn alike(a: &[Option<C64>], b: &[Option<C64>], min_mac: f64) -> bool {
+/// Whether two reference parts are one mode's: always when fewer than two references are
+/// determined (beyond [`WITHIN`] standard errors of zero, or without errors) in both, else
+/// when the MAC of those is at least `min_mac`.
+fn alike(a: &Part, b: &Part, min_mac: f64) -> bool {
+    let determined = |e: &Option<(C64, Option<f64>)>| match *e {
+        Some((v, Some(se))) => (v.norm() > WITHIN * se).then_some(v),
+        Some((v, None)) => Some(v),
+        None => None,
+    };
     let (x, y): (Vec<C64>, Vec<C64>) = a
         .iter()
         .zip(b)
-        .filter_map(|(a, b)| Some(((*a)?, (*b)?)))
+        .filter_map(|(a, b)| Some((determined(a)?, determined(b)?)))
         .unzip();
     x.len() < 2 || crate::mac(&x, &y) >= min_mac
 }

@@ -11,9 +11,10 @@
 //!    entry is divided by $g_c\lambda^{p_c}$, with $\lambda$ that setup's pole of the mode, so that
 //!    every entry is a displacement and velocities and accelerations compare.
 //! 2. **Matching.** Modes of different setups are the same mode when their frequencies differ
-//!    by at most [`MergeOptions::frequency_tolerance`] and, with two or more references, their
-//!    reference parts agree (MAC at least [`MergeOptions::min_reference_mac`]); nearest pairs
-//!    first, one mode of a setup to one merged mode.
+//!    by at most [`MergeOptions::frequency_tolerance`] and, with two or more references the
+//!    mode moves beyond twice their standard errors, their reference parts agree (MAC of those
+//!    at least [`MergeOptions::min_reference_mac`]); nearest pairs first, one mode of a setup
+//!    to one merged mode.
 //! 3. **Scaling.** The references' common shape $\rho$ and each setup's complex scale
 //!    $\alpha_s$ minimise $\sum_s\sum_{c\in R} |\alpha_s r_{s,c}-\rho_c|^2 / (|\alpha_s|^2\sigma_{s,c}^2)$
 //!    (alternating weighted least squares, $\max_c|\rho_c| = 1$); every entry of setup $s$ is

@@ -347,3 +347,57 @@ fn a_mode_without_a_shape_is_left_out_and_said() {
         .unwrap();
     assert_eq!(seen.mode, 1);
 }
+
+/// Two halves of a structure sharing two references at a mode's nodes: the references'
+/// entries are within their errors of zero, so their MAC is noise and cannot split the mode;
+/// where the references do move, parts that disagree still keep two modes apart.
+#[test]
+fn references_a_mode_does_not_move_do_not_split_it() {
+    let half = |name: &str, node: &str, f: f64, refs: [C64; 2], se: f64| {
+        let channels = vec![
+            channel("ref", [1.0, 0.0, 0.0], Quantity::Displacement, true),
+            channel("ref", [0.0, 1.0, 0.0], Quantity::Displacement, true),
+            channel(node, [0.0, 0.0, 1.0], Quantity::Displacement, false),
+        ];
+        SetupModes {
+            name: name.into(),
+            channels,
+            modes: vec![ReportedMode {
+                frequency_hz: f,
+                frequency_se_hz: Some(0.0004),
+                damping_ratio: 0.02,
+                damping_se: Some(0.002),
+                shape: Some(vec![refs[0], refs[1], c(1.0, 0.0)]),
+                shape_from_ssi: false,
+                shape_se: Some(vec![se, se, 0.0]),
+                ssi_mode: None,
+            }],
+        }
+    };
+    // Reference parts at right angles (MAC 0): noise at the nodes of the mode …
+    let (a, b) = (
+        [c(0.01, 0.004), c(0.004, 0.0)],
+        [c(-0.004, 0.0), c(0.012, 0.0)],
+    );
+    let merged = merge(
+        &[
+            half("north", "1", 0.4563, a, 0.02),
+            half("south", "2", 0.4568, b, 0.02),
+        ],
+        &MergeOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(merged.modes.len(), 1, "{:?}", merged.modes);
+    assert_eq!(merged.modes[0].seen_in.len(), 2);
+    // … or the references' true motion, told beyond their errors: two modes.
+    let (a, b) = ([c(0.5, 0.0), c(0.3, 0.0)], [c(-0.3, 0.0), c(0.5, 0.0)]);
+    let merged = merge(
+        &[
+            half("north", "1", 0.4563, a, 0.001),
+            half("south", "2", 0.4568, b, 0.001),
+        ],
+        &MergeOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(merged.modes.len(), 2);
+}
