@@ -1,6 +1,6 @@
 //! What a report page shows, as serializable types, and how an analysis becomes one.
 
-use covssi::fdd::efdd;
+use covssi::fdd::{efdd, efdd_of_mode};
 use covssi::{Complex64 as C64, ModalAnalysis, PoleStatus, Rejection, Stability, mac, mpc, mpd};
 use serde::Serialize;
 
@@ -222,6 +222,62 @@ pub fn diagram_of(a: &ModalAnalysis) -> Diagram {
     }
 }
 
+/// How far (relative) from a mode EFDD looks for its bell.
+const EFDD_REACH: f64 = 0.05;
+
+/// The mode within EFDD's reach of reported mode `i` whose shape EFDD cannot tell from
+/// `i`'s (MAC at least its bell's threshold), with that MAC: EFDD then has no opinion of
+/// either.
+fn inseparable(
+    a: &ModalAnalysis,
+    reported: &[covssi::ReportedMode],
+    i: usize,
+) -> Option<(usize, f64)> {
+    let (_, opts) = a.fdd.as_ref()?;
+    let m = &reported[i];
+    let shape = m.shape.as_deref()?;
+    reported.iter().enumerate().find_map(|(j, n)| {
+        let near = j != i && (n.frequency_hz / m.frequency_hz - 1.0).abs() <= EFDD_REACH;
+        let alike = mac(shape, n.shape.as_deref()?);
+        (near && alike >= opts.mac_threshold).then_some((j, alike))
+    })
+}
+
+/// EFDD's opinion of reported mode `i`: from its own shape's bell ([`efdd_of_mode`]), so
+/// that close modes each have their own; from the peak of s₁ for a mode without a shape;
+/// none when a close mode's shape is alike (see [`inseparable`]).
+fn efdd_opinion(
+    a: &ModalAnalysis,
+    reported: &[covssi::ReportedMode],
+    i: usize,
+) -> Option<covssi::fdd::EfddMode> {
+    let (f, o) = a.fdd.as_ref()?;
+    let m = &reported[i];
+    if inseparable(a, reported, i).is_some() {
+        return None;
+    }
+    match m.shape.as_deref() {
+        Some(shape) => efdd_of_mode(f, m.frequency_hz, shape, o),
+        None => efdd(f, m.frequency_hz, o),
+    }
+}
+
+/// A line for each pair of close modes EFDD cannot tell apart.
+fn inseparable_lines(a: &ModalAnalysis, reported: &[covssi::ReportedMode]) -> Vec<String> {
+    (0..reported.len())
+        .filter_map(|i| {
+            let (j, alike) = inseparable(a, reported, i).filter(|&(j, _)| j > i)?;
+            Some(format!(
+                "No EFDD for modes {} and {} ({:.4} and {:.4} Hz): their shapes are alike (MAC {alike:.2}), so EFDD cannot tell their bells apart.",
+                i + 1,
+                j + 1,
+                reported[i].frequency_hz,
+                reported[j].frequency_hz
+            ))
+        })
+        .collect()
+}
+
 /// The page of one record's analysis `a` (its FDD, when computed, behind the diagram and
 /// EFDD's opinion on each mode).
 pub fn ssi_page_data(title: &str, a: &ModalAnalysis) -> PageData {
@@ -238,11 +294,7 @@ pub fn ssi_page_data(title: &str, a: &ModalAnalysis) -> PageData {
             damping_se: m.damping_se,
             mpc: m.shape.as_deref().map(mpc),
             mpd: m.shape.as_deref().map(mpd),
-            efdd: a
-                .fdd
-                .as_ref()
-                .and_then(|(f, o)| efdd(f, m.frequency_hz, o))
-                .map(|e| (e.frequency_hz, e.damping_ratio)),
+            efdd: efdd_opinion(a, &reported, i).map(|e| (e.frequency_hz, e.damping_ratio)),
             seen: None,
         })
         .collect();
@@ -268,6 +320,7 @@ pub fn ssi_page_data(title: &str, a: &ModalAnalysis) -> PageData {
         ))
         .chain(a.decision.confirmed_lines())
         .chain(a.decision.set_apart_lines())
+        .chain(inseparable_lines(a, &reported))
         .chain(fdd.is_none().then(|| {
             "No EFDD: the record's FDD was not computed with this analysis, or the record is \
              too short for its segments (the diagram shows the first singular value of SSI's \

@@ -17,6 +17,13 @@
 //!    the slope of $\ln$ of its extrema's magnitudes over half-periods (between
 //!    [`FddOptions::decay_window`] of the first extremum), $\zeta = \delta/\sqrt{\pi^2+\delta^2}$
 //!    per half-period, $f_n = f_d/\sqrt{1-\zeta^2}$ ([`efdd`]).
+//! 4. **EFDD of a known mode.** Where modes are close, one peak of $s_1$ serves both, and
+//!    [`efdd`] gives them one answer. [`efdd_of_mode`] starts from the mode's own shape
+//!    (SSI's): at each line the leading singular vector $u_j$ ($j \le$ [`LEADING`]) most
+//!    alike it, if its MAC reaches the threshold, keeps its $s_j$; the bell is those lines
+//!    around the largest such $s_j$ — the mode's own bell, even where it is the second
+//!    singular value. Two modes whose shapes are themselves alike cannot be told apart this
+//!    way, and the caller says so.
 //!
 //! ```
 //! use covssi::fdd::{FddOptions, efdd, fdd};
@@ -72,6 +79,8 @@ pub struct Fdd {
     pub singular_values: Vec<Vec<f64>>,
     /// Per line, the first singular vector (unit norm, its largest entry real positive).
     pub first_vectors: Vec<Vec<C64>>,
+    /// Per line, the leading singular vectors (at most [`LEADING`], phased as the first).
+    pub leading_vectors: Vec<Vec<Vec<C64>>>,
     /// Samples per segment used.
     pub segment: usize,
     /// Segments averaged.
@@ -160,6 +169,7 @@ pub fn fdd(y: &[&[f64]], fs: f64, opts: &FddOptions) -> Result<Fdd, SsiError> {
     }
     let mut singular_values = Vec::with_capacity(lines);
     let mut first_vectors = Vec::with_capacity(lines);
+    let mut leading_vectors = Vec::with_capacity(lines);
     for k in 0..lines {
         let gk: Vec<C64> = g[k * l * l..(k + 1) * l * l]
             .iter()
@@ -168,15 +178,21 @@ pub fn fdd(y: &[&[f64]], fs: f64, opts: &FddOptions) -> Result<Fdd, SsiError> {
         let (values, vectors) = hermitian_eigen(&gk, l).map_err(SsiError::LinearAlgebra)?;
         singular_values.push(values.iter().map(|v| v.max(0.0)).collect());
         first_vectors.push(phased(&vectors[0]));
+        leading_vectors.push(vectors.iter().take(LEADING).map(|v| phased(v)).collect());
     }
     Ok(Fdd {
         frequencies_hz: (0..lines).map(|k| k as f64 * fs / segment as f64).collect(),
         singular_values,
         first_vectors,
+        leading_vectors,
         segment,
         segments,
     })
 }
+
+/// How many leading singular vectors are kept per line for [`efdd_of_mode`]: a mode of a
+/// group of up to this many close modes is found among them.
+pub const LEADING: usize = 3;
 
 /// `v` rotated so that its largest entry is real and positive.
 fn phased(v: &[C64]) -> Vec<C64> {
@@ -243,13 +259,64 @@ pub fn efdd(fdd: &Fdd, near_hz: f64, opts: &FddOptions) -> Option<EfddMode> {
     while hi + 2 < n_lines && alike(hi + 1) {
         hi += 1;
     }
+    let values: Vec<f64> = fdd.singular_values[lo..=hi].iter().map(|s| s[0]).collect();
+    decay_of_bell(fdd, lo, &values, peak.shape, opts)
+}
+
+/// EFDD of the mode of shape `shape` near `near_hz` (within 5 %): its own bell among the
+/// leading singular values (see the [module](self), step 4); `None` when no line there has a
+/// leading vector alike the shape, or the decay has too few extrema to fit.
+pub fn efdd_of_mode(fdd: &Fdd, near_hz: f64, shape: &[C64], opts: &FddOptions) -> Option<EfddMode> {
+    let n_lines = fdd.frequencies_hz.len();
+    let df = fdd.frequencies_hz.get(1)? - fdd.frequencies_hz[0];
+    // At each line, the leading singular value whose vector is the shape's, if any is.
+    let own = |k: usize| -> Option<f64> {
+        let (j, mac) = fdd.leading_vectors[k]
+            .iter()
+            .map(|v| crate::mac(v, shape))
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(&b.1))?;
+        (mac >= opts.mac_threshold).then(|| fdd.singular_values[k][j])
+    };
+    let lo = ((near_hz * 0.95) / df).floor().max(1.0) as usize;
+    let hi = (((near_hz * 1.05) / df).ceil() as usize).min(n_lines.saturating_sub(2));
+    let (peak, _) = (lo..=hi)
+        .filter_map(|k| own(k).map(|s| (k, s)))
+        .max_by(|a, b| a.1.total_cmp(&b.1))?;
+    let mut first = peak;
+    while first > 1 && own(first - 1).is_some() {
+        first -= 1;
+    }
+    let mut last = peak;
+    while last + 2 < n_lines && own(last + 1).is_some() {
+        last += 1;
+    }
+    let values: Vec<f64> = (first..=last).map(|k| own(k).unwrap_or(0.0)).collect();
+    let best = fdd.leading_vectors[peak]
+        .iter()
+        .max_by(|a, b| crate::mac(a, shape).total_cmp(&crate::mac(b, shape)))?
+        .clone();
+    decay_of_bell(fdd, first, &values, best, opts)
+}
+
+/// EFDD's decay fit of a bell of `values` from line `lo` (see the [module](self), step 3),
+/// the mode's shape `shape`.
+fn decay_of_bell(
+    fdd: &Fdd,
+    lo: usize,
+    values: &[f64],
+    shape: Vec<C64>,
+    opts: &FddOptions,
+) -> Option<EfddMode> {
+    let n_lines = fdd.frequencies_hz.len();
+    let hi = lo + values.len().checked_sub(1)?;
     // The bell as a one-sided spectrum; its inverse transform is the decay.
     let m = 2 * (n_lines - 1);
     let mut planner = RealFftPlanner::<f64>::new();
     let inv = planner.plan_fft_inverse(m);
     let mut bell = inv.make_input_vec();
-    for (b, s) in bell[lo..=hi].iter_mut().zip(&fdd.singular_values[lo..=hi]) {
-        *b = C64::new(s[0], 0.0);
+    for (b, s) in bell[lo..=hi].iter_mut().zip(values) {
+        *b = C64::new(*s, 0.0);
     }
     let mut decay = inv.make_output_vec();
     inv.process(&mut bell, &mut decay).ok()?;
@@ -293,7 +360,7 @@ pub fn efdd(fdd: &Fdd, near_hz: f64, opts: &FddOptions) -> Option<EfddMode> {
     Some(EfddMode {
         frequency_hz: fd / (1.0 - zeta * zeta).sqrt(),
         damping_ratio: zeta,
-        shape: peak.shape,
+        shape,
         bell_hz: (fdd.frequencies_hz[lo], fdd.frequencies_hz[hi]),
         extrema_fitted: fitted.len(),
     })
