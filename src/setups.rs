@@ -169,6 +169,9 @@ pub fn analyze_setups_with_progress(
     Ok(report)
 }
 
+/// Largest relative difference of two setups' rates that are one rate.
+const SAME_RATE: f64 = 1e-6;
+
 /// The global estimation of `setups` at the first setup's decimation and the setups' largest
 /// block rows, from their `records` as each setup's analysis decimated them; a setup
 /// decimated by another factor is read again (`fs`, `read` as for its analysis) and decimated
@@ -181,7 +184,13 @@ fn global(
     opts: &AnalysisOptions,
 ) -> Result<MergedModes, String> {
     let first = analysed.first().ok_or("no setup")?;
-    if let Some(other) = analysed.iter().find(|a| a.fs_hz != first.fs_hz) {
+    // Rates that differ by rounding (20 and 20.000000000000004 Hz, from two time columns
+    // cut from one record) are one rate: a relative difference of 1e-6 shifts every
+    // frequency by a thousandth of the smallest error SSI reports on a real record.
+    if let Some(other) = analysed
+        .iter()
+        .find(|a| (a.fs_hz - first.fs_hz).abs() > SAME_RATE * first.fs_hz)
+    {
         return Err(format!(
             "setups `{}` and `{}` have different rates ({} and {} Hz)",
             first.name, other.name, first.fs_hz, other.fs_hz

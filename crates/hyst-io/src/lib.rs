@@ -109,6 +109,18 @@ pub enum IoError {
         /// The rate of the time column's mean step (Hz).
         rate: f64,
     },
+    /// The time column's rows are out of order, restart, or miss samples.
+    #[error("{path}: the time column `{column}` at row {row} {what}")]
+    TimeColumn {
+        /// The file.
+        path: PathBuf,
+        /// The time column's name.
+        column: String,
+        /// The row (from 1 at the first data row) of the step's later sample.
+        row: usize,
+        /// What its step does.
+        what: String,
+    },
     /// The file has no header line.
     #[error("{path}: the file is empty (no header line)")]
     NoHeader {
@@ -320,6 +332,7 @@ mod paths;
 mod setups;
 mod setups_pyoma;
 mod shapes_uff;
+mod time;
 mod uff;
 mod uff_shapes;
 pub use covariates::{Covariates, list_records, read_covariates};
@@ -721,7 +734,7 @@ impl Table {
         // A time column that checks or gives the rate must be finite throughout.
         let time = self.rate_hz.is_none().then(|| self.time_column()).flatten();
         if let Some(i) = time {
-            self.finite(i)?;
+            time::check_steps(&self.path, &self.names[i], self.finite(i)?)?;
         }
         if let Some((column, rate)) = time.and_then(|i| self.rate_of_time_column(i)) {
             return match given {
