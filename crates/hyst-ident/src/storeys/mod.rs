@@ -53,8 +53,8 @@ pub use predict::{
 };
 pub use response::{ChannelError, response_errors, simulate_structure};
 pub use types::{
-    ElementEvidence, LevelStatistics, StoreyCandidate, StoreyFit, StoreyOptions, StoreyParameter,
-    StoreyProgress, StoreyReading, StoreyStructure,
+    ElementEvidence, LevelStatistics, NotPredicted, StoreyCandidate, StoreyFit, StoreyOptions,
+    StoreyParameter, StoreyProgress, StoreyReading, StoreyStructure,
 };
 
 use rayon::prelude::*;
@@ -173,18 +173,20 @@ pub fn fit_storeys(
     )?;
     report.candidates = scored;
     report.element_evidence = evidence;
-    report.predictions = predictions(&report, records, opts, progress)?;
+    (report.predictions, report.not_predicted) = predictions(&report, records, opts, progress);
     Ok(report)
 }
 
 /// The levels not recorded that `opts.predict` asks for: forces a factor times the loudest
-/// level's RMS (checked with the records), records as long as its.
+/// level's RMS (checked with the records), records as long as its; a level that cannot be
+/// predicted (its force not representable, its simulation diverging) is set apart with
+/// why, and the fit stands.
 fn predictions(
     fit: &StoreyFit,
     records: &[Vec<Vec<f64>>],
     opts: &StoreyOptions,
     progress: &(dyn Fn(StoreyProgress<'_>) + Sync),
-) -> Result<Vec<LevelPrediction>, IdentError> {
+) -> (Vec<LevelPrediction>, Vec<NotPredicted>) {
     let Some((loudest, q)) = fit
         .force_densities
         .iter()
@@ -192,25 +194,30 @@ fn predictions(
         .enumerate()
         .max_by(|a, b| a.1.total_cmp(&b.1))
     else {
-        return Ok(vec![]);
+        return (vec![], vec![]);
     };
     let samples = records[loudest][0].len();
     let how = PredictionOptions {
         replicates: opts.replicates,
         seed: opts.seed.wrapping_add(7000),
     };
-    opts.predict
-        .iter()
-        .enumerate()
-        .map(|(i, &factor)| {
-            progress(StoreyProgress {
-                stage: "predicting a level not recorded",
-                iteration: i + 1,
-                cost: f64::NAN,
-            });
-            predict_level(fit, q * factor * factor, samples, &how)
-        })
-        .collect()
+    let mut done = Vec::new();
+    let mut not = Vec::new();
+    for (i, &factor) in opts.predict.iter().enumerate() {
+        progress(StoreyProgress {
+            stage: "predicting a level not recorded",
+            iteration: i + 1,
+            cost: f64::NAN,
+        });
+        match predict_level(fit, q * factor * factor, samples, &how) {
+            Ok(p) => done.push(p),
+            Err(e) => not.push(NotPredicted {
+                factor,
+                reason: e.to_string(),
+            }),
+        }
+    }
+    (done, not)
 }
 
 /// The first or second half of every channel of every record.
@@ -289,6 +296,7 @@ fn finish(
             .collect(),
         simulated: whole.simulated.iter().map(|s| level(s, vec![])).collect(),
         predictions: vec![],
+        not_predicted: vec![],
         covariance: covariance
             .row_iter()
             .map(|r| r.iter().copied().collect())
@@ -302,4 +310,38 @@ fn finish(
         residual_rms: (whole.cost / whole.residuals as f64).sqrt(),
         iterations: whole.iterations,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::predict::tests_support::linear_fit;
+    use super::*;
+
+    /// A level that cannot be predicted (a force factor of 1e300 squares past f64) is set
+    /// apart with why, beside the one that can, and the report says both: the fit is kept.
+    #[test]
+    fn a_prediction_that_cannot_be_made_is_said_and_the_fit_stands() {
+        let mut fit = linear_fit([1000.0, 800.0], [4e6, 3e6], [0.05, 0.05], 50.0);
+        let records = vec![vec![vec![0.0; 6000]; 2]];
+        let opts = StoreyOptions {
+            predict: vec![1e300, 2.0],
+            ..StoreyOptions::default()
+        };
+        (fit.predictions, fit.not_predicted) = predictions(&fit, &records, &opts, &|_| {});
+        assert_eq!(fit.predictions.len(), 1);
+        assert!((fit.predictions[0].force_density - 4.0 * 50.0).abs() < 1e-9);
+        assert_eq!(fit.not_predicted.len(), 1);
+        let n = &fit.not_predicted[0];
+        assert_eq!(n.factor, 1e300);
+        assert!(n.reason.contains("force density"), "{}", n.reason);
+        let text = fit.to_string();
+        assert!(
+            text.contains("Predicted at 2.000 × the loudest level's force"),
+            "{text}"
+        );
+        assert!(
+            text.contains("Not predicted at 1e300 × the loudest level's force"),
+            "{text}"
+        );
+    }
 }

@@ -387,6 +387,7 @@ pub(crate) mod tests_support {
             measured: vec![],
             simulated: vec![],
             predictions: vec![],
+            not_predicted: vec![],
             covariance: vec![vec![0.0; 5]; 5],
             reading: StoreyReading {
                 bands_hz: vec![2.0, 12.0, 40.0],

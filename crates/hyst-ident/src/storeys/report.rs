@@ -123,6 +123,19 @@ impl fmt::Display for StoreyFit {
                 prediction(f, p, (p.force_density / loudest).sqrt())?;
             }
         }
+        for n in &self.not_predicted {
+            // A factor far from 1 in exponent form (1e300, not its 301 digits).
+            let factor = if (1e-3..1e4).contains(&n.factor) {
+                n.factor.to_string()
+            } else {
+                format!("{:e}", n.factor)
+            };
+            writeln!(
+                f,
+                "Not predicted at {factor} × the loudest level's force: {} (the fit above stands)",
+                n.reason
+            )?;
+        }
         writeln!(
             f,
             "Whitened residual RMS {:.2} (about 1 when the model explains every level) after {} iterations",

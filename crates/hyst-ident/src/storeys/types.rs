@@ -160,12 +160,27 @@ pub struct StoreyFit {
     /// The levels not recorded that [`StoreyOptions::predict`] asked for, in its order.
     #[cfg_attr(feature = "serde", serde(default))]
     pub predictions: Vec<super::LevelPrediction>,
+    /// The levels asked for that could not be predicted, each with why: the fit stands
+    /// without them.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub not_predicted: Vec<NotPredicted>,
     /// How the statistics were read and the model simulated (a prediction reads the same).
     pub reading: StoreyReading,
     /// RMS of the whitened differences of the final fit.
     pub residual_rms: f64,
     /// Iterations of the final fit.
     pub iterations: usize,
+}
+
+/// A level [`StoreyOptions::predict`] asked for that could not be predicted.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
+pub struct NotPredicted {
+    /// The factor on the loudest level's force asked for.
+    pub factor: f64,
+    /// Why it was not predicted (the force not representable, the simulation diverged).
+    pub reason: String,
 }
 
 /// How the fit read its statistics and simulated its model, fixed from the quietest level.
