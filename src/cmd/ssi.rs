@@ -318,6 +318,15 @@ pub(crate) fn flag_error(
     if let Some(e) = option_error(ssi, &e, names.len(), Some(fs_used)) {
         return e;
     }
+    // A channel by its column's name, not its index among those analysed.
+    if let hyst::covssi::SsiError::ConstantChannel { channel, value } = e
+        && let Some(name) = names.get(channel)
+    {
+        return fail(format!(
+            "{}: column `{name}` is constant (value {value}): it carries no response; leave it out of --columns",
+            input.display()
+        ));
+    }
     let decimated = match ssi.decimate {
         Some(r) if r > 1 => format!(", decimated by {r} to {fs_used} Hz"),
         _ => String::new(),
@@ -436,6 +445,11 @@ fn run_setups(a: &SsiArgs, path: &Path, opts: &hyst::covssi::AnalysisOptions) ->
             ));
         };
         report.report.floor_factors = hyst::rigid_floors::floor_factors(&report.report.merged, g);
+        if report.report.floor_factors.is_empty() {
+            report.report.merged.notes.push(
+                "--rigid-floors: no floor qualifies (a floor needs a reference node and other in-plane motion measured on it, three equations in some mode): the channels' factors are not checked".to_string(),
+            );
+        }
     }
     print!("{report}");
     if let Some(json) = &a.json {

@@ -109,6 +109,14 @@ pub enum IoError {
         /// The rate of the time column's mean step (Hz).
         rate: f64,
     },
+    /// A name given for the columns (`--names`) is empty.
+    #[error("{path}: the names given for its columns (--names) leave column {position} unnamed")]
+    EmptyName {
+        /// The file.
+        path: PathBuf,
+        /// The column (from 1).
+        position: usize,
+    },
     /// The time column's rows are out of order, restart, or miss samples.
     #[error("{path}: the time column `{column}` at row {row} {what}")]
     TimeColumn {
@@ -487,6 +495,12 @@ pub fn read_record(path: &Path, options: &ReadOptions) -> Result<Table, IoError>
                 path: path.to_path_buf(),
                 given: names.len(),
                 columns: table.names.len(),
+            });
+        }
+        if let Some(position) = names.iter().position(|n| n.trim().is_empty()) {
+            return Err(IoError::EmptyName {
+                path: path.to_path_buf(),
+                position: position + 1,
             });
         }
         if let Some(column) = repeated(names) {
@@ -1011,6 +1025,14 @@ mod tests {
             read_record(&p, &twice),
             Err(IoError::DuplicateColumn { .. })
         ));
+        let empty = ReadOptions::default().with_names(Some(vec!["a".into(), " ".into()]));
+        let e = read_record(&p, &empty).unwrap_err().to_string();
+        assert!(
+            e.ends_with(
+                "names.dat: the names given for its columns (--names) leave column 2 unnamed"
+            ),
+            "{e}"
+        );
     }
 
     /// A record larger than the free memory is refused naming both sizes; one that fits,

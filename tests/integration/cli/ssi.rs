@@ -68,6 +68,12 @@ fn dead_channels_are_left_out_and_named() {
     assert!(ok, "{err}");
     assert!(!err.contains("carry no signal"), "{err}");
     assert_eq!(by_default, by_hand);
+    // Named by hand, a constant channel is refused by its column's name.
+    let (ok, _, err) = run(&["--columns", "y,flat"]);
+    assert!(
+        !ok && err.contains("dead_sensors.csv: column `flat` is constant (value 0)"),
+        "{err}"
+    );
     let dead = write("all_dead.csv", "a,b\nNaN,1\nNaN,1\nNaN,1\n");
     let err = ssi_fails(&dead, &[]);
     assert!(
@@ -968,16 +974,13 @@ fn ssi_merges_setups_on_their_references() {
         )
     };
     let setups = write("setups.csv", &rows("6", "5"));
+    let merge = |extra: &[&str]| {
+        let mut args = vec!["ssi", "--setups", s(&setups), "--fs", "20"];
+        args.extend_from_slice(extra);
+        hyst(&args)
+    };
     let json = tmp("setups.json");
-    let (ok, out, err) = hyst(&[
-        "ssi",
-        "--setups",
-        s(&setups),
-        "--fs",
-        "20",
-        "--json",
-        s(&json),
-    ]);
+    let (ok, out, err) = merge(&["--json", s(&json)]);
     assert!(ok, "{err}");
     // An output on one of the setups' records is refused before any is read, the record
     // kept byte for byte.
@@ -1060,18 +1063,20 @@ fn ssi_merges_setups_on_their_references() {
     assert_eq!(full["merged"], doc["merged"]);
     // The floors' check needs the nodes' positions: a setup file without a geometry is
     // refused, saying where they come from.
-    let (ok, _, err) = hyst(&[
-        "ssi",
-        "--setups",
-        s(&setups),
-        "--fs",
-        "20",
-        "--rigid-floors",
-    ]);
+    let (ok, _, err) = merge(&["--rigid-floors"]);
     assert!(
         !ok && err.contains("--rigid-floors needs the nodes' positions"),
         "{err}"
     );
+    // With positions but one node a floor, no floor can check its channels: said, not
+    // passed over in silence.
+    let grid = write(
+        "tower_grid.txt",
+        "name x y z\n3 0 0 1\n4 0 0 2\n5 0 0 3\n6 0 0 4\n",
+    );
+    let (ok, out, err) = merge(&["--geometry", s(&grid), "--rigid-floors"]);
+    assert!(ok, "{err}");
+    assert!(out.contains("--rigid-floors: no floor qualifies"), "{out}");
     // A reference that moved between setups is said, and the other carries the merge.
     let moved = write("setups_moved.csv", &rows("6", "7"));
     let (ok, out, err) = hyst(&["ssi", "--setups", s(&moved), "--fs", "20"]);
