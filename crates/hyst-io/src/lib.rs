@@ -97,7 +97,7 @@ pub enum IoError {
     },
     /// `--fs` disagrees with the record's time column.
     #[error(
-        "{path}: --fs {given} Hz disagrees with the time column `{column}`, whose step is {rate:.6} Hz's: give --fs {rate:.6}, or leave it out"
+        "{path}: --fs {given} Hz disagrees with the time column `{column}`, whose step is {rate:.6} Hz's: the record is at {rate:.6} Hz (--fs {rate:.6})"
     )]
     RateVsTime {
         /// The file.
