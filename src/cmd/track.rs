@@ -171,6 +171,24 @@ pub(super) fn check_paths(a: &TrackArgs, records: &[PathBuf]) -> Result<(), Erro
         outputs.push(("--html", h.as_path()));
     }
     hyst::io::check_outputs(&inputs, &outputs)?;
+    // A page written among the records would be read as one on the next look (or run).
+    if let Some(h) = &a.html {
+        let folder = match h.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p,
+            _ => Path::new("."),
+        };
+        let same = |d: &Path| match (folder.canonicalize(), d.canonicalize()) {
+            (Ok(x), Ok(y)) => x == y,
+            _ => false,
+        };
+        if let Some(d) = a.inputs.iter().find(|d| d.is_dir() && same(d)) {
+            return Err(fail(format!(
+                "--html {}: inside the records folder {}, where the next look (or run) would take the page for a record; write it elsewhere",
+                h.display(),
+                d.display()
+            )));
+        }
+    }
     if a.out.exists() && !a.out.is_dir() {
         return Err(fail(format!(
             "--out {}: a file, not a folder; give the folder the run's store and tables go to",

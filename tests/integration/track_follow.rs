@@ -358,3 +358,37 @@ fn a_bad_poll_is_refused_naming_it() {
         );
     }
 }
+
+/// An `--html` page inside a followed folder would be taken for a record on the next look
+/// (it stopped the follower on its second pass): refused at start, naming both.
+#[test]
+fn a_page_inside_the_followed_folder_is_refused_at_start() {
+    let dir = scratch("page_inside");
+    let inbox = dir.join("inbox");
+    std::fs::create_dir_all(&inbox).unwrap();
+    let page = inbox.join("page.html");
+    let out = Command::new(env!("CARGO_BIN_EXE_hyst"))
+        .args([
+            "track",
+            "--inputs",
+            s(&inbox),
+            "--out",
+            s(&dir.join("out")),
+            "--html",
+            s(&page),
+            "--follow",
+        ])
+        .output()
+        .expect("the hyst binary runs");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{err}");
+    assert!(
+        err.contains(&format!(
+            "--html {}: inside the records folder {}",
+            s(&page),
+            s(&inbox)
+        )),
+        "{err}"
+    );
+    assert!(!page.exists());
+}
