@@ -16,8 +16,8 @@ use std::time::{Duration, SystemTime};
 use hyst::monitor::TrackReport;
 
 use super::track::{
-    TrackArgs, check_paths, checked_inputs, estimates_pass, record_files, records_pass,
-    records_setup, write_outputs,
+    TrackArgs, check_paths, checked_inputs, estimates_pass, record_files, records_among,
+    records_pass, records_setup, write_outputs,
 };
 use super::{Error, fail};
 
@@ -117,6 +117,7 @@ fn follow_records(
     let mut alarms_said = HashSet::new();
     let mut first_pass = true;
     let mut covariates_stamp = a.covariates.as_deref().and_then(stamp);
+    let mut not_records = HashSet::new();
     loop {
         if !taken.is_empty() {
             match records_pass(a, asked, store, taken.clone(), first_pass) {
@@ -138,24 +139,37 @@ fn follow_records(
         // Look until something new has settled.
         loop {
             std::thread::sleep(wait);
-            let mut new = Vec::new();
+            let mut settled = Vec::new();
             for f in record_files(a)? {
                 if taken.contains(&f) {
                     continue;
                 }
                 let now = stamp(&f);
                 if now.is_some() && pending.get(&f) == now.as_ref() {
-                    pending.remove(&f);
-                    new.push(f);
+                    settled.push(f);
                 } else if let Some(now) = now {
                     pending.insert(f, now);
                 }
+            }
+            // A settled file that is not a record (a note) stays pending, looked at again
+            // at each look and named once.
+            let new = records_among(settled, &mut not_records);
+            for f in &new {
+                pending.remove(f);
             }
             let covariates_now = a.covariates.as_deref().and_then(stamp);
             let covariates_changed = covariates_now != covariates_stamp;
             covariates_stamp = covariates_now;
             if !new.is_empty() || covariates_changed {
                 taken.extend(new);
+                // In the listing's order, as a batch run over them takes them: a file that
+                // lands late among earlier names goes to its name's place.
+                let listed: HashMap<PathBuf, usize> = record_files(a)?
+                    .into_iter()
+                    .enumerate()
+                    .map(|(i, f)| (f, i))
+                    .collect();
+                taken.sort_by_key(|f| listed.get(f).copied());
                 check_paths(a, &taken)?;
                 break;
             }

@@ -242,5 +242,11 @@ fn run_storeys(a: &LevelsArgs, fs: f64) -> Result<(), Error> {
     if let Some(path) = &a.json {
         hyst::report::write_json(&fit, path)?;
     }
+    if fit.agreement.verdict == hyst::ident::storeys::FitVerdict::Far {
+        // Written, so that what went wrong can be read; not a result a script takes.
+        return Err(fail(
+            "the storey fit did not reach its records (a mode band of the model lies outside the record's): nothing is located; the report above says where",
+        ));
+    }
     Ok(())
 }

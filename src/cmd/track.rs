@@ -1,7 +1,7 @@
 //! `hyst track`: many records of one structure identified, their modes tracked, changes
 //! told from estimation noise.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
@@ -144,6 +144,24 @@ pub(super) fn record_files(a: &TrackArgs) -> Result<Vec<PathBuf>, Error> {
         files.retain(|f| !hyst::store::is_output(&a.out, f));
     }
     Ok(files)
+}
+
+/// The `files` that are records ([`hyst::io::probe_record`]: a note or a page in a folder
+/// of records is not one, and takes no record's place, its training slot included); each
+/// other is named once on stderr (`said` remembers which were).
+pub(super) fn records_among(files: Vec<PathBuf>, said: &mut HashSet<PathBuf>) -> Vec<PathBuf> {
+    files
+        .into_iter()
+        .filter(|f| match hyst::io::probe_record(f) {
+            Ok(()) => true,
+            Err(e) => {
+                if said.insert(f.clone()) {
+                    eprintln!("note: left out, not a record: {e}");
+                }
+                false
+            }
+        })
+        .collect()
 }
 
 /// Every file the run writes (the store and tables in `--out`, the `--html` page) against
@@ -360,7 +378,7 @@ pub(super) fn checked_inputs(a: &TrackArgs) -> Result<Vec<PathBuf>, Error> {
     let records = if a.inputs.is_empty() {
         Vec::new()
     } else {
-        record_files(a)?
+        records_among(record_files(a)?, &mut HashSet::new())
     };
     check_paths(a, &records)?;
     Ok(records)

@@ -115,6 +115,35 @@ fn same_outputs(follow: &Path, batch: &Path) {
     }
 }
 
+/// `hyst track --follow` on `inbox`, four records training, into `out`.
+fn follow_args<'a>(inbox: &'a Path, out: &'a Path) -> Vec<&'a str> {
+    let mut a = vec![
+        "track",
+        "--inputs",
+        s(inbox),
+        "--fs",
+        "20",
+        "--training",
+        "4",
+    ];
+    a.extend(["--out", s(out), "--follow", "--poll", "0.2"]);
+    a
+}
+
+/// The batch run over `inbox`'s records 1 to `k` (named, not the folder), into a fresh
+/// scratch folder `name`.
+fn batch_over_records(inbox: &Path, k: usize, name: &str) -> PathBuf {
+    let dir = scratch(name);
+    let files: Vec<String> = (1..=k)
+        .map(|i| inbox.join(format!("rec_{i}.csv")).display().to_string())
+        .collect();
+    let mut a = vec!["track", "--inputs"];
+    a.extend(files.iter().map(String::as_str));
+    a.extend(["--fs", "20", "--training", "4", "--out", s(&dir)]);
+    batch(&a);
+    dir
+}
+
 /// Record files land one after another in a folder `hyst track --follow` watches: after
 /// each arrival its table and report are a batch run's over the files so far, byte for
 /// byte; killed (SIGKILL) and started again it takes up where it stopped and reaches the
@@ -128,31 +157,8 @@ fn follow_takes_record_files_as_a_batch_run_would() {
     let land = lander(&path, &inbox);
     let out = scratch("out");
     let log = scratch("logs").join("follow.txt");
-    let args = [
-        "track",
-        "--inputs",
-        s(&inbox),
-        "--fs",
-        "20",
-        "--training",
-        "4",
-        "--out",
-        s(&out),
-        "--follow",
-        "--poll",
-        "0.2",
-    ];
-    let batch_over = |k: usize, name: &str| {
-        let dir = scratch(name);
-        let files: Vec<String> = (1..=k)
-            .map(|i| inbox.join(format!("rec_{i}.csv")).display().to_string())
-            .collect();
-        let mut a = vec!["track", "--inputs"];
-        a.extend(files.iter().map(String::as_str));
-        a.extend(["--fs", "20", "--training", "4", "--out", s(&dir)]);
-        batch(&a);
-        dir
-    };
+    let args = follow_args(&inbox, &out);
+    let batch_over = |k: usize, name: &str| batch_over_records(&inbox, k, name);
     (1..=5).for_each(&land);
     let mut child = start(&args, &log);
     wait_for(&out, 5, &mut child);
@@ -391,4 +397,47 @@ fn a_page_inside_the_followed_folder_is_refused_at_start() {
         "{err}"
     );
     assert!(!page.exists());
+}
+
+/// A note among the records takes no record's place (`--training 4` trains on four
+/// records, as the batch run over the record files alone does), and a record landing after
+/// a later name goes to its name's place: the follower's table and report are the batch
+/// run's over the same record files, byte for byte (issue 77: the note took a training
+/// slot, and a late file went to the table's end).
+#[test]
+fn a_note_takes_no_place_and_a_late_record_goes_to_its_name() {
+    let Some(path) = common::data_file("oma/data_3dof.csv") else {
+        return;
+    };
+    let inbox = scratch("inbox_late");
+    let land = lander(&path, &inbox);
+    std::fs::write(
+        inbox.join("notes.txt"),
+        "Hourly records of the bridge.\nSensor 3 re-glued on day 2.\n",
+    )
+    .unwrap();
+    let out = scratch("out_late");
+    let args = follow_args(&inbox, &out);
+    [1, 2, 3, 4, 6].into_iter().for_each(&land);
+    let mut child = start(&args, &scratch("logs_late").join("follow.txt"));
+    wait_for(&out, 5, &mut child);
+    land(5);
+    wait_for(&out, 6, &mut child);
+    kill(child);
+    let dir = batch_over_records(&inbox, 6, "batch_late");
+    same_outputs(&out, &dir);
+    // The batch run over the folder leaves the note out the same way, and names it.
+    let folder = scratch("batch_folder");
+    let run = Command::new(env!("CARGO_BIN_EXE_hyst"))
+        .args(["track", "--inputs", s(&inbox), "--fs", "20"])
+        .args(["--training", "4", "--out", s(&folder)])
+        .output()
+        .unwrap();
+    assert!(run.status.success());
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        err.contains("left out, not a record") && err.contains("notes.txt"),
+        "{err}"
+    );
+    same_outputs(&folder, &dir);
 }

@@ -149,6 +149,34 @@ pub fn read_csv_with(path: &Path, delimiter: Delimiter) -> Result<Table, IoError
     Ok(table)
 }
 
+/// Whether `path` reads as a delimited record, from its header and first rows only (a file
+/// of prose, or one whose writer has put only its header so far, does not): the error the
+/// full read would give there.
+pub(super) fn probe(path: &Path, delimiter: Delimiter) -> Result<(), IoError> {
+    const ROWS: usize = 2;
+    let rows = DelimitedRows::open_record(path, delimiter)?;
+    let (names, sep) = (rows.names.clone(), rows.sep);
+    let mut seen = 0;
+    for r in rows.take(ROWS) {
+        let (row, r) = r?;
+        if let Some((c, t)) = r.iter().enumerate().find(|(_, t)| number(t, sep).is_none()) {
+            return Err(IoError::NotANumber {
+                path: path.to_path_buf(),
+                row,
+                column: names[c].clone(),
+                text: t.to_string(),
+            });
+        }
+        seen += 1;
+    }
+    if seen == 0 {
+        return Err(IoError::Empty {
+            path: path.to_path_buf(),
+        });
+    }
+    Ok(())
+}
+
 /// The columns of a delimited record's `rows` (opened from `path`), read by the `csv`
 /// crate, with each column's first cell that is not finite.
 #[allow(clippy::type_complexity)]
@@ -541,6 +569,31 @@ mod tests {
         let p = file_path(name);
         std::fs::write(&p, text).unwrap();
         p
+    }
+
+    /// The probe tells a record from a note by what the full read would say of its first
+    /// lines: prose and a header alone are not records; a record with or without a header,
+    /// and one whose later rows are bad (the full read's business), are.
+    #[test]
+    fn a_probe_tells_records_from_notes() {
+        let cases = [
+            (
+                "probe_note.txt",
+                "Hourly records.\nSensor 3 re-glued.\n",
+                false,
+            ),
+            ("probe_header.csv", "y1,y2\n", false),
+            ("probe_text_row.csv", "y1,y2\n1,abc\n", false),
+            ("probe_record.csv", "y1,y2\n1,2\n3,4\n", true),
+            ("probe_headerless.txt", "1 2\n3 4\n", true),
+            ("probe_bad_later.csv", "y1,y2\n1,2\n3,4\n5,x\n", true),
+        ];
+        for (name, text, record) in cases {
+            let p = file(name, text);
+            let got = crate::probe_record(&p);
+            assert_eq!(got.is_ok(), record, "{name}: {got:?}");
+            let _ = std::fs::remove_file(p);
+        }
     }
 
     /// A line that never ends is refused when it passes the bound, as a header or as a

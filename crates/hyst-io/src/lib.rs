@@ -474,6 +474,17 @@ impl ReadOptions {
     }
 }
 
+/// Whether `path` is a record [`read_record`] could read, from its first lines (a
+/// delimited file: its header and first rows; the binary formats by their name): the error
+/// reading it would give, found without reading it all. Used to tell records from the other
+/// files of a folder of them (a note, a page).
+pub fn probe_record(path: &Path) -> Result<(), IoError> {
+    match Format::of_path(path) {
+        Format::Csv | Format::Auto => delimited::probe(path, Delimiter::Auto),
+        Format::Npy | Format::Npz | Format::Mat | Format::Uff => Ok(()),
+    }
+}
+
 /// The record at `path`, read as `options` say (see the module's documentation).
 pub fn read_record(path: &Path, options: &ReadOptions) -> Result<Table, IoError> {
     let format = match options.format {

@@ -356,6 +356,8 @@ pub(crate) struct IndirectFit<S> {
     /// Residuals in the sum.
     pub(crate) residuals: usize,
     pub(crate) iterations: usize,
+    /// Whether an iteration gained less than the tolerance (else the limit stopped it).
+    pub(crate) converged: bool,
     /// (JᵀJ)⁻¹ of the last iteration's Jacobian, when it is invertible.
     pub(crate) covariance: Option<DMatrix<f64>>,
     /// The last iteration's Jacobian of the residuals (one column per parameter).
@@ -396,6 +398,7 @@ pub(crate) fn indirect_lm<S>(
     let mut iterations = 0;
     let mut last_jtj = None;
     let mut last_jacobian = None;
+    let mut converged = false;
     while iterations < opts.max_iterations {
         iterations += 1;
         let steps: Vec<f64> = p
@@ -436,6 +439,7 @@ pub(crate) fn indirect_lm<S>(
         });
         progress(iterations, cost);
         if before - cost <= opts.tolerance * before {
+            converged = true;
             break;
         }
     }
@@ -444,6 +448,7 @@ pub(crate) fn indirect_lm<S>(
         cost,
         residuals: r.len(),
         iterations,
+        converged,
         covariance: last_jtj.and_then(|m| m.try_inverse()),
         jacobian: last_jacobian,
     })

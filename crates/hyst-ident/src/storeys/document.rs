@@ -67,6 +67,11 @@ impl StoreyFit {
                 "`force_densities[{l}]` = {q}: a force density (N²/Hz) must be positive"
             )));
         }
+        if self.agreement.verdict == super::types::FitVerdict::Far {
+            return Err(inconsistent(
+                "`agreement.verdict` is `far`: the fit did not reach its records, so it is not a model of them".into(),
+            ));
+        }
         self.validate_parameters(floors)?;
         self.validate_reading(floors)
     }
@@ -241,6 +246,9 @@ mod tests {
         assert!(msg.contains("damping_ratios[0]"), "{msg}");
         let msg = refused(|f| f.reading.bands_hz = vec![2.0, 40.0, 12.0]);
         assert!(msg.contains("reading.bands_hz"), "{msg}");
+        // A fit that did not reach its records is not a model of them (issue 77).
+        let msg = refused(|f| f.agreement.verdict = super::super::FitVerdict::Far);
+        assert!(msg.contains("agreement.verdict"), "{msg}");
     }
 
     #[test]

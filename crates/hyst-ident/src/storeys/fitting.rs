@@ -19,6 +19,8 @@ pub(super) struct Fitted {
     pub(super) cost: f64,
     pub(super) residuals: usize,
     pub(super) iterations: usize,
+    /// The last iteration gained less than the tolerance (else the iteration limit ended it).
+    pub(super) converged: bool,
     pub(super) simulated: Vec<Vec<f64>>,
     /// The last Jacobian of the whitened residuals in the scaled parameters.
     pub(super) jacobian: Option<Vec<Vec<f64>>>,
@@ -129,6 +131,7 @@ pub(super) fn fit(
         cost: fit.cost,
         residuals: fit.residuals,
         iterations: fit.iterations,
+        converged: fit.converged,
         simulated: fit.simulated,
         jacobian: fit.jacobian,
         scale,

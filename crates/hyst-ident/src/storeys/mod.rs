@@ -33,6 +33,7 @@
 //! choice is fitted again on the whole records and reported with the others' scores, the
 //! runner-up first among them.
 
+mod agreement;
 mod document;
 mod error;
 mod fitting;
@@ -53,8 +54,9 @@ pub use predict::{
 };
 pub use response::{ChannelError, response_errors, simulate_structure};
 pub use types::{
-    ElementEvidence, LevelStatistics, NotPredicted, StoreyCandidate, StoreyFit, StoreyOptions,
-    StoreyParameter, StoreyProgress, StoreyReading, StoreyStructure,
+    ElementEvidence, FarBand, FitAgreement, FitVerdict, LevelStatistics, NotPredicted,
+    StoreyCandidate, StoreyFit, StoreyOptions, StoreyParameter, StoreyProgress, StoreyReading,
+    StoreyStructure,
 };
 
 use rayon::prelude::*;
@@ -173,7 +175,19 @@ pub fn fit_storeys(
     )?;
     report.candidates = scored;
     report.element_evidence = evidence;
-    (report.predictions, report.not_predicted) = predictions(&report, records, opts, progress);
+    if report.agreement.verdict == FitVerdict::Far {
+        // A model that does not reach its records predicts nothing of them.
+        report.not_predicted = opts
+            .predict
+            .iter()
+            .map(|&factor| NotPredicted {
+                factor,
+                reason: "the fit did not reach its records".into(),
+            })
+            .collect();
+    } else {
+        (report.predictions, report.not_predicted) = predictions(&report, records, opts, progress);
+    }
     Ok(report)
 }
 
@@ -281,6 +295,21 @@ fn finish(
         .collect();
     let (n, channels) = (setup.floors, setup.channels);
     let level = |s: &[f64], se: Vec<f64>| statistics::level(s, (n, channels), se);
+    let measured: Vec<LevelStatistics> = measured
+        .iter()
+        .zip(sd)
+        .map(|(s, sd)| level(s, sd))
+        .collect();
+    let simulated: Vec<LevelStatistics> =
+        whole.simulated.iter().map(|s| level(s, vec![])).collect();
+    let residual_rms = (whole.cost / whole.residuals as f64).sqrt();
+    let agreement = agreement::agreement(
+        (residual_rms, whole.residuals),
+        (&measured, &simulated),
+        weights,
+        (&cov, opts.replicates),
+        whole.converged,
+    );
     Ok(StoreyFit {
         storey: layout.storey,
         building,
@@ -289,12 +318,8 @@ fn finish(
         parameters,
         candidates: vec![],
         element_evidence: None,
-        measured: measured
-            .iter()
-            .zip(sd)
-            .map(|(s, sd)| level(s, sd))
-            .collect(),
-        simulated: whole.simulated.iter().map(|s| level(s, vec![])).collect(),
+        measured,
+        simulated,
         predictions: vec![],
         not_predicted: vec![],
         covariance: covariance
@@ -307,8 +332,9 @@ fn finish(
             steps_per_sample: setup.stepping.0,
             warm_up: setup.stepping.1,
         },
-        residual_rms: (whole.cost / whole.residuals as f64).sqrt(),
+        residual_rms,
         iterations: whole.iterations,
+        agreement,
     })
 }
 

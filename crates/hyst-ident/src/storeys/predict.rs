@@ -397,6 +397,7 @@ pub(crate) mod tests_support {
             },
             residual_rms: 0.0,
             iterations: 0,
+            agreement: Default::default(),
         }
     }
 }

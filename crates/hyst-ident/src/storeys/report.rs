@@ -4,7 +4,7 @@
 use std::fmt;
 
 use super::predict::LevelPrediction;
-use super::types::StoreyFit;
+use super::types::{FitVerdict, StoreyFit};
 use hyst_sim::building::Reading as Quantity;
 
 /// A location as users count it: storeys from 1 (between the ground and the first floor).
@@ -37,49 +37,7 @@ impl fmt::Display for StoreyFit {
             quantity,
             b.fs
         )?;
-        let mut ranked = self.candidates.iter();
-        if let Some(best) = ranked.next() {
-            write!(
-                f,
-                "Hysteretic element: {} (held-out score {:.1})",
-                place(best.storey),
-                best.held_out
-            )?;
-            match ranked.next() {
-                Some(r) => writeln!(f, "; runner-up {} ({:.1})", place(r.storey), r.held_out)?,
-                None => writeln!(f)?,
-            }
-        }
-        if let Some(e) = &self.element_evidence {
-            let verdict = if e.improvement > e.threshold {
-                "an element"
-            } else {
-                "no element: chance improves as much more than 1 % of the time"
-            };
-            writeln!(
-                f,
-                "Is there one? The best-placed element ({}) improves the fits by {:.1} against {:.1} at 1 % chance: {verdict}",
-                place(Some(e.storey)),
-                e.improvement,
-                e.threshold
-            )?;
-        }
-        writeln!(
-            f,
-            "Candidates (fitted on the first half of each record, scored on the second; lower is better):"
-        )?;
-        for c in &self.candidates {
-            match &c.failed {
-                Some(why) => writeln!(f, "  {:<10} fit failed: {why}", place(c.storey))?,
-                None => writeln!(
-                    f,
-                    "  {:<10} held out {:>9.1}   fitted {:>9.1}",
-                    place(c.storey),
-                    c.held_out,
-                    c.fitted
-                )?,
-            }
-        }
+        location(f, self)?;
         writeln!(f, "Parameters (± standard error):")?;
         for p in &self.parameters {
             writeln!(
@@ -138,9 +96,125 @@ impl fmt::Display for StoreyFit {
         }
         writeln!(
             f,
-            "Whitened residual RMS {:.2} (about 1 when the model explains every level) after {} iterations",
-            self.residual_rms, self.iterations
-        )
+            "Whitened residual RMS {:.2} (chance exceeds {:.2} 0.1 % of the time when the model holds) after {} iterations{}",
+            self.residual_rms,
+            self.agreement.chance_rms,
+            self.iterations,
+            if self.agreement.converged {
+                ""
+            } else {
+                ", the limit, still improving"
+            }
+        )?;
+        verdict(f, self)
+    }
+}
+
+/// Where the element is (unless the fit did not reach its records), whether there is
+/// one, and every candidate's scores.
+fn location(f: &mut fmt::Formatter<'_>, fit: &StoreyFit) -> fmt::Result {
+    let far = fit.agreement.verdict == FitVerdict::Far;
+    let mut ranked = fit.candidates.iter();
+    if far {
+        writeln!(
+            f,
+            "Hysteretic element: not located: the fit did not reach its records (see the end)"
+        )?;
+    } else if let Some(best) = ranked.next() {
+        write!(
+            f,
+            "Hysteretic element: {} (held-out score {:.1})",
+            place(best.storey),
+            best.held_out
+        )?;
+        match ranked.next() {
+            Some(r) => writeln!(f, "; runner-up {} ({:.1})", place(r.storey), r.held_out)?,
+            None => writeln!(f)?,
+        }
+    }
+    if let Some(e) = &fit.element_evidence {
+        let verdict = if far {
+            "not judged, the fit did not reach its records"
+        } else if e.improvement > e.threshold {
+            "an element"
+        } else {
+            "no element: chance improves as much more than 1 % of the time"
+        };
+        writeln!(
+            f,
+            "Is there one? The best-placed element ({}) improves the fits by {:.1} against {:.1} at 1 % chance: {verdict}",
+            place(Some(e.storey)),
+            e.improvement,
+            e.threshold
+        )?;
+    }
+    writeln!(
+        f,
+        "Candidates (fitted on the first half of each record, scored on the second; lower is better):"
+    )?;
+    for c in &fit.candidates {
+        match &c.failed {
+            Some(why) => writeln!(f, "  {:<10} fit failed: {why}", place(c.storey))?,
+            None => writeln!(
+                f,
+                "  {:<10} held out {:>9.1}   fitted {:>9.1}",
+                place(c.storey),
+                c.held_out,
+                c.fitted
+            )?,
+        }
+    }
+    Ok(())
+}
+
+/// The final fit's agreement with its records, in words.
+fn verdict(f: &mut fmt::Formatter<'_>, fit: &StoreyFit) -> fmt::Result {
+    let a = &fit.agreement;
+    match a.verdict {
+        FitVerdict::Explains | FitVerdict::NotJudged => Ok(()),
+        FitVerdict::Misses => writeln!(
+            f,
+            "The model does not explain every level (residual {:.2} beyond chance's {:.2}): every mode is where the records put it, so the location stands on held-out evidence, but the parameters are the nearest of a model that lacks something{}",
+            fit.residual_rms,
+            a.chance_rms,
+            if a.converged {
+                ""
+            } else {
+                " (or a fit stopped before its end)"
+            }
+        ),
+        FitVerdict::Far => {
+            let bands: Vec<String> = a
+                .far
+                .iter()
+                .take(3)
+                .map(|b| {
+                    format!(
+                        "level {} mode {} at {:.3} Hz in the model against {:.3} ± {:.3} Hz measured",
+                        b.level + 1,
+                        b.mode + 1,
+                        b.model_hz,
+                        b.measured_hz,
+                        b.width_hz
+                    )
+                })
+                .collect();
+            let more = a.far.len().saturating_sub(3);
+            writeln!(
+                f,
+                "The fit did not reach its records: {}{}; nothing is located from it. Check what the fit takes as known (the masses, the sensors' floors, what they read, the loaded floors)",
+                if bands.is_empty() {
+                    "its residual is not finite".to_string()
+                } else {
+                    bands.join("; ")
+                },
+                if more > 0 {
+                    format!(" (and {more} more)")
+                } else {
+                    String::new()
+                }
+            )
+        }
     }
 }
 

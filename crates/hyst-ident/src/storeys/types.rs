@@ -170,6 +170,78 @@ pub struct StoreyFit {
     pub residual_rms: f64,
     /// Iterations of the final fit.
     pub iterations: usize,
+    /// Whether the final fit reached its records ([`FitAgreement`]); a document written
+    /// before it was judged reads as [`FitVerdict::NotJudged`].
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub agreement: FitAgreement,
+}
+
+/// Whether the final fit reached its records (`agreement.rs`).
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
+pub struct FitAgreement {
+    /// The verdict.
+    pub verdict: FitVerdict,
+    /// The whitened residual RMS chance exceeds 0.1 % of the time when the model holds
+    /// (from the statistics' covariance over the fitted model's replicates; NaN when not
+    /// known).
+    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
+    pub chance_rms: f64,
+    /// Whether the fit stopped because an iteration gained less than the tolerance (else
+    /// at the iteration limit, still gaining).
+    pub converged: bool,
+    /// The mode bands (each level's) whose model centroid lies outside the measured band's
+    /// spread.
+    pub far: Vec<FarBand>,
+}
+
+impl Default for FitAgreement {
+    fn default() -> Self {
+        FitAgreement {
+            verdict: FitVerdict::NotJudged,
+            chance_rms: f64::NAN,
+            converged: true,
+            far: vec![],
+        }
+    }
+}
+
+/// What the final fit's agreement with its records says.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
+#[non_exhaustive]
+pub enum FitVerdict {
+    /// Every band where the record's is, the residual within chance.
+    Explains,
+    /// Every band where the record's is, the residual beyond chance: the model lacks
+    /// something; its location stands on held-out evidence, its parameters are the nearest
+    /// of its form.
+    Misses,
+    /// A band the model puts outside the record's (or no finite residual): the fit did not
+    /// reach its records, and locates nothing.
+    Far,
+    /// Written by a version that did not judge it.
+    NotJudged,
+}
+
+/// A mode band the model puts outside the measured band's spread.
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
+pub struct FarBand {
+    /// The level (0-based).
+    pub level: usize,
+    /// The mode band (0-based).
+    pub mode: usize,
+    /// The measured band's centroid (Hz).
+    pub measured_hz: f64,
+    /// The measured band's spread (its standard deviation, Hz).
+    pub width_hz: f64,
+    /// The model's centroid (Hz; NaN where its band is empty).
+    #[cfg_attr(feature = "serde", serde(with = "crate::nullable"))]
+    pub model_hz: f64,
 }
 
 /// A level [`StoreyOptions::predict`] asked for that could not be predicted.
