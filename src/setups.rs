@@ -393,6 +393,25 @@ impl fmt::Display for SetupsReport {
         for note in &m.notes {
             writeln!(f, "note: {note}")?;
         }
+        // Each setup's own analysis notes (a decimation that filters modes out, say), once
+        // for the setups that share one.
+        let mut said: Vec<(&str, Vec<&str>)> = Vec::new();
+        for s in &self.setups {
+            for note in &s.analysis.ssi.notes {
+                match said.iter_mut().find(|(n, _)| *n == note.as_str()) {
+                    Some((_, names)) => names.push(&s.name),
+                    None => said.push((note, vec![&s.name])),
+                }
+            }
+        }
+        for (note, names) in said {
+            let whose = if names.len() == self.setups.len() && names.len() > 1 {
+                "every setup".to_string()
+            } else {
+                format!("setup {}", names.join(", "))
+            };
+            writeln!(f, "note ({whose}): {note}")?;
+        }
         self.fmt_global(f)
     }
 }

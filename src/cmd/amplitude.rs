@@ -18,6 +18,17 @@ pub(crate) enum QuantityArg {
     Acceleration,
 }
 
+impl QuantityArg {
+    /// The flag's value.
+    fn name(self) -> &'static str {
+        match self {
+            QuantityArg::Displacement => "displacement",
+            QuantityArg::Velocity => "velocity",
+            QuantityArg::Acceleration => "acceleration",
+        }
+    }
+}
+
 impl From<QuantityArg> for Quantity {
     fn from(q: QuantityArg) -> Self {
         match q {
@@ -56,13 +67,9 @@ pub(crate) struct AmplitudeArgs {
     )]
     pub(crate) modes: Vec<f64>,
     /// What the channels measure.
-    #[arg(
-        help_heading = "Amplitude curves",
-        long,
-        value_enum,
-        default_value = "displacement"
-    )]
-    pub(crate) measured: QuantityArg,
+    /// [default: displacement; beside a --model, what its records read]
+    #[arg(help_heading = "Amplitude curves", long, value_enum)]
+    pub(crate) measured: Option<QuantityArg>,
     /// Report amplitudes as this quantity (converted at each point's frequency); default: as
     /// measured.
     #[arg(help_heading = "Amplitude curves", long, value_enum)]
@@ -153,7 +160,7 @@ impl AmplitudeArgs {
         o.groups = self.groups;
         o.min_triggers = self.min_triggers;
         o.band = self.band;
-        o.measured = self.measured.into();
+        o.measured = self.measured.unwrap_or(QuantityArg::Displacement).into();
         o.report_as = self.amplitude_of.map(Into::into);
         o.period = self.period;
         o.method = match self.method {
@@ -179,7 +186,7 @@ fn analyse(
     input: &std::path::Path,
     analysis: &hyst::covssi::AnalysisOptions,
     opts: &AmplitudeOptions,
-    modes: &[f64],
+    (modes, fit): (&[f64], Option<(&hyst::ident::storeys::StoreyFit, usize)>),
 ) -> Result<(amplitude::AmplitudeAnalysis, RecordShape), Error> {
     let ch = channels(input, &a.record)?;
     let shape = RecordShape {
@@ -187,6 +194,26 @@ fn analyse(
         samples: ch.data.first().map_or(0, Vec::len),
         fs: ch.fs,
     };
+    if let Some((fit, level)) = fit {
+        // Beside a model, the record must be the fit's level, read as it read them, before
+        // it is analysed: else its curves would be set beside another level's (issue 77:
+        // reversed records, another quantity, permuted floors were compared as if matched).
+        use hyst::ident::storeys::{check_level, level_statistics};
+        let b = &fit.building;
+        if shape.channels != b.sensors.len() || (shape.fs - b.fs).abs() > 1e-9 * shape.fs {
+            return Err(fail(format!(
+                "{}: {} channels at {} Hz; the --model was fitted to {} at {} Hz",
+                input.display(),
+                shape.channels,
+                shape.fs,
+                b.sensors.len(),
+                b.fs
+            )));
+        }
+        level_statistics(fit, &ch.data)
+            .and_then(|s| check_level(fit, level, &s))
+            .map_err(|e| fail(format!("{} beside --model: {e}", input.display())))?;
+    }
     let views: Vec<&[f64]> = ch.data.iter().map(|c| c.as_slice()).collect();
     amplitude::amplitude_analysis(&views, ch.fs, analysis, opts, modes)
         .map(|r| (r, shape))
@@ -199,12 +226,17 @@ fn analyse(
 pub(crate) fn run(a: &AmplitudeArgs) -> Result<(), Error> {
     // Settings that are wrong whatever the record, before any is read.
     let analysis = super::ssi::analysis_of(&a.ssi)?;
-    let opts = a.options()?;
-    opts.check().map_err(flag_of)?;
+    let mut opts = a.options()?;
     let fit = match &a.model {
         None => None,
         Some(path) => Some(read_fit(a, path)?),
     };
+    if let Some((_, read)) = &fit {
+        // Beside a model the records read what its records read.
+        opts.measured = (*read).into();
+    }
+    opts.check().map_err(flag_of)?;
+    let fit = fit.map(|(f, _)| f);
     let name = |p: &PathBuf| p.display().to_string();
     let mut shapes = Vec::with_capacity(a.input.len());
     let bar = steps_bar();
@@ -216,7 +248,8 @@ pub(crate) fn run(a: &AmplitudeArgs) -> Result<(), Error> {
             "{}: its modes, then their amplitude bands",
             input.display()
         ));
-        let (analysis, shape) = analyse(a, input, &analysis, &opts, follow)?;
+        let beside = fit.as_ref().map(|f| (f, i));
+        let (analysis, shape) = analyse(a, input, &analysis, &opts, (follow, beside))?;
         shapes.push(shape);
         Ok::<_, Error>((name(input), analysis))
     });
@@ -250,11 +283,36 @@ pub(crate) fn run(a: &AmplitudeArgs) -> Result<(), Error> {
 fn read_fit(
     a: &AmplitudeArgs,
     path: &std::path::Path,
-) -> Result<hyst::ident::storeys::StoreyFit, Error> {
+) -> Result<(hyst::ident::storeys::StoreyFit, QuantityArg), Error> {
     let fit: hyst::ident::storeys::StoreyFit = hyst::io::read_document(
         path,
         "a storey fit must be a JSON object (as `hyst levels --masses --json` writes)",
     )?;
+    // What the records read, and where the channels are, are the fit's: a --measured or
+    // --floors that says otherwise would compare other quantities or floors as if matched.
+    use hyst::ident::storeys::Quantity as Read;
+    let read = match fit.building.reading {
+        Read::Acceleration => QuantityArg::Acceleration,
+        Read::Velocity => QuantityArg::Velocity,
+        Read::Displacement => QuantityArg::Displacement,
+    };
+    if let Some(m) = a.measured.filter(|m| *m != read) {
+        return Err(fail(format!(
+            "--measured {}: --model {} was fitted to records of {}; the records beside it read the same (leave --measured out)",
+            m.name(),
+            path.display(),
+            read.name()
+        )));
+    }
+    if let Some(floors) = &a.floors {
+        let sensors: Vec<usize> = fit.building.sensors.iter().map(|f| f + 1).collect();
+        if *floors != sensors {
+            return Err(fail(format!(
+                "--floors {floors:?}: --model {} has its channels on floors {sensors:?}; the records beside it are read so (leave --floors out)",
+                path.display()
+            )));
+        }
+    }
     if a.input.len() != fit.force_densities.len() {
         return Err(fail(format!(
             "--model {} was fitted to {} records; give the same {} as --input, in the same order ({} given)",
@@ -264,7 +322,7 @@ fn read_fit(
             a.input.len()
         )));
     }
-    Ok(fit)
+    Ok((fit, read))
 }
 
 /// The measured campaign beside the fitted model's own records analysed alike.
@@ -274,19 +332,6 @@ fn beside_model(
     (fit, shapes): (&hyst::ident::storeys::StoreyFit, &[RecordShape]),
     (analysis, opts): (&hyst::covssi::AnalysisOptions, &AmplitudeOptions),
 ) -> Result<(), Error> {
-    let b = &fit.building;
-    for (input, r) in a.input.iter().zip(shapes) {
-        if r.channels != b.sensors.len() || (r.fs - b.fs).abs() > 1e-9 * r.fs {
-            return Err(fail(format!(
-                "{}: {} channels at {} Hz; the --model was fitted to {} at {} Hz",
-                input.display(),
-                r.channels,
-                r.fs,
-                b.sensors.len(),
-                b.fs
-            )));
-        }
-    }
     let lengths: Vec<usize> = shapes.iter().map(|r| r.samples).collect();
     let bar = steps_bar();
     bar.set_message("the fitted model's records");

@@ -558,6 +558,33 @@ fn levels_with_masses_locate_the_storey_and_write_the_fit() {
         s(&json),
     ]);
     assert!(!ok && err.contains("was fitted to 3 records"), "{err}");
+    // Records beside the model that are not its levels as it read them are refused before
+    // any is analysed (issue 77: each was compared as if it matched): in reverse order,
+    // said to read displacements, or with the channels on other floors.
+    let reversed: Vec<&str> = data.iter().rev().map(|p| s(p)).collect();
+    let beside = |more: &[&str], inputs: &[&str]| {
+        let mut args = vec!["amplitude", "--fs", "200", "--model", s(&json)];
+        args.extend(more);
+        args.push("--input");
+        args.extend(inputs);
+        hyst(&args)
+    };
+    let inputs: Vec<&str> = data.iter().map(|p| s(p)).collect();
+    let (ok, _, err) = beside(&[], &reversed);
+    assert!(
+        !ok && err.contains("does not read as the fit's level 1, but as its level 3"),
+        "{err}"
+    );
+    let (ok, _, err) = beside(&["--measured", "displacement"], &inputs);
+    assert!(
+        !ok && err.contains("--measured displacement") && err.contains("records of acceleration"),
+        "{err}"
+    );
+    let (ok, _, err) = beside(&["--floors", "3,2,1"], &inputs);
+    assert!(
+        !ok && err.contains("--floors [3, 2, 1]") && err.contains("floors [1, 2, 3]"),
+        "{err}"
+    );
     // Bad input is named: a floor counted from 0, a sensor above the top, one level.
     let (ok, _, err) = hyst(&[
         "levels",

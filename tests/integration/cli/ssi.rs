@@ -1224,3 +1224,30 @@ fn a_time_column_out_of_order_or_with_a_gap_is_said_with_its_row() {
         }
     }
 }
+
+/// `hyst ssi --setups --decimate 64` on the steel frame (256 Hz): Nyquist at 2 Hz filters
+/// every setup's modes out, and the report says so, once for the setups that share a note,
+/// as the single-record path does (issue 77: the setups' path was silent).
+#[test]
+fn setups_say_what_their_decimation_filters_out() {
+    let Some(grid) = common::data_file("steelframe/grid.txt") else {
+        return;
+    };
+    let dir = grid.parent().unwrap();
+    let (ok, out, err) = hyst(&["ssi", "--setups", s(dir), "--decimate", "64"]);
+    assert!(ok, "{err}");
+    let notes: Vec<&str> = out
+        .lines()
+        .filter(|l| l.starts_with("note (setup") && l.contains("decimating by 64"))
+        .collect();
+    assert!(!notes.is_empty(), "{out}");
+    // Each setup named once, in one of the notes.
+    for k in 1..=15 {
+        let name = format!("measurement_{k}");
+        let named = notes
+            .iter()
+            .filter(|n| n.split([' ', ',', ')']).any(|w| w == name))
+            .count();
+        assert_eq!(named, 1, "{name}: {notes:?}");
+    }
+}

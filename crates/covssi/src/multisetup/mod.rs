@@ -70,6 +70,10 @@ use crate::{Complex64 as C64, ReportedMode};
 
 pub use nodes::NodeMotion;
 
+/// The decades (log₁₀ |gain|) a channel's gain may lie in: sensors' calibration factors
+/// (V per m/s², counts per g, a sign) span a few decades about 1, never twelve.
+const GAIN_DECADES: std::ops::RangeInclusive<f64> = -12.0..=12.0;
+
 /// What a channel measures: the motion of a node along a direction, as displacement, velocity
 /// or acceleration.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -416,6 +420,13 @@ fn check(setups: &[SetupModes], opts: &MergeOptions) -> Result<(), MergeError> {
                 ))
             } else if !(ch.gain.is_finite() && ch.gain != 0.0) {
                 Some(format!("gain {} is not a finite nonzero number", ch.gain))
+            } else if !(GAIN_DECADES.contains(&ch.gain.abs().log10())) {
+                // A shape entry is divided by its gain and squared in every MAC: a gain of
+                // 1e-300 made them infinite (NaN shapes, exit 0, issue 77).
+                Some(format!(
+                    "gain {:e} is more than 12 decades from 1: a sensor's calibration factor so far off is a slip of units",
+                    ch.gain
+                ))
             } else {
                 None
             };

@@ -239,6 +239,21 @@ fn bad_channels_and_options_are_named() {
         err.to_string(),
         "setup `setup 2`, channel 0: direction [0.0, 0.0, 0.0] is not a nonzero vector"
     );
+    // A gain of 1e-300 made every shape entry infinite and every MAC NaN (issue 77); -1e-9
+    // (nano-units, a sign) is a gain.
+    let mut tiny = roving_setups();
+    tiny[1].channels[0].gain = 1e-300;
+    let err = merge(&tiny, &MergeOptions::default()).unwrap_err();
+    assert!(
+        err.to_string()
+            .contains("channel 0: gain 1e-300 is more than 12 decades from 1"),
+        "{err}"
+    );
+    tiny[1].channels[0].gain = -1e-9;
+    assert!(!matches!(
+        merge(&tiny, &MergeOptions::default()),
+        Err(MergeError::Channel { .. })
+    ));
     // One axis of one node read twice in a setup (here the other way round, 0.5° off):
     // refused, naming both channels; 1° off is another axis.
     let turned = |[x, y, z]: [f64; 3], deg: f64| {

@@ -252,9 +252,16 @@ impl fmt::Display for ModeCurve {
             )?;
         }
         if let Some(p) = self.points.iter().find(|p| p.amplitude > 0.0) {
+            // A storey whose floor (or the one below) has no channel has no drift: "—".
             let per = |v: &[f64]| -> String {
                 v.iter()
-                    .map(|x| format!("{:.3}", x / p.amplitude))
+                    .map(|x| {
+                        if x.is_finite() {
+                            format!("{:.3}", x / p.amplitude)
+                        } else {
+                            "—".into()
+                        }
+                    })
                     .collect::<Vec<_>>()
                     .join(", ")
             };
@@ -270,6 +277,20 @@ impl fmt::Display for ModeCurve {
                         "; each storey's drift, from the ground up, × [{}]",
                         per(&p.drifts)
                     )?;
+                    let unmeasured: Vec<String> = p
+                        .drifts
+                        .iter()
+                        .enumerate()
+                        .filter(|(_, d)| !d.is_finite())
+                        .map(|(s, _)| (s + 1).to_string())
+                        .collect();
+                    if !unmeasured.is_empty() {
+                        write!(
+                            f,
+                            " (storey {}: a floor of it has no channel)",
+                            unmeasured.join(", ")
+                        )?;
+                    }
                 }
                 writeln!(f)?;
             }

@@ -18,6 +18,19 @@ pub enum StoreyError {
         /// The mass given (NaN when none was).
         mass: f64,
     },
+    /// The masses make a structure that cannot be simulated at the records' modes (its
+    /// stiffnesses or forces past what a double holds).
+    #[error(
+        "the floor masses (the heaviest {mass:.3e} kg) give storey stiffnesses up to {stiffness:.3e} N/m at the records' modes, and a structure of them cannot be simulated ({why}): give the masses in kg"
+    )]
+    MassesNotSimulable {
+        /// The heaviest mass given (kg).
+        mass: f64,
+        /// The stiffest storey the start gives (N/m).
+        stiffness: f64,
+        /// What the simulation said.
+        why: String,
+    },
     /// A channel's floor is not in the structure.
     #[error("channel {channel} is said to be on floor {floor}; the structure has {floors} floors")]
     SensorBeyondTop {
@@ -104,6 +117,26 @@ pub enum StoreyError {
     #[error("the storey fit does not hold together: {what}")]
     InconsistentFit {
         /// What disagrees.
+        what: String,
+    },
+    /// A record set beside the fit does not read as the level it was given for.
+    #[error(
+        "record {record} does not read as the fit's level {record}{closest}: its statistics lie at a whitened distance {distance:.1} from that level's, where another record of it lies within {limit:.1} 999 times in 1000; give the records the fit was given, in its order, read as it read them (the same quantity, the channels on the same floors)"
+    )]
+    NotItsLevel {
+        /// The record (1-based).
+        record: usize,
+        /// ", but as its level j" when another level is nearer, else empty.
+        closest: String,
+        /// Its whitened squared distance from its level's statistics.
+        distance: f64,
+        /// What chance reaches.
+        limit: f64,
+    },
+    /// A prediction whose simulated response is not finite.
+    #[error("{what}: the fitted structure does not give a finite response at this level")]
+    NotFinite {
+        /// What is not finite.
         what: String,
     },
     /// A prediction or a record shorter than the fit's reading needs.

@@ -50,7 +50,7 @@ pub use error::StoreyError;
 pub use hyst_sim::building::{Reading as Quantity, ShearBuilding, StoreyHysteresis};
 
 pub use predict::{
-    LevelPrediction, PredictionOptions, level_statistics, model_records, predict_level,
+    LevelPrediction, PredictionOptions, check_level, level_statistics, model_records, predict_level,
 };
 pub use response::{ChannelError, response_errors, simulate_structure};
 pub use types::{
@@ -342,6 +342,34 @@ fn finish(
 mod tests {
     use super::predict::tests_support::linear_fit;
     use super::*;
+
+    /// Masses past what the simulation holds (1e300 kg: stiffnesses of 4e302 N/m for the
+    /// records' modes) are named as the masses before any fit, not as a diverged state
+    /// (issue 77); so are masses too light to hold the records' forces.
+    #[test]
+    fn masses_past_what_a_simulation_holds_are_named() {
+        let mut b = ShearBuilding::three_storey_example(None);
+        let records: Vec<Vec<Vec<f64>>> = [300.0, 1200.0]
+            .iter()
+            .zip(7_710_001..)
+            .map(|(sigma, seed)| {
+                b.load.rms = sigma * (b.fine_rate().unwrap() / 8000.0f64).sqrt();
+                b.generate(6000, seed).unwrap()
+            })
+            .collect();
+        for masses in [[1e300, 1000.0, 800.0], [1e-300, 1000.0, 800.0]] {
+            let structure = StoreyStructure::new(
+                masses.to_vec(),
+                vec![0, 1, 2],
+                Quantity::Acceleration,
+                200.0,
+            );
+            let e = fit_storeys(&records, &structure, &StoreyOptions::default(), &|_| {})
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("give the masses in kg"), "{masses:?}: {e}");
+        }
+    }
 
     /// A level that cannot be predicted (a force factor of 1e300 squares past f64) is set
     /// apart with why, beside the one that can, and the report says both: the fit is kept.

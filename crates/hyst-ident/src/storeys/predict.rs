@@ -163,6 +163,53 @@ pub fn level_statistics(
     ))
 }
 
+/// Whether `record`'s statistics (read by [`level_statistics`]) are the fit's level
+/// `level` (0-based): within chance of that level's measured statistics (the whitened
+/// squared distance under the 99.9 % point of 2χ²_d, two records' noise, d statistics) and
+/// nearer it than any other level. A record given in another order, read as another
+/// quantity, or with its channels on other floors is refused.
+pub fn check_level(
+    fit: &StoreyFit,
+    level: usize,
+    record: &LevelStatistics,
+) -> Result<(), IdentError> {
+    use statrs::distribution::{ChiSquared, ContinuousCDF};
+    let distance = |l: &LevelStatistics| -> f64 {
+        statistics::vector(record)
+            .iter()
+            .zip(statistics::vector(l))
+            .zip(&l.se)
+            .map(|((a, b), se)| ((a - b) / se).powi(2))
+            .sum()
+    };
+    let Some(own) = fit.measured.get(level) else {
+        return Ok(());
+    };
+    let d = own.se.len() as f64;
+    let limit = 2.0 * ChiSquared::new(d).map_or(f64::NAN, |c| c.inverse_cdf(0.999));
+    let here = distance(own);
+    let nearest = fit
+        .measured
+        .iter()
+        .enumerate()
+        .map(|(j, l)| (j, distance(l)))
+        .min_by(|a, b| a.1.total_cmp(&b.1));
+    let closest = match nearest {
+        Some((j, dj)) if j != level && dj < here => format!(", but as its level {}", j + 1),
+        _ => String::new(),
+    };
+    if here <= limit && closest.is_empty() {
+        return Ok(());
+    }
+    Err(StoreyError::NotItsLevel {
+        record: level + 1,
+        closest,
+        distance: here,
+        limit,
+    }
+    .into())
+}
+
 /// What the fitted structure shows at force density `force_density` (N²/Hz, two-sided, on
 /// each loaded floor: a recorded level's is in [`StoreyFit::force_densities`], and a force
 /// σ times as strong has σ² times the density) in a record of `samples` samples: the mean of
@@ -228,6 +275,19 @@ pub fn predict_level(
         })
         .collect();
     let drift_rms = drifts(&r, force_density, samples, &seeds)?;
+    // A number that is not one is not a prediction (said as not predicted, by the caller).
+    if let Some((s, d)) = drift_rms.iter().enumerate().find(|(_, d)| !d.is_finite()) {
+        return Err(StoreyError::NotFinite {
+            what: format!("storey {}'s predicted drift is {d}", s + 1),
+        }
+        .into());
+    }
+    if let Some(v) = centre.iter().chain(&spread).find(|v| !v.is_finite()) {
+        return Err(StoreyError::NotFinite {
+            what: format!("a predicted statistic is {v}"),
+        }
+        .into());
+    }
     Ok(LevelPrediction {
         force_density,
         samples,

@@ -209,7 +209,21 @@ pub(super) fn setup(
         opts.seed,
     );
     let n = records[quiet][0].len();
-    let unit_stats = reading.of(&sim.replicate(&unit, n, (1.0, 1.0), opts.seed + 77)?);
+    // The first simulation: masses past what the simulation can hold fail here, and are
+    // named as the masses (not a diverged state).
+    let stiffest = start[..floors].iter().copied().fold(0.0, f64::max);
+    let unphysical = |why: String| StoreyError::MassesNotSimulable {
+        mass: structure.masses.iter().copied().fold(0.0, f64::max),
+        stiffness: stiffest,
+        why,
+    };
+    let unit_records = sim
+        .replicate(&unit, n, (1.0, 1.0), opts.seed + 77)
+        .map_err(|e| unphysical(e.to_string()))?;
+    let unit_stats = reading.of(&unit_records);
+    if let Some(bad) = unit_stats.iter().find(|v| !v.is_finite()) {
+        return Err(unphysical(format!("its response reads as {bad}")).into());
+    }
     let channels = structure.sensors.len();
     for r in records {
         let m = reading.of(r);
@@ -222,6 +236,14 @@ pub(super) fn setup(
             .sum::<f64>()
             / floors as f64;
         start.push(d.exp());
+    }
+    if let Some(q) = start[2 * floors..]
+        .iter()
+        .find(|q| !(q.is_finite() && **q > 0.0))
+    {
+        return Err(
+            unphysical(format!("the force density the records need is {q:e} N²/Hz")).into(),
+        );
     }
     if folded {
         // The folded band starts at the record's own rate (a force white to Nyquist).
