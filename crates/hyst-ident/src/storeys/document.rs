@@ -8,7 +8,7 @@
 
 use super::error::StoreyError;
 use super::model::Layout;
-use super::setup::{WARM_UP_LEAST_DAMPING, stepping};
+use super::setup::{MAX_NU, WARM_UP_LEAST_DAMPING, stepping};
 use super::types::StoreyFit;
 use crate::IdentError;
 use hyst_sim::building::Reading as Quantity;
@@ -17,6 +17,11 @@ use hyst_sim::building::Reading as Quantity;
 /// document writes both from one double, and JSON's shortest round-trip representation reads
 /// it back exactly, so anything beyond rounding is an edit.
 const SAME: f64 = 1e-9;
+
+/// Welch's segment a fit's reading may hold (samples): a fit chooses a few hundred to a few
+/// thousand.
+const MIN_SEGMENT: usize = 16;
+const MAX_SEGMENT: usize = 1 << 24;
 
 /// How far the reading may go beyond the steps a fit of the structure takes
 /// ([`super::setup::stepping`], its warm-up at the least damping it allows): ten times either.
@@ -48,6 +53,11 @@ impl StoreyFit {
                 "`load_floors` {:?} and `building.load.floors` {:?} differ",
                 self.load_floors, b.load.floors
             )));
+        }
+        if b.sensors.is_empty() {
+            return Err(inconsistent(
+                "`building.sensors` is empty: a fit's structure reads at least one channel".into(),
+            ));
         }
         if self.load_floors.is_empty() {
             return Err(inconsistent(
@@ -142,6 +152,33 @@ impl StoreyFit {
                 "its covariance is not {np} × {np} (one row per parameter)"
             )));
         }
+        self.validate_covariance()
+    }
+
+    /// The covariance: all NaN (a singular Jacobian), or symmetric (to rounding) with
+    /// finite entries and no negative variance; predictions draw their band from it.
+    fn validate_covariance(&self) -> Result<(), IdentError> {
+        let c = &self.covariance;
+        if c.iter().flatten().all(|v| v.is_nan()) {
+            return Ok(());
+        }
+        for (i, row) in c.iter().enumerate() {
+            if !(row[i] >= 0.0 && row[i].is_finite()) {
+                return Err(inconsistent(format!(
+                    "`covariance[{i}][{i}]` = {}: a variance is finite and at least 0",
+                    row[i]
+                )));
+            }
+            for (j, &v) in row.iter().enumerate() {
+                let scale = (row[i] * c[j][j]).sqrt();
+                if !v.is_finite() || (v - c[j][i]).abs() > SAME * scale.max(v.abs()) {
+                    return Err(inconsistent(format!(
+                        "`covariance[{i}][{j}]` = {v} and `covariance[{j}][{i}]` = {}: a covariance is finite and symmetric",
+                        c[j][i]
+                    )));
+                }
+            }
+        }
         Ok(())
     }
 
@@ -161,10 +198,32 @@ impl StoreyFit {
             )));
         }
         let increasing = r.bands_hz.windows(2).all(|w| w[0] < w[1]);
-        if !increasing || r.bands_hz.iter().any(|f| !(f.is_finite() && *f >= 0.0)) {
+        let nyquist = b.fs / 2.0;
+        if !increasing || r.bands_hz.iter().any(|f| !(*f > 0.0 && *f <= nyquist)) {
             return Err(inconsistent(format!(
-                "`reading.bands_hz` {:?}: band edges are increasing frequencies (Hz)",
-                r.bands_hz
+                "`reading.bands_hz` {:?}: band edges are increasing frequencies (Hz) above 0 and at most Nyquist, {nyquist} Hz at `building.fs` {} Hz",
+                r.bands_hz, b.fs
+            )));
+        }
+        if !(MIN_SEGMENT..=MAX_SEGMENT).contains(&r.segment) {
+            return Err(inconsistent(format!(
+                "`reading.segment` = {}: Welch's segment is {MIN_SEGMENT} to {MAX_SEGMENT} samples",
+                r.segment
+            )));
+        }
+        for (field, share) in [("building.noise", b.noise), ("building.drift", b.drift)] {
+            if share > 1.0 {
+                return Err(inconsistent(format!(
+                    "`{field}` = {share}: a share of each channel's deviation, at most 1 (a fit writes 0)"
+                )));
+            }
+        }
+        if let Some(h) = &b.hysteresis
+            && h.nu > MAX_NU
+        {
+            return Err(inconsistent(format!(
+                "`building.hysteresis.nu` = {}: the Bouc-Wen exponent is at most {MAX_NU} (the loop is a step already)",
+                h.nu
             )));
         }
         let modes = b.modes()?;
@@ -246,9 +305,135 @@ mod tests {
         assert!(msg.contains("damping_ratios[0]"), "{msg}");
         let msg = refused(|f| f.reading.bands_hz = vec![2.0, 40.0, 12.0]);
         assert!(msg.contains("reading.bands_hz"), "{msg}");
+        // A structure that reads nothing simulated as a file of no channel (issue 77).
+        let msg = refused(|f| f.building.sensors.clear());
+        assert!(msg.contains("building.sensors"), "{msg}");
+        // A band past Nyquist, a covariance with a negative variance.
+        let msg = refused(|f| f.reading.bands_hz[2] = 1e308);
+        assert!(msg.contains("reading.bands_hz"), "{msg}");
+        let msg = refused(|f| f.covariance[1][1] = -1.0);
+        assert!(msg.contains("covariance[1][1]"), "{msg}");
         // A fit that did not reach its records is not a model of them (issue 77).
         let msg = refused(|f| f.agreement.verdict = super::super::FitVerdict::Far);
         assert!(msg.contains("agreement.verdict"), "{msg}");
+    }
+
+    /// Every place in a JSON value (each object's fields, each array's items), as paths.
+    fn places(v: &serde_json::Value, at: Vec<String>, out: &mut Vec<Vec<String>>) {
+        match v {
+            serde_json::Value::Object(m) => {
+                for (k, x) in m {
+                    let mut p = at.clone();
+                    p.push(k.clone());
+                    out.push(p.clone());
+                    places(x, p, out);
+                }
+            }
+            serde_json::Value::Array(a) => {
+                for (i, x) in a.iter().enumerate() {
+                    let mut p = at.clone();
+                    p.push(i.to_string());
+                    out.push(p.clone());
+                    places(x, p, out);
+                }
+            }
+            _ => {}
+        }
+    }
+
+    /// The value at `path` in `v`, and its parent's key.
+    fn at<'a>(v: &'a mut serde_json::Value, path: &[String]) -> &'a mut serde_json::Value {
+        path.iter().fold(v, |v, k| match v {
+            serde_json::Value::Array(a) => &mut a[k.parse::<usize>().unwrap()],
+            v => &mut v[k.as_str()],
+        })
+    }
+
+    /// The fuzz of issue 77 over the structure's document: every field of a linear and of
+    /// an element fit given each hostile value, removed, or joined by an unknown field; each
+    /// document read (`deny_unknown_fields`), checked, and, where it passes, simulated under
+    /// a force and as the model's own records. Every case ends in an answer or an error:
+    /// none panics (an abort would end the test run).
+    #[test]
+    fn a_mutated_document_is_refused_or_simulated_never_a_panic() {
+        use serde_json::json;
+        let started = std::time::Instant::now();
+        let element = super::super::predict::tests_support::two_floor_fit(
+            [1000.0, 800.0],
+            &[4e6, 3e6, 0.05, 0.05, 50.0, 0.6, 750.0, 500.0],
+            Some(1),
+        );
+        element.validate().unwrap();
+        let hostile = [
+            json!(0),
+            json!(-1),
+            json!(1e308),
+            json!(-1e308),
+            json!(1e-300),
+            json!(9),
+            json!(u64::MAX),
+            json!(null),
+            json!("x"),
+            json!([]),
+            json!({}),
+            json!(true),
+            json!(0.5),
+        ];
+        let (mut cases, mut read, mut simulated) = (0, 0, 0);
+        let mut panics = Vec::new();
+        for doc in [fit(), element] {
+            let base = serde_json::to_value(&doc).unwrap();
+            let mut paths = Vec::new();
+            places(&base, Vec::new(), &mut paths);
+            let mut docs: Vec<(String, serde_json::Value)> = Vec::new();
+            for p in &paths {
+                for h in &hostile {
+                    let mut v = base.clone();
+                    *at(&mut v, p) = h.clone();
+                    docs.push((format!("{} = {h}", p.join(".")), v));
+                }
+                let (last, parent) = p.split_last().unwrap();
+                let mut v = base.clone();
+                if let serde_json::Value::Object(m) = at(&mut v, parent) {
+                    m.remove(last);
+                    docs.push((format!("{} removed", p.join(".")), v.clone()));
+                    if let serde_json::Value::Object(m) = at(&mut v, parent) {
+                        m.insert("unknown".into(), json!(1));
+                    }
+                    docs.push((format!("{} removed, `unknown` added", p.join(".")), v));
+                }
+            }
+            for (what, v) in docs {
+                cases += 1;
+                let run = std::panic::catch_unwind(|| {
+                    let Ok(f) = serde_json::from_value::<StoreyFit>(v) else {
+                        return (false, false);
+                    };
+                    if f.validate().is_err() {
+                        return (true, false);
+                    }
+                    let forces = vec![vec![10.0; 300]; f.load_floors.len()];
+                    let _ = super::super::simulate_structure(&f, &forces);
+                    let _ = super::super::model_records(&f, &[2000], 1);
+                    (true, true)
+                });
+                match run {
+                    Ok((r, s)) => {
+                        read += usize::from(r);
+                        simulated += usize::from(s);
+                    }
+                    Err(_) => panics.push(what),
+                }
+            }
+        }
+        println!(
+            "{cases} mutated documents: {read} read, {simulated} passed the check and were simulated, {} panicked, in {:.1} s",
+            panics.len(),
+            started.elapsed().as_secs_f64()
+        );
+        assert!(panics.is_empty(), "{panics:#?}");
+        // The fuzz reached the simulation (values within range) and the check (most not).
+        assert!(cases > 1000 && simulated > 10 && simulated < cases / 2);
     }
 
     #[test]

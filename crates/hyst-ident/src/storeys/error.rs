@@ -119,6 +119,16 @@ pub enum StoreyError {
         /// What disagrees.
         what: String,
     },
+    /// An option of the fit outside its range.
+    #[error("option `{name}` = {value}: {expected}")]
+    BadOption {
+        /// The [`super::StoreyOptions`] field.
+        name: &'static str,
+        /// Its value.
+        value: f64,
+        /// What it must be.
+        expected: &'static str,
+    },
     /// A record set beside the fit does not read as the level it was given for.
     #[error(
         "record {record} does not read as the fit's level {record}{closest}: its statistics lie at a whitened distance {distance:.1} from that level's, where another record of it lies within {limit:.1} 999 times in 1000; give the records the fit was given, in its order, read as it read them (the same quantity, the channels on the same floors)"

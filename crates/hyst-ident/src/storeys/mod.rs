@@ -343,6 +343,96 @@ mod tests {
     use super::predict::tests_support::linear_fit;
     use super::*;
 
+    /// The options' fuzz (issue 77): each option given each hostile value is refused by its
+    /// name before anything is simulated, or (a seed, a count in range) accepted.
+    #[test]
+    fn every_option_out_of_range_is_refused_by_name() {
+        let records = vec![vec![vec![0.0; 1000]; 2]; 2];
+        let structure = StoreyStructure::new(
+            vec![1000.0, 800.0],
+            vec![0, 1],
+            Quantity::Acceleration,
+            200.0,
+        );
+        let floats = [f64::NAN, f64::INFINITY, -1.0, 0.0, 0.5, 1e308, -1e308];
+        let counts = [0, 1, 2, usize::MAX];
+        let mut cases: Vec<(&str, StoreyOptions)> = Vec::new();
+        for &v in &floats {
+            cases.push((
+                "nu",
+                StoreyOptions {
+                    nu: v,
+                    ..Default::default()
+                },
+            ));
+            let t = StoreyOptions {
+                tolerance: v + 1.0,
+                ..Default::default()
+            };
+            cases.push(("tolerance", t));
+        }
+        for &n in &counts {
+            cases.push((
+                "replicates",
+                StoreyOptions {
+                    replicates: n,
+                    ..Default::default()
+                },
+            ));
+        }
+        cases.push((
+            "max_iterations",
+            StoreyOptions {
+                max_iterations: usize::MAX,
+                ..Default::default()
+            },
+        ));
+        cases.push((
+            "force factor",
+            StoreyOptions {
+                predict: vec![f64::NAN],
+                ..Default::default()
+            },
+        ));
+        cases.push((
+            "load floor",
+            StoreyOptions {
+                load_floors: Some(vec![usize::MAX]),
+                ..Default::default()
+            },
+        ));
+        cases.push((
+            "storey",
+            StoreyOptions {
+                candidates: Some(vec![usize::MAX]),
+                ..Default::default()
+            },
+        ));
+        for (name, opts) in &cases {
+            match fit_storeys(&records, &structure, opts, &|_| {}) {
+                Err(e) => {
+                    // The constant records are refused after the options: an option in range.
+                    let e = e.to_string();
+                    let refused_by_name = e.contains(name);
+                    let in_range = e.contains("constant");
+                    assert!(refused_by_name || in_range, "{name}: {e}");
+                }
+                Ok(_) => panic!("{name}: constant records fitted"),
+            }
+        }
+        // 1.5 as ν, 0.5 as tolerance and 3 replicates are in range: they reach the records.
+        let ok = StoreyOptions {
+            nu: 1.5,
+            tolerance: 0.5,
+            replicates: 3,
+            ..Default::default()
+        };
+        let e = fit_storeys(&records, &structure, &ok, &|_| {})
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("constant"), "{e}");
+    }
+
     /// Masses past what the simulation holds (1e300 kg: stiffnesses of 4e302 N/m for the
     /// records' modes) are named as the masses before any fit, not as a diverged state
     /// (issue 77); so are masses too light to hold the records' forces.

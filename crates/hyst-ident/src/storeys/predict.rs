@@ -417,20 +417,31 @@ pub(crate) mod tests_support {
 
     /// A linear two-floor structure's fit as the fit would report it (no uncertainty).
     pub(crate) fn linear_fit(masses: [f64; 2], k: [f64; 2], zeta: [f64; 2], q: f64) -> StoreyFit {
+        two_floor_fit(masses, &[k[0], k[1], zeta[0], zeta[1], q], None)
+    }
+
+    /// The two-floor structure of `theta` (the layout's order: k, ζ, q, then a, β, γ of
+    /// an element in `storey`) as the fit would report it (no uncertainty).
+    pub(crate) fn two_floor_fit(
+        masses: [f64; 2],
+        theta: &[f64],
+        storey: Option<usize>,
+    ) -> StoreyFit {
         let fs = 100.0;
         let template = model::template(&masses, &[0, 1], Quantity::Displacement, fs, &[0, 1]);
         let layout = Layout {
             floors: 2,
             levels: 1,
-            storey: None,
+            storey,
             folded: false,
         };
-        let theta = [k[0], k[1], zeta[0], zeta[1], q];
+        let theta = theta.to_vec();
+        let p = theta.len();
         let (building, _, _) = model::building(&template, &layout, &theta, 1.0).unwrap();
         StoreyFit {
-            storey: None,
+            storey,
             building,
-            force_densities: vec![q],
+            force_densities: vec![theta[4]],
             load_floors: vec![0, 1],
             parameters: layout
                 .names()
@@ -448,7 +459,7 @@ pub(crate) mod tests_support {
             simulated: vec![],
             predictions: vec![],
             not_predicted: vec![],
-            covariance: vec![vec![0.0; 5]; 5],
+            covariance: vec![vec![0.0; p]; p],
             reading: StoreyReading {
                 bands_hz: vec![2.0, 12.0, 40.0],
                 segment: 512,

@@ -40,12 +40,62 @@ impl Setup {
     }
 }
 
+/// The most replicates behind a spread, and iterations of a fit: past them a run takes
+/// hours and says nothing more.
+const MOST_REPLICATES: usize = 1000;
+const MOST_ITERATIONS: usize = 1000;
+
+/// The largest Bouc-Wen exponent a fit holds or a document carries: at 20 the loop is a
+/// step already.
+pub(super) const MAX_NU: f64 = 20.0;
+
+/// The options within their ranges, each named when not.
+fn check_options(opts: &StoreyOptions) -> Result<(), StoreyError> {
+    let bad = |name, value: f64, expected| {
+        Err(StoreyError::BadOption {
+            name,
+            value,
+            expected,
+        })
+    };
+    if !(1.0..=MAX_NU).contains(&opts.nu) {
+        return bad(
+            "nu",
+            opts.nu,
+            "the Bouc-Wen exponent must be in [1, 20] (|z|^(ν−1) is infinite at 0 below 1; at 20 the loop is already a step)",
+        );
+    }
+    if !(0.0..1.0).contains(&opts.tolerance) {
+        return bad(
+            "tolerance",
+            opts.tolerance,
+            "a share of the weighted sum of squares, in [0, 1)",
+        );
+    }
+    if !(3..=MOST_REPLICATES).contains(&opts.replicates) {
+        return bad(
+            "replicates",
+            opts.replicates as f64,
+            "at least 3 replicates make a spread, and at most 1000",
+        );
+    }
+    if opts.max_iterations > MOST_ITERATIONS {
+        return bad(
+            "max_iterations",
+            opts.max_iterations as f64,
+            "at most 1000 iterations",
+        );
+    }
+    Ok(())
+}
+
 /// The records and the structure agree; the number of floors.
 pub(super) fn check(
     records: &[Vec<Vec<f64>>],
     structure: &StoreyStructure,
     opts: &StoreyOptions,
 ) -> Result<usize, StoreyError> {
+    check_options(opts)?;
     let floors = structure.masses.len();
     if records.len() < 2 {
         return Err(StoreyError::FewLevels {
@@ -72,7 +122,7 @@ pub(super) fn check(
     let beyond = |channel: usize, &floor: &usize| {
         (floor >= floors).then_some(StoreyError::SensorBeyondTop {
             channel: channel + 1,
-            floor: floor + 1,
+            floor: floor.saturating_add(1),
             floors,
         })
     };
@@ -94,14 +144,14 @@ pub(super) fn check(
             continue;
         };
         return Err(StoreyError::BadLoadFloor {
-            floor: f + 1,
+            floor: f.saturating_add(1),
             floors,
             why,
         });
     }
     if let Some(&s) = opts.candidates.iter().flatten().find(|&&s| s >= floors) {
         return Err(StoreyError::NoSuchStorey {
-            storey: s + 1,
+            storey: s.saturating_add(1),
             floors,
         });
     }
