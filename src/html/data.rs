@@ -222,9 +222,6 @@ pub fn diagram_of(a: &ModalAnalysis) -> Diagram {
     }
 }
 
-/// How far (relative) from a mode EFDD looks for its bell.
-const EFDD_REACH: f64 = 0.05;
-
 /// The mode within EFDD's reach of reported mode `i` whose shape EFDD cannot tell from
 /// `i`'s (MAC at least its bell's threshold), with that MAC: EFDD then has no opinion of
 /// either.
@@ -237,7 +234,8 @@ fn inseparable(
     let m = &reported[i];
     let shape = m.shape.as_deref()?;
     reported.iter().enumerate().find_map(|(j, n)| {
-        let near = j != i && (n.frequency_hz / m.frequency_hz - 1.0).abs() <= EFDD_REACH;
+        let near =
+            j != i && (n.frequency_hz / m.frequency_hz - 1.0).abs() <= covssi::fdd::EFDD_REACH;
         let alike = mac(shape, n.shape.as_deref()?);
         (near && alike >= opts.mac_threshold).then_some((j, alike))
     })

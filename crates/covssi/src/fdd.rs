@@ -209,7 +209,20 @@ fn phased(v: &[C64]) -> Vec<C64> {
     v.iter().map(|x| x * rot).collect()
 }
 
+/// How far (relative) from a mode EFDD looks for its peak and bell.
+pub const EFDD_REACH: f64 = 0.05;
+
 impl Fdd {
+    /// The lines within `reach` (relative) of `near_hz`, the first and last lines left out
+    /// (a peak needs a neighbour each side); `None` with fewer than two lines.
+    fn window(&self, near_hz: f64, reach: f64) -> Option<(usize, usize)> {
+        let df = self.frequencies_hz.get(1)? - self.frequencies_hz[0];
+        let lo = ((near_hz * (1.0 - reach)) / df).floor().max(1.0) as usize;
+        let last = self.frequencies_hz.len().saturating_sub(2);
+        let hi = (((near_hz * (1.0 + reach)) / df).ceil() as usize).min(last);
+        Some((lo, hi))
+    }
+
     /// The first singular value at every line.
     pub fn first(&self) -> Vec<f64> {
         self.singular_values.iter().map(|s| s[0]).collect()
@@ -219,9 +232,8 @@ impl Fdd {
     /// `None` when the largest value there is at the window's edge (no peak inside).
     pub fn mode_near(&self, near_hz: f64, tolerance: f64) -> Option<FddMode> {
         let s1 = self.first();
-        let df = self.frequencies_hz.get(1)? - self.frequencies_hz[0];
-        let lo = ((near_hz * (1.0 - tolerance)) / df).floor().max(1.0) as usize;
-        let hi = (((near_hz * (1.0 + tolerance)) / df).ceil() as usize).min(s1.len() - 2);
+        let (lo, hi) = self.window(near_hz, tolerance)?;
+        let df = self.frequencies_hz[1] - self.frequencies_hz[0];
         if lo >= hi {
             return None;
         }
@@ -248,7 +260,7 @@ impl Fdd {
 /// EFDD's mode near `near_hz` (the peak of s₁ within 5 % of it; see the [module](self)),
 /// or `None` when there is no peak there or its decay has too few extrema to fit.
 pub fn efdd(fdd: &Fdd, near_hz: f64, opts: &FddOptions) -> Option<EfddMode> {
-    let peak = fdd.mode_near(near_hz, 0.05)?;
+    let peak = fdd.mode_near(near_hz, EFDD_REACH)?;
     let n_lines = fdd.frequencies_hz.len();
     let alike = |k: usize| crate::mac(&fdd.first_vectors[k], &peak.shape) >= opts.mac_threshold;
     let mut lo = peak.line;
@@ -268,21 +280,19 @@ pub fn efdd(fdd: &Fdd, near_hz: f64, opts: &FddOptions) -> Option<EfddMode> {
 /// leading vector alike the shape, or the decay has too few extrema to fit.
 pub fn efdd_of_mode(fdd: &Fdd, near_hz: f64, shape: &[C64], opts: &FddOptions) -> Option<EfddMode> {
     let n_lines = fdd.frequencies_hz.len();
-    let df = fdd.frequencies_hz.get(1)? - fdd.frequencies_hz[0];
-    // At each line, the leading singular value whose vector is the shape's, if any is.
-    let own = |k: usize| -> Option<f64> {
+    // At each line, the leading singular vector that is the shape's (if any is) and its value.
+    let own = |k: usize| -> Option<(usize, f64)> {
         let (j, mac) = fdd.leading_vectors[k]
             .iter()
             .map(|v| crate::mac(v, shape))
             .enumerate()
             .max_by(|a, b| a.1.total_cmp(&b.1))?;
-        (mac >= opts.mac_threshold).then(|| fdd.singular_values[k][j])
+        (mac >= opts.mac_threshold).then(|| (j, fdd.singular_values[k][j]))
     };
-    let lo = ((near_hz * 0.95) / df).floor().max(1.0) as usize;
-    let hi = (((near_hz * 1.05) / df).ceil() as usize).min(n_lines.saturating_sub(2));
-    let (peak, _) = (lo..=hi)
-        .filter_map(|k| own(k).map(|s| (k, s)))
-        .max_by(|a, b| a.1.total_cmp(&b.1))?;
+    let (lo, hi) = fdd.window(near_hz, EFDD_REACH)?;
+    let (peak, (best, _)) = (lo..=hi)
+        .filter_map(|k| own(k).map(|o| (k, o)))
+        .max_by(|a, b| a.1.1.total_cmp(&b.1.1))?;
     let mut first = peak;
     while first > 1 && own(first - 1).is_some() {
         first -= 1;
@@ -291,11 +301,10 @@ pub fn efdd_of_mode(fdd: &Fdd, near_hz: f64, shape: &[C64], opts: &FddOptions) -
     while last + 2 < n_lines && own(last + 1).is_some() {
         last += 1;
     }
-    let values: Vec<f64> = (first..=last).map(|k| own(k).unwrap_or(0.0)).collect();
-    let best = fdd.leading_vectors[peak]
-        .iter()
-        .max_by(|a, b| crate::mac(a, shape).total_cmp(&crate::mac(b, shape)))?
-        .clone();
+    let values: Vec<f64> = (first..=last)
+        .map(|k| own(k).map_or(0.0, |(_, s)| s))
+        .collect();
+    let best = fdd.leading_vectors[peak].get(best)?.clone();
     decay_of_bell(fdd, first, &values, best, opts)
 }
 
