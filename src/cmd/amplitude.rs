@@ -18,17 +18,6 @@ pub(crate) enum QuantityArg {
     Acceleration,
 }
 
-impl QuantityArg {
-    /// The flag's value.
-    fn name(self) -> &'static str {
-        match self {
-            QuantityArg::Displacement => "displacement",
-            QuantityArg::Velocity => "velocity",
-            QuantityArg::Acceleration => "acceleration",
-        }
-    }
-}
-
 impl From<QuantityArg> for Quantity {
     fn from(q: QuantityArg) -> Self {
         match q {
@@ -299,9 +288,9 @@ fn read_fit(
     if let Some(m) = a.measured.filter(|m| *m != read) {
         return Err(fail(format!(
             "--measured {}: --model {} was fitted to records of {}; the records beside it read the same (leave --measured out)",
-            m.name(),
+            flag_value(m),
             path.display(),
-            read.name()
+            flag_value(read)
         )));
     }
     if let Some(floors) = &a.floors {
@@ -323,6 +312,12 @@ fn read_fit(
         )));
     }
     Ok((fit, read))
+}
+
+/// A `--measured` value as the flag spells it (clap's own name for it).
+fn flag_value(q: QuantityArg) -> String {
+    q.to_possible_value()
+        .map_or_else(|| format!("{q:?}"), |v| v.get_name().to_string())
 }
 
 /// The measured campaign beside the fitted model's own records analysed alike.

@@ -139,8 +139,9 @@ fn follow_records(
         // Look until something new has settled.
         loop {
             std::thread::sleep(wait);
+            let listed = record_files(a)?;
             let mut settled = Vec::new();
-            for f in record_files(a)? {
+            for f in listed.iter().cloned() {
                 if taken.contains(&f) {
                     continue;
                 }
@@ -164,12 +165,9 @@ fn follow_records(
                 taken.extend(new);
                 // In the listing's order, as a batch run over them takes them: a file that
                 // lands late among earlier names goes to its name's place.
-                let listed: HashMap<PathBuf, usize> = record_files(a)?
-                    .into_iter()
-                    .enumerate()
-                    .map(|(i, f)| (f, i))
-                    .collect();
-                taken.sort_by_key(|f| listed.get(f).copied());
+                let place: HashMap<&PathBuf, usize> =
+                    listed.iter().enumerate().map(|(i, f)| (f, i)).collect();
+                taken.sort_by_key(|f| place.get(f).copied());
                 check_paths(a, &taken)?;
                 break;
             }

@@ -111,6 +111,16 @@ pub(super) fn number(text: &str, delimiter: u8) -> Option<f64> {
     })
 }
 
+/// Cell `text` of `row` in `column` as a number, or the error naming it.
+fn cell(path: &Path, (row, column): (usize, &str), text: &str, sep: u8) -> Result<f64, IoError> {
+    number(text, sep).ok_or_else(|| IoError::NotANumber {
+        path: path.to_path_buf(),
+        row,
+        column: column.to_string(),
+        text: text.to_string(),
+    })
+}
+
 /// [`read_csv_with`] with the delimiter detected.
 pub fn read_csv(path: &Path) -> Result<Table, IoError> {
     read_csv_with(path, Delimiter::Auto)
@@ -159,13 +169,8 @@ pub(super) fn probe(path: &Path, delimiter: Delimiter) -> Result<(), IoError> {
     let mut seen = 0;
     for r in rows.take(ROWS) {
         let (row, r) = r?;
-        if let Some((c, t)) = r.iter().enumerate().find(|(_, t)| number(t, sep).is_none()) {
-            return Err(IoError::NotANumber {
-                path: path.to_path_buf(),
-                row,
-                column: names[c].clone(),
-                text: t.to_string(),
-            });
+        for (c, t) in r.iter().enumerate() {
+            cell(path, (row, &names[c]), t, sep)?;
         }
         seen += 1;
     }
@@ -192,12 +197,7 @@ pub(super) fn streamed(
     for r in rows {
         let (row, r) = r?;
         for (c, t) in r.iter().enumerate() {
-            let v = number(t, sep).ok_or_else(|| IoError::NotANumber {
-                path: path.to_path_buf(),
-                row,
-                column: names[c].clone(),
-                text: t.to_string(),
-            })?;
+            let v = cell(path, (row, &names[c]), t, sep)?;
             if !v.is_finite() && non_finite[c].is_none() {
                 non_finite[c] = Some(super::NonFiniteCell { row, value: v });
             }

@@ -174,8 +174,9 @@ pub fn check_level(
     record: &LevelStatistics,
 ) -> Result<(), IdentError> {
     use statrs::distribution::{ChiSquared, ContinuousCDF};
+    let given = statistics::vector(record);
     let distance = |l: &LevelStatistics| -> f64 {
-        statistics::vector(record)
+        given
             .iter()
             .zip(statistics::vector(l))
             .zip(&l.se)
@@ -186,7 +187,8 @@ pub fn check_level(
         return Ok(());
     };
     let d = own.se.len() as f64;
-    let limit = 2.0 * ChiSquared::new(d).map_or(f64::NAN, |c| c.inverse_cdf(0.999));
+    let limit = 2.0
+        * ChiSquared::new(d).map_or(f64::NAN, |c| c.inverse_cdf(1.0 - super::agreement::CHANCE));
     let here = distance(own);
     let nearest = fit
         .measured
