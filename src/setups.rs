@@ -348,6 +348,9 @@ impl fmt::Display for SetupsReport {
             f,
             "  mode  frequency (Hz)         damping (%)         setups  scatter  MPC    MPD (°)"
         )?;
+        if m.modes.is_empty() {
+            writeln!(f, "  no mode found in any setup (the notes below say why)")?;
+        }
         for (i, mode) in m.modes.iter().enumerate() {
             let se = |v: Option<f64>, k: f64, d: usize| {
                 v.map_or("—".to_string(), |e| format!("{:.*}", d, e * k))
@@ -430,6 +433,9 @@ impl SetupsReport {
             f,
             "\nglobal estimation (SSI once on all setups' correlations; no standard errors), beside the merge:"
         )?;
+        if g.modes.is_empty() {
+            return writeln!(f, "  no mode found");
+        }
         writeln!(f, "  frequency (Hz)  damping (%)  merged mode  MAC with it")?;
         for mode in &g.modes {
             let near =

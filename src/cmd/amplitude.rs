@@ -273,10 +273,7 @@ fn read_fit(
     a: &AmplitudeArgs,
     path: &std::path::Path,
 ) -> Result<(hyst::ident::storeys::StoreyFit, QuantityArg), Error> {
-    let fit: hyst::ident::storeys::StoreyFit = hyst::io::read_document(
-        path,
-        "a storey fit must be a JSON object (as `hyst levels --masses --json` writes)",
-    )?;
+    let fit = super::read_storey_fit("--model", path)?;
     // What the records read, and where the channels are, are the fit's: a --measured or
     // --floors that says otherwise would compare other quantities or floors as if matched.
     use hyst::ident::storeys::Quantity as Read;

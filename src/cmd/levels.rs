@@ -107,6 +107,24 @@ pub(crate) enum QuantityArg {
 pub(crate) fn run(a: &LevelsArgs) -> Result<(), Error> {
     use hyst::ident::levels::{self, LevelsOptions, SimulationOptions};
     let fs = check_fs(a.fs)?;
+    // One file given as two levels would be fitted as two records that agree exactly.
+    for (i, p) in a.data.iter().enumerate() {
+        let same = |q: &std::path::PathBuf| {
+            q == p
+                || matches!(
+                    (std::fs::canonicalize(q), std::fs::canonicalize(p)),
+                    (Ok(x), Ok(y)) if x == y
+                )
+        };
+        if let Some(j) = a.data[..i].iter().position(same) {
+            return Err(fail(format!(
+                "--data {}: given as level {} and level {}; each level is its own record",
+                p.display(),
+                j + 1,
+                i + 1
+            )));
+        }
+    }
     let Some(mass) = a.mass else {
         return run_storeys(a, fs);
     };
@@ -174,9 +192,15 @@ fn run_storeys(a: &LevelsArgs, fs: f64) -> Result<(), Error> {
             })
             .collect()
     };
-    if !a.validate.is_empty() || a.svg_dir.is_some() || a.by_simulation || a.fit_exponent {
+    if !a.validate.is_empty()
+        || a.svg_dir.is_some()
+        || a.by_simulation
+        || a.fit_exponent
+        || a.periodic
+        || a.data_periodic
+    {
         return Err(fail(
-            "--masses fits a structure by simulation: --validate, --svg-dir, --by-simulation and --fit-exponent are the one-oscillator route's",
+            "--masses fits a structure by simulation of random forces: --validate, --periodic, --data-periodic, --svg-dir, --by-simulation and --fit-exponent are the one-oscillator route's",
         ));
     }
     if let Some(given) = &a.channels

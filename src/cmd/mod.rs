@@ -190,6 +190,22 @@ pub(crate) fn fail(msg: impl Into<String>) -> Error {
     anyhow::anyhow!(msg.into())
 }
 
+/// A storey fit named by `flag` (`hyst levels --masses --json`, perhaps `FILE#/POINTER`),
+/// read and checked whole before anything else is read beside it: a field that is wrong is
+/// said as the document's (`--structure FILE: ...`), not as the record read next.
+pub(crate) fn read_storey_fit(
+    flag: &str,
+    path: &std::path::Path,
+) -> Result<hyst::ident::storeys::StoreyFit, Error> {
+    let fit: hyst::ident::storeys::StoreyFit = hyst::io::read_document(
+        path,
+        "a storey fit must be a JSON object (as `hyst levels --masses --json` writes)",
+    )?;
+    fit.validate()
+        .map_err(|e| fail(format!("{flag} {}: {e}", path.display())))?;
+    Ok(fit)
+}
+
 /// The channels to analyse: those given, else every column but the time column
 /// ([`hyst::io::Table::time_column`]), those in `besides` and those that carry no signal
 /// ([`hyst::io::default_channels`]), which are named in one line on stderr.

@@ -285,12 +285,8 @@ pub(crate) fn run(a: &SimulateArgs) -> Result<(), Error> {
 /// `hyst simulate --structure`: a storey fit driven by measured forces, compared with a
 /// measured record when one is given.
 fn run_structure(a: &SimulateArgs, structure: &std::path::Path) -> Result<(), Error> {
-    use hyst::ident::storeys::{StoreyFit, response_errors, simulate_structure};
-    if a.params.is_some() || a.excitation.is_some() || a.periodic || a.noise != 0.0 {
-        return Err(fail(
-            "--structure is driven by --input's --forces from rest: --params, --excitation, --periodic and --noise are the oscillator's",
-        ));
-    }
+    use hyst::ident::storeys::{response_errors, simulate_structure};
+    structure_flags(a)?;
     let Some(input) = &a.input else {
         return Err(fail(
             "--structure needs the --input file holding its --forces",
@@ -301,10 +297,7 @@ fn run_structure(a: &SimulateArgs, structure: &std::path::Path) -> Result<(), Er
             "--structure needs --forces: the --input columns of each loaded floor's force",
         ));
     }
-    let fit: StoreyFit = hyst::io::read_document(
-        structure,
-        "a storey fit must be a JSON object (as `hyst levels --masses --json` writes)",
-    )?;
+    let fit = super::read_storey_fit("--structure", structure)?;
     let t = read_record(input)?;
     let fs = t.rate(a.fs)?;
     if (fs - fit.building.fs).abs() > 1e-9 * fs {
@@ -319,7 +312,21 @@ fn run_structure(a: &SimulateArgs, structure: &std::path::Path) -> Result<(), Er
         .iter()
         .map(|c| Ok(t.column(c)?.to_vec()))
         .collect::<Result<Vec<_>, Error>>()?;
-    let y = simulate_structure(&fit, &forces).map_err(|e| fail(e.to_string()))?;
+    let y = simulate_structure(&fit, &forces).map_err(|e| match e {
+        // A state past any structure's: the forces given are far beyond those it was fitted
+        // under (a slip of units, say), said with their size.
+        hyst::ident::IdentError::Sim(hyst::sim::SimError::Diverged { .. }) => {
+            let (rms, peak) = forces.iter().flatten().fold((0.0, 0.0f64), |(s, p), &v| {
+                (s + v * v, p.max(v.abs()))
+            });
+            let rms = (rms / forces.iter().map(Vec::len).sum::<usize>().max(1) as f64).sqrt();
+            fail(format!(
+                "--input {}: under its --forces (RMS {rms:.4e} N, peak {peak:.4e} N) the fitted structure's state diverges ({e}): forces so far from those it was fitted under are outside what it holds (check their units)",
+                input.display()
+            ))
+        }
+        e => fail(e.to_string()),
+    })?;
     let names = channel_columns(&fit);
     let mut cols: Vec<&str> = a.forces.iter().map(String::as_str).collect();
     cols.extend(names.iter().map(String::as_str));
@@ -344,6 +351,25 @@ fn run_structure(a: &SimulateArgs, structure: &std::path::Path) -> Result<(), Er
         .iter()
         .map(|c| Ok(m.column(c)?.to_vec()))
         .collect::<Result<Vec<_>, Error>>()?;
+    if record.len() != y.len() {
+        return Err(fail(format!(
+            "--measured {}: {} channel(s) ({}); the fit has {} sensor(s)",
+            measured.display(),
+            record.len(),
+            channels.join(", "),
+            y.len()
+        )));
+    }
+    let samples = record
+        .first()
+        .map_or(0, Vec::len)
+        .min(y.first().map_or(0, Vec::len));
+    if a.compare_skip.saturating_add(2) > samples {
+        return Err(fail(format!(
+            "--compare-skip {}: the records compared have {samples} samples; leave at least two",
+            a.compare_skip
+        )));
+    }
     let errors = response_errors(&y, &record, a.compare_skip).map_err(|e| fail(e.to_string()))?;
     println!(
         "against {} (from sample {}): RMS error per channel, and as a share of the channel's deviation (compare the sensors' noise):",
@@ -357,6 +383,69 @@ fn run_structure(a: &SimulateArgs, structure: &std::path::Path) -> Result<(), Er
             e.measured_sd,
             100.0 * e.share()
         );
+    }
+    Ok(())
+}
+
+/// The flags `--structure` reads, checked before anything is read: the oscillator's flags
+/// (which it would ignore) refused, each column named once, and `--measured`'s companions
+/// only with it.
+fn structure_flags(a: &SimulateArgs) -> Result<(), Error> {
+    let design = hyst::sim::excitation::ExcitationDesign::default();
+    let s = &a.signal;
+    let oscillator = [
+        ("--params", a.params.is_some()),
+        ("--excitation", a.excitation.is_some()),
+        ("--periodic", a.periodic),
+        ("--noise", a.noise != 0.0),
+        ("--noise-seed", a.noise_seed != 2),
+        ("--column", a.column != "u"),
+        ("--input-interpolation", a.input_interpolation.is_some()),
+        ("--oversample", a.oversample != 20),
+        ("--integrator", a.integrator != IntegratorArg::Rk4),
+        ("--decimation", a.decimation != DecimationArg::Sample),
+        ("--rms", s.rms != design.rms),
+        ("--samples", s.samples != design.samples),
+        ("--seed", s.seed != design.seed),
+        ("--f-min", s.f_min != design.f_min),
+        ("--f-max", s.f_max != design.f_max),
+    ];
+    if let Some((flag, _)) = oscillator.iter().find(|(_, given)| *given) {
+        return Err(fail(format!(
+            "{flag} is the oscillator's: --structure is driven by --input's --forces from rest, at the steps its fit chose"
+        )));
+    }
+    let twice = |flag: &str, names: &[String]| {
+        names
+            .iter()
+            .enumerate()
+            .find(|(i, n)| names[..*i].contains(n))
+            .map_or(Ok(()), |(_, n)| {
+                Err(fail(format!(
+                    "{flag}: `{n}` is named twice (each is its own column)"
+                )))
+            })
+    };
+    twice("--forces", &a.forces)?;
+    if let Some(channels) = &a.channels {
+        twice("--channels", channels)?;
+        if let Some(c) = channels.iter().find(|c| a.forces.contains(c)) {
+            return Err(fail(format!(
+                "--channels: `{c}` is one of the --forces; the channels are the measured response"
+            )));
+        }
+    }
+    if a.measured.is_none() {
+        if a.channels.is_some() {
+            return Err(fail(
+                "--channels names --measured's columns: give --measured",
+            ));
+        }
+        if a.compare_skip != 0 {
+            return Err(fail(
+                "--compare-skip leaves samples out of the comparison with --measured: give --measured",
+            ));
+        }
     }
     Ok(())
 }

@@ -224,10 +224,14 @@ fn read_line(
     } else {
         names.join(", ")
     };
-    let time = t.time_column().map(|i| t.names[i].as_str());
-    let rate = match (t.rate_hz, time) {
+    let rate = match (t.rate_hz, t.time_rate()) {
         (Some(_), _) => "as the file states".to_string(),
-        (None, Some(name)) => format!("from the time column `{name}`"),
+        (None, Some((name, r))) if (r - fs).abs() <= 1e-9 * fs => {
+            format!("from the time column `{name}`")
+        }
+        // A --fs within the time column's tolerance is what the analysis uses: said so, with
+        // the column's, not credited to the column.
+        (None, Some((name, r))) => format!("as --fs gives; the time column `{name}` reads {r} Hz"),
         (None, None) => "as --fs gives".to_string(),
     };
     let skipped = match a.skip {
@@ -432,11 +436,13 @@ fn run_setups(a: &SsiArgs, path: &Path, opts: &hyst::covssi::AnalysisOptions) ->
     let mut report = hyst::report::FileReport::new(path.display().to_string(), report?);
     // The nodes' positions, for the outputs that draw or place the shapes and the floors'
     // check.
-    let geometry = if a.html.is_some() || a.shapes_uff.is_some() || a.rigid_floors {
-        hyst::io::setups_geometry(path, a.geometry.as_deref(), a.lines.as_deref())?
-    } else {
-        None
-    };
+    // A --geometry given is read (and its faults said) even when nothing asked draws it.
+    let geometry =
+        if a.html.is_some() || a.shapes_uff.is_some() || a.rigid_floors || a.geometry.is_some() {
+            hyst::io::setups_geometry(path, a.geometry.as_deref(), a.lines.as_deref())?
+        } else {
+            None
+        };
     if a.rigid_floors {
         let Some((g, _)) = &geometry else {
             return Err(fail(

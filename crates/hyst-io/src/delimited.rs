@@ -135,7 +135,38 @@ pub fn read_csv(path: &Path) -> Result<Table, IoError> {
 /// A file whose first line is numbers only has no header line: its columns are named `0`,
 /// `1`, … (as an array's are), the first line is the first row, and the table's notes say so.
 pub fn read_csv_with(path: &Path, delimiter: Delimiter) -> Result<Table, IoError> {
+    read_csv_named(path, delimiter, true)
+}
+
+/// Every header cell a name, none twice: a column unnamed or named twice could not be
+/// asked for by name, and would be read as a channel called nothing.
+pub(super) fn header_names(path: &Path, names: &[String]) -> Result<(), IoError> {
+    if let Some(k) = names.iter().position(|n| n.trim().is_empty()) {
+        return Err(IoError::UnnamedColumn {
+            path: path.to_path_buf(),
+            position: k + 1,
+        });
+    }
+    if let Some(column) = repeated(names) {
+        return Err(IoError::DuplicateColumn {
+            path: path.to_path_buf(),
+            column: column.to_string(),
+        });
+    }
+    Ok(())
+}
+
+/// [`read_csv_with`], its header's names checked only when `check_names` (not when the
+/// caller replaces them, as `--names` does).
+pub(super) fn read_csv_named(
+    path: &Path,
+    delimiter: Delimiter,
+    check_names: bool,
+) -> Result<Table, IoError> {
     let rows = DelimitedRows::open_record(path, delimiter)?;
+    if check_names {
+        header_names(path, &rows.names)?;
+    }
     let (names, sep, headerless) = (rows.names.clone(), rows.sep, rows.pending.is_some());
     // A plain record (no quotes, LF or CRLF line ends, every cell a number) is read in
     // parallel blocks; anything else, and every error, by the `csv` reader below.
@@ -165,6 +196,7 @@ pub fn read_csv_with(path: &Path, delimiter: Delimiter) -> Result<Table, IoError
 pub(super) fn probe(path: &Path, delimiter: Delimiter) -> Result<(), IoError> {
     const ROWS: usize = 2;
     let rows = DelimitedRows::open_record(path, delimiter)?;
+    header_names(path, &rows.names)?;
     let (names, sep) = (rows.names.clone(), rows.sep);
     let mut seen = 0;
     for r in rows.take(ROWS) {
@@ -302,11 +334,9 @@ impl DelimitedRows {
             });
         }
         rows.names = header.iter().map(str::to_string).collect();
-        if let Some(column) = repeated(&rows.names) {
-            return Err(IoError::DuplicateColumn {
-                path: path.to_path_buf(),
-                column: column.to_string(),
-            });
+        // A record's names may yet be replaced (`--names`): its reader checks them after.
+        if !headerless {
+            header_names(path, &rows.names)?;
         }
         Ok(rows)
     }

@@ -117,6 +117,16 @@ pub enum IoError {
         /// The column (from 1).
         position: usize,
     },
+    /// A header cell is empty (a table's index written without a name, say).
+    #[error(
+        "{path}: the header leaves column {position} unnamed (a table's index written without a name?): name it in the file, or give every column's name with --names"
+    )]
+    UnnamedColumn {
+        /// The file.
+        path: PathBuf,
+        /// The column (from 1).
+        position: usize,
+    },
     /// The time column's rows are out of order, restart, or miss samples.
     #[error("{path}: the time column `{column}` at row {row} {what}")]
     TimeColumn {
@@ -286,6 +296,14 @@ pub enum IoError {
         given: Option<f64>,
         /// The rate the file states (Hz).
         stated: Option<f64>,
+    },
+    /// A rate given that no record has (zero, negative, not finite).
+    #[error("{path}: --fs {given}: a sampling rate is a positive, finite number of hertz")]
+    NotARate {
+        /// The file it was given for.
+        path: PathBuf,
+        /// The rate given.
+        given: f64,
     },
     /// A format or delimiter named by a name that is not one of them.
     #[error("{what} `{given}` is not one of {}", .allowed.join(", "))]
@@ -498,7 +516,9 @@ pub fn read_record(path: &Path, options: &ReadOptions) -> Result<Table, IoError>
         Format::Npz => read_npz(path, variable),
         Format::Mat => read_mat(path, variable),
         Format::Uff => read_uff(path),
-        Format::Csv | Format::Auto => read_csv_with(path, options.delimiter),
+        Format::Csv | Format::Auto => {
+            delimited::read_csv_named(path, options.delimiter, options.names.is_none())
+        }
     }?;
     if let Some(names) = &options.names {
         if names.len() != table.names.len() {
@@ -707,17 +727,7 @@ impl Table {
     /// columns, increasing by a constant step over at least [`TIME_MIN_SAMPLES`] samples
     /// (every step within 1 % of the mean: no response does that over a record).
     pub fn time_column(&self) -> Option<usize> {
-        let named = |n: &str| {
-            let n = n.trim().to_ascii_lowercase();
-            let base = n
-                .split(|c: char| c == '(' || c == '[' || c == '_' || c.is_whitespace())
-                .next()
-                .unwrap_or("");
-            matches!(
-                base,
-                "t" | "time" | "times" | "timestamp" | "zeit" | "temps" | "tiempo" | "tempo"
-            )
-        };
+        let named = named_time;
         let uniform = |c: &[f64]| {
             let n = c.len();
             if n < TIME_MIN_SAMPLES {
@@ -747,8 +757,22 @@ impl Table {
     fn rate_of_time_column(&self, i: usize) -> Option<(&str, f64)> {
         let c = &self.columns[i];
         let n = c.len();
-        (n >= 2 && c.windows(2).all(|w| w[1] > w[0]))
-            .then(|| (self.names[i].as_str(), (n - 1) as f64 / (c[n - 1] - c[0])))
+        // A column of sample numbers (0, 1, 2, … as a table's index is written) counts
+        // samples, not seconds: it gives no rate, unless its name says it is time.
+        if !named_time(&self.names[i])
+            && c.iter().all(|v| v.fract() == 0.0)
+            && c.windows(2).all(|w| w[1] - w[0] == 1.0)
+        {
+            return None;
+        }
+        (n >= 2 && c.windows(2).all(|w| w[1] > w[0])).then(|| {
+            // Twelve significant digits: a time column written in decimal gives its rate
+            // only to rounding (20 Hz read as 19.999999999999996), and two records cut from
+            // one must state one rate.
+            let rate = (n - 1) as f64 / ((c[n - 1] - c[0]) * time::unit_of(&self.names[i]).0);
+            let rounded = format!("{rate:.11e}").parse().unwrap_or(rate);
+            (self.names[i].as_str(), rounded)
+        })
     }
 
     /// The sampling rate: the one `given`, which must agree with the file's if the file
@@ -756,6 +780,12 @@ impl Table {
     /// with its time column's mean step if it has one (within 1 %), else the file's, else
     /// the time column's.
     pub fn rate(&self, given: Option<f64>) -> Result<f64, IoError> {
+        if let Some(g) = given.filter(|g| !(g.is_finite() && *g > 0.0)) {
+            return Err(IoError::NotARate {
+                path: self.path.clone(),
+                given: g,
+            });
+        }
         // A time column that checks or gives the rate must be finite throughout.
         let time = self.rate_hz.is_none().then(|| self.time_column()).flatten();
         if let Some(i) = time {
@@ -824,9 +854,30 @@ pub fn divide_by_gains(
                 what: format!("channel `{name}`: gain {g} is not a finite nonzero number"),
             });
         }
+        // The setups' bound: a factor that far from 1 is a slip of units, and overflows.
+        if !covssi::multisetup::GAIN_DECADES.contains(&g.abs().log10()) {
+            return Err(IoError::Gains {
+                what: format!(
+                    "channel `{name}`: gain {g:e} is more than 12 decades from 1: a sensor's calibration factor so far off is a slip of units"
+                ),
+            });
+        }
         c.iter_mut().for_each(|v| *v /= g);
     }
     Ok(())
+}
+
+/// Whether a column's name says it holds time (`t`, `time`, `Time (s)`, `zeit_ms`, …).
+fn named_time(name: &str) -> bool {
+    let n = name.trim().to_ascii_lowercase();
+    let base = n
+        .split(|c: char| c == '(' || c == '[' || c == '_' || c.is_whitespace())
+        .next()
+        .unwrap_or("");
+    matches!(
+        base,
+        "t" | "time" | "times" | "timestamp" | "zeit" | "temps" | "tiempo" | "tempo"
+    )
 }
 
 /// The first name that appears twice in `names`, if any.
@@ -993,6 +1044,37 @@ mod tests {
         );
     }
 
+    /// Issue 77's second pass: a time column in milliseconds read as seconds (every
+    /// frequency 1000 times low), a table's index (0, 1, 2, …) taken for seconds at 1 Hz
+    /// against the --fs given, a rate of 19.999999999999996 Hz from a decimal column, and
+    /// a --fs of NaN accepted.
+    #[test]
+    fn a_time_column_gives_its_rate_in_its_unit_and_an_index_gives_none() {
+        let y: Vec<f64> = (0..100).map(|k| (0.3 * k as f64).sin()).collect();
+        let ms: Vec<f64> = (0..100).map(|k| 50.0 * k as f64).collect();
+        let tb = table(&["time_ms", "y"], vec![ms, y.clone()]);
+        assert_eq!(tb.rate(None).unwrap(), 20.0);
+        let index: Vec<f64> = (0..100).map(|k| k as f64).collect();
+        let tb = table(&["k", "y"], vec![index.clone(), y.clone()]);
+        assert_eq!(tb.time_column(), Some(0), "an index is not a channel");
+        assert_eq!(tb.rate(Some(20.0)).unwrap(), 20.0);
+        assert!(tb.rate(None).is_err(), "an index states no rate");
+        // Named as time, whole seconds are time: 1 Hz.
+        let tb = table(&["t", "y"], vec![index, y.clone()]);
+        assert_eq!(tb.rate(None).unwrap(), 1.0);
+        let decimal: Vec<f64> = (0..6000).map(|k| 0.05 * k as f64).collect();
+        let long_y: Vec<f64> = (0..6000).map(|k| (0.3 * k as f64).sin()).collect();
+        let tb = table(&["t", "y"], vec![decimal, long_y]);
+        assert_eq!(tb.rate(None).unwrap(), 20.0);
+        for bad in [f64::NAN, f64::INFINITY, 0.0, -20.0] {
+            let e = tb.rate(Some(bad)).unwrap_err().to_string();
+            assert!(
+                e.contains("a sampling rate is a positive, finite number"),
+                "{e}"
+            );
+        }
+    }
+
     /// Gains divide their channels; a count that differs or a zero gain is refused, named.
     #[test]
     fn gains_divide_their_channels_or_are_refused() {
@@ -1007,6 +1089,9 @@ mod tests {
         );
         let e = divide_by_gains(&names, &mut c, &[1.0, 0.0]).unwrap_err();
         assert!(e.to_string().contains("channel `b`: gain 0 is not"), "{e}");
+        // Past twelve decades a gain is a slip of units (1e-300 overflowed into NaN).
+        let e = divide_by_gains(&names, &mut c, &[1.0, 1e-300]).unwrap_err();
+        assert!(e.to_string().contains("more than 12 decades"), "{e}");
     }
 
     /// `--names` names every column once, or is refused naming the counts.

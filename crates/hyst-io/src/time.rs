@@ -16,6 +16,7 @@ pub const GAP: f64 = 1.5;
 /// The first step of `time` (the column `column` of the file `path`) that is not positive or
 /// is a gap, said with its row (counted from 1 at the first data row, as a cell's is).
 pub(crate) fn check_steps(path: &Path, column: &str, time: &[f64]) -> Result<(), IoError> {
+    let (_, unit) = unit_of(column);
     if time.len() < 3 {
         return Ok(());
     }
@@ -37,13 +38,13 @@ pub(crate) fn check_steps(path: &Path, column: &str, time: &[f64]) -> Result<(),
         ));
     }
     let mut sorted = steps.clone();
-    sorted.sort_by(f64::total_cmp);
-    let median = sorted[sorted.len() / 2];
+    let middle = sorted.len() / 2;
+    let median = *sorted.select_nth_unstable_by(middle, f64::total_cmp).1;
     if let Some(k) = steps.iter().position(|&d| d > GAP * median) {
         return Err(fail(
             k,
             format!(
-                "jumps from {} to {} (a step of {:.6} s where the record's is {median:.6} s): about {} sample(s) are missing, and the analysis takes the samples as equally spaced; cut the record there",
+                "jumps from {} to {} (a step of {:.6} {unit} where the record's is {median:.6} {unit}): about {} sample(s) are missing, and the analysis takes the samples as equally spaced; cut the record there",
                 time[k],
                 time[k + 1],
                 steps[k],
@@ -54,9 +55,53 @@ pub(crate) fn check_steps(path: &Path, column: &str, time: &[f64]) -> Result<(),
     Ok(())
 }
 
+/// Seconds per unit of a time column named `name`, and the unit's symbol: the unit after
+/// the name's first word (`time_ms`, `Time (ms)`, `t [us]`, `zeit_min`), seconds when none
+/// is written or the word after it is not a unit of time.
+pub(crate) fn unit_of(name: &str) -> (f64, &'static str) {
+    let lower = name.trim().to_lowercase();
+    let rest = lower
+        .find(|c: char| c == '(' || c == '[' || c == '_' || c.is_whitespace())
+        .map_or("", |i| &lower[i..]);
+    let unit = rest.trim_matches(|c: char| "()[]_ ".contains(c) || c.is_whitespace());
+    match unit {
+        "ms" | "msec" | "millis" | "millisecond" | "milliseconds" => (1e-3, "ms"),
+        "us" | "µs" | "μs" | "usec" | "microsecond" | "microseconds" => (1e-6, "µs"),
+        "ns" | "nanosecond" | "nanoseconds" => (1e-9, "ns"),
+        "min" | "mins" | "minute" | "minutes" => (60.0, "min"),
+        "h" | "hr" | "hrs" | "hour" | "hours" => (3600.0, "h"),
+        _ => (1.0, "s"),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_time_column_names_its_unit() {
+        for (name, seconds) in [
+            ("t", 1.0),
+            ("Time (s)", 1.0),
+            ("time_ms", 1e-3),
+            ("Time (ms)", 1e-3),
+            ("t [us]", 1e-6),
+            ("zeit_min", 60.0),
+            ("time [h]", 3600.0),
+            ("timestamp", 1.0),
+            ("time_utc", 1.0),
+        ] {
+            assert_eq!(unit_of(name).0, seconds, "{name}");
+        }
+        let e = check_steps(
+            Path::new("r.csv"),
+            "time_ms",
+            &[0.0, 50.0, 100.0, 150.0, 400.0],
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("a step of 250.000000 ms"), "{e}");
+    }
 
     fn said(time: &[f64]) -> String {
         check_steps(Path::new("r.csv"), "t", time)

@@ -489,7 +489,17 @@ impl fmt::Display for TrackReport {
                 self.in_control_run_length
             )?;
         }
-        if self.alarms.is_empty() {
+        if self.monitored == Some(0) {
+            writeln!(
+                f,
+                "nothing monitored: every record trained the baselines (give fewer --training records than the campaign holds)"
+            )?;
+        } else if self.alarms.is_empty() && self.baselines.iter().all(Option::is_none) {
+            writeln!(
+                f,
+                "nothing charted: no mode has a baseline (above), so the absence of an alarm says nothing"
+            )?;
+        } else if self.alarms.is_empty() {
             writeln!(f, "no alarm")?;
         }
         // Each mode's first few alarms: a lasting change raises one every few records after

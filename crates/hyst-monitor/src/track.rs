@@ -237,6 +237,10 @@ pub struct TrackReport {
     /// Why the subspace test could not be run, when it could not.
     #[cfg_attr(feature = "serde", serde(default))]
     pub subspace_error: Option<String>,
+    /// Records charted after the training period (none: every record trained, and "no
+    /// alarm" would say nothing); unknown in a report written before it was kept.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub monitored: Option<usize>,
 }
 
 /// The reference the first records agree on: among the first `opts.reference_pool` records
@@ -613,6 +617,7 @@ pub(crate) fn chart_modes(
         subspace: None,
         subspace_error: None,
         level_covariate: false,
+        monitored: Some(records.saturating_sub(opts.training)),
     }
 }
 

@@ -37,6 +37,16 @@ pub use record::{
 };
 pub mod resample;
 
+/// A field's value as a message shows it: a count as an integer, anything else as Rust's
+/// shortest round trip (`1e300`, not three hundred digits).
+fn shown(value: f64) -> String {
+    if value.fract() == 0.0 && value.abs() < 1e15 {
+        format!("{value:.0}")
+    } else {
+        format!("{value:?}")
+    }
+}
+
 /// Errors of simulation and signal generation.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
@@ -132,7 +142,7 @@ pub enum SimError {
         value: f64,
     },
     /// A building's field holds a value no building has.
-    #[error("building: `{field}` = {value}: {why}")]
+    #[error("building: `{field}` = {}: {why}", shown(*value))]
     InvalidBuilding {
         /// The field, as its document names it (`hysteresis.storey`, `masses[2]`).
         field: String,

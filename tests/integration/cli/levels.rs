@@ -504,6 +504,8 @@ fn levels_with_masses_locate_the_storey_and_write_the_fit() {
         "{predicted}"
     );
     the_fitted_structure_simulates_a_measured_force(&json);
+    let levels: Vec<&str> = data.iter().map(|p| s(p)).collect();
+    super::hostile::storey_surfaces_refuse_by_name(&json, &tmp("storey_forced.csv"), &levels);
     // The model's amplitude curves beside the measured ones (a check that needs no truth):
     // its own records at the three levels analysed alike, each measured point against the
     // model's curve at its amplitude.

@@ -6,6 +6,7 @@ use crate::common;
 
 mod amplitude;
 mod frf;
+mod hostile;
 mod ident;
 mod levels;
 mod options;

@@ -72,7 +72,7 @@ pub use nodes::NodeMotion;
 
 /// The decades (log₁₀ |gain|) a channel's gain may lie in: sensors' calibration factors
 /// (V per m/s², counts per g, a sign) span a few decades about 1, never twelve.
-const GAIN_DECADES: std::ops::RangeInclusive<f64> = -12.0..=12.0;
+pub const GAIN_DECADES: std::ops::RangeInclusive<f64> = -12.0..=12.0;
 
 /// What a channel measures: the motion of a node along a direction, as displacement, velocity
 /// or acceleration.

@@ -74,7 +74,7 @@ impl StoreyFit {
             .find(|(_, q)| !(q.is_finite() && **q > 0.0))
         {
             return Err(inconsistent(format!(
-                "`force_densities[{l}]` = {q}: a force density (N²/Hz) must be positive"
+                "`force_densities[{l}]` = {q:?}: a force density (N²/Hz) must be positive"
             )));
         }
         if self.agreement.verdict == super::types::FitVerdict::Far {
@@ -117,7 +117,7 @@ impl StoreyFit {
         for ((field, copy), p) in copies.iter().zip(values.by_ref()) {
             if (p.value - copy).abs() > SAME * copy.abs() {
                 return Err(inconsistent(format!(
-                    "parameter `{}` = {} but `{field}` = {copy}",
+                    "parameter `{}` = {:?} but `{field}` = {copy:?}",
                     p.name, p.value
                 )));
             }
@@ -126,7 +126,7 @@ impl StoreyFit {
             let p = values.next();
             if let Some(p) = p.filter(|p| !(p.value.is_finite() && p.value >= 0.0)) {
                 return Err(inconsistent(format!(
-                    "parameter `b` = {}: the folded band is at least 0",
+                    "parameter `b` = {:?}: the folded band is at least 0",
                     p.value
                 )));
             }
@@ -140,7 +140,7 @@ impl StoreyFit {
             for ((field, copy), p) in element.iter().zip(values) {
                 if (p.value - copy).abs() > SAME * copy.abs() {
                     return Err(inconsistent(format!(
-                        "parameter `{}` = {} but `{field}` = {copy}",
+                        "parameter `{}` = {:?} but `{field}` = {copy:?}",
                         p.name, p.value
                     )));
                 }
@@ -165,7 +165,7 @@ impl StoreyFit {
         for (i, row) in c.iter().enumerate() {
             if !(row[i] >= 0.0 && row[i].is_finite()) {
                 return Err(inconsistent(format!(
-                    "`covariance[{i}][{i}]` = {}: a variance is finite and at least 0",
+                    "`covariance[{i}][{i}]` = {:?}: a variance is finite and at least 0",
                     row[i]
                 )));
             }
@@ -173,7 +173,7 @@ impl StoreyFit {
                 let scale = (row[i] * c[j][j]).sqrt();
                 if !v.is_finite() || (v - c[j][i]).abs() > SAME * scale.max(v.abs()) {
                     return Err(inconsistent(format!(
-                        "`covariance[{i}][{j}]` = {v} and `covariance[{j}][{i}]` = {}: a covariance is finite and symmetric",
+                        "`covariance[{i}][{j}]` = {v:?} and `covariance[{j}][{i}]` = {:?}: a covariance is finite and symmetric",
                         c[j][i]
                     )));
                 }
@@ -214,7 +214,7 @@ impl StoreyFit {
         for (field, share) in [("building.noise", b.noise), ("building.drift", b.drift)] {
             if share > 1.0 {
                 return Err(inconsistent(format!(
-                    "`{field}` = {share}: a share of each channel's deviation, at most 1 (a fit writes 0)"
+                    "`{field}` = {share:?}: a share of each channel's deviation, at most 1 (a fit writes 0)"
                 )));
             }
         }
@@ -222,7 +222,7 @@ impl StoreyFit {
             && h.nu > MAX_NU
         {
             return Err(inconsistent(format!(
-                "`building.hysteresis.nu` = {}: the Bouc-Wen exponent is at most {MAX_NU} (the loop is a step already)",
+                "`building.hysteresis.nu` = {:?}: the Bouc-Wen exponent is at most {MAX_NU} (the loop is a step already)",
                 h.nu
             )));
         }

@@ -114,7 +114,7 @@ pub enum StoreyError {
         floors: usize,
     },
     /// A fit given to a prediction whose parts disagree (read from an edited report).
-    #[error("the storey fit does not hold together: {what}")]
+    #[error("the document does not hold together: {what}")]
     InconsistentFit {
         /// What disagrees.
         what: String,
