@@ -104,7 +104,7 @@ def test_a_headerless_dat_with_a_time_column_reads_as_its_csv(data_dir, hyst_bin
     from_csv = hyst_ssi(hyst_bin, csv, tmp_path, "--fs", str(FS))
     # The rate from 17-digit times is 20 Hz to rounding, and the answer the same to it.
     assert from_dat["fs_hz"] == pytest.approx(FS, rel=1e-12)
-    modes = lambda d: [(m["frequency_hz"], m["damping_ratio"]) for m in d["decision"]["modes"]]
+    modes = lambda d: [(m["frequency_hz"], m["damping_ratio"]) for m in d["modes"]]
     assert len(modes(from_dat)) == len(modes(from_csv)) >= 3
     for a, b in zip(modes(from_dat), modes(from_csv)):
         assert a == pytest.approx(b, rel=1e-6)

@@ -96,7 +96,7 @@ fn frf_fits_the_f16_torsion_mode_and_writes_flattened_outputs() {
     assert!(ok, "{err}");
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&sj).unwrap()).unwrap();
-    let near: Vec<f64> = v["modes"]
+    let near: Vec<f64> = v["ssi_modes"]
         .as_array()
         .unwrap()
         .iter()

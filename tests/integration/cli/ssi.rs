@@ -108,7 +108,7 @@ fn ssi_writes_modes_json_and_svg() {
     assert!(out.contains("mode"), "{out}");
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-    let modes = v["modes"].as_array().unwrap();
+    let modes = v["ssi_modes"].as_array().unwrap();
     let m = modes
         .iter()
         .find(|m| (m["frequency_hz"].as_f64().unwrap() - 1.5).abs() < 0.01)
@@ -205,7 +205,7 @@ fn ssi_without_refinement() {
     );
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-    assert!(v["refined"].is_null() && !v["modes"].as_array().unwrap().is_empty());
+    assert!(v["refined"].is_null() && !v["ssi_modes"].as_array().unwrap().is_empty());
     // One channel: its shapes are numbers, so neither shapes nor MACs are printed.
     assert!(!out.contains("MAC between"), "{out}");
 }
@@ -241,7 +241,7 @@ fn ssi_reports_shapes_mpc_and_mac() {
     );
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
-    let shapes: Vec<Vec<(f64, f64)>> = v["modes"]
+    let shapes: Vec<Vec<(f64, f64)>> = v["ssi_modes"]
         .as_array()
         .unwrap()
         .iter()
@@ -280,7 +280,7 @@ fn ssi_reports_shapes_mpc_and_mac() {
         let half = ((sxx - syy).powi(2) / 4.0 + sxy * sxy).sqrt();
         let (s1, s2) = ((sxx + syy) / 2.0 + half, (sxx + syy) / 2.0 - half);
         let expected = ((s1 - s2) / (s1 + s2)).powi(2);
-        let got = v["modes"][i]["mpc"].as_f64().unwrap();
+        let got = v["ssi_modes"][i]["mpc"].as_f64().unwrap();
         assert!(
             (got - expected).abs() < 1e-12,
             "MPC of mode {i}: {got} vs {expected}"
@@ -590,7 +590,7 @@ fn ssi_gains_divide_their_channels() {
             "gains.json",
             &[&["--no-refine", "--ssi-errors", "0"], gains].concat(),
         );
-        v["modes"]
+        v["ssi_modes"]
             .as_array()
             .unwrap()
             .iter()
@@ -901,7 +901,7 @@ fn format_flag_rate_and_shapes_uff() {
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     // One dataset per mode of the answer (SSI's by default, with their shapes).
-    let reported = v["decision"]["modes"].as_array().unwrap().len();
+    let reported = v["modes"].as_array().unwrap().len();
     assert_eq!(v["decision"]["source"], "ssi", "{v}");
     let text = std::fs::read_to_string(&uff).unwrap();
     let lines: Vec<&str> = text.lines().collect();
@@ -1038,7 +1038,7 @@ fn ssi_merges_setups_on_their_references() {
     let first = &doc["setups"][0]["analysis"];
     assert!(first["diagram"]["orders"].as_array().unwrap().is_empty());
     assert!(first["singular_values"].as_array().unwrap().is_empty());
-    assert!(!first["modes"].as_array().unwrap().is_empty());
+    assert!(!first["ssi_modes"].as_array().unwrap().is_empty());
     let full_json = tmp("setups_diagrams.json");
     let (ok, _, err) = hyst(&[
         "ssi",

@@ -308,7 +308,7 @@ def run_all(hyst, y, br, tr, tmp):
     out["koma"] = [median_errors(f, z, *t) for t in tr]
     f, z, doc = run_covssi(hyst, y, br, tmp)
     out["covssi"] = [median_errors(f, z, *t) for t in tr]
-    out["covssi mode"] = [mode_errors(doc["modes"], *t) for t in tr]
+    out["covssi mode"] = [mode_errors(doc["ssi_modes"], *t) for t in tr]
     out["covssi ML"] = [refined_errors(doc, *t) for t in tr]
     # The per-channel likelihood alone (for one channel it is the same likelihood).
     if y.shape[1] > 1:
@@ -480,7 +480,7 @@ def cluster_statistics(doc, tr, nchan):
 
     values = {"mean": [], "median": [], "level 2": []}
     for f_true, z_true in tr:
-        m = reported_mode(doc["modes"], f_true)
+        m = reported_mode(doc["ssi_modes"], f_true)
         if m is None:
             for v in values.values():
                 v.append((math.nan, math.nan))
@@ -499,7 +499,7 @@ def cluster_statistics(doc, tr, nchan):
         values["median"].append(err([p for _, p in members], np.median))
         values["level 2"].append(err(level2, np.mean))
     spurious, physical = [], []
-    for m in doc["modes"]:
+    for m in doc["ssi_modes"]:
         physical_mode = any(near(m["frequency_hz"], f) for f, _ in tr)
         (physical if physical_mode else spurious).append((len(m["members"]), m["members"][0][0]))
     return values, spurious, physical

@@ -2,6 +2,8 @@
 //! modes, then the maximum-likelihood refinement ([`refine_with_real_poles`]), as one report
 //! that prints as text ([`std::fmt::Display`], in `text`) and serializes (feature `serde`).
 
+#[cfg(feature = "serde")]
+mod document;
 mod text;
 
 pub use text::shape_text;
@@ -222,10 +224,20 @@ impl AnalysisOptions {
     }
 }
 
-/// What [`analyze`] finds: SSI's result (its fields at the top level in JSON), the MAC
-/// between its modes, and the refinement.
+/// What [`analyze`] finds: SSI's result, the MAC between its modes, the refinement, and the
+/// decision of what is a mode. In JSON (feature `serde`) the answer is `modes`, SSI's
+/// clusters `ssi_modes`, SSI's other fields at the top level, and `decision` the answer's
+/// source and what it set apart (`document`; the `hyst` crate's report reader takes the
+/// layout before it too).
 #[derive(Debug, Clone, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(
+    feature = "serde",
+    serde(
+        into = "document::ModalAnalysisDocument",
+        from = "document::ModalAnalysisDocument"
+    )
+)]
 pub struct ModalAnalysis {
     /// The channels' names, in the order given: their indices from [`analyze`]; a caller
     /// that knows their names sets them (they head the shapes in the text).
@@ -235,7 +247,6 @@ pub struct ModalAnalysis {
     /// How the record was decimated first.
     pub decimation: DecimationReport,
     /// SSI's result.
-    #[cfg_attr(feature = "serde", serde(flatten))]
     pub ssi: SsiResult,
     /// MAC between SSI's modes (1 on the diagonal).
     pub mac: Vec<Vec<f64>>,
@@ -262,7 +273,6 @@ pub struct ModalAnalysis {
     /// The FDD of the record analysed, when asked for ([`AnalysisOptions::fdd`]) and the
     /// record long enough for its segments, with the options it was made with (EFDD reads
     /// them). A page's, not the report's: not serialized.
-    #[cfg_attr(feature = "serde", serde(skip))]
     pub fdd: Option<(crate::fdd::Fdd, crate::fdd::FddOptions)>,
 }
 

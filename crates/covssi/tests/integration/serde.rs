@@ -33,9 +33,16 @@ fn an_analysis_reads_back_as_written() {
     let text = serde_json::to_string(&a).unwrap();
     let back: ModalAnalysis = serde_json::from_str(&text).unwrap();
     assert_eq!(back, a);
-    // SSI's fields at the top level, complex numbers as [re, im].
+    // SSI's fields at the top level, its clusters as `ssi_modes` and the answer as `modes`
+    // (one list of modes, issue 76), complex numbers as [re, im].
     let v: serde_json::Value = serde_json::from_str(&text).unwrap();
-    let m = &v["modes"][0];
+    let m = &v["ssi_modes"][0];
+    assert_eq!(
+        v["modes"].as_array().unwrap().len(),
+        a.decision.modes.len(),
+        "{v}"
+    );
+    assert!(v["decision"].get("modes").is_none(), "{v}");
     assert_eq!(m["lambda"][0].as_f64(), Some(a.ssi.modes[0].lambda.re));
     assert_eq!(m["lambda"][1].as_f64(), Some(a.ssi.modes[0].lambda.im));
     assert_eq!(v["refined"]["modes"][0]["ssi_mode"].as_u64(), Some(0));
