@@ -102,6 +102,62 @@ pub(crate) fn timed(cmd: &mut Command) -> Result<(f64, f64), String> {
     }
 }
 
+/// Issue 76's many-channel target: `hyst ssi` with its defaults on a bridge deck's ambient
+/// record of 66 channels (22 stations × 3 directions) over 30 minutes at 20 Hz
+/// ([`hyst_sim::deck`]: modal superposition with red loads, close modes, a lowest mode at
+/// 0.2 Hz), its time and peak memory against the targets (30 s, 1 GB), and how many of the
+/// deck's 16 modes the answer holds.
+fn deck(hyst: &Path, dir: &Path) -> Result<(), String> {
+    use hyst_sim::deck::{BridgeDeck, DECK_MODES};
+    let csv = dir.join("deck_66ch_30min.csv");
+    let deck = BridgeDeck::with(22, 20.0);
+    if !csv.is_file() {
+        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        let y = deck.accelerations(76_201).map_err(|e| e.to_string())?;
+        let names: Vec<String> = (0..y.len()).map(|c| format!("a{c}")).collect();
+        let names: Vec<&str> = names.iter().map(String::as_str).collect();
+        let columns: Vec<&[f64]> = y.iter().map(Vec::as_slice).collect();
+        hyst_io::write_csv(&csv, &names, &columns).map_err(|e| e.to_string())?;
+    }
+    let json = dir.join("deck_66ch_30min.json");
+    let (s, mb) = timed(
+        Command::new("/usr/bin/time")
+            .args(["-f", "TIMED %e %M"])
+            .arg(hyst)
+            .args(["ssi", "--fs", "20", "--input"])
+            .arg(&csv)
+            .arg("--json")
+            .arg(&json),
+    )?;
+    let doc: serde_json::Value = std::fs::read_to_string(&json)
+        .map_err(|e| format!("{}: {e}", json.display()))
+        .and_then(|t| serde_json::from_str(&t).map_err(|e| e.to_string()))?;
+    let answer: Vec<f64> = doc["modes"]
+        .as_array()
+        .map(|m| {
+            m.iter()
+                .filter_map(|m| m["frequency_hz"].as_f64())
+                .collect()
+        })
+        .unwrap_or_default();
+    // A deck mode is found when a reported mode lies within 1 % of it (the closest two are
+    // 2.8 % apart).
+    let found = DECK_MODES
+        .iter()
+        .filter(|t| {
+            answer
+                .iter()
+                .any(|f| (f / t.frequency_hz - 1.0).abs() <= 0.01)
+        })
+        .count();
+    println!(
+        "hyst_ssi_s_deck_66ch_30min {s:.1} s (peak {mb:.0} MB; defaults; {found} of the deck's {} modes in {} reported; targets 30 s, 1024 MB)",
+        DECK_MODES.len(),
+        answer.len()
+    );
+    Ok(())
+}
+
 /// The median of three in-process reads of `csv` by hyst's reader (seconds).
 fn read_seconds(csv: &Path) -> Result<f64, String> {
     let mut times = Vec::new();
@@ -158,6 +214,7 @@ pub fn run() -> Result<(), String> {
     );
     let (sr, mbr) = run(&csv, &[&same[..], &["--refine"]].concat())?;
     println!("hyst_ssi_refine_s_1e6_10ch {sr:.2} s (peak {mbr:.0} MB; with --refine)");
+    deck(&hyst, &target.join("bench"))?;
     let python = target.join("compare-venv").join("bin").join("python");
     if !python.is_file() {
         println!(
