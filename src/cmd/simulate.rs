@@ -9,6 +9,10 @@ use hyst::sim::{self, Decimation, Integrator, SimOptions};
 
 use super::{Error, InterpolationArg, check_fs, fail, read_record};
 
+/// `--oversample`'s and `--noise-seed`'s defaults (`--structure` refuses either changed).
+const OVERSAMPLE: usize = 20;
+const NOISE_SEED: u64 = 2;
+
 #[derive(Clone, Copy, ValueEnum, PartialEq, Eq, Debug)]
 pub(crate) enum IntegratorArg {
     /// Classic fourth-order Runge-Kutta.
@@ -99,7 +103,7 @@ pub(crate) struct SimulateArgs {
     #[arg(long, value_enum)]
     pub(crate) input_interpolation: Option<InterpolationArg>,
     /// Integration sub-steps per sample.
-    #[arg(long, default_value_t = 20)]
+    #[arg(long, default_value_t = OVERSAMPLE)]
     pub(crate) oversample: usize,
     /// Time integrator.
     #[arg(long, value_enum, default_value = "rk4")]
@@ -124,7 +128,7 @@ pub(crate) struct SimulateArgs {
     #[arg(long, default_value_t = 0.0)]
     pub(crate) noise: f64,
     /// Seed of the measurement noise.
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = NOISE_SEED)]
     pub(crate) noise_seed: u64,
     /// A fitted structure to simulate instead of an oscillator: a storey fit as `hyst levels
     /// --masses --json` writes it (`FILE#/POINTER` for one inside a larger report). It is
@@ -398,10 +402,10 @@ fn structure_flags(a: &SimulateArgs) -> Result<(), Error> {
         ("--excitation", a.excitation.is_some()),
         ("--periodic", a.periodic),
         ("--noise", a.noise != 0.0),
-        ("--noise-seed", a.noise_seed != 2),
+        ("--noise-seed", a.noise_seed != NOISE_SEED),
         ("--column", a.column != "u"),
         ("--input-interpolation", a.input_interpolation.is_some()),
-        ("--oversample", a.oversample != 20),
+        ("--oversample", a.oversample != OVERSAMPLE),
         ("--integrator", a.integrator != IntegratorArg::Rk4),
         ("--decimation", a.decimation != DecimationArg::Sample),
         ("--rms", s.rms != design.rms),
@@ -415,16 +419,11 @@ fn structure_flags(a: &SimulateArgs) -> Result<(), Error> {
             "{flag} is the oscillator's: --structure is driven by --input's --forces from rest, at the steps its fit chose"
         )));
     }
-    let twice = |flag: &str, names: &[String]| {
-        names
-            .iter()
-            .enumerate()
-            .find(|(i, n)| names[..*i].contains(n))
-            .map_or(Ok(()), |(_, n)| {
-                Err(fail(format!(
-                    "{flag}: `{n}` is named twice (each is its own column)"
-                )))
-            })
+    let twice = |flag: &str, names: &[String]| match hyst::io::repeated(names) {
+        Some(n) => Err(fail(format!(
+            "{flag}: `{n}` is named twice (each is its own column)"
+        ))),
+        None => Ok(()),
     };
     twice("--forces", &a.forces)?;
     if let Some(channels) = &a.channels {

@@ -727,7 +727,7 @@ impl Table {
     /// columns, increasing by a constant step over at least [`TIME_MIN_SAMPLES`] samples
     /// (every step within 1 % of the mean: no response does that over a record).
     pub fn time_column(&self) -> Option<usize> {
-        let named = named_time;
+        let named = time::named_time;
         let uniform = |c: &[f64]| {
             let n = c.len();
             if n < TIME_MIN_SAMPLES {
@@ -759,7 +759,7 @@ impl Table {
         let n = c.len();
         // A column of sample numbers (0, 1, 2, … as a table's index is written) counts
         // samples, not seconds: it gives no rate, unless its name says it is time.
-        if !named_time(&self.names[i])
+        if !time::named_time(&self.names[i])
             && c.iter().all(|v| v.fract() == 0.0)
             && c.windows(2).all(|w| w[1] - w[0] == 1.0)
         {
@@ -865,19 +865,6 @@ pub fn divide_by_gains(
         c.iter_mut().for_each(|v| *v /= g);
     }
     Ok(())
-}
-
-/// Whether a column's name says it holds time (`t`, `time`, `Time (s)`, `zeit_ms`, …).
-fn named_time(name: &str) -> bool {
-    let n = name.trim().to_ascii_lowercase();
-    let base = n
-        .split(|c: char| c == '(' || c == '[' || c == '_' || c.is_whitespace())
-        .next()
-        .unwrap_or("");
-    matches!(
-        base,
-        "t" | "time" | "times" | "timestamp" | "zeit" | "temps" | "tiempo" | "tempo"
-    )
 }
 
 /// The first name that appears twice in `names`, if any.

@@ -60,9 +60,7 @@ pub(crate) fn check_steps(path: &Path, column: &str, time: &[f64]) -> Result<(),
 /// is written or the word after it is not a unit of time.
 pub(crate) fn unit_of(name: &str) -> (f64, &'static str) {
     let lower = name.trim().to_lowercase();
-    let rest = lower
-        .find(|c: char| c == '(' || c == '[' || c == '_' || c.is_whitespace())
-        .map_or("", |i| &lower[i..]);
+    let (_, rest) = words(&lower);
     let unit = rest.trim_matches(|c: char| "()[]_ ".contains(c) || c.is_whitespace());
     match unit {
         "ms" | "msec" | "millis" | "millisecond" | "milliseconds" => (1e-3, "ms"),
@@ -72,6 +70,25 @@ pub(crate) fn unit_of(name: &str) -> (f64, &'static str) {
         "h" | "hr" | "hrs" | "hour" | "hours" => (3600.0, "h"),
         _ => (1.0, "s"),
     }
+}
+
+/// Whether a column's name says it holds time (`t`, `time`, `Time (s)`, `zeit_ms`, …): its
+/// first word, before any unit.
+pub(crate) fn named_time(name: &str) -> bool {
+    let lower = name.trim().to_lowercase();
+    matches!(
+        words(&lower).0,
+        "t" | "time" | "times" | "timestamp" | "zeit" | "temps" | "tiempo" | "tempo"
+    )
+}
+
+/// A column's name split at its first `(`, `[`, `_` or space: its first word, and the rest
+/// (where a unit is written).
+fn words(name: &str) -> (&str, &str) {
+    let at = name
+        .find(|c: char| c == '(' || c == '[' || c == '_' || c.is_whitespace())
+        .unwrap_or(name.len());
+    name.split_at(at)
 }
 
 #[cfg(test)]
